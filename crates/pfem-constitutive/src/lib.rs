@@ -1,0 +1,3 @@
+//! Constitutive laws for pfem.
+pub mod material;
+pub use material::*;

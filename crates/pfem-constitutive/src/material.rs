@@ -1,0 +1,160 @@
+//! The unified material interface (paper §3.5, eqs. 43–44).
+
+use pfem_core::{Const, Dim, Tensor};
+
+/// Kinematics of one element at the current Picard iterate, in the Updated
+/// Lagrangian frame whose reference is the configuration at `t_n`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Kinematics<const D: usize> {
+    /// Incremental deformation gradient `F = ∂x/∂Xⁿ` (eq. 8 with the
+    /// reference at `t_n`; eq. 35 with `F⁽ⁿ⁾ = I`).
+    pub f: Tensor<D>,
+    /// `J = det F` (eq. 7).
+    pub j: f64,
+    /// Rate of deformation `D = ½ (L + Lᵀ)`, `L = grad_x V` on the current
+    /// iterate (eqs. 17–18), in 1/s. In 2D, plane strain: `D_zz = 0`.
+    pub d: Tensor<D>,
+    /// Time step `Δt` (s).
+    pub dt: f64,
+}
+
+impl<const D: usize> Kinematics<D>
+where
+    Const<D>: Dim,
+{
+    /// Kinematics of a body at rest: `F = I`, `J = 1`, `D = 0`.
+    pub fn at_rest(dt: f64) -> Self {
+        Self { f: Tensor::<D>::identity(), j: 1.0, d: Tensor::<D>::zeros(), dt }
+    }
+
+    /// Volumetric strain rate `ε_v = tr D = div V` (eq. 19), 1/s.
+    pub fn volumetric_rate(&self) -> f64 {
+        self.d.trace()
+    }
+
+    /// Deviatoric rate of deformation `D' = D − ⅓ (tr D) I` (eq. 20). The
+    /// factor is ⅓ in 2D too: plane strain keeps the 3D deviator, whose
+    /// out-of-plane component is `−⅓ tr D` (see [`Self::deviatoric_rate_zz`]).
+    pub fn deviatoric_rate(&self) -> Tensor<D> {
+        self.d - Tensor::<D>::identity() * (self.d.trace() / 3.0)
+    }
+
+    /// Out-of-plane component of the deviatoric rate in 2D plane strain,
+    /// `D'_zz = −⅓ tr D`; zero in 3D, where there is no separate component.
+    pub fn deviatoric_rate_zz(&self) -> f64 {
+        if D == 2 {
+            -self.d.trace() / 3.0
+        } else {
+            0.0
+        }
+    }
+}
+
+/// History a material carries from step to step: state owned by the solver
+/// (per element for solids, per node for fluid pressure), handed to the
+/// material by reference, and moved with particles through remeshing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct History<const D: usize> {
+    /// Cauchy stress `σⁿ` (Pa) of a solid; in-plane components in 2D.
+    pub stress: Tensor<D>,
+    /// Out-of-plane normal stress `σ_zz` (Pa) in 2D plane strain; unused
+    /// (zero) in 3D.
+    pub stress_zz: f64,
+    /// Pressure `pⁿ` (Pa) of a fluid, positive in compression.
+    pub pressure: f64,
+}
+
+impl<const D: usize> Default for History<D>
+where
+    Const<D>: Dim,
+{
+    fn default() -> Self {
+        Self { stress: Tensor::<D>::zeros(), stress_zz: 0.0, pressure: 0.0 }
+    }
+}
+
+/// The unified constitutive triple of eq. 44: with it the Cauchy stress at
+/// `t_{n+1}` is `σ = σ̂⁽ⁿ⁾ + 𝒦 ε_v I + 2 μ D'` (eq. 43).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unified<const D: usize> {
+    /// Effective viscosity `μ⁽ⁿ⁺¹⁾` (Pa·s): `μ_f` for a fluid,
+    /// `μ_h Δt / J` for a hypoelastic solid.
+    pub mu: f64,
+    /// Effective volumetric coefficient `𝒦⁽ⁿ⁺¹⁾` (Pa·s): `Δt K_f` for a
+    /// fluid, `(λ_h + ⅔ μ_h) Δt / J` for a hypoelastic solid.
+    pub kappa: f64,
+    /// History stress `σ̂⁽ⁿ⁾` (Pa): `−pⁿ I` for a fluid,
+    /// `F σⁿ Fᵀ / J` for a hypoelastic solid.
+    pub sigma_hat: Tensor<D>,
+    /// Out-of-plane component of `σ̂⁽ⁿ⁾` in 2D plane strain (zero in 3D).
+    pub sigma_hat_zz: f64,
+}
+
+impl<const D: usize> Unified<D>
+where
+    Const<D>: Dim,
+{
+    /// Cauchy stress of eq. 43, `σ = σ̂ + 𝒦 ε_v I + 2 μ D'`, in-plane part.
+    pub fn cauchy_stress(&self, kin: &Kinematics<D>) -> Tensor<D> {
+        self.sigma_hat
+            + Tensor::<D>::identity() * (self.kappa * kin.volumetric_rate())
+            + kin.deviatoric_rate() * (2.0 * self.mu)
+    }
+
+    /// Out-of-plane normal stress of eq. 43 in 2D plane strain (zero in 3D).
+    pub fn cauchy_stress_zz(&self, kin: &Kinematics<D>) -> f64 {
+        if D == 2 {
+            self.sigma_hat_zz
+                + self.kappa * kin.volumetric_rate()
+                + 2.0 * self.mu * kin.deviatoric_rate_zz()
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Whether a material behaves as a fluid (remeshed every step, pressure on
+/// nodes, eq. 62) or as a solid (keeps its own mesh, stress on elements,
+/// eq. 63).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MaterialKind {
+    /// A fluid: history is the nodal pressure.
+    Fluid,
+    /// A solid: history is the element Cauchy stress.
+    Solid,
+}
+
+/// A constitutive law in the unified form of eqs. 43–44: the seam where
+/// users plug in their own materials.
+///
+/// A material is configuration (`&self`); its history ([`History`]) is state
+/// owned by the solver and passed in. The trait is object safe: assembly and
+/// the driver hold materials as `Box<dyn Material<D>>`.
+pub trait Material<const D: usize>: Send + Sync + std::fmt::Debug
+where
+    Const<D>: Dim,
+{
+    /// A short name for messages and output.
+    fn name(&self) -> &str;
+
+    /// Fluid or solid: decides where the history lives and whether the
+    /// body is remeshed.
+    fn kind(&self) -> MaterialKind;
+
+    /// Density `ρ` (kg/m³) in the reference configuration at `t_n`.
+    fn density(&self) -> f64;
+
+    /// Speed of the fastest wave the material carries (m/s): `√(K/ρ)` for a
+    /// fluid, `√((λ + 2μ)/ρ)` for an elastic solid. Used by time-step
+    /// control and stability estimates.
+    fn wave_speed(&self) -> f64;
+
+    /// The unified triple `(μ, 𝒦, σ̂⁽ⁿ⁾)` of eq. 44 for the kinematics of the
+    /// current Picard iterate and the history at `t_n`.
+    fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D>;
+
+    /// After the step has converged, advance the history from `t_n` to
+    /// `t_{n+1}`: the pressure of a fluid (eqs. 26, 62) or the Cauchy stress
+    /// of a solid (eqs. 39–42, 63).
+    fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>);
+}
