@@ -1,1 +1,7 @@
-//! pfem-geometry
+//! Geometry for pfem: Delaunay tessellation, alpha shapes (paper §8),
+//! boundary classification, particle management and mesh quality.
+pub mod error;
+pub mod tessellation;
+
+pub use error::GeometryError;
+pub use tessellation::{Tessellation, Tessellator, NO_NEIGHBOR};
