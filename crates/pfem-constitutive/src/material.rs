@@ -24,7 +24,23 @@ where
 {
     /// Kinematics of a body at rest: `F = I`, `J = 1`, `D = 0`.
     pub fn at_rest(dt: f64) -> Self {
-        Self { f: Tensor::<D>::identity(), j: 1.0, d: Tensor::<D>::zeros(), dt }
+        Self {
+            f: Tensor::<D>::identity(),
+            j: 1.0,
+            d: Tensor::<D>::zeros(),
+            dt,
+        }
+    }
+
+    /// Kinematics from the incremental deformation gradient `F`, the rate of
+    /// deformation `D` and the time step `Δt`, with `J = det F` (eq. 7).
+    pub fn new(f: Tensor<D>, d: Tensor<D>, dt: f64) -> Self {
+        Self {
+            f,
+            j: f.determinant(),
+            d,
+            dt,
+        }
     }
 
     /// Volumetric strain rate `ε_v = tr D = div V` (eq. 19), 1/s.
@@ -69,7 +85,11 @@ where
     Const<D>: Dim,
 {
     fn default() -> Self {
-        Self { stress: Tensor::<D>::zeros(), stress_zz: 0.0, pressure: 0.0 }
+        Self {
+            stress: Tensor::<D>::zeros(),
+            stress_zz: 0.0,
+            pressure: 0.0,
+        }
     }
 }
 

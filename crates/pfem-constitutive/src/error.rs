@@ -1,0 +1,106 @@
+//! Typed errors of material construction.
+
+use std::fmt;
+
+/// A material parameter, as named by [`MaterialError`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Parameter {
+    /// Density `ρ` (kg/m³).
+    Density,
+    /// Dynamic viscosity `μ_f` (Pa·s).
+    Viscosity,
+    /// Bulk modulus `K_f` (Pa).
+    BulkModulus,
+    /// Young's modulus `E` (Pa).
+    YoungModulus,
+    /// Poisson's ratio `ν` (dimensionless).
+    PoissonRatio,
+    /// First Lamé parameter `λ_h` (Pa).
+    LameLambda,
+    /// Shear modulus, the second Lamé parameter `μ_h` (Pa).
+    ShearModulus,
+}
+
+impl Parameter {
+    /// The parameter's name, symbol and unit, e.g. `"density ρ (kg/m³)"`.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Parameter::Density => "density ρ (kg/m³)",
+            Parameter::Viscosity => "dynamic viscosity μ_f (Pa·s)",
+            Parameter::BulkModulus => "bulk modulus K_f (Pa)",
+            Parameter::YoungModulus => "Young's modulus E (Pa)",
+            Parameter::PoissonRatio => "Poisson's ratio ν",
+            Parameter::LameLambda => "Lamé parameter λ_h (Pa)",
+            Parameter::ShearModulus => "shear modulus μ_h (Pa)",
+        }
+    }
+}
+
+impl fmt::Display for Parameter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.describe())
+    }
+}
+
+/// Why a material could not be built.
+///
+/// ```
+/// use pfem_constitutive::{Hypoelastic, MaterialError, Parameter};
+///
+/// let err = Hypoelastic::new(1100.0, 12.0e6, 0.5).unwrap_err();
+/// assert!(matches!(
+///     err,
+///     MaterialError::InvalidParameter { parameter: Parameter::PoissonRatio, .. }
+/// ));
+/// assert_eq!(
+///     err.to_string(),
+///     "Poisson's ratio ν = 0.5 is invalid: must be finite with -1 < ν < 0.5"
+/// );
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MaterialError {
+    /// A parameter is NaN, infinite, or outside its allowed range.
+    #[error("{parameter} = {value} is invalid: must be {allowed}")]
+    InvalidParameter {
+        /// Which parameter.
+        parameter: Parameter,
+        /// The value given.
+        value: f64,
+        /// The allowed range, in words.
+        allowed: &'static str,
+    },
+}
+
+impl MaterialError {
+    /// The parameter at fault.
+    pub fn parameter(&self) -> Parameter {
+        match self {
+            MaterialError::InvalidParameter { parameter, .. } => *parameter,
+        }
+    }
+}
+
+/// Checks `value` is finite and satisfies `ok`; otherwise the typed error.
+pub(crate) fn check(
+    parameter: Parameter,
+    value: f64,
+    ok: bool,
+    allowed: &'static str,
+) -> Result<f64, MaterialError> {
+    if value.is_finite() && ok {
+        Ok(value)
+    } else {
+        Err(MaterialError::InvalidParameter {
+            parameter,
+            value,
+            allowed,
+        })
+    }
+}
+
+/// `ρ`: finite and `> 0`.
+pub(crate) fn check_density(rho: f64) -> Result<f64, MaterialError> {
+    check(Parameter::Density, rho, rho > 0.0, "finite and > 0")
+}
