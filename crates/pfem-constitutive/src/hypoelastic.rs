@@ -198,3 +198,298 @@ where
         history.stress_zz = u.cauchy_stress_zz(kin);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    fn rotation<const D: usize>(theta: f64) -> Tensor<D>
+    where
+        Const<D>: Dim,
+    {
+        let (s, c) = theta.sin_cos();
+        let mut r = Tensor::<D>::identity();
+        if D == 2 {
+            r[(0, 0)] = c;
+            r[(0, 1)] = -s;
+            r[(1, 0)] = s;
+            r[(1, 1)] = c;
+        } else {
+            // Rodrigues about the unit axis (1, 2, 3)/√14.
+            let n = [1.0, 2.0, 3.0].map(|x: f64| x / 14f64.sqrt());
+            let mut k = Tensor::<D>::zeros();
+            k[(0, 1)] = -n[2];
+            k[(0, 2)] = n[1];
+            k[(1, 0)] = n[2];
+            k[(1, 2)] = -n[0];
+            k[(2, 0)] = -n[1];
+            k[(2, 1)] = n[0];
+            r += k * s + k * k * (1.0 - c);
+        }
+        r
+    }
+
+    fn prestress<const D: usize>() -> Tensor<D>
+    where
+        Const<D>: Dim,
+    {
+        let full = [
+            [3.0e6, 1.2e6, -0.4e6],
+            [1.2e6, -2.0e6, 0.9e6],
+            [-0.4e6, 0.9e6, 0.5e6],
+        ];
+        Tensor::<D>::from_fn(|i, j| full[i][j])
+    }
+
+    /// Stress invariants `(I1, I2, I3)` of the full 3×3 stress (in 2D with
+    /// `σ_zz` on the diagonal).
+    fn invariants<const D: usize>(s: &Tensor<D>, szz: f64) -> [f64; 3] {
+        let mut m = nalgebra::Matrix3::<f64>::zeros();
+        for i in 0..D {
+            for j in 0..D {
+                m[(i, j)] = s[(i, j)];
+            }
+        }
+        if D == 2 {
+            m[(2, 2)] = szz;
+        }
+        let i1 = m.trace();
+        let i2 = 0.5 * (i1 * i1 - (m * m).trace());
+        [i1, i2, m.determinant()]
+    }
+
+    fn objectivity<const D: usize>()
+    where
+        Const<D>: Dim,
+    {
+        let solid = Hypoelastic::new(2500.0, 1.0e6, 0.3).unwrap();
+        let sigma0 = prestress::<D>();
+        let szz0 = if D == 2 { 0.7e6 } else { 0.0 };
+        let mut h = History::<D> {
+            stress: sigma0,
+            stress_zz: szz0,
+            pressure: 0.0,
+        };
+        let steps = 20;
+        let r_step = rotation::<D>(FRAC_PI_2 / steps as f64);
+        let scale = sigma0.norm();
+        for _ in 0..steps {
+            let kin = Kinematics::new(r_step, Tensor::<D>::zeros(), 1e-3);
+            assert!((kin.j - 1.0).abs() < 1e-15);
+            // With F = R, J = 1: σ̂ = R σ Rᵀ (eq. 38), exactly up to rounding.
+            let u = solid.unified(&kin, &h);
+            let expected = r_step * h.stress * r_step.transpose();
+            assert!((u.sigma_hat - expected).norm() <= 1e-15 * scale);
+            solid.update_history(&kin, &mut h);
+            assert_eq!(h.stress, u.sigma_hat); // D = 0: nothing added
+        }
+        let r = rotation::<D>(FRAC_PI_2);
+        let expected = r * sigma0 * r.transpose();
+        let err = (h.stress - expected).norm() / scale;
+        assert!(err < 1e-10, "rotated stress off by {err:e}");
+        assert!((h.stress_zz - szz0).abs() <= 1e-10 * scale);
+        let a = invariants(&sigma0, szz0);
+        let b = invariants(&h.stress, h.stress_zz);
+        for k in 0..3 {
+            let tol = 1e-10 * scale.powi(k as i32 + 1);
+            assert!(
+                (a[k] - b[k]).abs() <= tol,
+                "invariant I{} drifted: {} vs {}",
+                k + 1,
+                a[k],
+                b[k]
+            );
+        }
+    }
+
+    #[test]
+    fn rigid_rotation_rotates_stress_2d() {
+        objectivity::<2>();
+    }
+
+    #[test]
+    fn rigid_rotation_rotates_stress_3d() {
+        objectivity::<3>();
+    }
+
+    /// Drives the solid through the total displacement gradient `h_total`
+    /// in `n` equal steps of the Updated Lagrangian kinematics: per step
+    /// `F = I + H/n`, `L = grad_X V · F⁻¹`, `D = sym L`.
+    fn drive<const D: usize>(solid: &Hypoelastic, h_total: Tensor<D>, n: usize) -> History<D>
+    where
+        Const<D>: Dim,
+    {
+        let dt = 1e-4;
+        let grad_big_v = h_total / (n as f64 * dt);
+        let mut h = History::<D>::default();
+        for _ in 0..n {
+            let f = Tensor::<D>::identity() + grad_big_v * dt;
+            let l = grad_big_v * f.try_inverse().unwrap();
+            let d = (l + l.transpose()) * 0.5;
+            solid.update_history(&Kinematics::new(f, d, dt), &mut h);
+        }
+        h
+    }
+
+    /// Hooke's law from `(E, ν)` on the small strain `ε = sym H`; in 2D
+    /// plane strain (`ε_zz = 0`) also `σ_zz`.
+    fn hooke<const D: usize>(e: f64, nu: f64, h_total: Tensor<D>) -> (Tensor<D>, f64)
+    where
+        Const<D>: Dim,
+    {
+        let eps = (h_total + h_total.transpose()) * 0.5;
+        let c = e / (1.0 + nu);
+        let lam_over = nu / (1.0 - 2.0 * nu);
+        let s = (eps + Tensor::<D>::identity() * (lam_over * eps.trace())) * c;
+        let szz = if D == 2 {
+            c * lam_over * eps.trace()
+        } else {
+            0.0
+        };
+        (s, szz)
+    }
+
+    fn small_strain<const D: usize>(h_total: Tensor<D>)
+    where
+        Const<D>: Dim,
+    {
+        for (e, nu) in [(12.0e6, 0.4), (2.1e11, 0.3), (1.0e6, -0.2), (5.0e5, 0.49)] {
+            let solid = Hypoelastic::new(1000.0, e, nu).unwrap();
+            let h = drive(&solid, h_total, 50);
+            let (s, szz) = hooke(e, nu, h_total);
+            let scale = s.norm();
+            let err = (h.stress - s).norm() / scale;
+            assert!(err < 1e-6, "E = {e}, ν = {nu}: Hooke off by {err:e}");
+            assert!((h.stress_zz - szz).abs() <= 1e-6 * scale);
+            if D == 2 {
+                // Plane strain: σ_zz = ν (σ_xx + σ_yy).
+                let plane = nu * (h.stress[(0, 0)] + h.stress[(1, 1)]);
+                assert!((h.stress_zz - plane).abs() <= 1e-6 * scale);
+            }
+        }
+    }
+
+    #[test]
+    fn uniaxial_strain_is_hooke_2d() {
+        small_strain(Tensor::<2>::new(1e-8, 0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn uniaxial_strain_is_hooke_3d() {
+        let mut h = Tensor::<3>::zeros();
+        h[(0, 0)] = 1e-8;
+        small_strain(h);
+    }
+
+    #[test]
+    fn simple_shear_is_hooke_2d() {
+        small_strain(Tensor::<2>::new(0.0, 1e-8, 0.0, 0.0));
+    }
+
+    #[test]
+    fn simple_shear_is_hooke_3d() {
+        let mut h = Tensor::<3>::zeros();
+        h[(0, 2)] = 1e-8;
+        small_strain(h);
+    }
+
+    #[test]
+    fn uniaxial_strain_moduli() {
+        // σ_xx = (λ + 2μ) ε, σ_yy = σ_zz = λ ε under uniaxial strain.
+        let solid = Hypoelastic::new(1000.0, 1.0e6, 0.3).unwrap();
+        let h = drive(&solid, Tensor::<2>::new(1e-8, 0.0, 0.0, 0.0), 10);
+        let (lam, mu) = (solid.lame_lambda(), solid.shear_modulus());
+        assert!((h.stress[(0, 0)] / ((lam + 2.0 * mu) * 1e-8) - 1.0).abs() < 1e-6);
+        assert!((h.stress[(1, 1)] / (lam * 1e-8) - 1.0).abs() < 1e-6);
+        assert!((h.stress_zz / (lam * 1e-8) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn unified_triple_matches_eq_44() {
+        let solid = Hypoelastic::from_lame(1100.0, 2.0e7, 4.0e6).unwrap();
+        let f = Tensor::<2>::new(1.1, 0.2, -0.1, 0.95);
+        let kin = Kinematics::new(f, Tensor::<2>::zeros(), 1e-3);
+        let h = History::<2> {
+            stress: Tensor::<2>::new(1.0, 2.0, 2.0, 3.0),
+            stress_zz: 4.0,
+            pressure: 99.0,
+        };
+        let u = solid.unified(&kin, &h);
+        let j = f.determinant();
+        assert!((u.mu - 4.0e6 * 1e-3 / j).abs() <= 1e-12 * u.mu);
+        assert!((u.kappa - (2.0e7 + 2.0 / 3.0 * 4.0e6) * 1e-3 / j).abs() <= 1e-12 * u.kappa);
+        let sh = f * h.stress * f.transpose() / j;
+        assert!((u.sigma_hat - sh).norm() <= 1e-14 * sh.norm());
+        assert!((u.sigma_hat_zz - 4.0 / j).abs() < 1e-14);
+        let mut h2 = h;
+        solid.update_history(&kin, &mut h2);
+        assert_eq!(h2.pressure, 99.0);
+    }
+
+    #[test]
+    fn parameters_round_trip() {
+        let s = Hypoelastic::new(7850.0, 2.1e11, 0.3).unwrap();
+        assert!((s.young_modulus() / 2.1e11 - 1.0).abs() < 1e-14);
+        assert!((s.poisson_ratio() - 0.3).abs() < 1e-14);
+        assert!((s.bulk_modulus() - 2.1e11 / (3.0 * 0.4)).abs() < 1e-3);
+        let c = ((s.lame_lambda() + 2.0 * s.shear_modulus()) / 7850.0).sqrt();
+        assert_eq!(<Hypoelastic as Material<3>>::wave_speed(&s), c);
+        assert_eq!(s.wave_speed(), c);
+        assert_eq!(<Hypoelastic as Material<2>>::density(&s), 7850.0);
+        assert_eq!(<Hypoelastic as Material<2>>::kind(&s), MaterialKind::Solid);
+    }
+
+    #[test]
+    fn invalid_parameters_are_typed_errors() {
+        use Parameter::*;
+        let cases: [((f64, f64, f64), Parameter); 12] = [
+            ((0.0, 1e6, 0.3), Density),
+            ((-1.0, 1e6, 0.3), Density),
+            ((f64::NAN, 1e6, 0.3), Density),
+            ((f64::INFINITY, 1e6, 0.3), Density),
+            ((1e3, 0.0, 0.3), YoungModulus),
+            ((1e3, -1e6, 0.3), YoungModulus),
+            ((1e3, f64::NAN, 0.3), YoungModulus),
+            ((1e3, f64::INFINITY, 0.3), YoungModulus),
+            ((1e3, 1e6, 0.5), PoissonRatio),
+            ((1e3, 1e6, -1.0), PoissonRatio),
+            ((1e3, 1e6, -1.5), PoissonRatio),
+            ((1e3, 1e6, f64::NAN), PoissonRatio),
+        ];
+        for ((rho, e, nu), p) in cases {
+            let err = Hypoelastic::new(rho, e, nu).unwrap_err();
+            assert_eq!(err.parameter(), p, "({rho}, {e}, {nu})");
+        }
+        assert_eq!(
+            Hypoelastic::new(1e3, 1e6, 0.7).unwrap_err().parameter(),
+            PoissonRatio
+        );
+        assert_eq!(
+            Hypoelastic::new(1e3, 1e6, f64::NEG_INFINITY)
+                .unwrap_err()
+                .parameter(),
+            PoissonRatio
+        );
+        // Overflowing Lamé parameters are reported, not stored.
+        assert!(Hypoelastic::new(1e3, f64::MAX, 0.4999999).is_err());
+        let lame = [
+            ((1e3, 1e6, 0.0), ShearModulus),
+            ((1e3, 1e6, -1.0), ShearModulus),
+            ((1e3, 1e6, f64::NAN), ShearModulus),
+            ((1e3, -1e6, 1e6), LameLambda),
+            ((1e3, f64::INFINITY, 1e6), LameLambda),
+            ((1e3, f64::NAN, 1e6), LameLambda),
+        ];
+        for ((rho, lam, mu), p) in lame {
+            assert_eq!(
+                Hypoelastic::from_lame(rho, lam, mu)
+                    .unwrap_err()
+                    .parameter(),
+                p
+            );
+        }
+        // Negative λ is fine while the bulk modulus stays positive (ν < 0).
+        assert!(Hypoelastic::from_lame(1e3, -0.5e6, 1e6).is_ok());
+    }
+}

@@ -153,3 +153,140 @@ where
         history.pressure -= kin.dt * self.bulk_modulus * kin.volumetric_rate(); // eq. 26
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn simple_shear<const D: usize>()
+    where
+        Const<D>: Dim,
+    {
+        let fluid = Newtonian::new(1000.0, 0.8, 2.0e9).unwrap();
+        let gamma_dot = 3.5;
+        let mut d = Tensor::<D>::zeros();
+        d[(0, 1)] = 0.5 * gamma_dot;
+        d[(1, 0)] = 0.5 * gamma_dot;
+        let kin = Kinematics {
+            d,
+            ..Kinematics::<D>::at_rest(1e-3)
+        };
+        let h = History::<D> {
+            pressure: 1.0e5,
+            ..History::default()
+        };
+        let sigma = fluid.unified(&kin, &h).cauchy_stress(&kin);
+        // τ = μ γ̇ (eq. 21); the normal stresses are −p.
+        assert!((sigma[(0, 1)] - 0.8 * gamma_dot).abs() < 1e-12);
+        assert_eq!(sigma[(1, 0)], sigma[(0, 1)]);
+        for i in 0..D {
+            assert_eq!(sigma[(i, i)], -1.0e5);
+        }
+    }
+
+    #[test]
+    fn simple_shear_gives_mu_gamma_dot_2d() {
+        simple_shear::<2>();
+    }
+
+    #[test]
+    fn simple_shear_gives_mu_gamma_dot_3d() {
+        simple_shear::<3>();
+    }
+
+    fn compression<const D: usize>()
+    where
+        Const<D>: Dim,
+    {
+        let water = Newtonian::water();
+        let (dt, eps_v, p0) = (2e-4, -3.0e-3, 1234.5);
+        // Nodal kinematics as the solver passes them: d = (ε_v / D) I.
+        let kin = Kinematics {
+            d: Tensor::<D>::identity() * (eps_v / D as f64),
+            ..Kinematics::<D>::at_rest(dt)
+        };
+        let mut h = History::<D> {
+            pressure: p0,
+            ..History::default()
+        };
+        let u = water.unified(&kin, &h);
+        water.update_history(&kin, &mut h);
+        let expected = p0 - dt * 2.2e9 * eps_v; // eq. 26
+        assert!((h.pressure - expected).abs() <= 1e-12 * expected);
+        assert_eq!(h.stress, Tensor::<D>::zeros());
+        // Mean stress of eq. 27 is −pⁿ⁺¹ (3D trace; in 2D with σ_zz).
+        let s = u.cauchy_stress(&kin);
+        let mean = (s.trace() + u.cauchy_stress_zz(&kin)) / 3.0;
+        assert!((mean + h.pressure).abs() <= 1e-12 * expected);
+    }
+
+    #[test]
+    fn compression_updates_pressure_2d() {
+        compression::<2>();
+    }
+
+    #[test]
+    fn compression_updates_pressure_3d() {
+        compression::<3>();
+    }
+
+    #[test]
+    fn unified_triple_matches_eq_44() {
+        let f = Newtonian::new(900.0, 0.1, 1.0e7).unwrap();
+        let kin = Kinematics::<2>::at_rest(1e-3);
+        let h = History::<2> {
+            pressure: 50.0,
+            ..History::default()
+        };
+        let u = f.unified(&kin, &h);
+        assert_eq!(u.mu, 0.1);
+        assert_eq!(u.kappa, 1e-3 * 1.0e7);
+        assert_eq!(u.sigma_hat, Tensor::<2>::identity() * -50.0);
+        assert_eq!(u.sigma_hat_zz, -50.0);
+        let u3 = f.unified(
+            &Kinematics::<3>::at_rest(1e-3),
+            &History {
+                pressure: 50.0,
+                ..History::default()
+            },
+        );
+        assert_eq!(u3.sigma_hat_zz, 0.0);
+    }
+
+    #[test]
+    fn water_is_valid_and_fast() {
+        let w = Newtonian::water();
+        assert_eq!(Newtonian::new(1000.0, 1e-3, 2.2e9), Ok(w));
+        assert!((w.wave_speed() - (2.2e6f64).sqrt()).abs() < 1e-12);
+        assert_eq!(<Newtonian as Material<3>>::wave_speed(&w), w.wave_speed());
+        assert_eq!(<Newtonian as Material<2>>::density(&w), 1000.0);
+        assert_eq!(<Newtonian as Material<2>>::kind(&w), MaterialKind::Fluid);
+        let soft = w.with_bulk_modulus(2.2e6).unwrap();
+        assert_eq!(soft.bulk_modulus(), 2.2e6);
+        assert_eq!(soft.viscosity(), 1e-3);
+    }
+
+    #[test]
+    fn invalid_parameters_are_typed_errors() {
+        use Parameter::*;
+        assert!(Newtonian::new(1000.0, 0.0, 2.2e9).is_ok()); // inviscid is fine
+        let cases = [
+            ((0.0, 1e-3, 2.2e9), Density),
+            ((-1.0, 1e-3, 2.2e9), Density),
+            ((f64::NAN, 1e-3, 2.2e9), Density),
+            ((f64::INFINITY, 1e-3, 2.2e9), Density),
+            ((1e3, -1e-3, 2.2e9), Viscosity),
+            ((1e3, f64::NAN, 2.2e9), Viscosity),
+            ((1e3, f64::INFINITY, 2.2e9), Viscosity),
+            ((1e3, 1e-3, 0.0), BulkModulus),
+            ((1e3, 1e-3, -2.2e9), BulkModulus),
+            ((1e3, 1e-3, f64::NAN), BulkModulus),
+            ((1e3, 1e-3, f64::INFINITY), BulkModulus),
+        ];
+        for ((rho, mu, k), p) in cases {
+            let err = Newtonian::new(rho, mu, k).unwrap_err();
+            assert_eq!(err.parameter(), p);
+            assert!(err.to_string().contains(p.describe()));
+        }
+    }
+}
