@@ -71,14 +71,35 @@ pub enum MaterialError {
         /// The allowed range, in words.
         allowed: &'static str,
     },
+    /// Every parameter is valid alone, but together they give a wave speed
+    /// that is zero or not finite (e.g. `K/ρ` overflows), which would break
+    /// time-step control.
+    #[error(
+        "wave speed {wave_speed} m/s is not finite and positive: \
+         the moduli and the density are too far apart"
+    )]
+    DegenerateWaveSpeed {
+        /// The wave speed the parameters give (m/s).
+        wave_speed: f64,
+    },
 }
 
 impl MaterialError {
-    /// The parameter at fault.
-    pub fn parameter(&self) -> Parameter {
+    /// The parameter at fault, if a single one is.
+    pub fn parameter(&self) -> Option<Parameter> {
         match self {
-            MaterialError::InvalidParameter { parameter, .. } => *parameter,
+            MaterialError::InvalidParameter { parameter, .. } => Some(*parameter),
+            MaterialError::DegenerateWaveSpeed { .. } => None,
         }
+    }
+}
+
+/// Checks a derived wave speed is finite and positive.
+pub(crate) fn check_wave_speed(wave_speed: f64) -> Result<(), MaterialError> {
+    if wave_speed.is_finite() && wave_speed > 0.0 {
+        Ok(())
+    } else {
+        Err(MaterialError::DegenerateWaveSpeed { wave_speed })
     }
 }
 

@@ -3,7 +3,7 @@
 
 use pfem_core::{Const, Dim, Tensor};
 
-use crate::error::{check, check_density, MaterialError, Parameter};
+use crate::error::{check, check_density, check_wave_speed, MaterialError, Parameter};
 use crate::material::{History, Kinematics, Material, MaterialKind, Unified};
 
 /// An isotropic hypoelastic solid (paper §3.3–3.4), in the Updated
@@ -60,7 +60,9 @@ impl Hypoelastic {
     /// # Errors
     ///
     /// [`MaterialError::InvalidParameter`] unless every parameter is finite,
-    /// `ρ > 0`, `E > 0` and `−1 < ν < 0.5`.
+    /// `ρ > 0`, `E > 0` and `−1 < ν < 0.5` (and the Lamé parameters do not
+    /// overflow); [`MaterialError::DegenerateWaveSpeed`] if
+    /// `√((λ_h + 2 μ_h)/ρ)` is not finite and positive.
     pub fn new(density: f64, young: f64, poisson: f64) -> Result<Self, MaterialError> {
         let density = check_density(density)?;
         let e = check(
@@ -95,7 +97,8 @@ impl Hypoelastic {
     ///
     /// [`MaterialError::InvalidParameter`] unless every parameter is finite,
     /// `ρ > 0`, `μ_h > 0` and `λ_h > −⅔ μ_h` (positive bulk modulus; the
-    /// same as `−1 < ν < 0.5`).
+    /// same as `−1 < ν < 0.5`); [`MaterialError::DegenerateWaveSpeed`] if
+    /// `√((λ_h + 2 μ_h)/ρ)` is not finite and positive.
     pub fn from_lame(density: f64, lambda: f64, mu: f64) -> Result<Self, MaterialError> {
         let density = check_density(density)?;
         let mu = check(Parameter::ShearModulus, mu, mu > 0.0, "finite and > 0")?;
@@ -105,11 +108,20 @@ impl Hypoelastic {
             lambda + 2.0 / 3.0 * mu > 0.0,
             "finite with λ_h + ⅔ μ_h > 0",
         )?;
-        Ok(Self {
+        let solid = Self {
             density,
             lambda,
             mu,
-        })
+        };
+        // The coefficients the solver uses must not overflow.
+        check(
+            Parameter::LameLambda,
+            solid.bulk_modulus(),
+            true,
+            "finite with λ_h + ⅔ μ_h finite",
+        )?;
+        check_wave_speed(solid.wave_speed())?;
+        Ok(solid)
     }
 
     /// First Lamé parameter `λ_h` (Pa).
@@ -459,17 +471,17 @@ mod tests {
         ];
         for ((rho, e, nu), p) in cases {
             let err = Hypoelastic::new(rho, e, nu).unwrap_err();
-            assert_eq!(err.parameter(), p, "({rho}, {e}, {nu})");
+            assert_eq!(err.parameter(), Some(p), "({rho}, {e}, {nu})");
         }
         assert_eq!(
             Hypoelastic::new(1e3, 1e6, 0.7).unwrap_err().parameter(),
-            PoissonRatio
+            Some(PoissonRatio)
         );
         assert_eq!(
             Hypoelastic::new(1e3, 1e6, f64::NEG_INFINITY)
                 .unwrap_err()
                 .parameter(),
-            PoissonRatio
+            Some(PoissonRatio)
         );
         // Overflowing Lamé parameters are reported, not stored.
         assert!(Hypoelastic::new(1e3, f64::MAX, 0.4999999).is_err());
@@ -486,7 +498,7 @@ mod tests {
                 Hypoelastic::from_lame(rho, lam, mu)
                     .unwrap_err()
                     .parameter(),
-                p
+                Some(p)
             );
         }
         // Negative λ is fine while the bulk modulus stays positive (ν < 0).

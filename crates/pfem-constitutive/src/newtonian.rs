@@ -2,7 +2,7 @@
 
 use pfem_core::{Const, Dim, Tensor};
 
-use crate::error::{check, check_density, MaterialError, Parameter};
+use crate::error::{check, check_density, check_wave_speed, MaterialError, Parameter};
 use crate::material::{History, Kinematics, Material, MaterialKind, Unified};
 
 /// A nearly-incompressible Newtonian fluid (paper §3.1–3.2).
@@ -56,9 +56,11 @@ impl Newtonian {
     /// # Errors
     ///
     /// [`MaterialError::InvalidParameter`] unless every parameter is finite,
-    /// `ρ > 0`, `μ_f ≥ 0` (zero is an inviscid fluid) and `K_f > 0`.
+    /// `ρ > 0`, `μ_f ≥ 0` (zero is an inviscid fluid) and `K_f > 0`;
+    /// [`MaterialError::DegenerateWaveSpeed`] if `√(K_f/ρ)` is not finite
+    /// and positive.
     pub fn new(density: f64, viscosity: f64, bulk_modulus: f64) -> Result<Self, MaterialError> {
-        Ok(Self {
+        let fluid = Self {
             density: check_density(density)?,
             viscosity: check(
                 Parameter::Viscosity,
@@ -72,7 +74,9 @@ impl Newtonian {
                 bulk_modulus > 0.0,
                 "finite and > 0",
             )?,
-        })
+        };
+        check_wave_speed(fluid.wave_speed())?;
+        Ok(fluid)
     }
 
     /// Water at about 20 °C: `ρ = 1000 kg/m³`, `μ_f = 10⁻³ Pa·s`,
@@ -285,7 +289,7 @@ mod tests {
         ];
         for ((rho, mu, k), p) in cases {
             let err = Newtonian::new(rho, mu, k).unwrap_err();
-            assert_eq!(err.parameter(), p);
+            assert_eq!(err.parameter(), Some(p));
             assert!(err.to_string().contains(p.describe()));
         }
     }
