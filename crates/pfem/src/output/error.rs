@@ -1,0 +1,87 @@
+//! The error type of the output layer.
+
+use std::path::PathBuf;
+
+use super::csv::ParseError;
+use super::vtu::FrameError;
+
+/// What went wrong while writing or reading an output file; every variant
+/// names the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OutputError {
+    /// The operating system refused a read, write, rename or directory
+    /// creation.
+    #[error("I/O error on {path}: {source}")]
+    Io {
+        /// The file or directory concerned.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The frame handed to the VTK writer is inconsistent (a cell index out
+    /// of range, a field of the wrong length…).
+    #[error("cannot write {path}: {source}")]
+    InvalidFrame {
+        /// The file that was to be written.
+        path: PathBuf,
+        /// What is inconsistent.
+        #[source]
+        source: FrameError,
+    },
+    /// A CSV probe row does not have one value per column.
+    #[error("{path}: row has {got} values but the header has {expected} columns")]
+    RowLength {
+        /// The CSV file.
+        path: PathBuf,
+        /// Number of columns in the header.
+        expected: usize,
+        /// Number of values in the rejected row.
+        got: usize,
+    },
+    /// A CSV column name would break the file (empty, or contains a comma,
+    /// quote or line break).
+    #[error("{path}: invalid column name {name:?}")]
+    ColumnName {
+        /// The CSV file.
+        path: PathBuf,
+        /// The rejected name.
+        name: String,
+    },
+    /// A reference CSV file could not be parsed.
+    #[error("{path}: {source}")]
+    Parse {
+        /// The CSV file (`<embedded>` for text that came from no file).
+        path: PathBuf,
+        /// Line and reason.
+        #[source]
+        source: ParseError,
+    },
+    /// `serde_json` could not serialise the run summary.
+    #[error("cannot serialise {path}: {source}")]
+    Json {
+        /// The JSON file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// Drawing or encoding a plot failed.
+    #[error("cannot draw {path}: {reason}")]
+    Plot {
+        /// The image file.
+        path: PathBuf,
+        /// What failed.
+        reason: String,
+    },
+}
+
+impl OutputError {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,148 @@
+//! ParaView data collections (`.pvd`): a time series of `.vtu` frames.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use pfem_core::{Const, Dim};
+
+use super::vtu::{encode_vtu_at, escape_xml_into};
+use super::{write_atomic, Encoding, Frame, OutputError};
+
+/// A `.pvd` collection file listing `(time, file)` pairs.
+///
+/// The whole file is rewritten atomically after every [`push`](Self::push),
+/// so a run that crashes leaves a valid collection of the frames written so
+/// far.
+#[derive(Debug, Clone)]
+pub struct PvdWriter {
+    path: PathBuf,
+    entries: Vec<(f64, String)>,
+}
+
+impl PvdWriter {
+    /// Starts a collection at `path`, writing it empty right away (so a bad
+    /// path fails now, not after the first frame). An existing file is
+    /// replaced.
+    pub fn create(path: impl Into<PathBuf>) -> Result<Self, OutputError> {
+        let writer = Self {
+            path: path.into(),
+            entries: Vec::new(),
+        };
+        writer.rewrite()?;
+        Ok(writer)
+    }
+
+    /// Adds the dataset `file` at simulated time `time` (s) and rewrites the
+    /// collection. `file` is stored as given: make it relative to the
+    /// `.pvd`'s directory so that the output folder can be moved.
+    pub fn push(&mut self, time: f64, file: impl AsRef<Path>) -> Result<(), OutputError> {
+        // Forward slashes read on every platform ParaView runs on.
+        let file = file.as_ref().to_string_lossy().replace('\\', "/");
+        self.entries.push((time, file));
+        self.rewrite()
+    }
+
+    /// The collection file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The `(time, file)` pairs written so far.
+    pub fn entries(&self) -> &[(f64, String)] {
+        &self.entries
+    }
+
+    fn rewrite(&self) -> Result<(), OutputError> {
+        let mut s = String::with_capacity(160 + 80 * self.entries.len());
+        s.push_str(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" \
+             byte_order=\"LittleEndian\">\n  <Collection>\n",
+        );
+        for (t, file) in &self.entries {
+            let _ = write!(
+                s,
+                "    <DataSet timestep=\"{t:?}\" group=\"\" part=\"0\" file=\""
+            );
+            escape_xml_into(file, &mut s);
+            s.push_str("\"/>\n");
+        }
+        s.push_str("  </Collection>\n</VTKFile>\n");
+        write_atomic(&self.path, s.as_bytes())
+    }
+}
+
+/// A time series of frames in one directory: `NAME_000000.vtu`,
+/// `NAME_000001.vtu`, … and the collection `NAME.pvd` that ParaView opens.
+///
+/// Each frame is written before the collection that lists it, both
+/// atomically: after a crash every listed file exists and is complete.
+#[derive(Debug)]
+pub struct VtuSeries {
+    dir: PathBuf,
+    name: String,
+    encoding: Encoding,
+    pvd: PvdWriter,
+}
+
+impl VtuSeries {
+    /// Creates `dir` (and its parents) if needed and starts an empty
+    /// collection `dir/NAME.pvd`, replacing any earlier one.
+    pub fn create(
+        dir: impl Into<PathBuf>,
+        name: &str,
+        encoding: Encoding,
+    ) -> Result<Self, OutputError> {
+        let dir = dir.into();
+        std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
+        let pvd = PvdWriter::create(dir.join(format!("{name}.pvd")))?;
+        Ok(Self {
+            dir,
+            name: name.to_owned(),
+            encoding,
+            pvd,
+        })
+    }
+
+    /// Writes `frame` as the next `.vtu` file, with `TimeValue = time` (s),
+    /// adds it to the collection, and returns the path written.
+    pub fn write_frame<const D: usize>(
+        &mut self,
+        time: f64,
+        frame: &Frame<'_, D>,
+    ) -> Result<PathBuf, OutputError>
+    where
+        Const<D>: Dim,
+    {
+        let file = format!("{}_{:06}.vtu", self.name, self.pvd.entries().len());
+        let path = self.dir.join(&file);
+        let bytes = encode_vtu_at(frame, self.encoding, Some(time)).map_err(|source| {
+            OutputError::InvalidFrame {
+                path: path.clone(),
+                source,
+            }
+        })?;
+        write_atomic(&path, &bytes)?;
+        self.pvd.push(time, &file)?;
+        Ok(path)
+    }
+
+    /// Number of frames written.
+    pub fn len(&self) -> usize {
+        self.pvd.entries().len()
+    }
+
+    /// Whether no frame has been written yet.
+    pub fn is_empty(&self) -> bool {
+        self.pvd.entries().is_empty()
+    }
+
+    /// The collection file (`dir/NAME.pvd`).
+    pub fn pvd_path(&self) -> &Path {
+        self.pvd.path()
+    }
+
+    /// The directory the frames are written to.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+}
