@@ -1,0 +1,179 @@
+//! Exact geometric predicates for the 3D Delaunay tessellator, with the
+//! symbolic perturbation (simulation of simplicity) that resolves every
+//! cospherical and coplanar tie deterministically.
+//!
+//! The sign conventions follow [`pfem_core::simplex_measure`]: a tetrahedron
+//! `(a, b, c, d)` is positively oriented when `det[b − a, c − a, d − a] > 0`.
+//! The determinants are evaluated with Shewchuk's adaptive-precision
+//! arithmetic (the `robust` crate), so every sign returned here is exact for
+//! finite inputs whose products neither overflow nor underflow.
+//!
+//! The perturbation is the one of Edelsbrunner and Mücke (1990), §5 and
+//! Devillers and Teillaud (2011): the lifted coordinate `|p_i|²` of point `i`
+//! is raised by `ε^(N − i)`, so the point with the largest index is the most
+//! perturbed. With it, the Delaunay tessellation is unique for any point set
+//! without duplicates, and independent of the insertion order.
+
+use robust::Coord3D;
+
+#[inline(always)]
+fn c3(p: &[f64; 3]) -> Coord3D<f64> {
+    Coord3D {
+        x: p[0],
+        y: p[1],
+        z: p[2],
+    }
+}
+
+#[inline(always)]
+fn sign(x: f64) -> i32 {
+    (x > 0.0) as i32 - (x < 0.0) as i32
+}
+
+/// Exact sign of `det[b − a, c − a, d − a]`: `+1` when `(a, b, c, d)` is
+/// positively oriented (positive signed volume), `−1` when negatively,
+/// `0` when the four points are coplanar.
+#[inline]
+pub fn orient3d(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3]) -> i32 {
+    // Shewchuk's orient3d is det[a − d, b − d, c − d] = −det[b − a, c − a, d − a].
+    -sign(robust::orient3d(c3(a), c3(b), c3(c), c3(d)))
+}
+
+/// Exact in-sphere test: `+1` when `e` lies strictly inside the sphere
+/// through `a, b, c, d`, `−1` strictly outside, `0` on it, provided
+/// `(a, b, c, d)` is positively oriented (the sign flips otherwise).
+#[inline]
+pub fn insphere(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3], e: &[f64; 3]) -> i32 {
+    // Shewchuk's insphere expects his positive orientation, which is ours
+    // negated, hence the minus sign.
+    -sign(robust::insphere(c3(a), c3(b), c3(c), c3(d), c3(e)))
+}
+
+/// Exact orientation of three points in the `(i, j)` coordinate plane.
+#[inline]
+fn orient2d_proj(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], i: usize, j: usize) -> i32 {
+    let pa = robust::Coord { x: a[i], y: a[j] };
+    let pb = robust::Coord { x: b[i], y: b[j] };
+    let pc = robust::Coord { x: c[i], y: c[j] };
+    sign(robust::orient2d(pa, pb, pc))
+}
+
+/// Whether three points are exactly collinear (or coincident).
+pub fn collinear(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]) -> bool {
+    orient2d_proj(a, b, c, 0, 1) == 0
+        && orient2d_proj(a, b, c, 1, 2) == 0
+        && orient2d_proj(a, b, c, 2, 0) == 0
+}
+
+/// The coordinate plane `(i, j)` onto which the non-collinear triangle
+/// `a, b, c` projects without degenerating, and its orientation there.
+fn projection_plane(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]) -> (usize, usize, i32) {
+    for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+        let o = orient2d_proj(a, b, c, i, j);
+        if o != 0 {
+            return (i, j, o);
+        }
+    }
+    (0, 1, 0)
+}
+
+/// In-sphere test with symbolic perturbation, for point indices: `true`
+/// when point `e` is in conflict with (strictly inside the perturbed
+/// circumsphere of) the positively oriented tetrahedron `t`. Never ties.
+/// `pts` holds the coordinates, indices are the perturbation ranks.
+pub fn insphere_sos(pts: &[[f64; 3]], t: [u32; 4], e: u32) -> bool {
+    let p = |i: u32| &pts[i as usize];
+    let s = insphere(p(t[0]), p(t[1]), p(t[2]), p(t[3]), p(e));
+    if s != 0 {
+        return s > 0;
+    }
+    // Cospherical: the leading terms of the perturbed determinant decide,
+    // from the most perturbed point (largest index) down (Devillers and
+    // Teillaud 2011, §3.1; two terms suffice for a non-flat tetrahedron).
+    let mut ids = [t[0], t[1], t[2], t[3], e];
+    ids.sort_unstable_by(|a, b| b.cmp(a));
+    for &top in &ids[..2] {
+        if top == e {
+            return false;
+        }
+        // Orientation of `t` with the top vertex replaced by `e`.
+        let mut q = t;
+        for v in q.iter_mut() {
+            if *v == top {
+                *v = e;
+            }
+        }
+        let o = orient3d(p(q[0]), p(q[1]), p(q[2]), p(q[3]));
+        if o != 0 {
+            return o > 0;
+        }
+    }
+    false
+}
+
+/// Conflict test of point `e` against the infinite tetrahedron over the
+/// hull facet `f` (positively oriented towards the outside: a point beyond
+/// the hull has positive orientation with it). Coplanar points are decided
+/// by the perturbed in-circle test within the facet's plane, which is the
+/// restriction of [`insphere_sos`] to that plane, so both tests agree.
+pub fn hull_conflict_sos(pts: &[[f64; 3]], f: [u32; 3], e: u32) -> bool {
+    let p = |i: u32| &pts[i as usize];
+    let (a, b, c, q) = (p(f[0]), p(f[1]), p(f[2]), p(e));
+    let o = orient3d(a, b, c, q);
+    if o != 0 {
+        return o > 0;
+    }
+    let (i, j, local) = projection_plane(a, b, c);
+    if local == 0 {
+        return false; // flat facet: cannot happen in a valid tessellation
+    }
+    // In-circle within the plane: the sphere through a, b, c and any point
+    // off the plane cuts the plane in the circumcircle of a, b, c.
+    let k = 3 - i - j;
+    let mut off = *a;
+    off[k] += a[k].abs().max(1.0);
+    let side = orient3d(a, b, c, &off);
+    let s = insphere(a, b, c, &off, q) * side;
+    if s != 0 {
+        return s > 0;
+    }
+    let mut ids = [f[0], f[1], f[2], e];
+    ids.sort_unstable_by(|a, b| b.cmp(a));
+    for &top in &ids[..3] {
+        if top == e {
+            return false;
+        }
+        let mut r = f;
+        for v in r.iter_mut() {
+            if *v == top {
+                *v = e;
+            }
+        }
+        let o = orient2d_proj(p(r[0]), p(r[1]), p(r[2]), i, j);
+        if o != 0 {
+            return o * local > 0;
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn conventions_match_simplex_measure() {
+        let a = [0.0, 0.0, 0.0];
+        let b = [1.0, 0.0, 0.0];
+        let c = [0.0, 1.0, 0.0];
+        let d = [0.0, 0.0, 1.0];
+        let pts = [a, b, c, d].map(pfem_core::Point::<3>::from);
+        assert!(pfem_core::simplex_measure::<3>(&pts) > 0.0);
+        assert_eq!(orient3d(&a, &b, &c, &d), 1);
+        assert_eq!(orient3d(&b, &a, &c, &d), -1);
+        assert_eq!(orient3d(&a, &b, &c, &[1.0, 1.0, 0.0]), 0);
+        assert_eq!(insphere(&a, &b, &c, &d, &[0.25, 0.25, 0.25]), 1);
+        assert_eq!(insphere(&a, &b, &c, &d, &[2.0, 2.0, 2.0]), -1);
+        assert_eq!(insphere(&a, &b, &c, &d, &[1.0, 1.0, 1.0]), 0);
+    }
+}
