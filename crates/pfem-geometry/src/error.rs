@@ -31,4 +31,65 @@ pub enum GeometryError {
         /// The tolerance (m).
         tolerance: f64,
     },
+    /// A coordinate is finite but outside the range the exact predicates
+    /// of the tessellator can handle without overflow, even after the
+    /// exact power-of-two rescaling the tessellator applies.
+    #[error("particle {index} has coordinate {value:e}, outside the range the tessellator supports")]
+    OutOfRange {
+        /// Index of the offending particle.
+        index: usize,
+        /// The offending coordinate (m).
+        value: f64,
+    },
+    /// More particles than `u32` indices can address.
+    #[error("{count} particles exceed the supported maximum of {max}")]
+    TooManyPoints {
+        /// Number of particles given.
+        count: usize,
+        /// Largest supported number.
+        max: usize,
+    },
+    /// Two per-particle (or per-simplex) arrays that must have the same
+    /// length do not.
+    #[error("{what} has length {found}, expected {expected}")]
+    LengthMismatch {
+        /// Which argument.
+        what: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// A parameter is outside its valid range.
+    #[error("parameter `{name}` = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// Parameter name (the struct field).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// What the valid range is.
+        reason: &'static str,
+    },
+    /// A particle spacing `h` is not finite and positive.
+    #[error("particle {index} has invalid spacing h = {value}")]
+    InvalidSpacing {
+        /// Index of the offending particle.
+        index: usize,
+        /// The spacing given (m).
+        value: f64,
+    },
+    /// A connectivity array refers to a particle that does not exist, or its
+    /// length is not a multiple of the vertices per simplex.
+    #[error("invalid connectivity: {reason}")]
+    InvalidConnectivity {
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// The underlying triangulation library failed unexpectedly. This is a
+    /// bug (ours or the library's), reported instead of panicking.
+    #[error("internal tessellator failure: {message}")]
+    Internal {
+        /// What the library reported.
+        message: String,
+    },
 }

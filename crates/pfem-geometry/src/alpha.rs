@@ -1,0 +1,272 @@
+//! The alpha shape of paper §8: which Delaunay simplices are fluid elements.
+
+use pfem_core::{circumsphere, simplex_measure, Const, Dim, ParticleKind, Point, MAX_NV};
+use rayon::prelude::*;
+
+use crate::{GeometryError, Tessellation, NO_NEIGHBOR};
+
+/// Parameters of the alpha shape.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AlphaShapeParams {
+    /// A fluid-candidate simplex is kept when its circumradius
+    /// `R ≤ alpha · h`, with `h` the mean spacing of its nodes.
+    /// Dimensionless, finite and `> 0`; PFEM codes use 1.2–1.4 (paper §8:
+    /// "close to, but greater than one"). Default `1.3`.
+    pub alpha: f64,
+}
+
+impl Default for AlphaShapeParams {
+    fn default() -> Self {
+        Self { alpha: 1.3 }
+    }
+}
+
+impl AlphaShapeParams {
+    /// Checks the parameters.
+    pub fn validate(&self) -> Result<(), GeometryError> {
+        if !(self.alpha.is_finite() && self.alpha > 0.0) {
+            return Err(GeometryError::InvalidParameter {
+                name: "alpha",
+                value: self.alpha,
+                reason: "must be finite and > 0",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Result of [`alpha_shape`]: the fluid mesh.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct AlphaShape {
+    /// For each simplex of the Delaunay tessellation, whether it is kept.
+    pub kept: Vec<bool>,
+    /// The kept simplices, in Delaunay order, as a tessellation of the same
+    /// particles. Its neighbour across a facet whose other side is not kept
+    /// is [`NO_NEIGHBOR`]: those facets are the boundary (see
+    /// [`classify`](crate::classify())).
+    pub mesh: Tessellation,
+    /// `source[m]` is the Delaunay simplex that mesh simplex `m` is.
+    pub source: Vec<u32>,
+    /// Total measure (area in 2D, volume in 3D) of the fluid candidates:
+    /// Delaunay simplices with at least one fluid node.
+    pub candidate_measure: f64,
+    /// Total measure of the kept simplices: the fluid volume of the mesh.
+    pub kept_measure: f64,
+}
+
+impl AlphaShape {
+    /// Measure of the fluid candidates that the alpha criterion dropped
+    /// (the volume the alpha shape takes away from the Delaunay hull).
+    pub fn deleted_measure(&self) -> f64 {
+        self.candidate_measure - self.kept_measure
+    }
+
+    /// Number of kept simplices.
+    pub fn len(&self) -> usize {
+        self.mesh.len()
+    }
+
+    /// Whether no simplex is kept.
+    pub fn is_empty(&self) -> bool {
+        self.mesh.is_empty()
+    }
+}
+
+/// Checks that the per-particle arrays agree and the spacings are valid.
+pub(crate) fn check_particles<const D: usize>(
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    spacing: &[f64],
+) -> Result<(), GeometryError>
+where
+    Const<D>: Dim,
+{
+    let n = points.len();
+    if kinds.len() != n {
+        return Err(GeometryError::LengthMismatch { what: "kinds", expected: n, found: kinds.len() });
+    }
+    if spacing.len() != n {
+        return Err(GeometryError::LengthMismatch {
+            what: "spacing",
+            expected: n,
+            found: spacing.len(),
+        });
+    }
+    if let Some(index) = spacing.iter().position(|h| !(h.is_finite() && *h > 0.0)) {
+        return Err(GeometryError::InvalidSpacing { index, value: spacing[index] });
+    }
+    Ok(())
+}
+
+/// Checks that a tessellation has `D + 1` vertices per simplex, indices in
+/// range and a neighbour array of the right length.
+pub(crate) fn check_tessellation<const D: usize>(
+    tess: &Tessellation,
+    n_points: usize,
+) -> Result<(), GeometryError>
+where
+    Const<D>: Dim,
+{
+    let nv = <Const<D> as Dim>::NV;
+    if tess.nv != nv && !tess.simplices.is_empty() {
+        return Err(GeometryError::InvalidConnectivity { reason: "nv is not D + 1" });
+    }
+    if tess.simplices.len() % nv != 0 {
+        return Err(GeometryError::InvalidConnectivity {
+            reason: "connectivity length is not a multiple of D + 1",
+        });
+    }
+    if tess.neighbors.len() != tess.simplices.len() {
+        return Err(GeometryError::InvalidConnectivity {
+            reason: "neighbour array length differs from connectivity length",
+        });
+    }
+    if tess.simplices.iter().any(|&v| v as usize >= n_points) {
+        return Err(GeometryError::InvalidConnectivity { reason: "vertex index out of range" });
+    }
+    let ns = tess.simplices.len() / nv;
+    if tess.neighbors.iter().any(|&t| t != NO_NEIGHBOR && t as usize >= ns) {
+        return Err(GeometryError::InvalidConnectivity { reason: "neighbour index out of range" });
+    }
+    Ok(())
+}
+
+/// Gathers the vertices of a simplex into a fixed-size array.
+#[inline]
+pub(crate) fn gather<const D: usize>(points: &[Point<D>], s: &[u32]) -> [Point<D>; MAX_NV]
+where
+    Const<D>: Dim,
+{
+    let mut p = [Point::<D>::zeros(); MAX_NV];
+    for (k, &v) in s.iter().enumerate() {
+        p[k] = points[v as usize];
+    }
+    p
+}
+
+/// Mean spacing of the nodes of a simplex: the local `h` of §8.
+#[inline]
+pub(crate) fn simplex_spacing(spacing: &[f64], s: &[u32]) -> f64 {
+    s.iter().map(|&v| spacing[v as usize]).sum::<f64>() / s.len() as f64
+}
+
+/// Decides one simplex: `(fluid candidate measure, kept)`.
+#[inline]
+fn decide<const D: usize>(
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    spacing: &[f64],
+    s: &[u32],
+    alpha: f64,
+) -> (f64, bool)
+where
+    Const<D>: Dim,
+{
+    // Candidates: at least one fluid node (NOTES point 4: wall-only, solid-only
+    // and solid/wall bridges are not fluid elements).
+    if !s.iter().any(|&v| kinds[v as usize] == ParticleKind::Fluid) {
+        return (0.0, false);
+    }
+    let p = gather::<D>(points, s);
+    let p = &p[..s.len()];
+    let measure = simplex_measure::<D>(p);
+    if !(measure > 0.0) {
+        return (measure.max(0.0), false);
+    }
+    let h = simplex_spacing(spacing, s);
+    // §8 alpha criterion: keep when the circumradius R ≤ α h.
+    let keep = matches!(circumsphere::<D>(p), Some((_, r)) if r <= alpha * h);
+    (measure, keep)
+}
+
+/// The alpha shape of paper §8 of a Delaunay tessellation, allocating.
+/// See [`alpha_shape_into`].
+pub fn alpha_shape<const D: usize>(
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    spacing: &[f64],
+    delaunay: &Tessellation,
+    params: &AlphaShapeParams,
+) -> Result<AlphaShape, GeometryError>
+where
+    Const<D>: Dim,
+{
+    let mut out = AlphaShape::default();
+    alpha_shape_into(points, kinds, spacing, delaunay, params, &mut out)?;
+    Ok(out)
+}
+
+/// The alpha shape of paper §8, written into `out` (allocations reused).
+///
+/// A Delaunay simplex is a *fluid candidate* when at least one of its nodes
+/// is [`ParticleKind::Fluid`]; simplices of wall particles only, of solid
+/// particles only (a solid keeps its own mesh, which the driver supplies) or
+/// bridging solids and walls without a fluid node are never kept. A
+/// candidate is kept when it is positively oriented and its circumradius
+/// satisfies `R ≤ α·h` (§8), `h` the mean of its nodes' `spacing`.
+///
+/// The per-simplex test runs in parallel (rayon); the sums are taken
+/// sequentially so results are bitwise reproducible.
+pub fn alpha_shape_into<const D: usize>(
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    spacing: &[f64],
+    delaunay: &Tessellation,
+    params: &AlphaShapeParams,
+    out: &mut AlphaShape,
+) -> Result<(), GeometryError>
+where
+    Const<D>: Dim,
+{
+    params.validate()?;
+    check_particles(points, kinds, spacing)?;
+    check_tessellation::<D>(delaunay, points.len())?;
+    let nv = <Const<D> as Dim>::NV;
+    let ns = delaunay.simplices.len() / nv;
+    let alpha = params.alpha;
+
+    // Candidate measure per simplex, negative-signed when dropped so that one
+    // f64 per simplex carries both facts (0 = not a candidate).
+    let mut signed = vec![0.0f64; ns];
+    delaunay
+        .simplices
+        .par_chunks(nv)
+        .zip(signed.par_iter_mut())
+        .with_min_len(2048)
+        .for_each(|(s, out)| {
+            let (m, keep) = decide::<D>(points, kinds, spacing, s, alpha);
+            *out = if keep { m } else { -m };
+        });
+
+    out.kept.clear();
+    out.kept.reserve(ns);
+    out.source.clear();
+    out.candidate_measure = 0.0;
+    out.kept_measure = 0.0;
+    // Delaunay simplex → mesh simplex.
+    let mut new_index = vec![NO_NEIGHBOR; ns];
+    for (s, &m) in signed.iter().enumerate() {
+        let keep = m > 0.0;
+        out.kept.push(keep);
+        out.candidate_measure += m.abs();
+        if keep {
+            out.kept_measure += m;
+            new_index[s] = out.source.len() as u32;
+            out.source.push(s as u32);
+        }
+    }
+    let mesh = &mut out.mesh;
+    mesh.nv = nv;
+    mesh.simplices.clear();
+    mesh.neighbors.clear();
+    mesh.simplices.reserve(out.source.len() * nv);
+    mesh.neighbors.reserve(out.source.len() * nv);
+    for &s in &out.source {
+        let s = s as usize;
+        mesh.simplices.extend_from_slice(delaunay.simplex(s));
+        for &t in delaunay.simplex_neighbors(s) {
+            mesh.neighbors.push(if t == NO_NEIGHBOR { NO_NEIGHBOR } else { new_index[t as usize] });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,455 @@
+//! The built-in 2D Delaunay tessellator, a thin layer over
+//! [spade](https://docs.rs/spade) (exact predicates, `O(n log n)` bulk
+//! loading) that keeps particle `i` as vertex `i`, refuses what it cannot
+//! mesh with a typed error and never panics.
+
+use pfem_core::Point;
+use spade::handles::FixedFaceHandle;
+use spade::{DelaunayTriangulation, Point2, Triangulation};
+
+use crate::{GeometryError, Tessellation, Tessellator, NO_NEIGHBOR};
+
+/// Parameters of [`Delaunay2`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Delaunay2Params {
+    /// Two particles closer than `coincidence_tolerance × L` are reported as
+    /// [`GeometryError::NearCoincident`], with `L` the larger side of the
+    /// particles' bounding box. Dimensionless, `≥ 0`; `0` reports exact
+    /// duplicates only. Default `1e-10`.
+    pub coincidence_tolerance: f64,
+}
+
+impl Default for Delaunay2Params {
+    fn default() -> Self {
+        Self { coincidence_tolerance: 1e-10 }
+    }
+}
+
+impl Delaunay2Params {
+    /// Checks the parameters.
+    pub fn validate(&self) -> Result<(), GeometryError> {
+        let t = self.coincidence_tolerance;
+        if !(t.is_finite() && (0.0..1.0).contains(&t)) {
+            return Err(GeometryError::InvalidParameter {
+                name: "coincidence_tolerance",
+                value: t,
+                reason: "must be finite, >= 0 and < 1",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Largest particle count [`Delaunay2`] accepts: indices are `u32` and spade
+/// stores about six directed edges per vertex under `u32` handles.
+pub const MAX_POINTS_2D: usize = (u32::MAX / 8) as usize;
+
+/// 2D Delaunay tessellator backed by spade's `bulk_load_stable`.
+///
+/// * Particle `i` is vertex `i`; every triangle is counter-clockwise
+///   (positive area); `neighbors` is read directly from spade's half-edge
+///   structure (entry `k` is the triangle across the edge opposite local
+///   vertex `k`).
+/// * Coordinates are multiplied by one power of two before meshing so that
+///   the largest magnitude is in `[0.5, 1)`. This is exact in floating point,
+///   so the mesh is the Delaunay triangulation of the input itself, for any
+///   magnitude (1e-300 to 1e300); only coordinates more than 2¹⁴² times
+///   smaller than the largest one are flushed to zero (spade's exact
+///   predicates cannot take them), a change far below any tolerance.
+/// * Exact duplicates (which spade would merge silently) and particles
+///   closer than [`Delaunay2Params::coincidence_tolerance`] are
+///   [`GeometryError::NearCoincident`]; NaN or infinite coordinates are
+///   [`GeometryError::NonFinite`]; fewer than three particles or all
+///   collinear are [`GeometryError::Degenerate`].
+///
+/// ```
+/// use pfem_core::Point;
+/// use pfem_geometry::{Delaunay2, Tessellation, Tessellator};
+///
+/// let pts = [
+///     Point::<2>::new(0.0, 0.0),
+///     Point::<2>::new(1.0, 0.0),
+///     Point::<2>::new(0.0, 1.0),
+///     Point::<2>::new(1.0, 1.2),
+/// ];
+/// let mut mesh = Tessellation::default();
+/// Delaunay2::default().tessellate(&pts, &mut mesh).unwrap();
+/// assert_eq!(mesh.len(), 2);
+/// ```
+#[derive(Debug, Clone, Default)]
+pub struct Delaunay2 {
+    /// Parameters.
+    pub params: Delaunay2Params,
+}
+
+impl Delaunay2 {
+    /// A tessellator with the given parameters, validated.
+    pub fn new(params: Delaunay2Params) -> Result<Self, GeometryError> {
+        params.validate()?;
+        Ok(Self { params })
+    }
+}
+
+/// `x · 2^e`, exact unless the result underflows.
+fn scale_pow2(mut x: f64, mut e: i32) -> f64 {
+    while e != 0 {
+        let step = e.clamp(-1000, 1000);
+        x *= f64::from_bits(((1023 + step) as u64) << 52);
+        e -= step;
+    }
+    x
+}
+
+/// Binary exponent `e` with `2^e ≤ x < 2^(e+1)` for finite `x > 0`.
+fn exponent(x: f64) -> i32 {
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    if biased == 0 {
+        // Subnormal: 2^-1074 · mantissa.
+        let m = bits & ((1u64 << 52) - 1);
+        -1074 + (63 - m.leading_zeros() as i32)
+    } else {
+        biased - 1023
+    }
+}
+
+impl Tessellator<2> for Delaunay2 {
+    fn tessellate(
+        &mut self,
+        points: &[Point<2>],
+        out: &mut Tessellation,
+    ) -> Result<(), GeometryError> {
+        out.nv = 3;
+        out.simplices.clear();
+        out.neighbors.clear();
+        self.params.validate()?;
+        let n = points.len();
+        if n > MAX_POINTS_2D {
+            return Err(GeometryError::TooManyPoints { count: n, max: MAX_POINTS_2D });
+        }
+        if let Some(index) = points.iter().position(|p| !(p.x.is_finite() && p.y.is_finite())) {
+            return Err(GeometryError::NonFinite { index });
+        }
+        let degenerate = GeometryError::Degenerate { count: n, dim: 2 };
+        if n < 3 {
+            return Err(degenerate);
+        }
+        let (mut lo, mut hi) = (points[0], points[0]);
+        for p in points {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        let extent = (hi - lo).max();
+        if extent == 0.0 {
+            return Err(degenerate);
+        }
+        let tolerance = self.params.coincidence_tolerance * extent;
+        let max_abs = lo.abs().sup(&hi.abs()).max();
+        // Exact power-of-two rescaling to bring max |x| into [0.5, 1).
+        let e = -exponent(max_abs) - 1;
+        let scaled = |x: f64| {
+            let s = scale_pow2(x, e);
+            if s.abs() < spade::MIN_ALLOWED_VALUE {
+                0.0
+            } else {
+                s
+            }
+        };
+        let input: Vec<Point2<f64>> =
+            points.iter().map(|p| Point2::new(scaled(p.x), scaled(p.y))).collect();
+
+        let built = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            DelaunayTriangulation::<Point2<f64>>::bulk_load_stable(input)
+        }));
+        let tri = match built {
+            Ok(Ok(t)) => t,
+            Ok(Err(err)) => {
+                return Err(GeometryError::Internal { message: format!("spade: {err}") });
+            }
+            Err(panic) => {
+                let message = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "spade panicked".into());
+                return Err(GeometryError::Internal { message });
+            }
+        };
+
+        if tri.num_vertices() != n {
+            return Err(find_duplicate(points, |p| (scaled(p.x), scaled(p.y)), tolerance));
+        }
+        let nf = tri.num_inner_faces();
+        if nf == 0 {
+            return Err(degenerate);
+        }
+        out.simplices.reserve(3 * nf);
+        out.neighbors.reserve(3 * nf);
+        let tol2 = tolerance * tolerance;
+        let mut close: Option<(usize, usize, f64)> = None;
+        for face in tri.inner_faces() {
+            debug_assert_eq!(face.fix().index() - 1, out.simplices.len() / 3);
+            let edges = face.adjacent_edges();
+            // vertices()[k] = edges[k].from(); edge k+1 is opposite vertex k.
+            let v = [edges[0].from(), edges[1].from(), edges[2].from()].map(|h| h.fix().index());
+            for k in 0..3 {
+                out.simplices.push(v[k] as u32);
+                let across = edges[(k + 1) % 3].rev().face().fix();
+                out.neighbors.push(face_to_simplex(across));
+                let (a, b) = (v[k], v[(k + 1) % 3]);
+                let d2 = (points[a] - points[b]).norm_squared();
+                if d2 < tol2 && close.is_none_or(|c| c.2 > d2) {
+                    close = Some((a.min(b), a.max(b), d2));
+                }
+            }
+        }
+        if let Some((first, second, d2)) = close {
+            out.simplices.clear();
+            out.neighbors.clear();
+            return Err(GeometryError::NearCoincident {
+                first,
+                second,
+                distance: d2.sqrt(),
+                tolerance,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// spade's face 0 is the outer face; inner face `f` is simplex `f - 1`.
+#[inline]
+fn face_to_simplex(f: FixedFaceHandle<spade::handles::PossiblyOuterTag>) -> u32 {
+    match f.index() {
+        0 => NO_NEIGHBOR,
+        i => (i - 1) as u32,
+    }
+}
+
+/// Finds a pair of particles that spade merged (equal after rescaling), the
+/// error path only.
+fn find_duplicate(
+    points: &[Point<2>],
+    key: impl Fn(&Point<2>) -> (f64, f64),
+    tolerance: f64,
+) -> GeometryError {
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (ka, kb) = (key(&points[a]), key(&points[b]));
+        ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal).then(a.cmp(&b))
+    });
+    for w in order.windows(2) {
+        if key(&points[w[0]]) == key(&points[w[1]]) {
+            let (first, second) = (w[0].min(w[1]), w[0].max(w[1]));
+            return GeometryError::NearCoincident {
+                first,
+                second,
+                distance: (points[first] - points[second]).norm(),
+                tolerance,
+            };
+        }
+    }
+    GeometryError::Internal { message: "spade dropped a vertex that has no duplicate".into() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use robust::{incircle, orient2d, Coord};
+
+    fn c(p: &Point<2>) -> Coord<f64> {
+        Coord { x: p.x, y: p.y }
+    }
+
+    fn mesh(points: &[Point<2>]) -> Result<Tessellation, GeometryError> {
+        let mut t = Tessellation::default();
+        Delaunay2::default().tessellate(points, &mut t)?;
+        Ok(t)
+    }
+
+    /// Checks orientation, adjacency, vertex coverage, Euler's formula and
+    /// (exactly, brute force) the empty-circumcircle property.
+    fn check(points: &[Point<2>], t: &Tessellation) {
+        // Robust predicates overflow beyond ~1e60: rescale exactly by a power
+        // of two first, as the tessellator does.
+        let max_abs = points.iter().map(|p| p.abs().max()).fold(0.0, f64::max);
+        let e = -exponent(max_abs) - 1;
+        let scaled: Vec<_> =
+            points.iter().map(|p| Point::<2>::new(scale_pow2(p.x, e), scale_pow2(p.y, e))).collect();
+        let points = &scaled[..];
+        let n = points.len();
+        let mut used = vec![false; n];
+        for s in 0..t.len() {
+            let v = t.simplex(s);
+            let p = [points[v[0] as usize], points[v[1] as usize], points[v[2] as usize]];
+            assert!(orient2d(c(&p[0]), c(&p[1]), c(&p[2])) > 0.0, "triangle {s} not ccw");
+            for &i in v {
+                used[i as usize] = true;
+            }
+            for k in 0..3 {
+                let nb = t.simplex_neighbors(s)[k];
+                let f = [v[(k + 1) % 3], v[(k + 2) % 3]];
+                if nb == NO_NEIGHBOR {
+                    continue;
+                }
+                let w = t.simplex(nb as usize);
+                let back = t.simplex_neighbors(nb as usize).iter().position(|&x| x == s as u32);
+                let kb = back.expect("adjacency not symmetric");
+                // Shared facet, opposite orientation.
+                assert_eq!([w[(kb + 2) % 3], w[(kb + 1) % 3]], f);
+            }
+            if n <= 80 {
+                for (j, q) in points.iter().enumerate() {
+                    if !v.contains(&(j as u32)) {
+                        let ic = incircle(c(&p[0]), c(&p[1]), c(&p[2]), c(q));
+                        assert!(ic <= 0.0, "point {j} inside circumcircle of {s}");
+                    }
+                }
+            }
+        }
+        assert!(used.iter().all(|&u| u), "a particle is not a vertex");
+        let hull = t.neighbors.iter().filter(|&&x| x == NO_NEIGHBOR).count();
+        assert_eq!(t.len(), 2 * n - 2 - hull, "Euler");
+    }
+
+    fn lattice(nx: usize, ny: usize, h: f64, origin: Point<2>) -> Vec<Point<2>> {
+        (0..nx * ny)
+            .map(|i| origin + Point::<2>::new((i % nx) as f64 * h, (i / nx) as f64 * h))
+            .collect()
+    }
+
+    #[test]
+    fn square_lattice_is_cocircular_everywhere() {
+        let p = lattice(9, 7, 0.1, Point::<2>::zeros());
+        let t = mesh(&p).unwrap();
+        assert_eq!(t.len(), 2 * 8 * 6);
+        check(&p, &t);
+    }
+
+    #[test]
+    fn huge_and_tiny_coordinates() {
+        for (scale, offset) in [(1e-6, 0.0), (1e-9, 1e6), (1.0, 1e6), (1e280, 0.0), (1e-300, 0.0)] {
+            let p: Vec<_> = lattice(6, 5, scale, Point::<2>::new(offset, -offset))
+                .into_iter()
+                .enumerate()
+                .map(|(i, q)| q + Point::<2>::new(0.0, (i % 3) as f64 * 0.01 * scale))
+                .collect();
+            let t = mesh(&p).unwrap_or_else(|e| panic!("scale {scale} offset {offset}: {e}"));
+            check(&p, &t);
+        }
+    }
+
+    #[test]
+    fn beyond_spade_limits() {
+        // Above spade's 2^201 and mixed with values under its 2^-142.
+        let p = [
+            Point::<2>::new(1e300, 0.0),
+            Point::<2>::new(0.0, 1e300),
+            Point::<2>::new(-1e300, -1e300),
+            Point::<2>::new(1e-200, 3e-320),
+        ];
+        let t = mesh(&p).unwrap();
+        assert_eq!(t.len(), 3);
+        check(&p, &t);
+    }
+
+    #[test]
+    fn typed_errors() {
+        let tri = |a: f64| [Point::<2>::new(0.0, 0.0), Point::<2>::new(1.0, 0.0), Point::<2>::new(a, 1.0)];
+        assert!(matches!(mesh(&tri(f64::NAN)), Err(GeometryError::NonFinite { index: 2 })));
+        assert!(matches!(mesh(&tri(f64::INFINITY)), Err(GeometryError::NonFinite { index: 2 })));
+        assert!(matches!(mesh(&tri(0.5)[..2]), Err(GeometryError::Degenerate { .. })));
+        assert!(matches!(mesh(&[]), Err(GeometryError::Degenerate { .. })));
+        let line: Vec<_> = (0..10).map(|i| Point::<2>::new(i as f64, 2.0 * i as f64)).collect();
+        assert!(matches!(mesh(&line), Err(GeometryError::Degenerate { count: 10, dim: 2 })));
+        let same = [Point::<2>::new(1.0, 1.0); 5];
+        assert!(matches!(mesh(&same), Err(GeometryError::Degenerate { .. })));
+        let mut dup = lattice(4, 4, 1.0, Point::<2>::zeros());
+        dup.push(dup[5]);
+        assert_eq!(
+            mesh(&dup),
+            Err(GeometryError::NearCoincident { first: 5, second: 16, distance: 0.0, tolerance: 3e-10 })
+        );
+        let mut near = lattice(4, 4, 1.0, Point::<2>::zeros());
+        near.push(near[7] + Point::<2>::new(1e-12, 0.0));
+        assert!(matches!(
+            mesh(&near),
+            Err(GeometryError::NearCoincident { first: 7, second: 16, .. })
+        ));
+        // Tolerance 0 accepts it, spade resolves it exactly.
+        let mut t = Tessellation::default();
+        let mut d = Delaunay2::new(Delaunay2Params { coincidence_tolerance: 0.0 }).unwrap();
+        d.tessellate(&near, &mut t).unwrap();
+        check(&near, &t);
+        assert!(Delaunay2::new(Delaunay2Params { coincidence_tolerance: -1.0 }).is_err());
+    }
+
+    #[test]
+    fn collinear_runs_and_clusters() {
+        // A collinear run with one point off the line, and a tight cluster.
+        let mut p: Vec<_> = (0..30).map(|i| Point::<2>::new(i as f64 * 0.1, 0.0)).collect();
+        p.push(Point::<2>::new(1.5, 1e-3));
+        for i in 0..25 {
+            p.push(Point::<2>::new(2.0 + (i % 5) as f64 * 1e-9, 1.0 + (i / 5) as f64 * 1e-9));
+        }
+        let t = mesh(&p).unwrap();
+        check(&p, &t);
+    }
+
+    fn cloud(max: usize) -> impl Strategy<Value = Vec<Point<2>>> {
+        prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 0..max)
+            .prop_map(|v| v.into_iter().map(|(x, y)| Point::<2>::new(x, y)).collect())
+    }
+
+    /// Snapped to a coarse grid: many duplicates, collinear and cocircular
+    /// subsets.
+    fn grid_cloud(max: usize) -> impl Strategy<Value = Vec<Point<2>>> {
+        prop::collection::vec((0i32..6, 0i32..6), 0..max)
+            .prop_map(|v| v.into_iter().map(|(x, y)| Point::<2>::new(x as f64, y as f64)).collect())
+    }
+
+    fn outcome_ok(p: &[Point<2>], r: Result<Tessellation, GeometryError>) {
+        match r {
+            Ok(t) => check(p, &t),
+            Err(GeometryError::NearCoincident { first, second, .. }) => {
+                assert!(first < second && second < p.len());
+            }
+            Err(GeometryError::Degenerate { .. } | GeometryError::NonFinite { .. }) => {}
+            Err(e) => panic!("unexpected error {e}"),
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(96))]
+        #[test]
+        fn random_clouds_are_delaunay(p in cloud(70)) {
+            outcome_ok(&p, mesh(&p));
+        }
+
+        #[test]
+        fn grid_clouds_are_delaunay_or_typed(p in grid_cloud(50)) {
+            let r = mesh(&p);
+            let mut sorted: Vec<_> = p.iter().map(|q| (q.x as i32, q.y as i32)).collect();
+            sorted.sort_unstable();
+            let has_dup = sorted.windows(2).any(|w| w[0] == w[1]);
+            if has_dup {
+                prop_assert!(r.is_err());
+            }
+            outcome_ok(&p, r);
+        }
+
+        #[test]
+        fn scaled_clouds(p in cloud(40), e in -300i32..300, off in -1e6f64..1e6) {
+            let s = 10f64.powi(e);
+            let q: Vec<_> = p.iter().map(|x| x * s + Point::<2>::new(off * s, 0.0)).collect();
+            outcome_ok(&q, mesh(&q));
+        }
+
+        #[test]
+        fn never_panics(v in prop::collection::vec((any::<f64>(), any::<f64>()), 0..20)) {
+            let p: Vec<_> = v.into_iter().map(|(x, y)| Point::<2>::new(x, y)).collect();
+            let _ = mesh(&p);
+        }
+    }
+}

@@ -1,0 +1,357 @@
+//! Particle management (adaptive refinement as in PFEM codes): removal of
+//! fluid particles that crowd, insertion into fluid elements that are too
+//! large, with every change of fluid volume accounted by cause (reading
+//! notes point 6) and an index map so the driver carries per-particle state
+//! along.
+
+use std::ops::{Add, Mul};
+
+use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, MAX_NV};
+
+use crate::alpha::{check_particles, check_tessellation, gather, simplex_spacing};
+use crate::{alpha_shape, AlphaShape, AlphaShapeParams, GeometryError, Tessellation, Tessellator};
+
+/// Parameters of [`manage_particles`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParticleManagementParams {
+    /// A fluid particle closer than `removal_fraction · h` to another
+    /// particle (`h` the mean spacing of the two) is removed. Dimensionless,
+    /// in `[0, 1)`; `0` disables removal. Default `0.3`.
+    pub removal_fraction: f64,
+    /// A kept simplex with a fluid node is refined by a particle at its
+    /// centroid when its measure exceeds `insertion_factor` times the measure
+    /// of the regular simplex of edge `h` (`h` the mean spacing of its
+    /// nodes; √3/4·h² in 2D, h³/(6√2) in 3D). Dimensionless, `> 0`;
+    /// `f64::INFINITY` disables insertion. Default `2.0`.
+    pub insertion_factor: f64,
+}
+
+impl Default for ParticleManagementParams {
+    fn default() -> Self {
+        Self { removal_fraction: 0.3, insertion_factor: 2.0 }
+    }
+}
+
+impl ParticleManagementParams {
+    /// Checks the parameters.
+    pub fn validate(&self) -> Result<(), GeometryError> {
+        let r = self.removal_fraction;
+        if !(r.is_finite() && (0.0..1.0).contains(&r)) {
+            return Err(GeometryError::InvalidParameter {
+                name: "removal_fraction",
+                value: r,
+                reason: "must be in [0, 1)",
+            });
+        }
+        let f = self.insertion_factor;
+        if f.is_nan() || f <= 0.0 {
+            return Err(GeometryError::InvalidParameter {
+                name: "insertion_factor",
+                value: f,
+                reason: "must be > 0 (infinity disables insertion)",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Change of fluid volume (area per metre in 2D) in one remeshing, by
+/// cause (m³, or m² in 2D). Negative means volume lost.
+///
+/// `after = before + removal + insertion`; `alpha_deletion` is reported
+/// beside, as it is measured against the Delaunay hull, not against the
+/// previous mesh.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct VolumeChange {
+    /// Measure of the fluid-candidate Delaunay simplices the alpha criterion
+    /// dropped (`≥ 0`, [`AlphaShape::deleted_measure`] of the input).
+    pub alpha_deletion: f64,
+    /// Change of the kept fluid volume caused by removing particles
+    /// (remeshed and alpha-shaped again without them).
+    pub removal: f64,
+    /// Change of the kept fluid volume caused by inserting particles.
+    pub insertion: f64,
+    /// Kept fluid volume before particle management.
+    pub before: f64,
+    /// Kept fluid volume after particle management.
+    pub after: f64,
+}
+
+/// Sentinel in [`ParticleMap::old_to_new`] for a removed particle.
+pub const REMOVED: u32 = u32::MAX;
+
+/// Where a particle of the new cloud comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Origin {
+    /// It is old particle `.0`.
+    Kept(u32),
+    /// It was inserted; its state is `Σ weights[k] · state[nodes[k]]` over
+    /// old particles. Unused entries (beyond `D + 1`) have weight `0` and
+    /// repeat `nodes[0]`.
+    Inserted {
+        /// Old particle indices.
+        nodes: [u32; MAX_NV],
+        /// Interpolation weights (barycentric, sum 1).
+        weights: [f64; MAX_NV],
+    },
+}
+
+/// Old → new particle indices. Kept particles keep their relative order and
+/// come first; inserted particles follow.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParticleMap {
+    /// New index of each old particle, or [`REMOVED`].
+    pub old_to_new: Vec<u32>,
+    /// Origin of each new particle.
+    pub origin: Vec<Origin>,
+}
+
+impl ParticleMap {
+    /// Number of particles after management.
+    pub fn len(&self) -> usize {
+        self.origin.len()
+    }
+
+    /// Whether the new cloud is empty.
+    pub fn is_empty(&self) -> bool {
+        self.origin.is_empty()
+    }
+
+    /// Old indices of the removed particles, ascending.
+    pub fn removed(&self) -> impl Iterator<Item = usize> + '_ {
+        self.old_to_new.iter().enumerate().filter(|(_, &n)| n == REMOVED).map(|(i, _)| i)
+    }
+
+    /// Carries a per-particle field (velocity, pressure, stress…) to the new
+    /// cloud: kept particles keep their value, inserted ones get the
+    /// barycentric interpolation of their simplex's nodes.
+    pub fn apply<T>(&self, old: &[T]) -> Vec<T>
+    where
+        T: Copy + Add<Output = T> + Mul<f64, Output = T>,
+    {
+        self.apply_with(old, |nodes, weights| {
+            let mut acc = old[nodes[0] as usize] * weights[0];
+            for (&n, &w) in nodes.iter().zip(weights).skip(1) {
+                acc = acc + old[n as usize] * w;
+            }
+            acc
+        })
+    }
+
+    /// Like [`ParticleMap::apply`] with a custom rule for inserted
+    /// particles: `interp(nodes, weights)` receives the `D + 1` old parent
+    /// indices and their barycentric weights.
+    pub fn apply_with<T: Clone>(
+        &self,
+        old: &[T],
+        mut interp: impl FnMut(&[u32], &[f64]) -> T,
+    ) -> Vec<T> {
+        self.origin
+            .iter()
+            .map(|o| match o {
+                Origin::Kept(i) => old[*i as usize].clone(),
+                Origin::Inserted { nodes, weights } => {
+                    let m = weights.iter().rposition(|&w| w != 0.0).map_or(1, |k| k + 1);
+                    interp(&nodes[..m], &weights[..m])
+                }
+            })
+            .collect()
+    }
+}
+
+/// Result of [`manage_particles`]: the new cloud, its mesh and the
+/// bookkeeping.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParticleUpdate<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// New particle positions.
+    pub points: Vec<Point<D>>,
+    /// New particle kinds (inserted particles are fluid).
+    pub kinds: Vec<ParticleKind>,
+    /// New particle spacings (inserted: mean of the parents').
+    pub spacing: Vec<f64>,
+    /// Old → new map, to carry per-particle state.
+    pub map: ParticleMap,
+    /// Fluid volume change by cause.
+    pub volume: VolumeChange,
+    /// Delaunay tessellation of the new cloud.
+    pub delaunay: Tessellation,
+    /// Alpha shape of the new cloud.
+    pub alpha: AlphaShape,
+    /// Number of removed particles.
+    pub removed: usize,
+    /// Number of inserted particles.
+    pub inserted: usize,
+}
+
+/// Measure of the regular simplex of edge `h`: `√(D+1) / (D! 2^(D/2)) h^D`.
+fn regular_measure<const D: usize>(h: f64) -> f64 {
+    let fact: f64 = (1..=D).map(|k| k as f64).product();
+    ((D + 1) as f64).sqrt() / (fact * 2f64.powf(D as f64 / 2.0)) * h.powi(D as i32)
+}
+
+/// Removes crowding fluid particles and inserts particles into oversized
+/// fluid elements, then re-tessellates and re-applies the alpha shape,
+/// measuring the fluid volume change of each step.
+///
+/// * `delaunay` and `alpha` are the tessellation and alpha shape of the
+///   current cloud (`alpha` computed from `delaunay` with `alpha_params`).
+/// * **Removal**: for every Delaunay edge shorter than
+///   [`removal_fraction`](ParticleManagementParams::removal_fraction)` · h`,
+///   one fluid endpoint is removed (the higher index if both are fluid);
+///   pairs of non-fluid particles are left alone; at most one particle of a
+///   pair goes.
+/// * **Insertion**: every kept simplex with a fluid node, none of its nodes
+///   removed, and a measure above
+///   [`insertion_factor`](ParticleManagementParams::insertion_factor) times
+///   the regular simplex of edge `h` gets a fluid particle at its centroid,
+///   with the parents' mean spacing; its state is the mean of the parents'
+///   ([`Origin::Inserted`]).
+/// * **Accounting**: the cloud after removal is re-tessellated and
+///   alpha-shaped to measure [`VolumeChange::removal`]; the final cloud
+///   likewise for [`VolumeChange::insertion`] (a step with nothing to do
+///   costs no tessellation). The final Delaunay and alpha shape are returned
+///   so the driver need not recompute them.
+#[allow(clippy::too_many_arguments)]
+pub fn manage_particles<const D: usize>(
+    tessellator: &mut dyn Tessellator<D>,
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    spacing: &[f64],
+    delaunay: &Tessellation,
+    alpha: &AlphaShape,
+    alpha_params: &AlphaShapeParams,
+    params: &ParticleManagementParams,
+) -> Result<ParticleUpdate<D>, GeometryError>
+where
+    Const<D>: Dim,
+{
+    params.validate()?;
+    alpha_params.validate()?;
+    check_particles(points, kinds, spacing)?;
+    check_tessellation::<D>(delaunay, points.len())?;
+    check_tessellation::<D>(&alpha.mesh, points.len())?;
+    let n = points.len();
+    let nv = <Const<D> as Dim>::NV;
+
+    // Removal over Delaunay edges (the nearest neighbour of every particle is
+    // a Delaunay neighbour, so no close pair is missed).
+    let mut removed = vec![false; n];
+    let mut n_removed = 0usize;
+    if params.removal_fraction > 0.0 {
+        for s in delaunay.simplices.chunks_exact(nv) {
+            for i in 0..nv {
+                for j in i + 1..nv {
+                    let (a, b) = (s[i].min(s[j]) as usize, s[i].max(s[j]) as usize);
+                    if removed[a] || removed[b] {
+                        continue;
+                    }
+                    let victim = match (kinds[a], kinds[b]) {
+                        (_, ParticleKind::Fluid) => b,
+                        (ParticleKind::Fluid, _) => a,
+                        _ => continue,
+                    };
+                    let h = 0.5 * (spacing[a] + spacing[b]);
+                    let limit = params.removal_fraction * h;
+                    if (points[a] - points[b]).norm_squared() < limit * limit {
+                        removed[victim] = true;
+                        n_removed += 1;
+                    }
+                }
+            }
+        }
+    }
+
+    let mut map = ParticleMap { old_to_new: vec![REMOVED; n], origin: Vec::new() };
+    let mut new_points = Vec::with_capacity(n);
+    let mut new_kinds = Vec::with_capacity(n);
+    let mut new_spacing = Vec::with_capacity(n);
+    for i in 0..n {
+        if !removed[i] {
+            map.old_to_new[i] = new_points.len() as u32;
+            map.origin.push(Origin::Kept(i as u32));
+            new_points.push(points[i]);
+            new_kinds.push(kinds[i]);
+            new_spacing.push(spacing[i]);
+        }
+    }
+    let n_after_removal = new_points.len();
+
+    // Insertion into oversized kept fluid simplices.
+    if params.insertion_factor.is_finite() {
+        let w = 1.0 / nv as f64;
+        for s in alpha.mesh.simplices.chunks_exact(nv) {
+            if s.iter().any(|&v| removed[v as usize])
+                || !s.iter().any(|&v| kinds[v as usize] == ParticleKind::Fluid)
+            {
+                continue;
+            }
+            let p = gather::<D>(points, s);
+            let h = simplex_spacing(spacing, s);
+            if simplex_measure::<D>(&p[..nv]) <= params.insertion_factor * regular_measure::<D>(h)
+            {
+                continue;
+            }
+            let centroid = p[..nv].iter().fold(Point::<D>::zeros(), |acc, q| acc + q) * w;
+            let mut nodes = [s[0]; MAX_NV];
+            let mut weights = [0.0; MAX_NV];
+            for k in 0..nv {
+                nodes[k] = s[k];
+                weights[k] = w;
+            }
+            map.origin.push(Origin::Inserted { nodes, weights });
+            new_points.push(centroid);
+            new_kinds.push(ParticleKind::Fluid);
+            new_spacing.push(h);
+        }
+    }
+    let n_inserted = new_points.len() - n_after_removal;
+
+    // Volume accounting by cause.
+    let before = alpha.kept_measure;
+    let mut volume =
+        VolumeChange { alpha_deletion: alpha.deleted_measure(), before, after: before, ..Default::default() };
+    let mut out_delaunay = Tessellation::default();
+    let out_alpha;
+    if n_removed == 0 && n_inserted == 0 {
+        out_delaunay = delaunay.clone();
+        out_alpha = alpha.clone();
+    } else {
+        let mut mid = before;
+        if n_removed > 0 && n_inserted > 0 {
+            let pts = &new_points[..n_after_removal];
+            tessellator.tessellate(pts, &mut out_delaunay)?;
+            let a = alpha_shape(
+                pts,
+                &new_kinds[..n_after_removal],
+                &new_spacing[..n_after_removal],
+                &out_delaunay,
+                alpha_params,
+            )?;
+            mid = a.kept_measure;
+        }
+        tessellator.tessellate(&new_points, &mut out_delaunay)?;
+        out_alpha = alpha_shape(&new_points, &new_kinds, &new_spacing, &out_delaunay, alpha_params)?;
+        let after = out_alpha.kept_measure;
+        if n_inserted == 0 {
+            mid = after;
+        }
+        volume.removal = mid - before;
+        volume.insertion = after - mid;
+        volume.after = after;
+    }
+
+    Ok(ParticleUpdate {
+        points: new_points,
+        kinds: new_kinds,
+        spacing: new_spacing,
+        map,
+        volume,
+        delaunay: out_delaunay,
+        alpha: out_alpha,
+        removed: n_removed,
+        inserted: n_inserted,
+    })
+}

@@ -1,0 +1,189 @@
+//! Alpha shape (paper §8) and classification of sampled shapes: boundary
+//! loops and areas, isolated particles and detached drops.
+
+use std::f64::consts::PI;
+
+use pfem_core::{ParticleKind, Point};
+use pfem_geometry::{
+    alpha_shape, classify, AlphaShape, AlphaShapeParams, Classification, Delaunay2, FacetKind,
+    NodeTag, Tessellation, Tessellator,
+};
+
+fn run(points: &[Point<2>], kinds: &[ParticleKind], h: f64) -> (AlphaShape, Classification) {
+    let spacing = vec![h; points.len()];
+    let mut t = Tessellation::default();
+    Delaunay2::default().tessellate(points, &mut t).unwrap();
+    let a = alpha_shape(points, kinds, &spacing, &t, &AlphaShapeParams::default()).unwrap();
+    let c = classify(points, kinds, &a.mesh, None).unwrap();
+    (a, c)
+}
+
+fn fluid(n: usize) -> Vec<ParticleKind> {
+    vec![ParticleKind::Fluid; n]
+}
+
+/// Concentric rings of spacing ≈ h between radii `r0` and `r1`.
+fn rings(r0: f64, r1: f64, h: f64) -> Vec<Point<2>> {
+    let mut p = Vec::new();
+    let nr = ((r1 - r0) / h).round() as usize;
+    for k in 0..=nr {
+        let r = r0 + (r1 - r0) * k as f64 / nr as f64;
+        if r == 0.0 {
+            p.push(Point::<2>::zeros());
+            continue;
+        }
+        let m = (2.0 * PI * r / h).round() as usize;
+        let phase = 0.5 * k as f64; // stagger rings
+        for j in 0..m {
+            let t = 2.0 * PI * (j as f64 + phase) / m as f64;
+            p.push(Point::<2>::new(r * t.cos(), r * t.sin()));
+        }
+    }
+    p
+}
+
+#[test]
+fn square_has_one_loop_and_exact_area() {
+    let n = 50;
+    let h = 1.0 / (n - 1) as f64;
+    let p: Vec<_> =
+        (0..n * n).map(|i| Point::<2>::new((i % n) as f64 * h, (i / n) as f64 * h)).collect();
+    let (a, c) = run(&p, &fluid(p.len()), h);
+    assert_eq!(c.boundary_loops, Some(1));
+    assert!((a.kept_measure - 1.0).abs() < 1e-2, "area {}", a.kept_measure);
+    assert_eq!(c.components.len(), 1);
+    assert_eq!(c.boundary_facets.len(), 4 * (n - 1));
+    assert_eq!(c.boundary_nodes.len(), 4 * (n - 1));
+    assert!(c.isolated.is_empty());
+    assert!(c.boundary_facets.iter().all(|f| f.kind == FacetKind::FreeSurface));
+}
+
+#[test]
+fn disk_has_one_loop_and_area_within_one_percent() {
+    let r = 1.0;
+    let h = 2.0 * r / 50.0;
+    let p = rings(0.0, r, h);
+    let (a, c) = run(&p, &fluid(p.len()), h);
+    assert_eq!(c.boundary_loops, Some(1));
+    assert_eq!(c.components.len(), 1);
+    let exact = PI * r * r;
+    assert!((a.kept_measure - exact).abs() < 0.01 * exact, "area {} vs {exact}", a.kept_measure);
+    assert!(a.deleted_measure() >= 0.0);
+}
+
+#[test]
+fn annulus_has_two_loops_and_area_within_one_percent() {
+    let (r0, r1) = (0.5, 1.0);
+    let h = 2.0 * r1 / 50.0;
+    let p = rings(r0, r1, h);
+    let (a, c) = run(&p, &fluid(p.len()), h);
+    assert_eq!(c.boundary_loops, Some(2));
+    assert_eq!(c.components.len(), 1);
+    let exact = PI * (r1 * r1 - r0 * r0);
+    assert!((a.kept_measure - exact).abs() < 0.01 * exact, "area {} vs {exact}", a.kept_measure);
+    // The hole was a candidate region the alpha criterion removed.
+    assert!(a.deleted_measure() > 0.5 * PI * r0 * r0);
+}
+
+fn block(nx: usize, ny: usize, h: f64, x0: f64, y0: f64) -> Vec<Point<2>> {
+    (0..nx * ny)
+        .map(|i| Point::<2>::new(x0 + (i % nx) as f64 * h, y0 + (i / nx) as f64 * h))
+        .collect()
+}
+
+#[test]
+fn isolated_particles_and_detached_drop() {
+    let h = 0.1;
+    let mut p = block(10, 10, h, 0.0, 0.0);
+    let main = p.len();
+    p.push(Point::<2>::new(1.5, 0.45)); // a flying particle
+    p.extend(block(3, 3, h, 0.3, 1.6)); // a drop of nine particles
+    p.push(Point::<2>::new(-0.7, 2.0)); // another flying particle
+    let (a, c) = run(&p, &fluid(p.len()), h);
+    assert_eq!(c.isolated, vec![main as u32, (p.len() - 1) as u32]);
+    assert_eq!(c.tags[main], NodeTag::Isolated);
+    assert_eq!(c.components.len(), 2);
+    assert_eq!(c.components[0].simplices, 2 * 81);
+    assert_eq!(c.components[1].simplices, 2 * 4);
+    assert!((c.components[1].measure - 0.04).abs() < 1e-12);
+    assert!((a.kept_measure - 0.85).abs() < 1e-12);
+    assert_eq!(c.boundary_loops, Some(2));
+    assert_eq!(c.tags[main + 1 + 4], NodeTag::Interior); // centre of the drop
+    assert_eq!(c.tags[main + 1], NodeTag::FreeSurface);
+}
+
+#[test]
+fn walls_and_solids_are_not_fluid_but_touch_it() {
+    // Two wall rows at the bottom, fluid above, a solid block on the right.
+    let h = 0.1;
+    let nx = 12;
+    let p = block(nx, 10, h, 0.0, 0.0);
+    let kinds: Vec<_> = (0..p.len())
+        .map(|i| {
+            let (x, y) = (i % nx, i / nx);
+            if y < 2 {
+                ParticleKind::Wall
+            } else if x >= 9 {
+                ParticleKind::Solid
+            } else {
+                ParticleKind::Fluid
+            }
+        })
+        .collect();
+    let (a, c) = run(&p, &kinds, h);
+    // Fluid elements: rows 2..10 × columns 0..9 of fluid cells plus the
+    // cells bridging to the wall (row 1→2) and to the solid (col 8→9).
+    for s in 0..a.mesh.len() {
+        assert!(a.mesh.simplex(s).iter().any(|&v| kinds[v as usize] == ParticleKind::Fluid));
+    }
+    assert_eq!(c.tags[0], NodeTag::Dry); // deep wall row
+    assert_eq!(c.tags[nx + 3], NodeTag::Wall); // wall row touching fluid
+    assert_eq!(c.tags[5 * nx + 9], NodeTag::Interface); // solid column touching fluid
+    assert_eq!(c.tags[5 * nx + 11], NodeTag::Dry); // solid interior
+    assert_eq!(c.tags[5 * nx + 4], NodeTag::Interior);
+    assert_eq!(c.tags[9 * nx + 4], NodeTag::FreeSurface);
+    let kinds_of = |k: FacetKind| c.boundary_facets.iter().filter(|f| f.kind == k).count();
+    // Wall row under the 9 fluid columns; the corner cell's diagonal decides
+    // whether its wall edge or its wall–solid edge bounds the fluid.
+    let (w, i) = (kinds_of(FacetKind::Wall), kinds_of(FacetKind::Interface));
+    assert!((8..=9).contains(&w), "{w}");
+    assert!((7..=8).contains(&i), "{i}"); // solid column 9, rows 2..9
+    assert_eq!(w + i, 16);
+    assert_eq!(c.unmatched_interface_facets, 0);
+
+    // With the solid's own mesh (its Delaunay here), interface facets match.
+    let solid: Vec<_> = (0..p.len()).filter(|&i| kinds[i] == ParticleKind::Solid).collect();
+    let sp: Vec<_> = solid.iter().map(|&i| p[i]).collect();
+    let mut st = Tessellation::default();
+    Delaunay2::default().tessellate(&sp, &mut st).unwrap();
+    let elems: Vec<u32> = st.simplices.iter().map(|&v| solid[v as usize] as u32).collect();
+    let c2 = classify(&p, &kinds, &a.mesh, Some(&elems)).unwrap();
+    assert_eq!(c2.unmatched_interface_facets, 0);
+    assert_eq!(c2.tags, c.tags);
+    // A solid mesh that lacks those facets is reported.
+    let c3 = classify(&p, &kinds, &a.mesh, Some(&elems[..3])).unwrap();
+    assert!(c3.unmatched_interface_facets > 0);
+}
+
+#[test]
+fn alpha_parameter_is_validated_and_controls_the_shape() {
+    let h = 0.1;
+    let p = block(5, 5, h, 0.0, 0.0);
+    let k = fluid(p.len());
+    let sp = vec![h; p.len()];
+    let mut t = Tessellation::default();
+    Delaunay2::default().tessellate(&p, &mut t).unwrap();
+    // Lattice triangles have R = h/√2: α = 0.7 drops them all, 0.75 keeps.
+    let a = alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams { alpha: 0.7 }).unwrap();
+    assert!(a.is_empty());
+    assert!((a.deleted_measure() - 0.16).abs() < 1e-12);
+    let a = alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams { alpha: 0.75 }).unwrap();
+    assert_eq!(a.len(), 32);
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams { alpha: bad }).is_err());
+    }
+    let mut bad_sp = sp.clone();
+    bad_sp[3] = 0.0;
+    assert!(alpha_shape(&p, &k, &bad_sp, &t, &AlphaShapeParams::default()).is_err());
+    assert!(alpha_shape(&p, &k[..3], &sp, &t, &AlphaShapeParams::default()).is_err());
+}

@@ -1,0 +1,91 @@
+//! Large-input validation of the 3D Delaunay tessellator, run in release
+//! (`cargo test --release -p pfem-geometry --test delaunay3_large -- --nocapture`);
+//! ignored in debug builds, where it would be slow.
+
+use pfem_core::{simplex_measure, Point};
+use pfem_geometry::{Delaunay3, Tessellation, Tessellator, NO_NEIGHBOR};
+use std::time::Instant;
+
+fn random_points(n: usize, seed: u64) -> Vec<Point<3>> {
+    let mut s = seed;
+    let mut next = move || {
+        s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| Point::<3>::new(next(), next(), next()))
+        .collect()
+}
+
+fn lattice(k: usize, h: f64) -> Vec<Point<3>> {
+    let mut pts = Vec::with_capacity(k * k * k);
+    for i in 0..k {
+        for j in 0..k {
+            for l in 0..k {
+                pts.push(Point::<3>::new(i as f64 * h, j as f64 * h, l as f64 * h));
+            }
+        }
+    }
+    pts
+}
+
+/// Positive volumes, symmetric adjacency; returns the total volume.
+fn check(pts: &[Point<3>], t: &Tessellation) -> f64 {
+    let mut vol = 0.0;
+    for s in 0..t.len() {
+        let p: Vec<Point<3>> = t.simplex(s).iter().map(|&i| pts[i as usize]).collect();
+        let v = simplex_measure::<3>(&p);
+        assert!(v > 0.0);
+        vol += v;
+        for &nb in t.simplex_neighbors(s) {
+            if nb != NO_NEIGHBOR {
+                assert!(t.simplex_neighbors(nb as usize).contains(&(s as u32)));
+            }
+        }
+    }
+    vol
+}
+
+fn timed(name: &str, pts: &[Point<3>]) -> Tessellation {
+    let mut mesher = Delaunay3::default();
+    let mut out = Tessellation::new(4);
+    mesher.tessellate(pts, &mut out).unwrap();
+    let start = Instant::now();
+    let reps = 3;
+    for _ in 0..reps {
+        mesher.tessellate(pts, &mut out).unwrap();
+    }
+    let dt = start.elapsed().as_secs_f64() / reps as f64;
+    println!(
+        "{name}: {} points, {} tets ({:.3} per point), {:.3} s",
+        pts.len(),
+        out.len(),
+        out.len() as f64 / pts.len() as f64,
+        dt
+    );
+    out
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "release only")]
+fn random_100k() {
+    let pts = random_points(100_000, 2);
+    let t = timed("random", &pts);
+    let ratio = t.len() as f64 / pts.len() as f64;
+    assert!((6.3..6.8).contains(&ratio), "{ratio}");
+    let vol = check(&pts, &t);
+    assert!(vol > 0.99 && vol < 1.0);
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "release only")]
+fn lattice_30() {
+    let pts = lattice(30, 0.01);
+    let t = timed("lattice", &pts);
+    let vol = check(&pts, &t);
+    let expect = (29.0f64 * 0.01).powi(3);
+    assert!((vol - expect).abs() < 1e-12 * expect, "{vol} vs {expect}");
+}
