@@ -9,7 +9,7 @@
 //! | probes (front position, …) | [`CsvProbe`] | `.csv`, one row per sample |
 //! | end-of-run figures | [`RunSummary`] | `summary.json` |
 //! | simulation vs experiment | [`plot_series_png`] | `.png` |
-//! | measured reference data | [`reference`], [`load_reference_csv`] | `data/validation/*.csv` |
+//! | measured reference data | [`reference`](mod@reference), [`load_reference_csv`] | `data/validation/*.csv` |
 //! | terminal progress | [`Progress`] | stderr |
 //!
 //! Whole files (`.vtu`, `.pvd`, `summary.json`, `.png`) are written through
@@ -37,7 +37,7 @@
 //!     cells: &[0, 1, 2],
 //!     vertex_cells: &[3],
 //!     point_data: vec![Field::vector("velocity", &velocity)],
-//!     cell_data: vec![],
+//!     ..Default::default()
 //! };
 //! let mut series = VtuSeries::create(&dir, "dam_break", Encoding::Base64)?;
 //! let file = series.write_frame(0.0, &frame)?;
