@@ -1,1 +1,20 @@
-//! pfem-assembly
+//! Element kernels, parallel sparse assembly of the monolithic PFEM system
+//! (Marti & Idelsohn 2007, eqs. 55–59) and linear solvers.
+//!
+//! One time step's mesh (fluid elements from the tessellation, solid
+//! elements from each solid's own mesh) is handed to
+//! [`Assembler::prepare`], which builds the sparsity pattern once; each
+//! Picard iteration then calls [`Assembler::assemble`] and a
+//! [`LinearSolver`].
+pub mod assembler;
+pub mod error;
+pub mod kernels;
+pub mod pattern;
+pub mod solver;
+
+pub use assembler::{
+    Assembler, AssemblyInfo, AssemblyInput, Constraints, Inertia, NodalRate, StepMesh,
+};
+pub use error::{AssemblyError, SolveError};
+pub use kernels::VolumetricTreatment;
+pub use solver::{ConjugateGradient, LinearSolver, SolveReport, SparseCholesky, SparseLu};

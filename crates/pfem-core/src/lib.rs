@@ -128,10 +128,7 @@ where
 /// `grad W_k = row k-1 of E^{-1}` for `k ≥ 1` and `grad W_0 = -Σ grad W_k`,
 /// with `E` the [`edge_matrix`].
 #[inline]
-pub fn shape_gradients<const D: usize>(
-    p: &[Point<D>],
-    grads: &mut [Vector<D>],
-) -> Option<f64>
+pub fn shape_gradients<const D: usize>(p: &[Point<D>], grads: &mut [Vector<D>]) -> Option<f64>
 where
     Const<D>: Dim,
 {
@@ -211,11 +208,19 @@ mod tests {
 
     #[test]
     fn circumsphere_of_right_triangle() {
-        let p = [Point::<2>::new(0.0, 0.0), Point::<2>::new(2.0, 0.0), Point::<2>::new(0.0, 2.0)];
+        let p = [
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(2.0, 0.0),
+            Point::<2>::new(0.0, 2.0),
+        ];
         let (c, r) = circumsphere::<2>(&p).unwrap();
         assert_relative_eq!(c, Point::<2>::new(1.0, 1.0), epsilon = 1e-14);
         assert_relative_eq!(r, 2f64.sqrt(), epsilon = 1e-14);
-        let flat = [Point::<2>::new(0.0, 0.0), Point::<2>::new(1.0, 0.0), Point::<2>::new(2.0, 0.0)];
+        let flat = [
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 0.0),
+            Point::<2>::new(2.0, 0.0),
+        ];
         assert!(circumsphere::<2>(&flat).is_none());
         let mut g = [Vector::<2>::zeros(); 3];
         assert!(shape_gradients::<2>(&flat, &mut g).is_none());

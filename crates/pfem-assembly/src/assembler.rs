@@ -1,0 +1,829 @@
+//! Parallel sparse assembly of the monolithic system, eqs. 55–59.
+//!
+//! With `c = 2/Δt` (Newmark, β = ¼, γ = ½) the system solved for the
+//! velocity `V` at the Picard iterate is eq. 55 divided by `Δt`:
+//!
+//! `(c M + K) V = c M Vⁿ + M Aⁿ − D σ̂⁽ⁿ⁾ + F`
+//!
+//! (the paper prints `M Aⁿ/Δt` in eq. 49; dimensional consistency and
+//! Newmark's eq. 48 give `M Aⁿ`). With backward Euler `c = 1/Δt` and the
+//! `M Aⁿ` term is absent. `M` is the lumped mass `ρ Vₑⁿ / (D + 1)` per node.
+//!
+//! Fluids carry their pressure on nodes (eq. 62). The volumetric term of a
+//! fluid is assembled as `Gᵀ M̂⁻¹ 𝒦 G` with the lumped `M̂` of eq. 56 and
+//! `G_aj = ∫ W_a grad W_j` (nodal averaged volumetric strain, the default
+//! [`VolumetricTreatment::NodalAveraged`]) or element by element as printed
+//! in eq. 57 ([`VolumetricTreatment::ElementWise`]). The fluid history force
+//! `−D σ̂⁽ⁿ⁾` with `σ̂ = −pⁿ I` is `Gᵀ pⁿ` in both cases.
+
+use pfem_constitutive::{History, Material, MaterialKind, Unified};
+use pfem_core::{Const, Dim, Point, Tensor, Vector, MAX_NV};
+use rayon::prelude::*;
+
+use crate::kernels::{
+    element_history_force, element_state, element_stiffness, volumetric_on_element, ElementState,
+    VolumetricTreatment, MAX_LOCAL,
+};
+use crate::pattern::BlockPattern;
+use crate::AssemblyError;
+
+const NONE: u32 = u32::MAX;
+const CHUNK: usize = 4096;
+
+/// Velocity constraints, per particle and component: wall particles
+/// (prescribed velocity, fixed or moving), slip walls (one component),
+/// clamped solid nodes (zero velocity).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Constraints<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Bit `k` set: component `k` of the particle's velocity is prescribed.
+    pub mask: Vec<u8>,
+    /// Prescribed velocity (m/s); only the masked components are used.
+    pub velocity: Vec<Vector<D>>,
+}
+
+impl<const D: usize> Constraints<D>
+where
+    Const<D>: Dim,
+{
+    /// No constraint on any of `n` particles.
+    pub fn free(n: usize) -> Self {
+        Self {
+            mask: vec![0; n],
+            velocity: vec![Vector::<D>::zeros(); n],
+        }
+    }
+
+    /// Prescribes the whole velocity of particle `i`.
+    pub fn fix(&mut self, i: usize, velocity: Vector<D>) {
+        self.mask[i] = (1u8 << D) - 1;
+        self.velocity[i] = velocity;
+    }
+
+    /// Prescribes component `k` of the velocity of particle `i` (a slip
+    /// wall normal to axis `k`).
+    pub fn fix_component(&mut self, i: usize, k: usize, value: f64) {
+        self.mask[i] |= 1 << k;
+        self.velocity[i][k] = value;
+    }
+
+    /// Whether component `k` of particle `i` is prescribed.
+    #[inline]
+    pub fn is_fixed(&self, i: usize, k: usize) -> bool {
+        self.mask[i] & (1 << k) != 0
+    }
+
+    /// Whether every component of particle `i` is prescribed.
+    #[inline]
+    pub fn is_fully_fixed(&self, i: usize) -> bool {
+        self.mask[i] == (1u8 << D) - 1
+    }
+}
+
+/// Time-integration weights of the inertia term, set by the time scheme.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Inertia {
+    /// Factor `c` of `c M` on the left and `c M Vⁿ` on the right (1/s).
+    pub mass_factor: f64,
+    /// Whether `M Aⁿ` enters the right-hand side (Newmark) or not
+    /// (backward Euler).
+    pub with_acceleration: bool,
+}
+
+/// The mesh of one step: all elements (fluid from the tessellation, solid
+/// from each solid's own mesh) with their material index.
+#[derive(Debug, Clone, Copy)]
+pub struct StepMesh<'a> {
+    /// Flat connectivity, `D + 1` particle indices per element.
+    pub elements: &'a [u32],
+    /// Material index (into the materials slice) of each element.
+    pub element_material: &'a [u16],
+}
+
+/// What the assembly reads at a Picard iterate.
+#[derive(Debug, Clone, Copy)]
+pub struct AssemblyInput<'a, const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Positions of the iterate `x⁽ⁱ⁾`, per particle.
+    pub x: &'a [Point<D>],
+    /// Positions at `t_n`, the Updated Lagrangian reference.
+    pub x_n: &'a [Point<D>],
+    /// Velocity of the iterate `V⁽ⁱ⁾` (for rate-dependent materials).
+    pub v: &'a [Vector<D>],
+    /// Velocity at `t_n`.
+    pub v_n: &'a [Vector<D>],
+    /// Acceleration at `t_n`.
+    pub a_n: &'a [Vector<D>],
+    /// Nodal pressure at `t_n` (Pa); read for nodes of fluid elements.
+    pub pressure_n: &'a [f64],
+    /// Per element history at `t_n` (solid stress); fluid elements' entries
+    /// are not read.
+    pub element_history: &'a [History<D>],
+    /// The materials, indexed by [`StepMesh::element_material`].
+    pub materials: &'a [Box<dyn Material<D>>],
+    /// Velocity constraints.
+    pub constraints: &'a Constraints<D>,
+    /// Body force per unit mass (m/s²), `None` when the scene has none.
+    pub body_force: Option<Vector<D>>,
+    /// Time step (s).
+    pub dt: f64,
+    /// Inertia weights of the time scheme.
+    pub inertia: Inertia,
+}
+
+/// Assembles the monolithic system on one step's mesh. The pattern and all
+/// index maps are built once per step by [`Assembler::prepare`]; each Picard
+/// iteration then refills the values with [`Assembler::assemble`].
+#[derive(Debug, Default)]
+pub struct Assembler<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// How the volumetric term is integrated.
+    pub treatment: VolumetricTreatment,
+    n_particles: usize,
+    n_elements: usize,
+    /// particle → system node (NONE if in no element).
+    sys_of: Vec<u32>,
+    /// system node → particle.
+    particle_of: Vec<u32>,
+    /// Element connectivity in system node numbers.
+    elem_sys: Vec<u32>,
+    elem_material: Vec<u16>,
+    /// Whether each element is a fluid element (pressure on nodes).
+    elem_fluid: Vec<bool>,
+    /// Whether each element's volumetric term is assembled on it.
+    elem_vol: Vec<bool>,
+    pattern: BlockPattern,
+    generation: u64,
+    /// NV² block positions per element, row node a, column node b.
+    elem_blocks: Vec<u32>,
+    /// Nodal patches: for each system node a in a fluid element, the
+    /// system nodes of its fluid elements.
+    patch_ptr: Vec<usize>,
+    patch_nodes: Vec<u32>,
+    /// NV² slots per element: slot of node b in patch(a).
+    elem_slots: Vec<u32>,
+    /// P_a² block positions per patch, row i, column j.
+    patch_block_ptr: Vec<usize>,
+    patch_blocks: Vec<u32>,
+    /// Fluid material of each patch node (first fluid element seen).
+    node_fluid_material: Vec<u16>,
+    // Per-iteration values.
+    values: Vec<f64>,
+    rhs: Vec<f64>,
+    mass: Vec<f64>,
+    vol_hat: Vec<f64>,
+    kappa_hat: Vec<f64>,
+    w: Vec<Vector<D>>,
+    states: Vec<ElementState<D>>,
+    unified: Vec<Unified<D>>,
+    local: Vec<f64>,
+}
+
+/// Figures of one assembly.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AssemblyInfo {
+    /// Unknowns of the system.
+    pub dofs: usize,
+    /// Stored nonzeros.
+    pub nnz: usize,
+}
+
+impl<const D: usize> Assembler<D>
+where
+    Const<D>: Dim,
+{
+    /// A new assembler using `treatment` for the volumetric term.
+    pub fn new(treatment: VolumetricTreatment) -> Self {
+        Self {
+            treatment,
+            ..Default::default()
+        }
+    }
+
+    /// Builds the pattern and index maps for the mesh of a step.
+    pub fn prepare(
+        &mut self,
+        n_particles: usize,
+        mesh: StepMesh<'_>,
+        materials: &[Box<dyn Material<D>>],
+    ) -> Result<(), AssemblyError> {
+        let nv = <Const<D> as Dim>::NV;
+        if mesh.elements.len() % nv != 0 || mesh.elements.len() / nv != mesh.element_material.len()
+        {
+            return Err(AssemblyError::MeshMismatch {
+                what: "element connectivity and element materials have different lengths",
+            });
+        }
+        let ne = mesh.element_material.len();
+        self.n_particles = n_particles;
+        self.n_elements = ne;
+        // System nodes.
+        self.sys_of.clear();
+        self.sys_of.resize(n_particles, NONE);
+        self.particle_of.clear();
+        for &p in mesh.elements {
+            let p = p as usize;
+            if p >= n_particles {
+                return Err(AssemblyError::MeshMismatch {
+                    what: "element refers to a particle that does not exist",
+                });
+            }
+            if self.sys_of[p] == NONE {
+                self.sys_of[p] = self.particle_of.len() as u32;
+                self.particle_of.push(p as u32);
+            }
+        }
+        let ns = self.particle_of.len();
+        self.elem_sys.clear();
+        self.elem_sys
+            .extend(mesh.elements.iter().map(|&p| self.sys_of[p as usize]));
+        self.elem_material.clear();
+        self.elem_material.extend_from_slice(mesh.element_material);
+        self.elem_fluid.clear();
+        self.elem_vol.clear();
+        for &m in mesh.element_material {
+            let mat = materials
+                .get(m as usize)
+                .ok_or(AssemblyError::MeshMismatch {
+                    what: "element refers to a material that does not exist",
+                })?;
+            let kind = mat.kind();
+            self.elem_fluid.push(kind == MaterialKind::Fluid);
+            self.elem_vol
+                .push(volumetric_on_element(kind, self.treatment));
+        }
+        // Nodal patches of fluid elements.
+        let mut count = vec![0usize; ns + 1];
+        for e in 0..ne {
+            if self.elem_fluid[e] {
+                for &a in &self.elem_sys[e * nv..(e + 1) * nv] {
+                    count[a as usize] += nv;
+                }
+            }
+        }
+        let mut ptr = vec![0usize; ns + 1];
+        for a in 0..ns {
+            ptr[a + 1] = ptr[a] + count[a];
+        }
+        let mut fill = ptr.clone();
+        let mut raw = vec![0u32; ptr[ns]];
+        self.node_fluid_material.clear();
+        self.node_fluid_material.resize(ns, u16::MAX);
+        for e in 0..ne {
+            if self.elem_fluid[e] {
+                let el = &self.elem_sys[e * nv..(e + 1) * nv];
+                for &a in el {
+                    let a = a as usize;
+                    raw[fill[a]..fill[a] + nv].copy_from_slice(el);
+                    fill[a] += nv;
+                    if self.node_fluid_material[a] == u16::MAX {
+                        self.node_fluid_material[a] = self.elem_material[e];
+                    }
+                }
+            }
+        }
+        self.patch_ptr.clear();
+        self.patch_ptr.push(0);
+        self.patch_nodes.clear();
+        for a in 0..ns {
+            let row = &mut raw[ptr[a]..ptr[a + 1]];
+            row.sort_unstable();
+            let start = self.patch_nodes.len();
+            for &j in row.iter() {
+                if self.patch_nodes.len() == start || *self.patch_nodes.last().unwrap() != j {
+                    self.patch_nodes.push(j);
+                }
+            }
+            self.patch_ptr.push(self.patch_nodes.len());
+        }
+        // Pattern: element couplings, plus patch × patch for the nodal
+        // volumetric term and the pressure coupling.
+        let (elem_sys, patch_ptr, patch_nodes) =
+            (&self.elem_sys, &self.patch_ptr, &self.patch_nodes);
+        self.pattern.build(ns, D, |visit| {
+            for el in elem_sys.chunks_exact(nv) {
+                visit(el);
+            }
+            for a in 0..ns {
+                let p = &patch_nodes[patch_ptr[a]..patch_ptr[a + 1]];
+                if !p.is_empty() {
+                    visit(p);
+                }
+            }
+        });
+        self.generation += 1;
+        // Block positions.
+        self.elem_blocks.clear();
+        self.elem_slots.clear();
+        for e in 0..ne {
+            let el = &self.elem_sys[e * nv..(e + 1) * nv];
+            for &a in el {
+                for &b in el {
+                    self.elem_blocks
+                        .push(self.pattern.block(a, b).expect("element pair in pattern"));
+                    let slot = if self.elem_fluid[e] {
+                        let p = &self.patch_nodes
+                            [self.patch_ptr[a as usize]..self.patch_ptr[a as usize + 1]];
+                        (self.patch_ptr[a as usize]
+                            + p.binary_search(&b).expect("patch holds element"))
+                            as u32
+                    } else {
+                        NONE
+                    };
+                    self.elem_slots.push(slot);
+                }
+            }
+        }
+        self.patch_block_ptr.clear();
+        self.patch_block_ptr.push(0);
+        self.patch_blocks.clear();
+        for a in 0..ns {
+            let p = &self.patch_nodes[self.patch_ptr[a]..self.patch_ptr[a + 1]];
+            for &i in p {
+                for &j in p {
+                    self.patch_blocks
+                        .push(self.pattern.block(i, j).expect("patch pair in pattern"));
+                }
+            }
+            self.patch_block_ptr.push(self.patch_blocks.len());
+        }
+        self.values.resize(self.pattern.nnz(), 0.0);
+        self.rhs.resize(self.pattern.dofs(), 0.0);
+        Ok(())
+    }
+
+    /// Fills the matrix and right-hand side at the iterate described by
+    /// `input` (eqs. 55–59 with the corrections stated in the module docs).
+    pub fn assemble(
+        &mut self,
+        input: &AssemblyInput<'_, D>,
+    ) -> Result<AssemblyInfo, AssemblyError> {
+        let nv = <Const<D> as Dim>::NV;
+        let ne = self.n_elements;
+        let n_local = nv * D;
+        if input.x.len() != self.n_particles || input.element_history.len() != ne {
+            return Err(AssemblyError::MeshMismatch {
+                what: "assembly input does not match the prepared mesh",
+            });
+        }
+        // 1. Element states and unified triples, in parallel.
+        let elem_sys = &self.elem_sys;
+        let particle_of = &self.particle_of;
+        let mut states = std::mem::take(&mut self.states);
+        let mut unified = std::mem::take(&mut self.unified);
+        states.resize(ne, dummy_state());
+        unified.resize(
+            ne,
+            Unified {
+                mu: 0.0,
+                kappa: 0.0,
+                sigma_hat: Tensor::<D>::zeros(),
+                sigma_hat_zz: 0.0,
+            },
+        );
+        let bad = states
+            .par_iter_mut()
+            .zip(unified.par_iter_mut())
+            .enumerate()
+            .map(|(e, (st, un))| {
+                let mut x = [Point::<D>::zeros(); MAX_NV];
+                let mut xn = [Point::<D>::zeros(); MAX_NV];
+                let mut v = [Vector::<D>::zeros(); MAX_NV];
+                for a in 0..nv {
+                    let p = particle_of[elem_sys[e * nv + a] as usize] as usize;
+                    x[a] = input.x[p];
+                    xn[a] = input.x_n[p];
+                    v[a] = input.v[p];
+                }
+                match element_state::<D>(&x[..nv], &xn[..nv], &v[..nv], input.dt) {
+                    Some(s) => {
+                        *st = s;
+                        let mat = &input.materials[self.elem_material[e] as usize];
+                        *un = mat.unified(&s.kin, &input.element_history[e]);
+                        if un.mu.is_finite()
+                            && un.kappa.is_finite()
+                            && un.sigma_hat.iter().all(|v| v.is_finite())
+                        {
+                            None
+                        } else {
+                            Some((e, false))
+                        }
+                    }
+                    None => Some((e, true)),
+                }
+            })
+            .find_any(|r| r.is_some())
+            .flatten();
+        self.states = states;
+        self.unified = unified;
+        if let Some((e, inverted)) = bad {
+            let nodes = (0..nv)
+                .map(|a| self.particle_of[self.elem_sys[e * nv + a] as usize])
+                .collect();
+            return Err(if inverted {
+                AssemblyError::InvertedElement { element: e, nodes }
+            } else {
+                AssemblyError::NonFiniteMaterial {
+                    element: e,
+                    material: self.elem_material[e],
+                }
+            });
+        }
+        self.values.iter_mut().for_each(|v| *v = 0.0);
+        self.rhs.iter_mut().for_each(|v| *v = 0.0);
+        let ns = self.particle_of.len();
+        self.mass.clear();
+        self.mass.resize(ns, 0.0);
+        // 2. Element stiffness and solid history force: computed in
+        // parallel chunks, scattered serially through precomputed indices.
+        let stride = n_local * n_local + n_local;
+        self.local.resize(CHUNK * stride, 0.0);
+        for c0 in (0..ne).step_by(CHUNK) {
+            let c1 = (c0 + CHUNK).min(ne);
+            let states = &self.states;
+            let unified = &self.unified;
+            let elem_vol = &self.elem_vol;
+            let elem_fluid = &self.elem_fluid;
+            self.local[..(c1 - c0) * stride]
+                .par_chunks_mut(stride)
+                .enumerate()
+                .for_each(|(i, buf)| {
+                    let e = c0 + i;
+                    let (k, f) = buf.split_at_mut(n_local * n_local);
+                    element_stiffness::<D>(&states[e], &unified[e], elem_vol[e], k);
+                    f.iter_mut().for_each(|v| *v = 0.0);
+                    if !elem_fluid[e] {
+                        element_history_force::<D>(&states[e], &unified[e].sigma_hat, f);
+                    }
+                });
+            let mut sink = Sink {
+                pattern: &self.pattern,
+                particle_of: &self.particle_of,
+                constraints: input.constraints,
+                values: &mut self.values,
+                rhs: &mut self.rhs,
+            };
+            for e in c0..c1 {
+                let buf = &self.local[(e - c0) * stride..(e - c0 + 1) * stride];
+                let el = &self.elem_sys[e * nv..(e + 1) * nv];
+                let rho = input.materials[self.elem_material[e] as usize].density();
+                let m = rho * self.states[e].volume_n / nv as f64;
+                for a in 0..nv {
+                    self.mass[el[a] as usize] += m;
+                    for k in 0..D {
+                        sink.rhs(el[a], k, buf[n_local * n_local + a * D + k]);
+                    }
+                    for b in 0..nv {
+                        let p = self.elem_blocks[e * nv * nv + a * nv + b];
+                        for k in 0..D {
+                            for l in 0..D {
+                                let val = buf[(a * D + k) * n_local + b * D + l];
+                                sink.entry(p, el[a], k, el[b], l, val);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // 3. Nodal volumetric term and fluid pressure force (eqs. 56, 58).
+        self.nodal_gradients();
+        let mut sink = Sink {
+            pattern: &self.pattern,
+            particle_of: &self.particle_of,
+            constraints: input.constraints,
+            values: &mut self.values,
+            rhs: &mut self.rhs,
+        };
+        for a in 0..ns {
+            let (s, e) = (self.patch_ptr[a], self.patch_ptr[a + 1]);
+            if s == e {
+                continue;
+            }
+            let p_a = input.pressure_n[self.particle_of[a] as usize];
+            // Gᵀ pⁿ: force on node i is p_a w_{a,i}.
+            for slot in s..e {
+                let i = self.patch_nodes[slot];
+                for k in 0..D {
+                    let f = p_a * self.w[slot][k];
+                    sink.rhs(i, k, f);
+                }
+            }
+            if self.treatment == VolumetricTreatment::NodalAveraged && self.vol_hat[a] > 0.0 {
+                let c = self.kappa_hat[a] / self.vol_hat[a];
+                let np = e - s;
+                let bp = self.patch_block_ptr[a];
+                for (ii, si) in (s..e).enumerate() {
+                    let wi = self.w[si];
+                    let i = self.patch_nodes[si];
+                    for (jj, sj) in (s..e).enumerate() {
+                        let wj = self.w[sj];
+                        let j = self.patch_nodes[sj];
+                        let p = self.patch_blocks[bp + ii * np + jj];
+                        for k in 0..D {
+                            for l in 0..D {
+                                sink.entry(p, i, k, j, l, c * wi[k] * wj[l]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // 4. Inertia and body force on each system node.
+        let cm = input.inertia.mass_factor;
+        for a in 0..ns {
+            let part = self.particle_of[a] as usize;
+            let m = self.mass[a];
+            let mut f = input.v_n[part] * (cm * m);
+            if input.inertia.with_acceleration {
+                f += input.a_n[part] * m;
+            }
+            if let Some(b) = input.body_force {
+                f += b * m; // eq. 59, lumped
+            }
+            let p = sink
+                .pattern
+                .block(a as u32, a as u32)
+                .expect("diagonal block");
+            for k in 0..D {
+                sink.rhs(a as u32, k, f[k]);
+                sink.entry(p, a as u32, k, a as u32, k, cm * m);
+            }
+        }
+        // 5. Prescribed dofs: identity rows, value on the right.
+        for a in 0..ns {
+            let part = self.particle_of[a] as usize;
+            if input.constraints.mask[part] == 0 {
+                continue;
+            }
+            let p = self
+                .pattern
+                .block(a as u32, a as u32)
+                .expect("diagonal block");
+            for k in 0..D {
+                if input.constraints.is_fixed(part, k) {
+                    let idx = self.pattern.value_index(p, a as u32, k, k);
+                    self.values[idx] = 1.0;
+                    self.rhs[a * D + k] = input.constraints.velocity[part][k];
+                }
+            }
+        }
+        if let Some(i) = self.rhs.iter().position(|v| !v.is_finite()) {
+            return Err(AssemblyError::NonFiniteSystem { dof: i });
+        }
+        Ok(AssemblyInfo {
+            dofs: self.pattern.dofs(),
+            nnz: self.pattern.nnz(),
+        })
+    }
+
+    /// Nodal weights `w_{a,j} = Σ_{e∋a,j} Vₑ/(D+1) grad W_j` (the rows of
+    /// `G` of eq. 58 without `𝒦`), lumped `M̂_a` (eq. 56) and the
+    /// volume-weighted nodal `𝒦_a`.
+    fn nodal_gradients(&mut self) {
+        let nv = <Const<D> as Dim>::NV;
+        let ns = self.particle_of.len();
+        self.w.clear();
+        self.w.resize(self.patch_nodes.len(), Vector::<D>::zeros());
+        self.vol_hat.clear();
+        self.vol_hat.resize(ns, 0.0);
+        self.kappa_hat.clear();
+        self.kappa_hat.resize(ns, 0.0);
+        for e in 0..self.n_elements {
+            if !self.elem_fluid[e] {
+                continue;
+            }
+            let st = &self.states[e];
+            let wv = st.volume / nv as f64;
+            for a in 0..nv {
+                let na = self.elem_sys[e * nv + a] as usize;
+                self.vol_hat[na] += wv;
+                self.kappa_hat[na] += wv * self.unified[e].kappa;
+                for b in 0..nv {
+                    let slot = self.elem_slots[e * nv * nv + a * nv + b] as usize;
+                    self.w[slot] += st.grads[b] * wv;
+                }
+            }
+        }
+        for a in 0..ns {
+            if self.vol_hat[a] > 0.0 {
+                self.kappa_hat[a] /= self.vol_hat[a];
+            }
+        }
+    }
+
+    /// The assembled matrix as a faer sparse view.
+    pub fn matrix(&self) -> faer::sparse::SparseColMatRef<'_, usize, f64> {
+        let n = self.pattern.dofs();
+        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(
+            n,
+            n,
+            &self.pattern.col_ptr,
+            None,
+            &self.pattern.row_idx,
+        );
+        faer::sparse::SparseColMatRef::new(sym, &self.values)
+    }
+
+    /// The assembled right-hand side.
+    pub fn rhs(&self) -> &[f64] {
+        &self.rhs
+    }
+
+    /// Changes whenever [`Assembler::prepare`] builds a new pattern, so that
+    /// solvers can reuse a symbolic factorisation while it stays the same.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Number of unknowns.
+    pub fn dofs(&self) -> usize {
+        self.pattern.dofs()
+    }
+
+    /// Particle of each system node.
+    pub fn particles(&self) -> &[u32] {
+        &self.particle_of
+    }
+
+    /// System node of particle `p`, `None` if it is in no element.
+    pub fn system_node(&self, p: usize) -> Option<usize> {
+        match self.sys_of.get(p) {
+            Some(&s) if s != NONE => Some(s as usize),
+            _ => None,
+        }
+    }
+
+    /// Lumped nodal mass of each system node (kg, per metre in 2D).
+    pub fn mass(&self) -> &[f64] {
+        &self.mass
+    }
+
+    /// Element states of the last assembly.
+    pub fn element_states(&self) -> &[ElementState<D>] {
+        &self.states
+    }
+
+    /// Whether element `e` is a fluid element.
+    pub fn is_fluid_element(&self, e: usize) -> bool {
+        self.elem_fluid[e]
+    }
+
+    /// Material of element `e`.
+    pub fn element_material(&self, e: usize) -> u16 {
+        self.elem_material[e]
+    }
+
+    /// Nodal averaged volumetric strain rate `ε_{v,a} = (G V)_a / M̂_a`
+    /// (eq. 56 without `𝒦`) at every system node of a fluid element, with
+    /// the fluid material of the node and its `M̂_a`; uses the geometry of
+    /// the last assembly. `v` is indexed by particle.
+    pub fn nodal_volumetric_rates(&self, v: &[Vector<D>], out: &mut Vec<NodalRate>) {
+        out.clear();
+        for a in 0..self.particle_of.len() {
+            let (s, e) = (self.patch_ptr[a], self.patch_ptr[a + 1]);
+            if s == e || self.vol_hat[a] <= 0.0 {
+                continue;
+            }
+            let mut div = 0.0;
+            for slot in s..e {
+                div += self.w[slot]
+                    .dot(&v[self.particle_of[self.patch_nodes[slot] as usize] as usize]);
+            }
+            out.push(NodalRate {
+                particle: self.particle_of[a],
+                material: self.node_fluid_material[a],
+                volume: self.vol_hat[a],
+                rate: div / self.vol_hat[a],
+            });
+        }
+    }
+
+    /// Force the assembled system's element and nodal terms exert on each
+    /// particle for a given velocity field, excluding inertia and body force:
+    /// `−(K V − fσ̂)`, written per particle. Used for reactions on walls.
+    pub fn internal_force(&self, input: &AssemblyInput<'_, D>, out: &mut [Vector<D>]) {
+        let nv = <Const<D> as Dim>::NV;
+        out.iter_mut().for_each(|f| *f = Vector::<D>::zeros());
+        let mut k = [0.0; MAX_LOCAL * MAX_LOCAL];
+        let n_local = nv * D;
+        for e in 0..self.n_elements {
+            let st = &self.states[e];
+            let un = &self.unified[e];
+            element_stiffness::<D>(st, un, self.elem_vol[e], &mut k[..n_local * n_local]);
+            let mut f = [0.0; MAX_LOCAL];
+            if !self.elem_fluid[e] {
+                element_history_force::<D>(st, &un.sigma_hat, &mut f[..n_local]);
+            }
+            let el = &self.elem_sys[e * nv..(e + 1) * nv];
+            for a in 0..nv {
+                let pa = self.particle_of[el[a] as usize] as usize;
+                for kk in 0..D {
+                    let mut s = f[a * D + kk];
+                    for b in 0..nv {
+                        let pb = self.particle_of[el[b] as usize] as usize;
+                        for l in 0..D {
+                            s -= k[(a * D + kk) * n_local + b * D + l] * input.v[pb][l];
+                        }
+                    }
+                    out[pa][kk] += s;
+                }
+            }
+        }
+        for a in 0..self.particle_of.len() {
+            let (s, e) = (self.patch_ptr[a], self.patch_ptr[a + 1]);
+            if s == e {
+                continue;
+            }
+            // Nodal pressure at n+1 would be pⁿ − 𝒦 ε_v: force p w.
+            let pa = self.particle_of[a] as usize;
+            let mut p = input.pressure_n[pa];
+            if self.treatment == VolumetricTreatment::NodalAveraged && self.vol_hat[a] > 0.0 {
+                let mut div = 0.0;
+                for slot in s..e {
+                    div += self.w[slot]
+                        .dot(&input.v[self.particle_of[self.patch_nodes[slot] as usize] as usize]);
+                }
+                p -= self.kappa_hat[a] * div / self.vol_hat[a];
+            }
+            for slot in s..e {
+                let i = self.particle_of[self.patch_nodes[slot] as usize] as usize;
+                out[i] += self.w[slot] * p;
+            }
+        }
+    }
+}
+
+/// Where assembled entries go: applies the velocity constraints (identity
+/// rows for prescribed dofs, their columns moved to the right-hand side so
+/// the system stays symmetric).
+struct Sink<'s, const D: usize>
+where
+    Const<D>: Dim,
+{
+    pattern: &'s BlockPattern,
+    particle_of: &'s [u32],
+    constraints: &'s Constraints<D>,
+    values: &'s mut [f64],
+    rhs: &'s mut [f64],
+}
+
+impl<const D: usize> Sink<'_, D>
+where
+    Const<D>: Dim,
+{
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn entry(&mut self, p: u32, i: u32, k: usize, j: u32, l: usize, val: f64) {
+        let pi = self.particle_of[i as usize] as usize;
+        if self.constraints.is_fixed(pi, k) {
+            return;
+        }
+        let pj = self.particle_of[j as usize] as usize;
+        if self.constraints.is_fixed(pj, l) {
+            self.rhs[i as usize * D + k] -= val * self.constraints.velocity[pj][l];
+            return;
+        }
+        let idx = self.pattern.value_index(p, j, k, l);
+        self.values[idx] += val;
+    }
+
+    #[inline]
+    fn rhs(&mut self, i: u32, k: usize, val: f64) {
+        let pi = self.particle_of[i as usize] as usize;
+        if !self.constraints.is_fixed(pi, k) {
+            self.rhs[i as usize * D + k] += val;
+        }
+    }
+}
+
+/// Nodal volumetric rate of a fluid node, see
+/// [`Assembler::nodal_volumetric_rates`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodalRate {
+    /// Particle index.
+    pub particle: u32,
+    /// Fluid material of the node.
+    pub material: u16,
+    /// Lumped nodal measure `M̂_a` (eq. 56).
+    pub volume: f64,
+    /// `ε_{v,a}` (1/s).
+    pub rate: f64,
+}
+
+fn dummy_state<const D: usize>() -> ElementState<D>
+where
+    Const<D>: Dim,
+{
+    ElementState {
+        grads: [Vector::<D>::zeros(); MAX_NV],
+        volume: 0.0,
+        volume_n: 0.0,
+        kin: pfem_constitutive::Kinematics::at_rest(0.0),
+    }
+}

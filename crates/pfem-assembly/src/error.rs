@@ -1,0 +1,86 @@
+//! Typed errors of assembly and linear solves.
+
+/// What went wrong while assembling the system.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum AssemblyError {
+    /// An element is degenerate or inverted (`J ≤ 0`) at the iterate: the
+    /// step must be rejected and retried with a smaller `Δt`.
+    #[error("element {element} (particles {nodes:?}) is degenerate or inverted (J <= 0)")]
+    InvertedElement {
+        /// Element index in the step's mesh.
+        element: usize,
+        /// Its particles.
+        nodes: Vec<u32>,
+    },
+    /// A material returned a non-finite coefficient.
+    #[error("material {material} returned a non-finite constitutive triple on element {element}")]
+    NonFiniteMaterial {
+        /// Element index.
+        element: usize,
+        /// Material index.
+        material: u16,
+    },
+    /// The right-hand side is not finite.
+    #[error("the assembled right-hand side is not finite at unknown {dof}")]
+    NonFiniteSystem {
+        /// The unknown.
+        dof: usize,
+    },
+    /// The mesh and the data handed to assembly do not fit together.
+    #[error("inconsistent assembly input: {what}")]
+    MeshMismatch {
+        /// What does not fit.
+        what: &'static str,
+    },
+}
+
+/// What went wrong in a linear solve.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SolveError {
+    /// The right-hand side holds a NaN or an infinity.
+    #[error("right-hand side is not finite at index {index}")]
+    NonFinite {
+        /// The offending entry.
+        index: usize,
+    },
+    /// The factorisation failed (singular or not positive definite).
+    #[error("{solver} factorisation failed: {detail}")]
+    Factorization {
+        /// Solver name.
+        solver: &'static str,
+        /// What the factorisation reported.
+        detail: String,
+    },
+    /// The solution's residual is too large to be trusted.
+    #[error("{solver} returned a solution with relative residual {residual:e} above {limit:e}")]
+    Inaccurate {
+        /// Solver name.
+        solver: &'static str,
+        /// Relative residual ‖Ax − b‖/‖b‖.
+        residual: f64,
+        /// Accepted limit.
+        limit: f64,
+    },
+    /// An iterative solver ran out of iterations.
+    #[error(
+        "{solver} did not converge in {iterations} iterations (relative residual {residual:e})"
+    )]
+    NoConvergence {
+        /// Solver name.
+        solver: &'static str,
+        /// Iterations done.
+        iterations: usize,
+        /// Relative residual reached.
+        residual: f64,
+    },
+    /// A conjugate-gradient solver met a direction of non-positive curvature.
+    #[error("{solver}: system is not positive definite (iteration {iteration})")]
+    NotPositiveDefinite {
+        /// Solver name.
+        solver: &'static str,
+        /// Iteration where it was found.
+        iteration: usize,
+    },
+}

@@ -1,0 +1,177 @@
+//! Closed-form checks of the Newmark–Picard step on fixed meshes: free fall,
+//! hydrostatics, patch tests, locking shown and cured.
+
+mod common;
+
+use pfem_assembly::{Constraints, StepMesh, VolumetricTreatment};
+use pfem_constitutive::{History, Material, Newtonian};
+use pfem_core::{Point, Vector};
+use pfem_time::{Integrator, ParticleState, Scheme, StepInput, StepParams};
+
+const G: f64 = 9.81;
+
+fn centroid(x: &[Point<2>]) -> Point<2> {
+    x.iter().fold(Point::<2>::zeros(), |a, b| a + b) / x.len() as f64
+}
+
+#[test]
+fn free_fall_of_a_detached_fluid_block() {
+    let (pts, tris) = common::grid(0.0, 1.0, 0.2, 0.2, 8, 8);
+    let ne = tris.len() / 3;
+    let materials: Vec<Box<dyn Material<2>>> = vec![Box::new(Newtonian::water())];
+    let mat = vec![0u16; ne];
+    let mut history = vec![History::<2>::default(); ne];
+    let constraints = Constraints::<2>::free(pts.len());
+    let mut state = ParticleState::at_rest(pts);
+    let y0 = centroid(&state.x).y;
+    let mut integ = Integrator::<2>::new(StepParams::default());
+    let input = StepInput {
+        mesh: StepMesh {
+            elements: &tris,
+            element_material: &mat,
+        },
+        materials: &materials,
+        constraints: &constraints,
+        body_force: Some(Vector::<2>::new(0.0, -G)),
+    };
+    integ
+        .initialize_acceleration(&mut state, &history, &input)
+        .unwrap();
+    let dt = 0.01;
+    let mut t = 0.0;
+    for _ in 0..30 {
+        let rep = integ
+            .advance(t, dt, &mut state, &mut history, &input)
+            .unwrap();
+        t += rep.dt;
+    }
+    let y = centroid(&state.x).y;
+    let exact = y0 - 0.5 * G * t * t;
+    assert!(
+        ((y - exact) / (y0 - exact)).abs() < 5e-3,
+        "centroid {y} vs {exact}"
+    );
+    let pmax = state.pressure.iter().fold(0.0f64, |m, p| m.max(p.abs()));
+    // "near zero": far below the hydrostatic scale of a 0.2 m column.
+    assert!(pmax < 1e-3 * 1000.0 * G * 0.2, "pressure {pmax}");
+}
+
+/// A water column of height `h` in a tank whose bottom and side rows of
+/// particles are walls; returns (state, history, mesh, constraints).
+fn tank(h: f64, n: usize) -> (ParticleState<2>, Vec<u32>, Constraints<2>) {
+    let (pts, tris) = common::grid(0.0, 0.0, h, h, n, n);
+    let mut constraints = Constraints::<2>::free(pts.len());
+    for (i, p) in pts.iter().enumerate() {
+        if p.y < 1e-9 || p.x < 1e-9 || p.x > h - 1e-9 {
+            constraints.fix(i, Vector::<2>::zeros());
+        }
+    }
+    // Elements made only of wall particles are not elements.
+    let tris: Vec<u32> = tris
+        .chunks(3)
+        .filter(|t| t.iter().any(|&q| constraints.mask[q as usize] == 0))
+        .flatten()
+        .copied()
+        .collect();
+    (ParticleState::at_rest(pts), tris, constraints)
+}
+
+fn run_tank(
+    treatment: VolumetricTreatment,
+    scheme: Scheme,
+    hydrostatic_start: bool,
+    t_end: f64,
+) -> (ParticleState<2>, f64, f64, f64) {
+    let h = 0.5;
+    let (mut state, tris, constraints) = tank(h, 20);
+    if hydrostatic_start {
+        for (p, x) in state.pressure.iter_mut().zip(&state.x) {
+            *p = 1000.0 * G * (h - x.y);
+        }
+    }
+    let ne = tris.len() / 3;
+    let materials: Vec<Box<dyn Material<2>>> = vec![Box::new(Newtonian::water())];
+    let mat = vec![0u16; ne];
+    let mut history = vec![History::<2>::default(); ne];
+    let params = StepParams {
+        volumetric: treatment,
+        scheme,
+        ..Default::default()
+    };
+    let mut integ = Integrator::<2>::new(params);
+    let input = StepInput {
+        mesh: StepMesh {
+            elements: &tris,
+            element_material: &mat,
+        },
+        materials: &materials,
+        constraints: &constraints,
+        body_force: Some(Vector::<2>::new(0.0, -G)),
+    };
+    let vol0 = volume(&state.x, &tris);
+    let mut t = 0.0;
+    let dt = 0.005;
+    let mut vmax: f64 = 0.0;
+    while t < t_end - 1e-12 {
+        let rep = integ
+            .advance(t, dt, &mut state, &mut history, &input)
+            .unwrap();
+        t += rep.dt;
+        vmax = state.v.iter().fold(vmax, |m, v| m.max(v.norm()));
+    }
+    let vol = volume(&state.x, &tris);
+    (state, vmax, vol0, vol)
+}
+
+fn volume(x: &[Point<2>], tris: &[u32]) -> f64 {
+    tris.chunks(3)
+        .map(|t| {
+            pfem_core::simplex_measure::<2>(&[x[t[0] as usize], x[t[1] as usize], x[t[2] as usize]])
+        })
+        .sum()
+}
+
+/// Largest error of the nodal pressure of fluid particles against
+/// ρ g (H − y), relative to ρ g H.
+fn pressure_error(state: &ParticleState<2>, h: f64) -> f64 {
+    let mut err: f64 = 0.0;
+    for (p, x) in state.pressure.iter().zip(&state.x) {
+        if x.y > 1e-9 && x.x > 1e-9 && x.x < h - 1e-9 {
+            err = err.max((p - 1000.0 * G * (h - x.y)).abs());
+        }
+    }
+    err / (1000.0 * G * h)
+}
+
+#[test]
+fn water_at_rest_with_real_bulk_modulus_stays_hydrostatic() {
+    let h = 0.5;
+    let (state, vmax, vol0, vol) = run_tank(
+        VolumetricTreatment::NodalAveraged,
+        Scheme::Newmark,
+        true,
+        1.0,
+    );
+    let e = pressure_error(&state, h);
+    assert!(e < 0.01, "pressure error {e}");
+    assert!(vmax < 1e-3 * (G * h).sqrt(), "spurious velocity {vmax}");
+    assert!(((vol - vol0) / vol0).abs() < 1e-3, "volume {vol0} -> {vol}");
+}
+
+#[test]
+fn water_released_without_pressure_settles_to_hydrostatic() {
+    // Start with p = 0: gravity compresses the column; backward Euler damps
+    // the acoustic transient and the pressure settles to ρ g (H − y).
+    let h = 0.5;
+    let (state, _vmax, vol0, vol) = run_tank(
+        VolumetricTreatment::NodalAveraged,
+        Scheme::BackwardEuler,
+        false,
+        1.0,
+    );
+    let e = pressure_error(&state, h);
+    assert!(e < 0.01, "pressure error {e}");
+    let vend = state.v.iter().fold(0.0f64, |m, v| m.max(v.norm()));
+    assert!(vend < 1e-3 * (G * h).sqrt(), "residual velocity {vend}");
+    assert!(((vol - vol0) / vol0).abs() < 1e-3, "volume {vol0} -> {vol}");
+}

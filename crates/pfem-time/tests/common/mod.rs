@@ -1,0 +1,77 @@
+//! Structured meshes for the closed-form tests (no remeshing needed).
+#![allow(dead_code)]
+
+use pfem_core::Point;
+
+/// Nodes of an `nx × ny` cell grid on `[x0, x0+lx] × [y0, y0+ly]`, row by row,
+/// and its triangles (two per cell, alternating diagonals).
+pub fn grid(x0: f64, y0: f64, lx: f64, ly: f64, nx: usize, ny: usize) -> (Vec<Point<2>>, Vec<u32>) {
+    let mut pts = Vec::new();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            pts.push(Point::<2>::new(
+                x0 + lx * i as f64 / nx as f64,
+                y0 + ly * j as f64 / ny as f64,
+            ));
+        }
+    }
+    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    let mut tris = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            if (i + j) % 2 == 0 {
+                tris.extend_from_slice(&[a, b, c, a, c, d]);
+            } else {
+                tris.extend_from_slice(&[a, b, d, b, c, d]);
+            }
+        }
+    }
+    (pts, tris)
+}
+
+/// Nodes and tetrahedra (six per cell, Kuhn subdivision) of a box grid.
+pub fn grid3(l: [f64; 3], n: [usize; 3]) -> (Vec<Point<3>>, Vec<u32>) {
+    let mut pts = Vec::new();
+    for k in 0..=n[2] {
+        for j in 0..=n[1] {
+            for i in 0..=n[0] {
+                pts.push(Point::<3>::new(
+                    l[0] * i as f64 / n[0] as f64,
+                    l[1] * j as f64 / n[1] as f64,
+                    l[2] * k as f64 / n[2] as f64,
+                ));
+            }
+        }
+    }
+    let id = |i: usize, j: usize, k: usize| ((k * (n[1] + 1) + j) * (n[0] + 1) + i) as u32;
+    let mut tets = Vec::new();
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let c = |b: usize| id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+                // Kuhn: paths from corner 0 to corner 7 through the 6 permutations.
+                for perm in [
+                    [1, 2, 4],
+                    [1, 4, 2],
+                    [2, 1, 4],
+                    [2, 4, 1],
+                    [4, 1, 2],
+                    [4, 2, 1],
+                ] {
+                    let v0 = 0usize;
+                    let v1 = v0 | perm[0];
+                    let v2 = v1 | perm[1];
+                    let v3 = v2 | perm[2];
+                    let mut t = [c(v0), c(v1), c(v2), c(v3)];
+                    let p: Vec<Point<3>> = t.iter().map(|&q| pts[q as usize]).collect();
+                    if pfem_core::simplex_measure::<3>(&p) < 0.0 {
+                        t.swap(2, 3);
+                    }
+                    tets.extend_from_slice(&t);
+                }
+            }
+        }
+    }
+    (pts, tets)
+}
