@@ -6,7 +6,14 @@ Usage: python3 docs/check_vtu.py FILE.vtu|FILE.pvd [...]
 For a .vtu: point and cell counts, cell types, point/cell/field array names
 with their component counts and value ranges. For a .pvd: the same for each
 listed dataset, with its timestep. Exits non-zero when VTK reports an error or
-a file has no points. Needs the `vtk` Python package (`pip install vtk`).
+a file has no points or an array of the wrong length. Needs the `vtk` Python
+package (`pip install vtk`).
+
+Sample files from the test suite (2D ASCII and base64 frames with every field
+kind, a 3D series with its .pvd):
+
+    PFEM_VTU_SAMPLE_DIR=/tmp/vtu cargo test -p pfem --test output_vtu write_samples
+    python3 docs/check_vtu.py /tmp/vtu/*.vtu /tmp/vtu/series3d.pvd
 """
 
 import os

@@ -33,6 +33,8 @@ pub struct Progress {
     end_time: f64,
     quiet: bool,
     last_message: Option<Instant>,
+    /// Latest `(t, dt)`, shown by [`finish`](Self::finish).
+    latest: (f64, f64),
 }
 
 impl Progress {
@@ -53,6 +55,7 @@ impl Progress {
             end_time,
             quiet,
             last_message: None,
+            latest: (0.0, 0.0),
         }
     }
 
@@ -66,6 +69,7 @@ impl Progress {
     /// most ten times a second.
     pub fn update(&mut self, t: f64, dt: f64) {
         let Some(bar) = &self.bar else { return };
+        self.latest = (t, dt);
         bar.set_position(self.position(t));
         let now = Instant::now();
         if self
@@ -73,11 +77,12 @@ impl Progress {
             .is_none_or(|last| now.duration_since(last) >= REDRAW)
         {
             self.last_message = Some(now);
-            bar.set_message(format!(
-                "t = {t:.4} / {:.4} s  Δt = {dt:.2e} s",
-                self.end_time
-            ));
+            bar.set_message(self.message(t, dt));
         }
+    }
+
+    fn message(&self, t: f64, dt: f64) -> String {
+        format!("t = {t:.4} / {:.4} s  Δt = {dt:.2e} s", self.end_time)
     }
 
     /// Prints a line to stderr: above the bar when it is shown, as a plain
@@ -93,7 +98,8 @@ impl Progress {
     /// Leaves the bar in its final state on the terminal.
     pub fn finish(&mut self) {
         if let Some(bar) = self.bar.take() {
-            bar.finish();
+            let (t, dt) = self.latest;
+            bar.finish_with_message(self.message(t, dt));
         }
     }
 
