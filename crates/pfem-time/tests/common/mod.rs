@@ -75,3 +75,46 @@ pub fn grid3(l: [f64; 3], n: [usize; 3]) -> (Vec<Point<3>>, Vec<u32>) {
     }
     (pts, tets)
 }
+
+/// A small deterministic generator (SplitMix64) giving values in `[-1, 1)`.
+pub struct Jitter(u64);
+
+impl Jitter {
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+
+    pub fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// Moves every node strictly inside the box `[0, l]` by up to `amount`
+/// (per component, in metres), leaving boundary nodes where they are.
+pub fn perturb_interior<const D: usize>(pts: &mut [Point<D>], l: [f64; D], amount: f64, seed: u64)
+where
+    pfem_core::Const<D>: pfem_core::Dim,
+{
+    let mut rng = Jitter::new(seed);
+    for p in pts.iter_mut() {
+        if on_box_boundary(p, l) {
+            continue;
+        }
+        for k in 0..D {
+            p[k] += amount * rng.next();
+        }
+    }
+}
+
+/// Whether a point lies on the boundary of the box `[0, l]`.
+pub fn on_box_boundary<const D: usize>(p: &Point<D>, l: [f64; D]) -> bool
+where
+    pfem_core::Const<D>: pfem_core::Dim,
+{
+    (0..D).any(|k| p[k] < 1e-12 * l[k] || p[k] > l[k] * (1.0 - 1e-12))
+}
