@@ -118,3 +118,28 @@ where
 {
     (0..D).any(|k| p[k] < 1e-12 * l[k] || p[k] > l[k] * (1.0 - 1e-12))
 }
+
+/// Like [`grid`] but every cell is cut along the same diagonal (from its
+/// lower left to its upper right corner). Unlike the alternating pattern,
+/// whose cell pairs form crossed-diagonal ("union jack") macro-elements
+/// that leave linear triangles room for incompressible motion, this mesh
+/// locks under an element-wise incompressibility constraint.
+pub fn grid_uniform_diagonal(
+    x0: f64,
+    y0: f64,
+    lx: f64,
+    ly: f64,
+    nx: usize,
+    ny: usize,
+) -> (Vec<Point<2>>, Vec<u32>) {
+    let (pts, _) = grid(x0, y0, lx, ly, nx, ny);
+    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    let mut tris = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            tris.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    (pts, tris)
+}
