@@ -1,1 +1,52 @@
-//! pfem
+//! # pfem: the Particle Finite Element Method for fluid–structure interaction
+//!
+//! pfem implements the monolithic Lagrangian method of Marti & Idelsohn
+//! (2007): fluid and solid are one continuum with one momentum and one
+//! continuity equation; a quasi-incompressible Newtonian fluid and a
+//! hypoelastic solid share one discrete constitutive form (eqs. 43–44), so
+//! one system (eqs. 55–56), advanced by Newmark with Picard iterations
+//! (§6), moves every particle; the particles are re-meshed by Delaunay
+//! tessellation every step and the free surface is found with an alpha
+//! shape (§8). 2D (plane strain) and 3D share one code path.
+//!
+//! Units are SI throughout: m, s, kg, Pa.
+//!
+//! ```
+//! use pfem::prelude::*;
+//!
+//! // A 0.2 m × 0.2 m block of water at rest on a floor.
+//! let h = 0.025;
+//! let scene = Scene::<2>::new("puddle")
+//!     .gravity(Vector::<2>::new(0.0, -9.81))
+//!     .settings(RunSettings { end_time: 0.02, max_dt: 5e-3, output_interval: None, ..Default::default() })
+//!     .wall("floor", Geometry::Box { min: Point::<2>::new(-0.1, -h), max: Point::<2>::new(0.3, 0.0) }, h, WallMotion::Fixed)
+//!     .fluid("water", Box::new(Newtonian::water()), Geometry::Box { min: Point::<2>::new(0.0, 0.0), max: Point::<2>::new(0.2, 0.2) }, h);
+//! let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())?;
+//! sim.run(&mut [])?;
+//! assert!(sim.time >= 0.02 - 1e-12);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+pub mod error;
+pub mod lattice;
+pub mod output;
+pub mod scene;
+pub mod simulation;
+
+pub use error::{RunError, SceneError};
+pub use pfem_assembly as assembly;
+pub use pfem_constitutive as constitutive;
+pub use pfem_core as core;
+pub use pfem_geometry as geometry;
+pub use pfem_time as time;
+pub use scene::{Body, Geometry, RunSettings, Scene, WallMotion};
+pub use simulation::{Observer, Simulation, StageStats, Stages, VolumeLedger};
+
+/// The names most programs need.
+pub mod prelude {
+    pub use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
+    pub use crate::simulation::{Observer, Simulation};
+    pub use pfem_constitutive::{Hypoelastic, Material, MaterialKind, Newtonian};
+    pub use pfem_core::{Point, Vector};
+    pub use pfem_geometry::{Delaunay2, Tessellator};
+    pub use pfem_time::{Scheme, StepParams};
+}

@@ -1,0 +1,154 @@
+//! Lattices of particles filling simple shapes, and the structured simplex
+//! mesh of a box lattice (the own mesh of a solid body).
+
+use pfem_core::{simplex_measure, Const, Dim, Point};
+
+fn counts<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> [usize; 3]
+where
+    Const<D>: Dim,
+{
+    let mut n = [0usize; 3];
+    for k in 0..D {
+        n[k] = ((max[k] - min[k]) / h).round().max(1.0) as usize;
+    }
+    n
+}
+
+/// Lattice nodes of the box `[min, max]` at spacing close to `h` (the
+/// spacing along each axis is adjusted so the corners are nodes), ordered
+/// x fastest.
+pub fn box_points<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> Vec<Point<D>>
+where
+    Const<D>: Dim,
+{
+    let n = counts::<D>(min, max, h);
+    let mut out = Vec::new();
+    let nz = if D == 3 { n[2] + 1 } else { 1 };
+    for k in 0..nz {
+        for j in 0..=n[1] {
+            for i in 0..=n[0] {
+                let idx = [i, j, k];
+                let mut p = Point::<D>::zeros();
+                for d in 0..D {
+                    p[d] = min[d] + (max[d] - min[d]) * idx[d] as f64 / n[d] as f64;
+                }
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+/// Simplices (triangles, or six Kuhn tetrahedra per cell) of the lattice
+/// of [`box_points`], positively oriented, indices into its output.
+pub fn box_simplices<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> Vec<u32>
+where
+    Const<D>: Dim,
+{
+    let n = counts::<D>(min, max, h);
+    let pts = box_points::<D>(min, max, h);
+    let id = |i: usize, j: usize, k: usize| ((k * (n[1] + 1) + j) * (n[0] + 1) + i) as u32;
+    let mut out = Vec::new();
+    if D == 2 {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let (a, b, c, d) = (
+                    id(i, j, 0),
+                    id(i + 1, j, 0),
+                    id(i + 1, j + 1, 0),
+                    id(i, j + 1, 0),
+                );
+                if (i + j) % 2 == 0 {
+                    out.extend_from_slice(&[a, b, c, a, c, d]);
+                } else {
+                    out.extend_from_slice(&[a, b, d, b, c, d]);
+                }
+            }
+        }
+    } else {
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    let c = |b: usize| id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+                    for perm in [
+                        [1, 2, 4],
+                        [1, 4, 2],
+                        [2, 1, 4],
+                        [2, 4, 1],
+                        [4, 1, 2],
+                        [4, 2, 1],
+                    ] {
+                        let v1 = perm[0];
+                        let v2 = v1 | perm[1];
+                        let v3 = v2 | perm[2];
+                        let mut t = [c(0), c(v1), c(v2), c(v3)];
+                        let p: Vec<Point<D>> = t.iter().map(|&q| pts[q as usize]).collect();
+                        if simplex_measure::<D>(&p) < 0.0 {
+                            t.swap(2, 3);
+                        }
+                        out.extend_from_slice(&t);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Lattice nodes (spacing `h`, centred on `center`) inside the ball.
+pub fn ball_points<const D: usize>(center: &Point<D>, radius: f64, h: f64) -> Vec<Point<D>>
+where
+    Const<D>: Dim,
+{
+    let m = (radius / h).floor() as i64;
+    let mut out = Vec::new();
+    let range = -m..=m;
+    let zr = if D == 3 { -m..=m } else { 0..=0 };
+    for k in zr {
+        for j in range.clone() {
+            for i in range.clone() {
+                let idx = [i, j, k];
+                let mut p = *center;
+                for d in 0..D {
+                    p[d] += idx[d] as f64 * h;
+                }
+                if (p - center).norm() <= radius + 1e-9 * h {
+                    out.push(p);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_mesh_covers_the_box() {
+        let min = Point::<2>::new(0.0, 0.0);
+        let max = Point::<2>::new(0.35, 0.02);
+        let p = box_points::<2>(&min, &max, 0.005);
+        let t = box_simplices::<2>(&min, &max, 0.005);
+        let area: f64 = t
+            .chunks(3)
+            .map(|c| simplex_measure::<2>(&[p[c[0] as usize], p[c[1] as usize], p[c[2] as usize]]))
+            .sum();
+        assert!((area - 0.35 * 0.02).abs() < 1e-12);
+        let min3 = Point::<3>::new(0.0, 0.0, 0.0);
+        let max3 = Point::<3>::new(1.0, 0.5, 0.25);
+        let p = box_points::<3>(&min3, &max3, 0.25);
+        let t = box_simplices::<3>(&min3, &max3, 0.25);
+        let vol: f64 = t
+            .chunks(4)
+            .map(|c| {
+                let q: Vec<Point<3>> = c.iter().map(|&i| p[i as usize]).collect();
+                let v = simplex_measure::<3>(&q);
+                assert!(v > 0.0);
+                v
+            })
+            .sum();
+        assert!((vol - 0.125).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,369 @@
+//! Scenes: the bodies of a simulation (fluids, solids, walls), their
+//! materials, geometry and particle spacing, the body forces and the run
+//! settings. Built with [`Scene::new`] and its builder methods, validated by
+//! [`Scene::validate`] before any step runs.
+
+use pfem_constitutive::{Material, MaterialKind};
+use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
+
+use crate::SceneError;
+
+/// Where a body's particles are.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Geometry<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// An axis-aligned box (rectangle in 2D) filled with a lattice of
+    /// spacing `h` whose nodes include the box's corners.
+    Box {
+        /// Lower corner (m).
+        min: Point<D>,
+        /// Upper corner (m).
+        max: Point<D>,
+    },
+    /// A disk (2D) or ball (3D): the lattice nodes inside it.
+    Ball {
+        /// Centre (m).
+        center: Point<D>,
+        /// Radius (m).
+        radius: f64,
+    },
+    /// The user's own particles (m).
+    Particles(Vec<Point<D>>),
+}
+
+impl<const D: usize> Geometry<D>
+where
+    Const<D>: Dim,
+{
+    /// Lower and upper corners of the bounding box.
+    pub fn bounds(&self) -> (Point<D>, Point<D>) {
+        match self {
+            Geometry::Box { min, max } => (*min, *max),
+            Geometry::Ball { center, radius } => (
+                center - Vector::<D>::repeat(*radius),
+                center + Vector::<D>::repeat(*radius),
+            ),
+            Geometry::Particles(p) => {
+                let mut lo = Point::<D>::repeat(f64::INFINITY);
+                let mut hi = Point::<D>::repeat(f64::NEG_INFINITY);
+                for q in p {
+                    lo = lo.inf(q);
+                    hi = hi.sup(q);
+                }
+                (lo, hi)
+            }
+        }
+    }
+}
+
+/// Prescribed motion of a wall.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WallMotion<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// At rest.
+    Fixed,
+    /// Moving at a constant velocity (m/s).
+    Velocity(Vector<D>),
+}
+
+/// A body of a scene.
+#[derive(Debug)]
+pub struct Body<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Name used in messages and output.
+    pub name: String,
+    /// Fluid, solid or wall.
+    pub kind: ParticleKind,
+    /// Material (none for a wall).
+    pub material: Option<Box<dyn Material<D>>>,
+    /// Where its particles are.
+    pub geometry: Geometry<D>,
+    /// Particle spacing `h` (m).
+    pub spacing: f64,
+    /// Initial velocity (m/s).
+    pub velocity: Vector<D>,
+    /// Wall motion (walls only).
+    pub motion: WallMotion<D>,
+    /// Solids only: particles inside this box are clamped (zero velocity).
+    pub clamp: Option<(Point<D>, Point<D>)>,
+}
+
+/// Run settings of a scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunSettings {
+    /// End time (s).
+    pub end_time: f64,
+    /// Largest time step (s).
+    pub max_dt: f64,
+    /// Courant number bounding `Δt ≤ C h_min / v_max`.
+    pub courant: f64,
+    /// Interval between outputs (s); `None` for no VTU output.
+    pub output_interval: Option<f64>,
+    /// Alpha of the alpha shape (§8).
+    pub alpha: f64,
+}
+
+impl Default for RunSettings {
+    fn default() -> Self {
+        Self {
+            end_time: 1.0,
+            max_dt: 1e-3,
+            courant: 0.5,
+            output_interval: Some(0.02),
+            alpha: 1.3,
+        }
+    }
+}
+
+/// A scene: bodies, body force and run settings.
+#[derive(Debug)]
+pub struct Scene<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Scene name (file names, summary).
+    pub name: String,
+    /// The bodies.
+    pub bodies: Vec<Body<D>>,
+    /// Body force per unit mass (m/s²), `None` for none.
+    pub gravity: Option<Vector<D>>,
+    /// Run settings.
+    pub settings: RunSettings,
+}
+
+impl<const D: usize> Scene<D>
+where
+    Const<D>: Dim,
+{
+    /// An empty scene.
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            bodies: Vec::new(),
+            gravity: None,
+            settings: RunSettings::default(),
+        }
+    }
+
+    /// Sets the gravity (m/s²).
+    pub fn gravity(mut self, g: Vector<D>) -> Self {
+        self.gravity = Some(g);
+        self
+    }
+
+    /// Sets the run settings.
+    pub fn settings(mut self, settings: RunSettings) -> Self {
+        self.settings = settings;
+        self
+    }
+
+    /// Adds a fluid body.
+    pub fn fluid(
+        mut self,
+        name: &str,
+        material: Box<dyn Material<D>>,
+        geometry: Geometry<D>,
+        spacing: f64,
+    ) -> Self {
+        self.bodies.push(Body {
+            name: name.into(),
+            kind: ParticleKind::Fluid,
+            material: Some(material),
+            geometry,
+            spacing,
+            velocity: Vector::<D>::zeros(),
+            motion: WallMotion::Fixed,
+            clamp: None,
+        });
+        self
+    }
+
+    /// Adds a solid body, clamped where `clamp` (a box) says.
+    pub fn solid(
+        mut self,
+        name: &str,
+        material: Box<dyn Material<D>>,
+        geometry: Geometry<D>,
+        spacing: f64,
+        clamp: Option<(Point<D>, Point<D>)>,
+    ) -> Self {
+        self.bodies.push(Body {
+            name: name.into(),
+            kind: ParticleKind::Solid,
+            material: Some(material),
+            geometry,
+            spacing,
+            velocity: Vector::<D>::zeros(),
+            motion: WallMotion::Fixed,
+            clamp,
+        });
+        self
+    }
+
+    /// Adds a wall.
+    pub fn wall(
+        mut self,
+        name: &str,
+        geometry: Geometry<D>,
+        spacing: f64,
+        motion: WallMotion<D>,
+    ) -> Self {
+        self.bodies.push(Body {
+            name: name.into(),
+            kind: ParticleKind::Wall,
+            material: None,
+            geometry,
+            spacing,
+            velocity: Vector::<D>::zeros(),
+            motion,
+            clamp: None,
+        });
+        self
+    }
+
+    /// Sets the initial velocity of the last body added.
+    pub fn with_velocity(mut self, v: Vector<D>) -> Self {
+        if let Some(b) = self.bodies.last_mut() {
+            b.velocity = v;
+        }
+        self
+    }
+
+    /// Checks the scene before any step runs: positive finite spacing no
+    /// larger than its body, materials where needed and of the right kind,
+    /// valid run settings, solids supported, fluids not overlapping other
+    /// bodies' interiors.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let s = &self.settings;
+        for (what, v) in [
+            ("end_time", s.end_time),
+            ("max_dt", s.max_dt),
+            ("courant", s.courant),
+            ("alpha", s.alpha),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(SceneError::InvalidSetting {
+                    setting: what,
+                    value: v,
+                });
+            }
+        }
+        if let Some(dt) = s.output_interval {
+            if !(dt > 0.0 && dt.is_finite()) {
+                return Err(SceneError::InvalidSetting {
+                    setting: "output_interval",
+                    value: dt,
+                });
+            }
+        }
+        if let Some(g) = self.gravity {
+            if g.iter().any(|v| !v.is_finite()) {
+                return Err(SceneError::InvalidSetting {
+                    setting: "gravity",
+                    value: f64::NAN,
+                });
+            }
+        }
+        if self.bodies.is_empty() {
+            return Err(SceneError::Empty);
+        }
+        for b in &self.bodies {
+            if !(b.spacing > 0.0 && b.spacing.is_finite()) {
+                return Err(SceneError::InvalidSpacing {
+                    body: b.name.clone(),
+                    spacing: b.spacing,
+                });
+            }
+            let (lo, hi) = b.geometry.bounds();
+            if lo.iter().chain(hi.iter()).any(|v| !v.is_finite()) {
+                return Err(SceneError::InvalidGeometry {
+                    body: b.name.clone(),
+                    why: "non-finite or empty geometry".into(),
+                });
+            }
+            let extent = (hi - lo).max();
+            if let Geometry::Ball { radius, .. } = b.geometry {
+                if !(radius > 0.0) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: "radius must be positive".into(),
+                    });
+                }
+            }
+            if !matches!(b.geometry, Geometry::Particles(_)) && b.spacing > extent + 1e-12 {
+                return Err(SceneError::SpacingLargerThanBody {
+                    body: b.name.clone(),
+                    spacing: b.spacing,
+                    extent,
+                });
+            }
+            if let Geometry::Box { min, max } = &b.geometry {
+                if (0..D).any(|k| max[k] < min[k]) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: "box max below min".into(),
+                    });
+                }
+            }
+            match (b.kind, &b.material) {
+                (ParticleKind::Wall, _) => {}
+                (_, None) => {
+                    return Err(SceneError::MissingMaterial {
+                        body: b.name.clone(),
+                    })
+                }
+                (ParticleKind::Fluid, Some(m)) if m.kind() != MaterialKind::Fluid => {
+                    return Err(SceneError::MaterialKindMismatch {
+                        body: b.name.clone(),
+                    })
+                }
+                (ParticleKind::Solid, Some(m)) if m.kind() != MaterialKind::Solid => {
+                    return Err(SceneError::MaterialKindMismatch {
+                        body: b.name.clone(),
+                    })
+                }
+                _ => {}
+            }
+            if b.kind == ParticleKind::Solid {
+                if !matches!(b.geometry, Geometry::Box { .. }) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: "solid bodies are boxes for now (they keep a structured mesh of their own)".into(),
+                    });
+                }
+                let supported = b.clamp.is_some() || self.gravity.is_none();
+                let floating = self.bodies.iter().any(|o| o.kind == ParticleKind::Fluid);
+                if !supported && !floating {
+                    return Err(SceneError::Unsupported {
+                        body: b.name.clone(),
+                    });
+                }
+            }
+        }
+        // Overlap: a box body's interior (shrunk by half a spacing) must not
+        // contain another body's box interior.
+        for (i, a) in self.bodies.iter().enumerate() {
+            for b in self.bodies.iter().skip(i + 1) {
+                if let (Geometry::Box { min: a0, max: a1 }, Geometry::Box { min: b0, max: b1 }) =
+                    (&a.geometry, &b.geometry)
+                {
+                    let m = 0.5 * a.spacing.min(b.spacing);
+                    let overlap = (0..D).all(|k| a0[k] + m < b1[k] - m && b0[k] + m < a1[k] - m);
+                    if overlap {
+                        return Err(SceneError::Overlap {
+                            first: a.name.clone(),
+                            second: b.name.clone(),
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

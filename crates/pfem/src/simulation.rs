@@ -1,0 +1,555 @@
+//! The simulation loop: remesh → assemble → solve (Picard) → update →
+//! observe, with only the stages a scene calls for.
+
+use std::time::Instant;
+
+use pfem_assembly::{Constraints, StepMesh};
+use pfem_constitutive::{History, Material, MaterialKind};
+use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, Vector};
+use pfem_geometry::{alpha_shape, AlphaShapeParams, Tessellation, Tessellator};
+use pfem_time::{CourantController, Integrator, ParticleState, StepInput, StepParams};
+
+use crate::lattice;
+use crate::scene::{Geometry, Scene, WallMotion};
+use crate::{RunError, SceneError};
+
+/// The stages a step runs, derived from the scene: a scene pays only for
+/// the effects it has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stages {
+    /// Delaunay remeshing and alpha shape every step (scenes with a fluid).
+    pub remesh: bool,
+    /// Nodal pressure update, eq. 62 (scenes with a fluid).
+    pub pressure: bool,
+    /// Solid stress update, eq. 63 (scenes with a solid).
+    pub solid_stress: bool,
+    /// Body-force assembly (scenes with gravity).
+    pub body_force: bool,
+    /// Flying-particle handling: particles outside every element fly
+    /// ballistically (scenes with a fluid that has a free surface).
+    pub free_surface: bool,
+}
+
+/// Wall time and call count of each stage.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StageStats {
+    /// Remeshing: calls and seconds.
+    pub remesh: (u64, f64),
+    /// Assembly: calls (steps) and seconds.
+    pub assemble: (u64, f64),
+    /// Linear solves: calls (steps) and seconds.
+    pub solve: (u64, f64),
+    /// History and state update: calls and seconds.
+    pub update: (u64, f64),
+    /// Observers (output): calls and seconds.
+    pub observe: (u64, f64),
+    /// Pressure updates (eq. 62) done.
+    pub pressure_updates: u64,
+    /// Solid stress updates (eq. 63) done.
+    pub stress_updates: u64,
+}
+
+/// Something called after every accepted step (outputs, probes, checks).
+/// Every method has a do-nothing default; `()` observes nothing.
+pub trait Observer<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Called once before the first step.
+    fn start(&mut self, _sim: &Simulation<D>) -> Result<(), RunError> {
+        Ok(())
+    }
+    /// Called after every accepted step.
+    fn step(&mut self, _sim: &Simulation<D>) -> Result<(), RunError> {
+        Ok(())
+    }
+    /// Called once after the last step.
+    fn finish(&mut self, _sim: &Simulation<D>) -> Result<(), RunError> {
+        Ok(())
+    }
+}
+
+impl<const D: usize> Observer<D> for () where Const<D>: Dim {}
+
+/// Fluid volume changes by cause (m³, m² per metre in 2D).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct VolumeLedger {
+    /// Fluid volume at the start.
+    pub initial: f64,
+    /// Change by remeshing (Delaunay + alpha shape deletions/creations).
+    pub remeshing: f64,
+    /// Change during the solution (quasi-incompressibility, flow).
+    pub solution: f64,
+}
+
+/// A running simulation.
+pub struct Simulation<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Scene name.
+    pub name: String,
+    /// Particle state: positions, velocities, accelerations, pressure.
+    pub state: ParticleState<D>,
+    /// Kind of each particle.
+    pub kind: Vec<ParticleKind>,
+    /// Body of each particle.
+    pub body: Vec<u32>,
+    /// Spacing carried by each particle (m).
+    pub spacing: Vec<f64>,
+    /// Material of each particle (`u16::MAX` for walls).
+    pub material_of: Vec<u16>,
+    /// The materials.
+    pub materials: Vec<Box<dyn Material<D>>>,
+    /// Body names.
+    pub body_names: Vec<String>,
+    /// Velocity constraints (walls, clamps).
+    pub constraints: Constraints<D>,
+    /// Fluid elements of the current step (flat).
+    pub fluid_elements: Vec<u32>,
+    /// Material of each fluid element.
+    pub fluid_material: Vec<u16>,
+    /// Solid elements, each solid's own mesh (flat).
+    pub solid_elements: Vec<u32>,
+    /// Material of each solid element.
+    pub solid_material: Vec<u16>,
+    /// Cauchy stress history of each solid element.
+    pub solid_history: Vec<History<D>>,
+    /// Stages this scene runs.
+    pub stages: Stages,
+    /// Stage timings and counters.
+    pub stats: StageStats,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Last time step (s).
+    pub dt: f64,
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected attempts.
+    pub rejected: u64,
+    /// Volume ledger.
+    pub volume: VolumeLedger,
+    /// Body force (m/s²).
+    pub gravity: Option<Vector<D>>,
+    /// End time (s).
+    pub end_time: f64,
+    /// Output interval (s).
+    pub output_interval: Option<f64>,
+    /// Time-step controller.
+    pub controller: CourantController,
+    /// Alpha-shape parameters.
+    pub alpha: AlphaShapeParams,
+    tessellator: Box<dyn Tessellator<D>>,
+    integrator: Integrator<D>,
+    tess: Tessellation,
+    elements: Vec<u32>,
+    element_material: Vec<u16>,
+    history: Vec<History<D>>,
+}
+
+impl<const D: usize> std::fmt::Debug for Simulation<D>
+where
+    Const<D>: Dim,
+{
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation")
+            .field("name", &self.name)
+            .field("particles", &self.state.len())
+            .field("time", &self.time)
+            .field("steps", &self.steps)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<const D: usize> Simulation<D>
+where
+    Const<D>: Dim,
+{
+    /// Builds the particles, solid meshes and constraints of a validated
+    /// scene. `tessellator` remeshes the fluid each step; `params` sets the
+    /// time scheme and Picard loop.
+    pub fn new(
+        scene: Scene<D>,
+        tessellator: Box<dyn Tessellator<D>>,
+        params: StepParams,
+    ) -> Result<Self, SceneError> {
+        scene.validate()?;
+        let Scene {
+            name,
+            bodies,
+            gravity,
+            settings,
+        } = scene;
+        let mut x: Vec<Point<D>> = Vec::new();
+        let mut v: Vec<Vector<D>> = Vec::new();
+        let mut kind = Vec::new();
+        let mut body = Vec::new();
+        let mut spacing = Vec::new();
+        let mut material_of = Vec::new();
+        let mut materials: Vec<Box<dyn Material<D>>> = Vec::new();
+        let mut body_names = Vec::new();
+        let mut solid_elements = Vec::new();
+        let mut solid_material = Vec::new();
+        let mut fixed: Vec<(usize, Vector<D>)> = Vec::new();
+        // Walls and solids first: fluid lattice nodes that coincide with
+        // them are dropped, the wall or solid particle takes their place.
+        let mut order: Vec<usize> = (0..bodies.len()).collect();
+        order.sort_by_key(|&i| match bodies[i].kind {
+            ParticleKind::Wall => 0,
+            ParticleKind::Solid => 1,
+            ParticleKind::Fluid => 2,
+        });
+        let mut bodies: Vec<Option<crate::scene::Body<D>>> = bodies.into_iter().map(Some).collect();
+        for bi in order {
+            let b = bodies[bi].take().expect("each body once");
+            let id = body_names.len() as u32;
+            body_names.push(b.name.clone());
+            let pts = match &b.geometry {
+                Geometry::Box { min, max } => lattice::box_points::<D>(min, max, b.spacing),
+                Geometry::Ball { center, radius } => {
+                    lattice::ball_points::<D>(center, *radius, b.spacing)
+                }
+                Geometry::Particles(p) => p.clone(),
+            };
+            let mat = match b.material {
+                Some(m) => {
+                    materials.push(m);
+                    (materials.len() - 1) as u16
+                }
+                None => u16::MAX,
+            };
+            let tol = 0.25 * b.spacing;
+            let first = x.len();
+            let mut local_index = vec![u32::MAX; pts.len()];
+            for (li, p) in pts.iter().enumerate() {
+                if b.kind == ParticleKind::Fluid
+                    && x.iter()
+                        .take(first)
+                        .any(|q: &Point<D>| (q - p).norm() < tol)
+                {
+                    continue;
+                }
+                local_index[li] = x.len() as u32;
+                x.push(*p);
+                kind.push(b.kind);
+                body.push(id);
+                spacing.push(b.spacing);
+                material_of.push(mat);
+                let vel = match (b.kind, b.motion) {
+                    (ParticleKind::Wall, WallMotion::Velocity(w)) => w,
+                    (ParticleKind::Wall, WallMotion::Fixed) => Vector::<D>::zeros(),
+                    _ => b.velocity,
+                };
+                v.push(vel);
+                let clamped = b.clamp.is_some_and(|(lo, hi)| {
+                    (0..D).all(|k| p[k] >= lo[k] - 1e-12 && p[k] <= hi[k] + 1e-12)
+                });
+                if b.kind == ParticleKind::Wall || clamped {
+                    fixed.push((
+                        x.len() - 1,
+                        if clamped { Vector::<D>::zeros() } else { vel },
+                    ));
+                }
+            }
+            if b.kind == ParticleKind::Solid {
+                if let Geometry::Box { min, max } = &b.geometry {
+                    let conn = lattice::box_simplices::<D>(min, max, b.spacing);
+                    for &q in &conn {
+                        solid_elements.push(local_index[q as usize]);
+                    }
+                    solid_material.extend(std::iter::repeat_n(mat, conn.len() / (D + 1)));
+                }
+            }
+        }
+        if x.is_empty() {
+            return Err(SceneError::Empty);
+        }
+        let n = x.len();
+        let mut constraints = Constraints::<D>::free(n);
+        for (i, vel) in fixed {
+            constraints.fix(i, vel);
+        }
+        let mut state = ParticleState::at_rest(x);
+        state.v = v;
+        // Hydrostatic initial pressure in fluids at rest under gravity:
+        // p = ρ g·(x_top − x) with x_top the body's highest particle along g.
+        if let Some(g) = gravity {
+            let gn = g.norm();
+            if gn > 0.0 {
+                let dir = g / gn;
+                for (bi, _) in body_names.iter().enumerate() {
+                    let idx: Vec<usize> = (0..n)
+                        .filter(|&i| body[i] == bi as u32 && kind[i] == ParticleKind::Fluid)
+                        .collect();
+                    if idx.is_empty() {
+                        continue;
+                    }
+                    let top = idx
+                        .iter()
+                        .map(|&i| state.x[i].dot(&dir))
+                        .fold(f64::INFINITY, f64::min);
+                    let rho = materials[material_of[idx[0]] as usize].density();
+                    for &i in &idx {
+                        state.pressure[i] = rho * gn * (state.x[i].dot(&dir) - top);
+                    }
+                }
+            }
+        }
+        let has_fluid = kind.contains(&ParticleKind::Fluid);
+        let has_solid = kind.contains(&ParticleKind::Solid);
+        let stages = Stages {
+            remesh: has_fluid,
+            pressure: has_fluid,
+            solid_stress: has_solid,
+            body_force: gravity.is_some_and(|g| g.norm() > 0.0),
+            free_surface: has_fluid,
+        };
+        let h_min = spacing.iter().copied().fold(f64::INFINITY, f64::min);
+        let controller = CourantController {
+            courant: settings.courant,
+            dt_max: settings.max_dt,
+            dt_min: params.min_dt,
+            growth: 1.25,
+        };
+        let _ = h_min;
+        let n_solid = solid_material.len();
+        let mut sim = Self {
+            name,
+            state,
+            kind,
+            body,
+            spacing,
+            material_of,
+            materials,
+            body_names,
+            constraints,
+            fluid_elements: Vec::new(),
+            fluid_material: Vec::new(),
+            solid_elements,
+            solid_material,
+            solid_history: vec![History::default(); n_solid],
+            stages,
+            stats: StageStats::default(),
+            time: 0.0,
+            dt: settings.max_dt,
+            steps: 0,
+            rejected: 0,
+            volume: VolumeLedger::default(),
+            gravity: if stages.body_force { gravity } else { None },
+            end_time: settings.end_time,
+            output_interval: settings.output_interval,
+            controller,
+            alpha: AlphaShapeParams {
+                alpha: settings.alpha,
+                ..Default::default()
+            },
+            tessellator,
+            integrator: Integrator::new(params),
+            tess: Tessellation::default(),
+            elements: Vec::new(),
+            element_material: Vec::new(),
+            history: Vec::new(),
+        };
+        sim.remesh()
+            .map_err(|e| SceneError::Mesh { why: e.to_string() })?;
+        sim.volume.initial = sim.fluid_volume();
+        sim.assemble_mesh();
+        let input = StepInput {
+            mesh: StepMesh {
+                elements: &sim.elements,
+                element_material: &sim.element_material,
+            },
+            materials: &sim.materials,
+            constraints: &sim.constraints,
+            body_force: sim.gravity,
+        };
+        sim.integrator
+            .initialize_acceleration(&mut sim.state, &sim.history, &input)
+            .map_err(|e| SceneError::Mesh { why: e.to_string() })?;
+        Ok(sim)
+    }
+
+    /// Fluid volume: the measure of the current fluid elements (m³; m² per
+    /// metre of depth in 2D).
+    pub fn fluid_volume(&self) -> f64 {
+        let nv = D + 1;
+        self.fluid_elements
+            .chunks_exact(nv)
+            .map(|el| {
+                let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+                for a in 0..nv {
+                    p[a] = self.state.x[el[a] as usize];
+                }
+                simplex_measure::<D>(&p[..nv])
+            })
+            .sum()
+    }
+
+    /// Regenerates the fluid mesh: Delaunay of all particles, alpha shape
+    /// (§8), one fluid material per element from its fluid nodes.
+    fn remesh(&mut self) -> Result<(), RunError> {
+        if !self.stages.remesh {
+            return Ok(());
+        }
+        let t0 = Instant::now();
+        self.tessellator
+            .tessellate(&self.state.x, &mut self.tess)
+            .map_err(RunError::Geometry)?;
+        let shape = alpha_shape(
+            &self.state.x,
+            &self.kind,
+            &self.spacing,
+            &self.tess,
+            &self.alpha,
+        )
+        .map_err(RunError::Geometry)?;
+        self.fluid_elements.clear();
+        self.fluid_material.clear();
+        let nv = D + 1;
+        for el in shape.mesh.simplices.chunks_exact(nv) {
+            let m = el
+                .iter()
+                .find(|&&p| self.kind[p as usize] == ParticleKind::Fluid)
+                .map(|&p| self.material_of[p as usize])
+                .unwrap_or(u16::MAX);
+            self.fluid_elements.extend_from_slice(el);
+            self.fluid_material.push(m);
+        }
+        self.stats.remesh.0 += 1;
+        self.stats.remesh.1 += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    fn assemble_mesh(&mut self) {
+        self.elements.clear();
+        self.elements.extend_from_slice(&self.fluid_elements);
+        self.elements.extend_from_slice(&self.solid_elements);
+        self.element_material.clear();
+        self.element_material
+            .extend_from_slice(&self.fluid_material);
+        self.element_material
+            .extend_from_slice(&self.solid_material);
+        self.history.clear();
+        self.history
+            .resize(self.fluid_material.len(), History::default());
+        self.history.extend_from_slice(&self.solid_history);
+    }
+
+    /// Smallest element size `h_min` used by the Courant controller: the
+    /// smallest particle spacing.
+    pub fn h_min(&self) -> f64 {
+        self.spacing.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+
+    /// Largest particle speed (m/s).
+    pub fn v_max(&self) -> f64 {
+        self.state.v.iter().map(|v| v.norm()).fold(0.0, f64::max)
+    }
+
+    /// One accepted step: remesh (if the scene has a fluid), then the
+    /// Newmark–Picard step with rejection and retry.
+    pub fn step(&mut self) -> Result<(), RunError> {
+        if self.steps > 0 {
+            let before = self.fluid_volume();
+            self.remesh()?;
+            self.volume.remeshing += self.fluid_volume() - before;
+        }
+        self.assemble_mesh();
+        let mut dt = self.controller.next(self.h_min(), self.v_max(), self.dt);
+        if self.time + dt > self.end_time {
+            dt = (self.end_time - self.time).max(self.controller.dt_min);
+        }
+        let before = self.fluid_volume();
+        let input = StepInput {
+            mesh: StepMesh {
+                elements: &self.elements,
+                element_material: &self.element_material,
+            },
+            materials: &self.materials,
+            constraints: &self.constraints,
+            body_force: self.gravity,
+        };
+        let rep =
+            self.integrator
+                .advance(self.time, dt, &mut self.state, &mut self.history, &input)?;
+        let nf = self.fluid_material.len();
+        self.solid_history.copy_from_slice(&self.history[nf..]);
+        self.time += rep.dt;
+        self.dt = rep.dt;
+        self.steps += 1;
+        self.rejected += rep.rejections as u64;
+        self.stats.assemble.0 += rep.iterations as u64;
+        self.stats.assemble.1 += rep.assemble_seconds;
+        self.stats.solve.0 += rep.iterations as u64;
+        self.stats.solve.1 += rep.solve_seconds;
+        self.stats.update.0 += 1;
+        self.stats.update.1 += rep.update_seconds;
+        if self.stages.pressure {
+            self.stats.pressure_updates += 1;
+        }
+        if self.stages.solid_stress {
+            self.stats.stress_updates += 1;
+        }
+        self.volume.solution += self.fluid_volume() - before;
+        if let Some(i) = self
+            .state
+            .x
+            .iter()
+            .position(|p| p.iter().any(|v| !v.is_finite()))
+        {
+            return Err(RunError::NonFinite {
+                time: self.time,
+                particle: i,
+            });
+        }
+        Ok(())
+    }
+
+    /// Runs to the end time, calling the observers after every step.
+    pub fn run(&mut self, observers: &mut [&mut dyn Observer<D>]) -> Result<(), RunError> {
+        for o in observers.iter_mut() {
+            o.start(self)?;
+        }
+        while self.time < self.end_time - 1e-12 {
+            self.step()?;
+            let t0 = Instant::now();
+            for o in observers.iter_mut() {
+                o.step(self)?;
+            }
+            self.stats.observe.0 += 1;
+            self.stats.observe.1 += t0.elapsed().as_secs_f64();
+        }
+        for o in observers.iter_mut() {
+            o.finish(self)?;
+        }
+        Ok(())
+    }
+
+    /// Particles of body `name`.
+    pub fn body_particles(&self, name: &str) -> Vec<usize> {
+        match self.body_names.iter().position(|b| b == name) {
+            Some(id) => (0..self.state.len())
+                .filter(|&i| self.body[i] == id as u32)
+                .collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// Particles of fluid bodies that are in at least one fluid element.
+    pub fn meshed_fluid_particles(&self) -> Vec<bool> {
+        let mut m = vec![false; self.state.len()];
+        for &p in &self.fluid_elements {
+            if self.kind[p as usize] == ParticleKind::Fluid {
+                m[p as usize] = true;
+            }
+        }
+        m
+    }
+
+    /// Whether materials of this simulation include a solid.
+    pub fn has_solid(&self) -> bool {
+        self.materials
+            .iter()
+            .any(|m| m.kind() == MaterialKind::Solid)
+    }
+}
