@@ -1,6 +1,6 @@
 //! The alpha shape of paper §8: which Delaunay simplices are fluid elements.
 
-use pfem_core::{circumsphere, simplex_measure, Const, Dim, ParticleKind, Point, MAX_NV};
+use pfem_core::{edge_matrix, Const, Dim, ParticleKind, Point, Vector, MAX_NV};
 use rayon::prelude::*;
 
 use crate::{GeometryError, Tessellation, NO_NEIGHBOR};
@@ -83,7 +83,11 @@ where
 {
     let n = points.len();
     if kinds.len() != n {
-        return Err(GeometryError::LengthMismatch { what: "kinds", expected: n, found: kinds.len() });
+        return Err(GeometryError::LengthMismatch {
+            what: "kinds",
+            expected: n,
+            found: kinds.len(),
+        });
     }
     if spacing.len() != n {
         return Err(GeometryError::LengthMismatch {
@@ -93,7 +97,10 @@ where
         });
     }
     if let Some(index) = spacing.iter().position(|h| !(h.is_finite() && *h > 0.0)) {
-        return Err(GeometryError::InvalidSpacing { index, value: spacing[index] });
+        return Err(GeometryError::InvalidSpacing {
+            index,
+            value: spacing[index],
+        });
     }
     Ok(())
 }
@@ -109,7 +116,9 @@ where
 {
     let nv = <Const<D> as Dim>::NV;
     if tess.nv != nv && !tess.simplices.is_empty() {
-        return Err(GeometryError::InvalidConnectivity { reason: "nv is not D + 1" });
+        return Err(GeometryError::InvalidConnectivity {
+            reason: "nv is not D + 1",
+        });
     }
     if tess.simplices.len() % nv != 0 {
         return Err(GeometryError::InvalidConnectivity {
@@ -122,11 +131,19 @@ where
         });
     }
     if tess.simplices.iter().any(|&v| v as usize >= n_points) {
-        return Err(GeometryError::InvalidConnectivity { reason: "vertex index out of range" });
+        return Err(GeometryError::InvalidConnectivity {
+            reason: "vertex index out of range",
+        });
     }
     let ns = tess.simplices.len() / nv;
-    if tess.neighbors.iter().any(|&t| t != NO_NEIGHBOR && t as usize >= ns) {
-        return Err(GeometryError::InvalidConnectivity { reason: "neighbour index out of range" });
+    if tess
+        .neighbors
+        .iter()
+        .any(|&t| t != NO_NEIGHBOR && t as usize >= ns)
+    {
+        return Err(GeometryError::InvalidConnectivity {
+            reason: "neighbour index out of range",
+        });
     }
     Ok(())
 }
@@ -168,15 +185,39 @@ where
         return (0.0, false);
     }
     let p = gather::<D>(points, s);
-    let p = &p[..s.len()];
-    let measure = simplex_measure::<D>(p);
-    if !(measure > 0.0) {
+    let (measure, r2) = measure_and_circumradius2::<D>(&p[..s.len()]);
+    if measure.is_nan() || measure <= 0.0 {
         return (measure.max(0.0), false);
     }
-    let h = simplex_spacing(spacing, s);
+    let ah = alpha * simplex_spacing(spacing, s);
     // §8 alpha criterion: keep when the circumradius R ≤ α h.
-    let keep = matches!(circumsphere::<D>(p), Some((_, r)) if r <= alpha * h);
-    (measure, keep)
+    (measure, r2 <= ah * ah)
+}
+
+/// Signed measure and squared circumradius of a simplex (`∞` when
+/// degenerate). The circumcentre offset `c` from `p[0]` solves
+/// `2 Eᵀ c = (|e_k|²)_k`, `E` the edge matrix; small fixed-size inverses
+/// are closed-form in nalgebra.
+#[inline]
+pub(crate) fn measure_and_circumradius2<const D: usize>(p: &[Point<D>]) -> (f64, f64)
+where
+    Const<D>: Dim,
+{
+    let e = edge_matrix::<D>(p);
+    let det = e.determinant();
+    let measure = det * <Const<D> as Dim>::MEASURE_FACTOR;
+    if !(det.is_finite() && det != 0.0) {
+        return (measure, f64::INFINITY);
+    }
+    let Some(inv) = e.transpose().try_inverse() else {
+        return (measure, f64::INFINITY);
+    };
+    let mut rhs = Vector::<D>::zeros();
+    for k in 0..D {
+        rhs[k] = e.column(k).norm_squared();
+    }
+    let r2 = (inv * rhs * 0.5).norm_squared();
+    (measure, if r2.is_finite() { r2 } else { f64::INFINITY })
 }
 
 /// The alpha shape of paper §8 of a Delaunay tessellation, allocating.
@@ -265,7 +306,11 @@ where
         let s = s as usize;
         mesh.simplices.extend_from_slice(delaunay.simplex(s));
         for &t in delaunay.simplex_neighbors(s) {
-            mesh.neighbors.push(if t == NO_NEIGHBOR { NO_NEIGHBOR } else { new_index[t as usize] });
+            mesh.neighbors.push(if t == NO_NEIGHBOR {
+                NO_NEIGHBOR
+            } else {
+                new_index[t as usize]
+            });
         }
     }
     Ok(())

@@ -4,6 +4,8 @@
 
 use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, MAX_NV};
 
+use rayon::prelude::*;
+
 use crate::alpha::{check_tessellation, gather};
 use crate::{GeometryError, Tessellation, NO_NEIGHBOR};
 
@@ -111,7 +113,10 @@ impl Classification {
     {
         let s = mesh.simplex(f.simplex as usize);
         let mut out = [u32::MAX; MAX_NV];
-        for (o, &l) in out.iter_mut().zip(<Const<D> as Dim>::facet(f.facet as usize)) {
+        for (o, &l) in out
+            .iter_mut()
+            .zip(<Const<D> as Dim>::facet(f.facet as usize))
+        {
             *o = s[l];
         }
         out
@@ -173,7 +178,11 @@ where
 {
     let n = points.len();
     if kinds.len() != n {
-        return Err(GeometryError::LengthMismatch { what: "kinds", expected: n, found: kinds.len() });
+        return Err(GeometryError::LengthMismatch {
+            what: "kinds",
+            expected: n,
+            found: kinds.len(),
+        });
     }
     check_tessellation::<D>(mesh, n)?;
     let nv = <Const<D> as Dim>::NV;
@@ -208,7 +217,12 @@ where
     let mut flags = vec![0u8; n];
     out.boundary_facets.clear();
     out.unmatched_interface_facets = 0;
-    for (s, (vs, nb)) in mesh.simplices.chunks_exact(nv).zip(mesh.neighbors.chunks_exact(nv)).enumerate() {
+    for (s, (vs, nb)) in mesh
+        .simplices
+        .chunks_exact(nv)
+        .zip(mesh.neighbors.chunks_exact(nv))
+        .enumerate()
+    {
         for &v in vs {
             flags[v as usize] |= 1;
         }
@@ -238,7 +252,11 @@ where
             } else {
                 FacetKind::Wall
             };
-            out.boundary_facets.push(BoundaryFacet { simplex: s as u32, facet: k as u8, kind });
+            out.boundary_facets.push(BoundaryFacet {
+                simplex: s as u32,
+                facet: k as u8,
+                kind,
+            });
         }
     }
 
@@ -265,7 +283,11 @@ where
     }
 
     connected_components::<D>(points, mesh, &mut out.component, &mut out.components);
-    out.boundary_loops = if D == 2 { Some(count_boundary_loops_2d(mesh, ns)) } else { None };
+    out.boundary_loops = if D == 2 {
+        Some(count_boundary_loops_2d(mesh, ns))
+    } else {
+        None
+    };
     Ok(())
 }
 
@@ -308,19 +330,27 @@ fn connected_components<const D: usize>(
     components.clear();
     // Roots are the smallest simplex of their set, so labels in order of
     // first simplex come out of one forward pass.
+    let measures: Vec<f64> = mesh
+        .simplices
+        .par_chunks(nv)
+        .with_min_len(4096)
+        .map(|s| simplex_measure::<D>(&gather::<D>(points, s)[..nv]))
+        .collect();
     let mut label = vec![u32::MAX; ns];
-    for s in 0..ns {
+    for (s, &measure) in measures.iter().enumerate() {
         let r = find(&mut parent, s as u32) as usize;
         if label[r] == u32::MAX {
             label[r] = components.len() as u32;
-            components.push(Component { simplices: 0, measure: 0.0 });
+            components.push(Component {
+                simplices: 0,
+                measure: 0.0,
+            });
         }
         let c = label[r];
         component.push(c);
-        let p = gather::<D>(points, mesh.simplex(s));
         let c = &mut components[c as usize];
         c.simplices += 1;
-        c.measure += simplex_measure::<D>(&p[..nv]);
+        c.measure += measure;
     }
 }
 

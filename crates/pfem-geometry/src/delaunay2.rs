@@ -4,8 +4,12 @@
 //! mesh with a typed error and never panics.
 
 use pfem_core::Point;
+use rayon::prelude::*;
 use spade::handles::FixedFaceHandle;
 use spade::{DelaunayTriangulation, Point2, Triangulation};
+
+/// Faces per parallel work item when reading spade's mesh.
+const CHUNK: usize = 4096;
 
 use crate::{GeometryError, Tessellation, Tessellator, NO_NEIGHBOR};
 
@@ -21,7 +25,9 @@ pub struct Delaunay2Params {
 
 impl Default for Delaunay2Params {
     fn default() -> Self {
-        Self { coincidence_tolerance: 1e-10 }
+        Self {
+            coincidence_tolerance: 1e-10,
+        }
     }
 }
 
@@ -125,9 +131,15 @@ impl Tessellator<2> for Delaunay2 {
         self.params.validate()?;
         let n = points.len();
         if n > MAX_POINTS_2D {
-            return Err(GeometryError::TooManyPoints { count: n, max: MAX_POINTS_2D });
+            return Err(GeometryError::TooManyPoints {
+                count: n,
+                max: MAX_POINTS_2D,
+            });
         }
-        if let Some(index) = points.iter().position(|p| !(p.x.is_finite() && p.y.is_finite())) {
+        if let Some(index) = points
+            .iter()
+            .position(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
             return Err(GeometryError::NonFinite { index });
         }
         let degenerate = GeometryError::Degenerate { count: n, dim: 2 };
@@ -155,8 +167,10 @@ impl Tessellator<2> for Delaunay2 {
                 s
             }
         };
-        let input: Vec<Point2<f64>> =
-            points.iter().map(|p| Point2::new(scaled(p.x), scaled(p.y))).collect();
+        let input: Vec<Point2<f64>> = points
+            .iter()
+            .map(|p| Point2::new(scaled(p.x), scaled(p.y)))
+            .collect();
 
         let built = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             DelaunayTriangulation::<Point2<f64>>::bulk_load_stable(input)
@@ -164,7 +178,9 @@ impl Tessellator<2> for Delaunay2 {
         let tri = match built {
             Ok(Ok(t)) => t,
             Ok(Err(err)) => {
-                return Err(GeometryError::Internal { message: format!("spade: {err}") });
+                return Err(GeometryError::Internal {
+                    message: format!("spade: {err}"),
+                });
             }
             Err(panic) => {
                 let message = panic
@@ -177,33 +193,66 @@ impl Tessellator<2> for Delaunay2 {
         };
 
         if tri.num_vertices() != n {
-            return Err(find_duplicate(points, |p| (scaled(p.x), scaled(p.y)), tolerance));
+            return Err(find_duplicate(
+                points,
+                |p| (scaled(p.x), scaled(p.y)),
+                tolerance,
+            ));
         }
         let nf = tri.num_inner_faces();
         if nf == 0 {
             return Err(degenerate);
         }
-        out.simplices.reserve(3 * nf);
-        out.neighbors.reserve(3 * nf);
+        out.simplices.resize(3 * nf, 0);
+        out.neighbors.resize(3 * nf, 0);
         let tol2 = tolerance * tolerance;
-        let mut close: Option<(usize, usize, f64)> = None;
-        for face in tri.inner_faces() {
-            debug_assert_eq!(face.fix().index() - 1, out.simplices.len() / 3);
-            let edges = face.adjacent_edges();
-            // vertices()[k] = edges[k].from(); edge k+1 is opposite vertex k.
-            let v = [edges[0].from(), edges[1].from(), edges[2].from()].map(|h| h.fix().index());
-            for k in 0..3 {
-                out.simplices.push(v[k] as u32);
-                let across = edges[(k + 1) % 3].rev().face().fix();
-                out.neighbors.push(face_to_simplex(across));
-                let (a, b) = (v[k], v[(k + 1) % 3]);
-                let d2 = (points[a] - points[b]).norm_squared();
-                if d2 < tol2 && close.is_none_or(|c| c.2 > d2) {
-                    close = Some((a.min(b), a.max(b), d2));
+        // Face handles in index order (inner face f is simplex f - 1), then
+        // the half-edge structure is read in parallel.
+        let faces: Vec<_> = tri.fixed_inner_faces().collect();
+        let tri = &tri;
+        let close = faces
+            .par_chunks(CHUNK)
+            .zip(out.simplices.par_chunks_mut(3 * CHUNK))
+            .zip(out.neighbors.par_chunks_mut(3 * CHUNK))
+            .map(|((faces, simplices), neighbors)| {
+                let mut close: Option<(f64, usize, usize)> = None;
+                for (j, &f) in faces.iter().enumerate() {
+                    let edges = tri.face(f).adjacent_edges();
+                    // vertices()[k] = edges[k].from(); edge k+1 is opposite
+                    // vertex k.
+                    let v = [edges[0].from(), edges[1].from(), edges[2].from()]
+                        .map(|h| h.fix().index());
+                    for k in 0..3 {
+                        simplices[3 * j + k] = v[k] as u32;
+                        let across = edges[(k + 1) % 3].rev().face().fix();
+                        let nb = face_to_simplex(across);
+                        neighbors[3 * j + k] = nb;
+                        // Edge k+1 joins vertices k+1 and k+2; check each
+                        // edge once (hull edges have no twin face).
+                        let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
+                        if a > b && nb != NO_NEIGHBOR {
+                            continue;
+                        }
+                        let d2 = (points[a] - points[b]).norm_squared();
+                        if d2 < tol2 {
+                            let c = (d2, a.min(b), a.max(b));
+                            if close.is_none_or(|old| c < old) {
+                                close = Some(c);
+                            }
+                        }
+                    }
                 }
-            }
-        }
-        if let Some((first, second, d2)) = close {
+                close
+            })
+            .reduce(
+                || None,
+                |x, y| match (x, y) {
+                    (Some(a), Some(b)) => Some(if b < a { b } else { a }),
+                    (a, None) => a,
+                    (None, b) => b,
+                },
+            );
+        if let Some((d2, first, second)) = close {
             out.simplices.clear();
             out.neighbors.clear();
             return Err(GeometryError::NearCoincident {
@@ -236,7 +285,9 @@ fn find_duplicate(
     let mut order: Vec<usize> = (0..points.len()).collect();
     order.sort_by(|&a, &b| {
         let (ka, kb) = (key(&points[a]), key(&points[b]));
-        ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal).then(a.cmp(&b))
+        ka.partial_cmp(&kb)
+            .unwrap_or(std::cmp::Ordering::Equal)
+            .then(a.cmp(&b))
     });
     for w in order.windows(2) {
         if key(&points[w[0]]) == key(&points[w[1]]) {
@@ -249,7 +300,9 @@ fn find_duplicate(
             };
         }
     }
-    GeometryError::Internal { message: "spade dropped a vertex that has no duplicate".into() }
+    GeometryError::Internal {
+        message: "spade dropped a vertex that has no duplicate".into(),
+    }
 }
 
 #[cfg(test)]
@@ -275,15 +328,24 @@ mod tests {
         // of two first, as the tessellator does.
         let max_abs = points.iter().map(|p| p.abs().max()).fold(0.0, f64::max);
         let e = -exponent(max_abs) - 1;
-        let scaled: Vec<_> =
-            points.iter().map(|p| Point::<2>::new(scale_pow2(p.x, e), scale_pow2(p.y, e))).collect();
+        let scaled: Vec<_> = points
+            .iter()
+            .map(|p| Point::<2>::new(scale_pow2(p.x, e), scale_pow2(p.y, e)))
+            .collect();
         let points = &scaled[..];
         let n = points.len();
         let mut used = vec![false; n];
         for s in 0..t.len() {
             let v = t.simplex(s);
-            let p = [points[v[0] as usize], points[v[1] as usize], points[v[2] as usize]];
-            assert!(orient2d(c(&p[0]), c(&p[1]), c(&p[2])) > 0.0, "triangle {s} not ccw");
+            let p = [
+                points[v[0] as usize],
+                points[v[1] as usize],
+                points[v[2] as usize],
+            ];
+            assert!(
+                orient2d(c(&p[0]), c(&p[1]), c(&p[2])) > 0.0,
+                "triangle {s} not ccw"
+            );
             for &i in v {
                 used[i as usize] = true;
             }
@@ -294,7 +356,10 @@ mod tests {
                     continue;
                 }
                 let w = t.simplex(nb as usize);
-                let back = t.simplex_neighbors(nb as usize).iter().position(|&x| x == s as u32);
+                let back = t
+                    .simplex_neighbors(nb as usize)
+                    .iter()
+                    .position(|&x| x == s as u32);
                 let kb = back.expect("adjacency not symmetric");
                 // Shared facet, opposite orientation.
                 assert_eq!([w[(kb + 2) % 3], w[(kb + 1) % 3]], f);
@@ -329,7 +394,13 @@ mod tests {
 
     #[test]
     fn huge_and_tiny_coordinates() {
-        for (scale, offset) in [(1e-6, 0.0), (1e-9, 1e6), (1.0, 1e6), (1e280, 0.0), (1e-300, 0.0)] {
+        for (scale, offset) in [
+            (1e-6, 0.0),
+            (1e-9, 1e6),
+            (1.0, 1e6),
+            (1e280, 0.0),
+            (1e-300, 0.0),
+        ] {
             let p: Vec<_> = lattice(6, 5, scale, Point::<2>::new(offset, -offset))
                 .into_iter()
                 .enumerate()
@@ -356,42 +427,82 @@ mod tests {
 
     #[test]
     fn typed_errors() {
-        let tri = |a: f64| [Point::<2>::new(0.0, 0.0), Point::<2>::new(1.0, 0.0), Point::<2>::new(a, 1.0)];
-        assert!(matches!(mesh(&tri(f64::NAN)), Err(GeometryError::NonFinite { index: 2 })));
-        assert!(matches!(mesh(&tri(f64::INFINITY)), Err(GeometryError::NonFinite { index: 2 })));
-        assert!(matches!(mesh(&tri(0.5)[..2]), Err(GeometryError::Degenerate { .. })));
+        let tri = |a: f64| {
+            [
+                Point::<2>::new(0.0, 0.0),
+                Point::<2>::new(1.0, 0.0),
+                Point::<2>::new(a, 1.0),
+            ]
+        };
+        assert!(matches!(
+            mesh(&tri(f64::NAN)),
+            Err(GeometryError::NonFinite { index: 2 })
+        ));
+        assert!(matches!(
+            mesh(&tri(f64::INFINITY)),
+            Err(GeometryError::NonFinite { index: 2 })
+        ));
+        assert!(matches!(
+            mesh(&tri(0.5)[..2]),
+            Err(GeometryError::Degenerate { .. })
+        ));
         assert!(matches!(mesh(&[]), Err(GeometryError::Degenerate { .. })));
-        let line: Vec<_> = (0..10).map(|i| Point::<2>::new(i as f64, 2.0 * i as f64)).collect();
-        assert!(matches!(mesh(&line), Err(GeometryError::Degenerate { count: 10, dim: 2 })));
+        let line: Vec<_> = (0..10)
+            .map(|i| Point::<2>::new(i as f64, 2.0 * i as f64))
+            .collect();
+        assert!(matches!(
+            mesh(&line),
+            Err(GeometryError::Degenerate { count: 10, dim: 2 })
+        ));
         let same = [Point::<2>::new(1.0, 1.0); 5];
         assert!(matches!(mesh(&same), Err(GeometryError::Degenerate { .. })));
         let mut dup = lattice(4, 4, 1.0, Point::<2>::zeros());
         dup.push(dup[5]);
         assert_eq!(
             mesh(&dup),
-            Err(GeometryError::NearCoincident { first: 5, second: 16, distance: 0.0, tolerance: 3e-10 })
+            Err(GeometryError::NearCoincident {
+                first: 5,
+                second: 16,
+                distance: 0.0,
+                tolerance: 3e-10
+            })
         );
         let mut near = lattice(4, 4, 1.0, Point::<2>::zeros());
         near.push(near[7] + Point::<2>::new(1e-12, 0.0));
         assert!(matches!(
             mesh(&near),
-            Err(GeometryError::NearCoincident { first: 7, second: 16, .. })
+            Err(GeometryError::NearCoincident {
+                first: 7,
+                second: 16,
+                ..
+            })
         ));
         // Tolerance 0 accepts it, spade resolves it exactly.
         let mut t = Tessellation::default();
-        let mut d = Delaunay2::new(Delaunay2Params { coincidence_tolerance: 0.0 }).unwrap();
+        let mut d = Delaunay2::new(Delaunay2Params {
+            coincidence_tolerance: 0.0,
+        })
+        .unwrap();
         d.tessellate(&near, &mut t).unwrap();
         check(&near, &t);
-        assert!(Delaunay2::new(Delaunay2Params { coincidence_tolerance: -1.0 }).is_err());
+        assert!(Delaunay2::new(Delaunay2Params {
+            coincidence_tolerance: -1.0
+        })
+        .is_err());
     }
 
     #[test]
     fn collinear_runs_and_clusters() {
         // A collinear run with one point off the line, and a tight cluster.
-        let mut p: Vec<_> = (0..30).map(|i| Point::<2>::new(i as f64 * 0.1, 0.0)).collect();
+        let mut p: Vec<_> = (0..30)
+            .map(|i| Point::<2>::new(i as f64 * 0.1, 0.0))
+            .collect();
         p.push(Point::<2>::new(1.5, 1e-3));
         for i in 0..25 {
-            p.push(Point::<2>::new(2.0 + (i % 5) as f64 * 1e-9, 1.0 + (i / 5) as f64 * 1e-9));
+            p.push(Point::<2>::new(
+                2.0 + (i % 5) as f64 * 1e-9,
+                1.0 + (i / 5) as f64 * 1e-9,
+            ));
         }
         let t = mesh(&p).unwrap();
         check(&p, &t);
@@ -405,8 +516,11 @@ mod tests {
     /// Snapped to a coarse grid: many duplicates, collinear and cocircular
     /// subsets.
     fn grid_cloud(max: usize) -> impl Strategy<Value = Vec<Point<2>>> {
-        prop::collection::vec((0i32..6, 0i32..6), 0..max)
-            .prop_map(|v| v.into_iter().map(|(x, y)| Point::<2>::new(x as f64, y as f64)).collect())
+        prop::collection::vec((0i32..6, 0i32..6), 0..max).prop_map(|v| {
+            v.into_iter()
+                .map(|(x, y)| Point::<2>::new(x as f64, y as f64))
+                .collect()
+        })
     }
 
     fn outcome_ok(p: &[Point<2>], r: Result<Tessellation, GeometryError>) {

@@ -34,7 +34,9 @@ pub enum GeometryError {
     /// A coordinate is finite but outside the range the exact predicates
     /// of the tessellator can handle without overflow, even after the
     /// exact power-of-two rescaling the tessellator applies.
-    #[error("particle {index} has coordinate {value:e}, outside the range the tessellator supports")]
+    #[error(
+        "particle {index} has coordinate {value:e}, outside the range the tessellator supports"
+    )]
     OutOfRange {
         /// Index of the offending particle.
         index: usize,

@@ -28,7 +28,10 @@ pub struct ParticleManagementParams {
 
 impl Default for ParticleManagementParams {
     fn default() -> Self {
-        Self { removal_fraction: 0.3, insertion_factor: 2.0 }
+        Self {
+            removal_fraction: 0.3,
+            insertion_factor: 2.0,
+        }
     }
 }
 
@@ -119,7 +122,11 @@ impl ParticleMap {
 
     /// Old indices of the removed particles, ascending.
     pub fn removed(&self) -> impl Iterator<Item = usize> + '_ {
-        self.old_to_new.iter().enumerate().filter(|(_, &n)| n == REMOVED).map(|(i, _)| i)
+        self.old_to_new
+            .iter()
+            .enumerate()
+            .filter(|(_, &n)| n == REMOVED)
+            .map(|(i, _)| i)
     }
 
     /// Carries a per-particle field (velocity, pressure, stress…) to the new
@@ -200,9 +207,9 @@ fn regular_measure<const D: usize>(h: f64) -> f64 {
 ///   current cloud (`alpha` computed from `delaunay` with `alpha_params`).
 /// * **Removal**: for every Delaunay edge shorter than
 ///   [`removal_fraction`](ParticleManagementParams::removal_fraction)` · h`,
-///   one fluid endpoint is removed (the higher index if both are fluid);
-///   pairs of non-fluid particles are left alone; at most one particle of a
-///   pair goes.
+///   one fluid endpoint is removed (if both are fluid, the one in more
+///   such close pairs, ties to the higher index); pairs of non-fluid
+///   particles are left alone; at most one particle of a pair goes.
 /// * **Insertion**: every kept simplex with a fluid node, none of its nodes
 ///   removed, and a measure above
 ///   [`insertion_factor`](ParticleManagementParams::insertion_factor) times
@@ -241,30 +248,56 @@ where
     let mut removed = vec![false; n];
     let mut n_removed = 0usize;
     if params.removal_fraction > 0.0 {
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        let mut crowding = vec![0u32; n];
         for s in delaunay.simplices.chunks_exact(nv) {
             for i in 0..nv {
                 for j in i + 1..nv {
-                    let (a, b) = (s[i].min(s[j]) as usize, s[i].max(s[j]) as usize);
-                    if removed[a] || removed[b] {
+                    let (a, b) = (s[i].min(s[j]), s[i].max(s[j]));
+                    let (ua, ub) = (a as usize, b as usize);
+                    if kinds[ua] != ParticleKind::Fluid && kinds[ub] != ParticleKind::Fluid {
                         continue;
                     }
-                    let victim = match (kinds[a], kinds[b]) {
-                        (_, ParticleKind::Fluid) => b,
-                        (ParticleKind::Fluid, _) => a,
-                        _ => continue,
-                    };
-                    let h = 0.5 * (spacing[a] + spacing[b]);
-                    let limit = params.removal_fraction * h;
-                    if (points[a] - points[b]).norm_squared() < limit * limit {
-                        removed[victim] = true;
-                        n_removed += 1;
+                    let limit = params.removal_fraction * 0.5 * (spacing[ua] + spacing[ub]);
+                    if (points[ua] - points[ub]).norm_squared() < limit * limit {
+                        pairs.push((a, b));
                     }
                 }
             }
         }
+        // Interior edges appear in two simplices.
+        pairs.sort_unstable();
+        pairs.dedup();
+        for &(a, b) in &pairs {
+            crowding[a as usize] += 1;
+            crowding[b as usize] += 1;
+        }
+        for &(a, b) in &pairs {
+            let (a, b) = (a as usize, b as usize);
+            if removed[a] || removed[b] {
+                continue;
+            }
+            // The fluid endpoint that crowds most goes (ties: higher index).
+            let victim = match (kinds[a], kinds[b]) {
+                (ParticleKind::Fluid, ParticleKind::Fluid) => {
+                    if crowding[a] > crowding[b] {
+                        a
+                    } else {
+                        b
+                    }
+                }
+                (ParticleKind::Fluid, _) => a,
+                _ => b,
+            };
+            removed[victim] = true;
+            n_removed += 1;
+        }
     }
 
-    let mut map = ParticleMap { old_to_new: vec![REMOVED; n], origin: Vec::new() };
+    let mut map = ParticleMap {
+        old_to_new: vec![REMOVED; n],
+        origin: Vec::new(),
+    };
     let mut new_points = Vec::with_capacity(n);
     let mut new_kinds = Vec::with_capacity(n);
     let mut new_spacing = Vec::with_capacity(n);
@@ -290,8 +323,7 @@ where
             }
             let p = gather::<D>(points, s);
             let h = simplex_spacing(spacing, s);
-            if simplex_measure::<D>(&p[..nv]) <= params.insertion_factor * regular_measure::<D>(h)
-            {
+            if simplex_measure::<D>(&p[..nv]) <= params.insertion_factor * regular_measure::<D>(h) {
                 continue;
             }
             let centroid = p[..nv].iter().fold(Point::<D>::zeros(), |acc, q| acc + q) * w;
@@ -311,8 +343,12 @@ where
 
     // Volume accounting by cause.
     let before = alpha.kept_measure;
-    let mut volume =
-        VolumeChange { alpha_deletion: alpha.deleted_measure(), before, after: before, ..Default::default() };
+    let mut volume = VolumeChange {
+        alpha_deletion: alpha.deleted_measure(),
+        before,
+        after: before,
+        ..Default::default()
+    };
     let mut out_delaunay = Tessellation::default();
     let out_alpha;
     if n_removed == 0 && n_inserted == 0 {
@@ -333,7 +369,13 @@ where
             mid = a.kept_measure;
         }
         tessellator.tessellate(&new_points, &mut out_delaunay)?;
-        out_alpha = alpha_shape(&new_points, &new_kinds, &new_spacing, &out_delaunay, alpha_params)?;
+        out_alpha = alpha_shape(
+            &new_points,
+            &new_kinds,
+            &new_spacing,
+            &out_delaunay,
+            alpha_params,
+        )?;
         let after = out_alpha.kept_measure;
         if n_inserted == 0 {
             mid = after;
@@ -354,4 +396,176 @@ where
         removed: n_removed,
         inserted: n_inserted,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Delaunay2, Tessellator};
+
+    fn block(nx: usize, ny: usize, h: f64) -> Vec<Point<2>> {
+        (0..nx * ny)
+            .map(|i| Point::<2>::new((i % nx) as f64 * h, (i / nx) as f64 * h))
+            .collect()
+    }
+
+    struct Setup {
+        p: Vec<Point<2>>,
+        k: Vec<ParticleKind>,
+        h: Vec<f64>,
+        t: Tessellation,
+        a: AlphaShape,
+    }
+
+    fn setup(p: Vec<Point<2>>, spacing: f64) -> Setup {
+        let k = vec![ParticleKind::Fluid; p.len()];
+        let h = vec![spacing; p.len()];
+        let mut t = Tessellation::default();
+        Delaunay2::default().tessellate(&p, &mut t).unwrap();
+        let a = alpha_shape(&p, &k, &h, &t, &AlphaShapeParams::default()).unwrap();
+        Setup { p, k, h, t, a }
+    }
+
+    fn manage(s: &Setup, params: &ParticleManagementParams) -> ParticleUpdate<2> {
+        manage_particles(
+            &mut Delaunay2::default(),
+            &s.p,
+            &s.k,
+            &s.h,
+            &s.t,
+            &s.a,
+            &AlphaShapeParams::default(),
+            params,
+        )
+        .unwrap()
+    }
+
+    fn balanced(v: &VolumeChange) {
+        assert!(
+            (v.before + v.removal + v.insertion - v.after).abs() < 1e-12,
+            "{v:?}"
+        );
+    }
+
+    #[test]
+    fn nothing_to_do_changes_nothing() {
+        let s = setup(block(6, 6, 0.1), 0.1);
+        let u = manage(&s, &ParticleManagementParams::default());
+        assert_eq!((u.removed, u.inserted), (0, 0));
+        assert_eq!(u.points, s.p);
+        assert_eq!(u.volume.removal, 0.0);
+        assert_eq!(u.volume.insertion, 0.0);
+        assert_eq!(u.alpha, s.a);
+        assert_eq!(u.map.old_to_new, (0..36).collect::<Vec<u32>>());
+    }
+
+    #[test]
+    fn removal_of_a_crowding_particle_is_accounted() {
+        // An extra particle just below the bottom edge adds a sliver of
+        // volume; removing it takes that volume away again.
+        let mut p = block(6, 6, 0.1);
+        p.insert(3, Point::<2>::new(0.25, -0.02));
+        let s = setup(p, 0.1);
+        assert!(s.a.kept_measure > 0.25 + 1e-6);
+        let u = manage(
+            &s,
+            &ParticleManagementParams {
+                removal_fraction: 0.3,
+                ..Default::default()
+            },
+        );
+        // Its nearest neighbours (0.2, 0) and (0.3, 0) are 0.054 away,
+        // more than 0.3 h: nothing is removed…
+        assert_eq!(u.removed, 0);
+        // …until the fraction is large enough.
+        let u = manage(
+            &s,
+            &ParticleManagementParams {
+                removal_fraction: 0.6,
+                ..Default::default()
+            },
+        );
+        assert_eq!(u.removed, 1);
+        assert_eq!(u.map.old_to_new[3], REMOVED);
+        assert_eq!(u.map.removed().collect::<Vec<_>>(), vec![3]);
+        assert_eq!(u.map.old_to_new[4], 3);
+        assert_eq!(u.points, block(6, 6, 0.1));
+        assert!((u.volume.after - 0.25).abs() < 1e-12);
+        assert!(u.volume.removal < -1e-6);
+        assert_eq!(u.volume.insertion, 0.0);
+        balanced(&u.volume);
+        // State follows the particles.
+        let field: Vec<f64> = (0..s.p.len()).map(|i| i as f64).collect();
+        let moved = u.map.apply(&field);
+        assert_eq!(moved[3], 4.0);
+        assert_eq!(moved.len(), 36);
+    }
+
+    #[test]
+    fn insertion_refines_and_interpolates_linearly() {
+        // Particles declare a spacing smaller than the lattice: every
+        // triangle (area h²/2 = 0.005) exceeds 2 × √3/4 × 0.06².
+        let s = setup(block(5, 5, 0.1), 0.06);
+        assert_eq!(s.a.len(), 32);
+        let u = manage(&s, &ParticleManagementParams::default());
+        assert_eq!((u.removed, u.inserted), (0, 32));
+        assert_eq!(u.points.len(), 25 + 32);
+        assert!(u.kinds[25..].iter().all(|&k| k == ParticleKind::Fluid));
+        assert!(u.spacing[25..].iter().all(|&h| (h - 0.06).abs() < 1e-15));
+        // Convex block, all elements kept: insertion changes no volume.
+        assert!(u.volume.insertion.abs() < 1e-12, "{:?}", u.volume);
+        balanced(&u.volume);
+        // A linear field is reproduced at the inserted particles.
+        let f = |p: &Point<2>| 2.0 * p.x - 3.0 * p.y + 1.0;
+        let old: Vec<f64> = s.p.iter().map(f).collect();
+        let new = u.map.apply(&old);
+        for (q, v) in u.points.iter().zip(&new) {
+            assert!((f(q) - v).abs() < 1e-12);
+        }
+        // Vector-valued state too.
+        let vel: Vec<Point<2>> = s.p.iter().map(|p| Point::<2>::new(p.y, -p.x)).collect();
+        let moved = u.map.apply(&vel);
+        assert!((moved[30] - Point::<2>::new(u.points[30].y, -u.points[30].x)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn removal_and_insertion_together_balance() {
+        let mut p = block(5, 5, 0.1);
+        p.push(Point::<2>::new(0.41, 0.4)); // crowds particle 24
+        let s = setup(p, 0.06);
+        let u = manage(&s, &ParticleManagementParams::default());
+        assert_eq!(u.removed, 1);
+        assert_eq!(u.map.old_to_new[25], REMOVED);
+        assert!(u.inserted > 0);
+        balanced(&u.volume);
+        assert_eq!(u.volume.alpha_deletion, s.a.deleted_measure());
+    }
+
+    #[test]
+    fn parameters_are_validated() {
+        for (r, f) in [
+            (-0.1, 2.0),
+            (1.0, 2.0),
+            (f64::NAN, 2.0),
+            (0.3, 0.0),
+            (0.3, f64::NAN),
+        ] {
+            let p = ParticleManagementParams {
+                removal_fraction: r,
+                insertion_factor: f,
+            };
+            assert!(p.validate().is_err(), "{p:?}");
+        }
+        let p = ParticleManagementParams {
+            removal_fraction: 0.0,
+            insertion_factor: f64::INFINITY,
+        };
+        assert!(p.validate().is_ok());
+    }
+
+    #[test]
+    fn regular_simplex_measures() {
+        assert!((regular_measure::<2>(1.0) - 3f64.sqrt() / 4.0).abs() < 1e-15);
+        assert!((regular_measure::<3>(1.0) - 1.0 / (6.0 * 2f64.sqrt())).abs() < 1e-15);
+    }
 }

@@ -76,7 +76,9 @@ pub struct QualityParams {
 
 impl Default for QualityParams {
     fn default() -> Self {
-        Self { degenerate_threshold: 1e-3 }
+        Self {
+            degenerate_threshold: 1e-3,
+        }
     }
 }
 
@@ -133,7 +135,11 @@ where
         .with_min_len(2048)
         .map(|s| radius_ratio::<D>(&gather::<D>(points, s)[..nv]))
         .collect();
-    let mut rep = QualityReport { min: 1.0, mean: 1.0, ..Default::default() };
+    let mut rep = QualityReport {
+        min: 1.0,
+        mean: 1.0,
+        ..Default::default()
+    };
     let mut sum = 0.0;
     for (s, &q) in quality.iter().enumerate() {
         sum += q;
@@ -152,4 +158,100 @@ where
     }
     rep.quality = quality;
     Ok(rep)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Delaunay2, Tessellator};
+
+    #[test]
+    fn radius_ratio_of_reference_simplices() {
+        let s3 = 3f64.sqrt();
+        let eq = [
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(2.0, 0.0),
+            Point::<2>::new(1.0, s3),
+        ];
+        assert!((radius_ratio::<2>(&eq) - 1.0).abs() < 1e-12);
+        let right = [
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 0.0),
+            Point::<2>::new(0.0, 1.0),
+        ];
+        // r = (2 - √2)/2, R = √2/2: q = 2 r / R = 2(√2 - 1).
+        assert!((radius_ratio::<2>(&right) - 2.0 * (2f64.sqrt() - 1.0)).abs() < 1e-12);
+        let inverted = [right[0], right[2], right[1]];
+        assert!((radius_ratio::<2>(&inverted) + radius_ratio::<2>(&right)).abs() < 1e-15);
+        let flat = [
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 0.0),
+            Point::<2>::new(3.0, 0.0),
+        ];
+        assert_eq!(radius_ratio::<2>(&flat), 0.0);
+        let needle = [
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 0.0),
+            Point::<2>::new(0.5, 1e-6),
+        ];
+        assert!(radius_ratio::<2>(&needle) < 1e-5);
+
+        let tet = [
+            Point::<3>::new(1.0, 1.0, 1.0),
+            Point::<3>::new(1.0, -1.0, -1.0),
+            Point::<3>::new(-1.0, 1.0, -1.0),
+            Point::<3>::new(-1.0, -1.0, 1.0),
+        ];
+        let q = radius_ratio::<3>(&tet);
+        assert!((q.abs() - 1.0).abs() < 1e-12, "{q}");
+        let corner = [
+            Point::<3>::new(0.0, 0.0, 0.0),
+            Point::<3>::new(1.0, 0.0, 0.0),
+            Point::<3>::new(0.0, 1.0, 0.0),
+            Point::<3>::new(0.0, 0.0, 1.0),
+        ];
+        let q = radius_ratio::<3>(&corner);
+        assert!(q > 0.0 && q < 1.0);
+        let sliver = [
+            corner[0],
+            corner[1],
+            corner[2],
+            Point::<3>::new(1.0, 1.0, 1e-9),
+        ];
+        assert!(radius_ratio::<3>(&sliver).abs() < 1e-6);
+    }
+
+    #[test]
+    fn mesh_quality_flags_degenerate_and_inverted() {
+        let p = vec![
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 0.0),
+            Point::<2>::new(0.0, 1.0),
+            Point::<2>::new(1.0, 1.0),
+            Point::<2>::new(2.0, 0.0),
+            Point::<2>::new(3.0, 1e-9),
+        ];
+        let mut t = Tessellation::new(3);
+        t.simplices = vec![0, 1, 2, 1, 3, 2, 0, 2, 1, 1, 4, 5];
+        t.neighbors = vec![crate::NO_NEIGHBOR; 12];
+        let r = mesh_quality::<2>(&p, &t, &QualityParams::default()).unwrap();
+        assert_eq!(r.inverted, vec![2]);
+        assert_eq!(r.degenerate, vec![3]);
+        assert_eq!(r.worst, Some(2));
+        assert!(r.min < 0.0);
+
+        let grid: Vec<_> = (0..100)
+            .map(|i| Point::<2>::new((i % 10) as f64, (i / 10) as f64))
+            .collect();
+        let mut t = Tessellation::default();
+        Delaunay2::default().tessellate(&grid, &mut t).unwrap();
+        let r = mesh_quality::<2>(&grid, &t, &QualityParams::default()).unwrap();
+        assert!(r.inverted.is_empty() && r.degenerate.is_empty());
+        assert!((r.min - 2.0 * (2f64.sqrt() - 1.0)).abs() < 1e-12);
+        assert!(QualityParams {
+            degenerate_threshold: 1.5
+        }
+        .validate()
+        .is_err());
+    }
 }

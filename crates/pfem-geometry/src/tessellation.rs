@@ -27,7 +27,11 @@ pub struct Tessellation {
 impl Tessellation {
     /// An empty tessellation with `nv` vertices per simplex.
     pub fn new(nv: usize) -> Self {
-        Self { nv, simplices: Vec::new(), neighbors: Vec::new() }
+        Self {
+            nv,
+            simplices: Vec::new(),
+            neighbors: Vec::new(),
+        }
     }
 
     /// Number of simplices.
@@ -63,6 +67,9 @@ where
     Const<D>: Dim,
 {
     /// Tessellates `points` into `out`, reusing its allocations.
-    fn tessellate(&mut self, points: &[Point<D>], out: &mut Tessellation)
-        -> Result<(), GeometryError>;
+    fn tessellate(
+        &mut self,
+        points: &[Point<D>],
+        out: &mut Tessellation,
+    ) -> Result<(), GeometryError>;
 }

@@ -46,16 +46,24 @@ fn rings(r0: f64, r1: f64, h: f64) -> Vec<Point<2>> {
 fn square_has_one_loop_and_exact_area() {
     let n = 50;
     let h = 1.0 / (n - 1) as f64;
-    let p: Vec<_> =
-        (0..n * n).map(|i| Point::<2>::new((i % n) as f64 * h, (i / n) as f64 * h)).collect();
+    let p: Vec<_> = (0..n * n)
+        .map(|i| Point::<2>::new((i % n) as f64 * h, (i / n) as f64 * h))
+        .collect();
     let (a, c) = run(&p, &fluid(p.len()), h);
     assert_eq!(c.boundary_loops, Some(1));
-    assert!((a.kept_measure - 1.0).abs() < 1e-2, "area {}", a.kept_measure);
+    assert!(
+        (a.kept_measure - 1.0).abs() < 1e-2,
+        "area {}",
+        a.kept_measure
+    );
     assert_eq!(c.components.len(), 1);
     assert_eq!(c.boundary_facets.len(), 4 * (n - 1));
     assert_eq!(c.boundary_nodes.len(), 4 * (n - 1));
     assert!(c.isolated.is_empty());
-    assert!(c.boundary_facets.iter().all(|f| f.kind == FacetKind::FreeSurface));
+    assert!(c
+        .boundary_facets
+        .iter()
+        .all(|f| f.kind == FacetKind::FreeSurface));
 }
 
 #[test]
@@ -67,7 +75,11 @@ fn disk_has_one_loop_and_area_within_one_percent() {
     assert_eq!(c.boundary_loops, Some(1));
     assert_eq!(c.components.len(), 1);
     let exact = PI * r * r;
-    assert!((a.kept_measure - exact).abs() < 0.01 * exact, "area {} vs {exact}", a.kept_measure);
+    assert!(
+        (a.kept_measure - exact).abs() < 0.01 * exact,
+        "area {} vs {exact}",
+        a.kept_measure
+    );
     assert!(a.deleted_measure() >= 0.0);
 }
 
@@ -80,7 +92,11 @@ fn annulus_has_two_loops_and_area_within_one_percent() {
     assert_eq!(c.boundary_loops, Some(2));
     assert_eq!(c.components.len(), 1);
     let exact = PI * (r1 * r1 - r0 * r0);
-    assert!((a.kept_measure - exact).abs() < 0.01 * exact, "area {} vs {exact}", a.kept_measure);
+    assert!(
+        (a.kept_measure - exact).abs() < 0.01 * exact,
+        "area {} vs {exact}",
+        a.kept_measure
+    );
     // The hole was a candidate region the alpha criterion removed.
     assert!(a.deleted_measure() > 0.5 * PI * r0 * r0);
 }
@@ -134,7 +150,11 @@ fn walls_and_solids_are_not_fluid_but_touch_it() {
     // Fluid elements: rows 2..10 × columns 0..9 of fluid cells plus the
     // cells bridging to the wall (row 1→2) and to the solid (col 8→9).
     for s in 0..a.mesh.len() {
-        assert!(a.mesh.simplex(s).iter().any(|&v| kinds[v as usize] == ParticleKind::Fluid));
+        assert!(a
+            .mesh
+            .simplex(s)
+            .iter()
+            .any(|&v| kinds[v as usize] == ParticleKind::Fluid));
     }
     assert_eq!(c.tags[0], NodeTag::Dry); // deep wall row
     assert_eq!(c.tags[nx + 3], NodeTag::Wall); // wall row touching fluid
@@ -152,11 +172,17 @@ fn walls_and_solids_are_not_fluid_but_touch_it() {
     assert_eq!(c.unmatched_interface_facets, 0);
 
     // With the solid's own mesh (its Delaunay here), interface facets match.
-    let solid: Vec<_> = (0..p.len()).filter(|&i| kinds[i] == ParticleKind::Solid).collect();
+    let solid: Vec<_> = (0..p.len())
+        .filter(|&i| kinds[i] == ParticleKind::Solid)
+        .collect();
     let sp: Vec<_> = solid.iter().map(|&i| p[i]).collect();
     let mut st = Tessellation::default();
     Delaunay2::default().tessellate(&sp, &mut st).unwrap();
-    let elems: Vec<u32> = st.simplices.iter().map(|&v| solid[v as usize] as u32).collect();
+    let elems: Vec<u32> = st
+        .simplices
+        .iter()
+        .map(|&v| solid[v as usize] as u32)
+        .collect();
     let c2 = classify(&p, &kinds, &a.mesh, Some(&elems)).unwrap();
     assert_eq!(c2.unmatched_interface_facets, 0);
     assert_eq!(c2.tags, c.tags);

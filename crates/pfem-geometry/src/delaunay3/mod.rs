@@ -43,6 +43,7 @@
 //! # Ok::<(), pfem_geometry::GeometryError>(())
 //! ```
 
+mod exact;
 mod order;
 pub mod predicates;
 
@@ -129,10 +130,14 @@ impl std::fmt::Debug for Delaunay3 {
 /// Work arrays, reused from call to call.
 #[derive(Clone, Default)]
 struct Workspace {
-    /// Coordinates, rescaled by a power of two.
+    /// Coordinates in insertion order (internal vertex `k` is input point
+    /// `rank[k]`), rescaled by a power of two.
     pts: Vec<[f64; 3]>,
-    /// Insertion order.
-    order: Vec<u32>,
+    /// Input index of each internal vertex: the insertion order, and the
+    /// rank of the symbolic perturbation.
+    rank: Vec<u32>,
+    /// Coordinates in input order (scratch).
+    input: Vec<[f64; 3]>,
     /// Hilbert keys (scratch of the ordering).
     keys: Vec<u64>,
     /// Vertices of each tetrahedron slot; `INF` at index 3 for infinite
@@ -199,8 +204,7 @@ impl Tessellator<3> for Delaunay3 {
             return Err(GeometryError::Degenerate { count: n, dim: 3 });
         };
         let tol = self.min_distance * scale;
-        for i in 0..ws.order.len() {
-            let p = ws.order[i];
+        for p in 0..n as u32 {
             if first.contains(&p) {
                 continue;
             }
@@ -226,19 +230,24 @@ impl Workspace {
                 max: MAX_POINTS,
             });
         }
-        self.pts.clear();
+        self.input.clear();
         for (index, p) in points.iter().enumerate() {
             if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
                 return Err(GeometryError::NonFinite { index });
             }
-            self.pts.push([p.x, p.y, p.z]);
+            self.input.push([p.x, p.y, p.z]);
         }
         order::brio(
-            &self.pts,
-            &mut self.order,
+            &self.input,
+            &mut self.rank,
             &mut self.keys,
             0x5EED_DE1A_0A1E_2024,
         );
+        // Store the points in insertion order: neighbours in the walk and
+        // the cavity are then close in memory too.
+        self.pts.clear();
+        self.pts
+            .extend(self.rank.iter().map(|&i| self.input[i as usize]));
         Ok(())
     }
 
@@ -272,14 +281,12 @@ impl Workspace {
     /// neighbours. `None` when the set is flat.
     fn initial_tetrahedron(&mut self) -> Option<[u32; 4]> {
         let pts = &self.pts;
-        let order = &self.order;
         let p = |i: u32| &pts[i as usize];
-        let a = *order.first()?;
-        let b = *order.iter().find(|&&i| p(i) != p(a))?;
-        let c = *order.iter().find(|&&i| !collinear(p(a), p(b), p(i)))?;
-        let d = *order
-            .iter()
-            .find(|&&i| orient3d(p(a), p(b), p(c), p(i)) != 0)?;
+        let mut ids = 0..pts.len() as u32;
+        let a = ids.next()?;
+        let b = ids.clone().find(|&i| p(i) != p(a))?;
+        let c = ids.clone().find(|&i| !collinear(p(a), p(b), p(i)))?;
+        let d = ids.find(|&i| orient3d(p(a), p(b), p(c), p(i)) != 0)?;
         let t = if orient3d(p(a), p(b), p(c), p(d)) > 0 {
             [a, b, c, d]
         } else {
@@ -427,17 +434,19 @@ impl Workspace {
         let seed = match self.locate(pi) {
             Located::Tet(t) => t,
             Located::Duplicate(v) => {
+                let (v, w) = (self.rank[v as usize], self.rank[pi as usize]);
                 return Err(GeometryError::NearCoincident {
-                    first: v.min(pi) as usize,
-                    second: v.max(pi) as usize,
+                    first: v.min(w) as usize,
+                    second: v.max(w) as usize,
                     distance: 0.0,
                     tolerance: tol / scale,
-                })
+                });
             }
             Located::Lost => {
+                let i = self.rank[pi as usize];
                 return Err(GeometryError::Internal {
-                    message: format!("point {pi} could not be located (predicate underflow?)"),
-                })
+                    message: format!("point {i} could not be located (predicate underflow?)"),
+                });
             }
         };
         self.stamp += 2;
@@ -450,6 +459,7 @@ impl Workspace {
         self.cavity.push(seed);
         self.stack.push(seed);
         let pts = &self.pts;
+        let rank = &self.rank;
         while let Some(t) = self.stack.pop() {
             let tn = self.tn[t as usize];
             for (f, &nb) in tn.iter().enumerate() {
@@ -461,9 +471,9 @@ impl Workspace {
                 if m != s_out {
                     let v = self.tv[n];
                     let conflict = if v[3] == INF {
-                        hull_conflict_sos(pts, [v[0], v[1], v[2]], pi)
+                        hull_conflict_sos(pts, rank, [v[0], v[1], v[2]], pi)
                     } else {
-                        insphere_sos(pts, v, pi)
+                        insphere_sos(pts, rank, v, pi)
                     };
                     if conflict {
                         self.mark[n] = s_in;
@@ -497,9 +507,10 @@ impl Workspace {
             }
             let d = best.0.sqrt();
             if d < tol {
+                let (v, w) = (rank[best.1 as usize], rank[pi as usize]);
                 return Err(GeometryError::NearCoincident {
-                    first: best.1.min(pi) as usize,
-                    second: best.1.max(pi) as usize,
+                    first: v.min(w) as usize,
+                    second: v.max(w) as usize,
                     distance: d / scale,
                     tolerance: tol / scale,
                 });
@@ -605,7 +616,8 @@ impl Workspace {
             if self.mark[t] == u32::MAX {
                 continue;
             }
-            out.simplices.extend_from_slice(v);
+            out.simplices
+                .extend(v.iter().map(|&i| self.rank[i as usize]));
             for &nb in &self.tn[t] {
                 let m = self.mark[(nb >> 2) as usize];
                 out.neighbors

@@ -16,6 +16,8 @@
 
 use robust::Coord3D;
 
+use super::exact;
+
 #[inline(always)]
 fn c3(p: &[f64; 3]) -> Coord3D<f64> {
     Coord3D {
@@ -35,6 +37,36 @@ fn sign(x: f64) -> i32 {
 /// `0` when the four points are coplanar.
 #[inline]
 pub fn orient3d(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3]) -> i32 {
+    let (bx, by, bz) = (b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+    let (cx, cy, cz) = (c[0] - a[0], c[1] - a[1], c[2] - a[2]);
+    let (dx, dy, dz) = (d[0] - a[0], d[1] - a[1], d[2] - a[2]);
+    let det = bz * (cx * dy - dx * cy) + cz * (dx * by - bx * dy) + dz * (bx * cy - cx * by);
+    // Semi-static filter: Shewchuk's bound (7 + 56ε)ε · permanent with the
+    // permanent bounded by 6 mx my mz (ε = 2^-53), rounded up.
+    let mx = bx.abs().max(cx.abs()).max(dx.abs());
+    let my = by.abs().max(cy.abs()).max(dy.abs());
+    let mz = bz.abs().max(cz.abs()).max(dz.abs());
+    let eps = 5.2e-15 * (mx * my * mz);
+    if mx == 0.0 || my == 0.0 || mz == 0.0 {
+        return 0; // the four points share a coordinate plane
+    }
+    if mx.min(my).min(mz) > 1e-90 && mx.max(my).max(mz) < 1e90 {
+        if det > eps {
+            return 1;
+        }
+        if det < -eps {
+            return -1;
+        }
+    }
+    orient3d_exact(a, b, c, d)
+}
+
+#[cold]
+#[inline(never)]
+fn orient3d_exact(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3]) -> i32 {
+    if let Some(s) = exact::orient3d(a, b, c, d) {
+        return s;
+    }
     // Shewchuk's orient3d is det[a − d, b − d, c − d] = −det[b − a, c − a, d − a].
     -sign(robust::orient3d(c3(a), c3(b), c3(c), c3(d)))
 }
@@ -44,8 +76,51 @@ pub fn orient3d(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3]) -> i32 {
 /// `(a, b, c, d)` is positively oriented (the sign flips otherwise).
 #[inline]
 pub fn insphere(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3], e: &[f64; 3]) -> i32 {
-    // Shewchuk's insphere expects his positive orientation, which is ours
-    // negated, hence the minus sign.
+    let (ax, ay, az) = (a[0] - e[0], a[1] - e[1], a[2] - e[2]);
+    let (bx, by, bz) = (b[0] - e[0], b[1] - e[1], b[2] - e[2]);
+    let (cx, cy, cz) = (c[0] - e[0], c[1] - e[1], c[2] - e[2]);
+    let (dx, dy, dz) = (d[0] - e[0], d[1] - e[1], d[2] - e[2]);
+    let ab = ax * by - bx * ay;
+    let bc = bx * cy - cx * by;
+    let cd = cx * dy - dx * cy;
+    let da = dx * ay - ax * dy;
+    let ac = ax * cy - cx * ay;
+    let bd = bx * dy - dx * by;
+    let abc = az * bc - bz * ac + cz * ab;
+    let bcd = bz * cd - cz * bd + dz * bc;
+    let cda = cz * da + dz * ac + az * cd;
+    let dab = dz * ab + az * bd + bz * da;
+    let alift = ax * ax + ay * ay + az * az;
+    let blift = bx * bx + by * by + bz * bz;
+    let clift = cx * cx + cy * cy + cz * cz;
+    let dlift = dx * dx + dy * dy + dz * dz;
+    // Shewchuk's determinant, positive inside for *his* orientation,
+    // which is ours negated.
+    let det = (dlift * abc - clift * dab) + (blift * cda - alift * bcd);
+    // Semi-static filter: (16 + 224ε)ε · permanent, the permanent bounded
+    // by 72 M² mx my mz with M = max(mx, my, mz), rounded up.
+    let mx = ax.abs().max(bx.abs()).max(cx.abs()).max(dx.abs());
+    let my = ay.abs().max(by.abs()).max(cy.abs()).max(dy.abs());
+    let mz = az.abs().max(bz.abs()).max(cz.abs()).max(dz.abs());
+    let big = mx.max(my).max(mz);
+    let eps = 1.3e-13 * (mx * my * mz) * (big * big);
+    if mx.min(my).min(mz) > 1e-55 && big < 1e55 {
+        if det > eps {
+            return -1;
+        }
+        if det < -eps {
+            return 1;
+        }
+    }
+    insphere_exact(a, b, c, d, e)
+}
+
+#[cold]
+#[inline(never)]
+fn insphere_exact(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3], e: &[f64; 3]) -> i32 {
+    if let Some(s) = exact::insphere_det(a, b, c, d, e) {
+        return -s;
+    }
     -sign(robust::insphere(c3(a), c3(b), c3(c), c3(d), c3(e)))
 }
 
@@ -80,8 +155,9 @@ fn projection_plane(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]) -> (usize, usize, 
 /// In-sphere test with symbolic perturbation, for point indices: `true`
 /// when point `e` is in conflict with (strictly inside the perturbed
 /// circumsphere of) the positively oriented tetrahedron `t`. Never ties.
-/// `pts` holds the coordinates, indices are the perturbation ranks.
-pub fn insphere_sos(pts: &[[f64; 3]], t: [u32; 4], e: u32) -> bool {
+/// `pts` holds the coordinates, `rank` the perturbation rank of each point
+/// (distinct; the point of largest rank is the most perturbed).
+pub fn insphere_sos(pts: &[[f64; 3]], rank: &[u32], t: [u32; 4], e: u32) -> bool {
     let p = |i: u32| &pts[i as usize];
     let s = insphere(p(t[0]), p(t[1]), p(t[2]), p(t[3]), p(e));
     if s != 0 {
@@ -91,7 +167,7 @@ pub fn insphere_sos(pts: &[[f64; 3]], t: [u32; 4], e: u32) -> bool {
     // from the most perturbed point (largest index) down (Devillers and
     // Teillaud 2011, §3.1; two terms suffice for a non-flat tetrahedron).
     let mut ids = [t[0], t[1], t[2], t[3], e];
-    ids.sort_unstable_by(|a, b| b.cmp(a));
+    ids.sort_unstable_by_key(|&i| std::cmp::Reverse(rank[i as usize]));
     for &top in &ids[..2] {
         if top == e {
             return false;
@@ -116,7 +192,7 @@ pub fn insphere_sos(pts: &[[f64; 3]], t: [u32; 4], e: u32) -> bool {
 /// the hull has positive orientation with it). Coplanar points are decided
 /// by the perturbed in-circle test within the facet's plane, which is the
 /// restriction of [`insphere_sos`] to that plane, so both tests agree.
-pub fn hull_conflict_sos(pts: &[[f64; 3]], f: [u32; 3], e: u32) -> bool {
+pub fn hull_conflict_sos(pts: &[[f64; 3]], rank: &[u32], f: [u32; 3], e: u32) -> bool {
     let p = |i: u32| &pts[i as usize];
     let (a, b, c, q) = (p(f[0]), p(f[1]), p(f[2]), p(e));
     let o = orient3d(a, b, c, q);
@@ -138,7 +214,7 @@ pub fn hull_conflict_sos(pts: &[[f64; 3]], f: [u32; 3], e: u32) -> bool {
         return s > 0;
     }
     let mut ids = [f[0], f[1], f[2], e];
-    ids.sort_unstable_by(|a, b| b.cmp(a));
+    ids.sort_unstable_by_key(|&i| std::cmp::Reverse(rank[i as usize]));
     for &top in &ids[..3] {
         if top == e {
             return false;
