@@ -1,5 +1,6 @@
 //! 3D Delaunay tessellation speed: `cargo bench -p pfem-geometry --bench delaunay3`.
 //! Figures and machine are recorded in `docs/benchmarks.md`.
+#![allow(missing_docs)] // criterion_group! generates undocumented items
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use pfem_core::Point;

@@ -213,3 +213,100 @@ fn alpha_parameter_is_validated_and_controls_the_shape() {
     assert!(alpha_shape(&p, &k, &bad_sp, &t, &AlphaShapeParams::default()).is_err());
     assert!(alpha_shape(&p, &k[..3], &sp, &t, &AlphaShapeParams::default()).is_err());
 }
+
+#[test]
+fn the_same_code_serves_3d() {
+    use pfem_geometry::Delaunay3;
+    let (n, h) = (6usize, 0.1);
+    let p: Vec<Point<3>> = (0..n * n * n)
+        .map(|i| {
+            let (x, y, z) = (i % n, (i / n) % n, i / (n * n));
+            Point::<3>::new(x as f64 * h, y as f64 * h, z as f64 * h)
+        })
+        .collect();
+    let mut p = p;
+    p.push(Point::<3>::new(2.0, 2.0, 2.0)); // a flying particle
+    let kinds = fluid(p.len());
+    let spacing = vec![h; p.len()];
+    let mut t = Tessellation::default();
+    Delaunay3::default().tessellate(&p, &mut t).unwrap();
+    let a = alpha_shape(&p, &kinds, &spacing, &t, &AlphaShapeParams::default()).unwrap();
+    let exact = (0.5f64).powi(3);
+    assert!(
+        (a.kept_measure - exact).abs() < 1e-9 * exact,
+        "{}",
+        a.kept_measure
+    );
+    let c = classify(&p, &kinds, &a.mesh, None).unwrap();
+    assert_eq!(c.boundary_loops, None);
+    assert_eq!(c.components.len(), 1);
+    assert_eq!(c.isolated, vec![(p.len() - 1) as u32]);
+    assert_eq!(c.tags[n * n * 2 + n * 2 + 2], NodeTag::Interior);
+    assert_eq!(c.tags[0], NodeTag::FreeSurface);
+    // Every boundary node lies on a face of the cube.
+    for &v in &c.boundary_nodes {
+        let q = p[v as usize];
+        assert!(q
+            .iter()
+            .any(|&x| x.abs() < 1e-12 || (x - 0.5).abs() < 1e-12));
+    }
+}
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn kind(k: u8) -> ParticleKind {
+        match k % 4 {
+            0 => ParticleKind::Wall,
+            1 => ParticleKind::Solid,
+            _ => ParticleKind::Fluid,
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// Invariants of alpha shape and classification on random clouds of
+        /// random kinds: kept ⊆ candidates, measures add up, every boundary
+        /// facet has no neighbour, tags follow the documented rules.
+        #[test]
+        fn alpha_and_classification_invariants(
+            v in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0, any::<u8>()), 3..150),
+            alpha in 0.5f64..3.0,
+        ) {
+            let p: Vec<_> = v.iter().map(|&(x, y, _)| Point::<2>::new(x, y)).collect();
+            let kinds: Vec<_> = v.iter().map(|&(_, _, k)| kind(k)).collect();
+            let h = 1.0 / (p.len() as f64).sqrt();
+            let spacing = vec![h; p.len()];
+            let mut t = Tessellation::default();
+            if Delaunay2::default().tessellate(&p, &mut t).is_err() {
+                return Ok(());
+            }
+            let a = alpha_shape(&p, &kinds, &spacing, &t, &AlphaShapeParams { alpha }).unwrap();
+            prop_assert!(a.kept_measure <= a.candidate_measure * (1.0 + 1e-12));
+            prop_assert!(a.kept_measure >= 0.0);
+            let c = classify(&p, &kinds, &a.mesh, None).unwrap();
+            let sum: f64 = c.components.iter().map(|c| c.measure).sum();
+            prop_assert!((sum - a.kept_measure).abs() <= 1e-12 * (1.0 + sum));
+            for f in &c.boundary_facets {
+                prop_assert_eq!(a.mesh.simplex_neighbors(f.simplex as usize)[f.facet as usize], pfem_geometry::NO_NEIGHBOR);
+            }
+            // Each boundary edge has two endpoints; loops ≤ edges / 3.
+            let loops = c.boundary_loops.unwrap();
+            prop_assert!(3 * loops <= c.boundary_facets.len());
+            prop_assert_eq!(loops == 0, a.is_empty());
+            for (i, tag) in c.tags.iter().enumerate() {
+                let in_mesh = a.mesh.simplices.contains(&(i as u32));
+                let expect = match (kinds[i], in_mesh, c.boundary_nodes.contains(&(i as u32))) {
+                    (ParticleKind::Fluid, false, _) => NodeTag::Isolated,
+                    (ParticleKind::Fluid, true, false) => NodeTag::Interior,
+                    (ParticleKind::Fluid, true, true) => NodeTag::FreeSurface,
+                    (ParticleKind::Wall, true, _) => NodeTag::Wall,
+                    (ParticleKind::Solid, true, _) => NodeTag::Interface,
+                    (_, false, _) => NodeTag::Dry,
+                };
+                prop_assert_eq!(*tag, expect);
+            }
+        }
+    }
+}

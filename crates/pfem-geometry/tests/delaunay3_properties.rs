@@ -66,9 +66,9 @@ fn check_delaunay(pts: &[Point<3>], t: &Tessellation) -> f64 {
             faces.insert(f);
         }
         // Neighbour symmetry, across the facet opposite local vertex k.
-        for k in 0..4 {
+        for (k, fk) in FACET.iter().enumerate() {
             let nb = t.simplex_neighbors(s)[k];
-            let mut f: Vec<u32> = FACET[k].iter().map(|&j| v[j]).collect();
+            let mut f: Vec<u32> = fk.iter().map(|&j| v[j]).collect();
             if nb == NO_NEIGHBOR {
                 hull_faces += 1;
                 // Convex hull facet: no point beyond it.

@@ -4,81 +4,86 @@
 //!
 //! When the coordinates of the points of a predicate are all integer
 //! multiples of one power of two spanning at most 60 bits, they become
-//! `i64`, and the determinants are evaluated in 384-bit two's-complement
-//! arithmetic, which holds them with room to spare (|insphere| < 2^312).
+//! `i64`, and the determinants are evaluated exactly in fixed-width integer
+//! arithmetic of up to 384 bits (|insphere| < 2^313).
 //! Otherwise the caller falls back to Shewchuk's adaptive expansions.
 
-/// A 384-bit two's-complement integer with wrapping arithmetic: exact for
-/// values below 2^383 in magnitude.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct I384([u64; 6]);
-
-impl I384 {
-    #[inline]
-    fn from_i128(v: i128) -> Self {
-        let ext = if v < 0 { u64::MAX } else { 0 };
-        I384([v as u64, (v >> 64) as u64, ext, ext, ext, ext])
-    }
-
-    #[inline]
-    fn add(self, o: Self) -> Self {
-        let mut r = [0u64; 6];
-        let mut carry = false;
-        for i in 0..6 {
-            let (s1, c1) = self.0[i].overflowing_add(o.0[i]);
-            let (s2, c2) = s1.overflowing_add(carry as u64);
-            r[i] = s2;
-            carry = c1 || c2;
+/// Schoolbook product of two magnitudes, truncated to `C` limbs (exact
+/// when `C ≥ A + B` or the product fits).
+#[inline(always)]
+fn mul_mag<const A: usize, const B: usize, const C: usize>(a: [u64; A], b: [u64; B]) -> [u64; C] {
+    let mut r = [0u64; C];
+    for (i, &ai) in a.iter().enumerate() {
+        if ai == 0 {
+            continue;
         }
-        I384(r)
-    }
-
-    #[inline]
-    fn neg(self) -> Self {
-        let mut r = self.0.map(|x| !x);
-        for x in &mut r {
-            let (s, c) = x.overflowing_add(1);
-            *x = s;
-            if !c {
+        let mut carry = 0u128;
+        for (j, &bj) in b.iter().enumerate() {
+            if i + j >= C {
                 break;
             }
+            let t = u128::from(r[i + j]) + u128::from(ai) * u128::from(bj) + carry;
+            r[i + j] = t as u64;
+            carry = t >> 64;
         }
-        I384(r)
-    }
-
-    #[inline]
-    fn sub(self, o: Self) -> Self {
-        self.add(o.neg())
-    }
-
-    /// Product modulo 2^384 (exact when the true product fits).
-    #[inline]
-    fn mul(self, o: Self) -> Self {
-        let mut r = [0u64; 6];
-        for i in 0..6 {
-            if self.0[i] == 0 {
-                continue;
-            }
-            let mut carry = 0u128;
-            for j in 0..6 - i {
-                let t = u128::from(r[i + j]) + u128::from(self.0[i]) * u128::from(o.0[j]) + carry;
-                r[i + j] = t as u64;
-                carry = t >> 64;
-            }
-        }
-        I384(r)
-    }
-
-    #[inline]
-    fn signum(self) -> i32 {
-        if self.0.iter().all(|&x| x == 0) {
-            0
-        } else if self.0[5] >> 63 == 1 {
-            -1
-        } else {
-            1
+        if i + B < C {
+            r[i + B] = carry as u64;
         }
     }
+    r
+}
+
+/// A signed magnitude, widened to `N` limbs of two's complement.
+#[inline(always)]
+fn twos<const M: usize, const N: usize>(neg: bool, mag: [u64; M]) -> [u64; N] {
+    let mut r = [0u64; N];
+    r[..M].copy_from_slice(&mag);
+    if neg {
+        let mut carry = true;
+        for x in &mut r {
+            let (s, c) = (!*x).overflowing_add(carry as u64);
+            *x = s;
+            carry = c;
+        }
+    }
+    r
+}
+
+/// Wrapping sum of two's-complement numbers.
+#[inline(always)]
+fn add<const N: usize>(a: [u64; N], b: [u64; N]) -> [u64; N] {
+    let mut r = [0u64; N];
+    let mut carry = false;
+    for ((ri, &x), &y) in r.iter_mut().zip(&a).zip(&b) {
+        let (s1, c1) = x.overflowing_add(y);
+        let (s2, c2) = s1.overflowing_add(carry as u64);
+        *ri = s2;
+        carry = c1 || c2;
+    }
+    r
+}
+
+/// Sign and magnitude of a two's-complement number.
+#[inline(always)]
+fn split<const N: usize>(a: [u64; N]) -> (bool, [u64; N]) {
+    let neg = a[N - 1] >> 63 == 1;
+    (neg, if neg { twos(true, a) } else { a })
+}
+
+#[inline(always)]
+fn signum<const N: usize>(a: [u64; N]) -> i32 {
+    if a.iter().all(|&x| x == 0) {
+        0
+    } else if a[N - 1] >> 63 == 1 {
+        -1
+    } else {
+        1
+    }
+}
+
+#[inline(always)]
+fn limbs(x: u128) -> [u64; 2] {
+    [x as u64, (x >> 64) as u64]
 }
 
 /// `x = m · 2^e` with `m` odd (or zero).
@@ -135,18 +140,25 @@ fn to_integers<const N: usize>(p: [&[f64; 3]; N]) -> Option<[[i64; 3]; N]> {
     Some(out)
 }
 
+/// `det[a; b; c]` for entries below 2^61 in magnitude: below 2^187, as
+/// 256-bit two's complement.
 #[inline]
-fn det3(a: [i64; 3], b: [i64; 3], c: [i64; 3]) -> I384 {
+fn det3(a: [i64; 3], b: [i64; 3], c: [i64; 3]) -> [u64; 4] {
     let m = |x: i64, y: i64, z: i64, w: i64| {
         i128::from(x) * i128::from(y) - i128::from(z) * i128::from(w)
     };
-    let m0 = I384::from_i128(m(b[1], c[2], b[2], c[1]));
-    let m1 = I384::from_i128(m(b[0], c[2], b[2], c[0]));
-    let m2 = I384::from_i128(m(b[0], c[1], b[1], c[0]));
-    let a0 = I384::from_i128(a[0].into());
-    let a1 = I384::from_i128(a[1].into());
-    let a2 = I384::from_i128(a[2].into());
-    a0.mul(m0).sub(a1.mul(m1)).add(a2.mul(m2))
+    let minors = [
+        m(b[1], c[2], b[2], c[1]),
+        -m(b[0], c[2], b[2], c[0]),
+        m(b[0], c[1], b[1], c[0]),
+    ];
+    let mut det = [0u64; 4];
+    for (&ai, &mi) in a.iter().zip(&minors) {
+        let neg = (ai < 0) != (mi < 0);
+        let p: [u64; 3] = mul_mag([ai.unsigned_abs()], limbs(mi.unsigned_abs()));
+        det = add(det, twos(neg, p));
+    }
+    det
 }
 
 #[inline]
@@ -158,7 +170,7 @@ fn diff(a: [i64; 3], b: [i64; 3]) -> [i64; 3] {
 /// coordinates span too many binary orders of magnitude.
 pub(super) fn orient3d(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3]) -> Option<i32> {
     let [a, b, c, d] = to_integers([a, b, c, d])?;
-    Some(det3(diff(b, a), diff(c, a), diff(d, a)).signum())
+    Some(signum(det3(diff(b, a), diff(c, a), diff(d, a))))
 }
 
 /// Exact sign of Shewchuk's in-sphere determinant (rows `p − e`,
@@ -173,19 +185,25 @@ pub(super) fn insphere_det(
     let [a, b, c, d, e] = to_integers([a, b, c, d, e])?;
     let (a, b, c, d) = (diff(a, e), diff(b, e), diff(c, e), diff(d, e));
     let lift = |p: [i64; 3]| {
-        I384::from_i128(
-            p.iter()
-                .map(|&x| i128::from(x) * i128::from(x))
-                .sum::<i128>(),
-        )
+        p.iter()
+            .map(|&x| (i128::from(x) * i128::from(x)) as u128)
+            .sum::<u128>()
     };
-    // Laplace expansion along the lifted column.
-    let det = lift(d)
-        .mul(det3(a, b, c))
-        .sub(lift(c).mul(det3(a, b, d)))
-        .add(lift(b).mul(det3(a, c, d)))
-        .sub(lift(a).mul(det3(b, c, d)));
-    Some(det.signum())
+    // Laplace expansion along the lifted column; |terms| < 2^124 · 2^187.
+    let terms = [
+        (lift(d), det3(a, b, c), false),
+        (lift(c), det3(a, b, d), true),
+        (lift(b), det3(a, c, d), false),
+        (lift(a), det3(b, c, d), true),
+    ];
+    let mut det = [0u64; 6];
+    for (l, m, minus) in terms {
+        let (neg, mag) = split(m);
+        let mag3 = [mag[0], mag[1], mag[2]];
+        let p: [u64; 5] = mul_mag(limbs(l), mag3);
+        det = add(det, twos(neg != minus, p));
+    }
+    Some(signum(det))
 }
 
 #[cfg(test)]
@@ -194,15 +212,19 @@ mod tests {
 
     #[test]
     fn wide_arithmetic() {
-        let x = I384::from_i128(-(1i128 << 100));
-        let y = I384::from_i128(1i128 << 120);
-        let p = x.mul(y).mul(y); // -2^340
-        assert_eq!(p.signum(), -1);
-        assert_eq!(p.add(p.neg()).signum(), 0);
-        assert_eq!(p.neg().signum(), 1);
+        let x: [u64; 6] = twos(true, mul_mag::<2, 2, 4>(limbs(1 << 100), limbs(1 << 120)));
+        assert_eq!(signum(x), -1);
         assert_eq!(
-            I384::from_i128(3).sub(I384::from_i128(5)),
-            I384::from_i128(-2)
+            signum(add(
+                x,
+                twos(false, mul_mag::<2, 2, 4>(limbs(1 << 120), limbs(1 << 100)))
+            )),
+            0
+        );
+        assert_eq!(split(x).1[3], 1 << (220 - 192));
+        assert_eq!(
+            add::<2>(twos(false, [3]), twos(true, [5])),
+            twos::<1, 2>(true, [2])
         );
     }
 

@@ -85,6 +85,17 @@ struct EdgeSlot {
     gen: u32,
 }
 
+/// A tetrahedron slot.
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(32))]
+struct Tet {
+    /// Vertices; `INF` at index 3 for infinite tetrahedra, `DEAD` at
+    /// index 0 for free slots.
+    v: [u32; 4],
+    /// Neighbours, packed `tet << 2 | local facet of the neighbour`.
+    n: [u32; 4],
+}
+
 /// Where a point falls.
 enum Located {
     /// In conflict with this tetrahedron.
@@ -122,7 +133,7 @@ impl std::fmt::Debug for Delaunay3 {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Delaunay3")
             .field("min_distance", &self.min_distance)
-            .field("tetrahedra", &self.ws.tv.len())
+            .field("tetrahedra", &self.ws.tets.len())
             .finish_non_exhaustive()
     }
 }
@@ -140,11 +151,9 @@ struct Workspace {
     input: Vec<[f64; 3]>,
     /// Hilbert keys (scratch of the ordering).
     keys: Vec<u64>,
-    /// Vertices of each tetrahedron slot; `INF` at index 3 for infinite
-    /// ones, `DEAD` at index 0 for free slots.
-    tv: Vec<[u32; 4]>,
-    /// Neighbours, packed `tet << 2 | local facet of the neighbour`.
-    tn: Vec<[u32; 4]>,
+    /// Tetrahedron slots: vertices and neighbours together, one memory
+    /// access per tetrahedron.
+    tets: Vec<Tet>,
     /// Per-slot stamp: `stamp` in the current cavity, `stamp + 1` tested
     /// and not in conflict.
     mark: Vec<u32>,
@@ -293,8 +302,7 @@ impl Workspace {
             [b, a, c, d]
         };
 
-        self.tv.clear();
-        self.tn.clear();
+        self.tets.clear();
         self.mark.clear();
         self.free.clear();
         self.stamp = 0;
@@ -303,40 +311,40 @@ impl Workspace {
             e.gen = 0;
         }
         self.rng = 0x2545_F491_4F6C_DD1D;
-        self.tv.push(t);
-        self.tn.push([0; 4]);
-        for k in 0..4 {
-            let fk = FACET[k];
+        self.tets.push(Tet { v: t, n: [0; 4] });
+        for (k, fk) in FACET.iter().enumerate() {
             // Infinite tet over facet k, its finite facet (opposite INF at
             // local 3) glued to facet k of tet 0.
-            self.tv.push([t[fk[0]], t[fk[1]], t[fk[2]], INF]);
-            self.tn.push([0; 4]);
-            self.tn[0][k] = pack(k as u32 + 1, 3);
-            self.tn[k + 1][3] = pack(0, k);
+            self.tets.push(Tet {
+                v: [t[fk[0]], t[fk[1]], t[fk[2]], INF],
+                n: [0; 4],
+            });
+            self.tets[0].n[k] = pack(k as u32 + 1, 3);
+            self.tets[k + 1].n[3] = pack(0, k);
         }
         // Glue the infinite tets to each other across their faces through
         // INF: face j (j < 3) of an infinite tet holds the two finite
         // vertices other than j; match them by vertex pair.
         for s in 1..5u32 {
             for j in 0..3 {
-                let v = self.tv[s as usize];
+                let v = self.tets[s as usize].v;
                 let (x, y) = other_two(v, j);
                 'search: for r in 1..5u32 {
                     if r == s {
                         continue;
                     }
-                    let w = self.tv[r as usize];
+                    let w = self.tets[r as usize].v;
                     for i in 0..3 {
                         let (u, z) = other_two(w, i);
                         if (u == x && z == y) || (u == y && z == x) {
-                            self.tn[s as usize][j] = pack(r, i);
+                            self.tets[s as usize].n[j] = pack(r, i);
                             break 'search;
                         }
                     }
                 }
             }
         }
-        self.mark.resize(self.tv.len(), 0);
+        self.mark.resize(self.tets.len(), 0);
         self.last = 0;
         Some(t)
     }
@@ -358,19 +366,19 @@ impl Workspace {
         let pts = &self.pts;
         let p = &pts[pi as usize];
         let mut t = self.last;
-        if self.tv[t as usize][3] == INF {
-            t = self.tn[t as usize][3] >> 2;
+        if self.tets[t as usize].v[3] == INF {
+            t = self.tets[t as usize].n[3] >> 2;
         }
         let mut prev = u32::MAX;
-        let limit = 1000 + self.tv.len();
+        let limit = 1000 + self.tets.len();
         for _ in 0..limit {
-            let v = self.tv[t as usize];
+            let Tet { v, n: tn } = self.tets[t as usize];
             let q = v.map(|i| &pts[i as usize]);
             let mut next = u32::MAX;
             r = r.rotate_left(2);
             for k in 0..4 {
                 let f = (r as usize + k) & 3;
-                let nb = self.tn[t as usize][f] >> 2;
+                let nb = tn[f] >> 2;
                 if nb == prev {
                     continue;
                 }
@@ -390,7 +398,7 @@ impl Workspace {
             }
             prev = t;
             t = next;
-            if self.tv[t as usize][3] == INF {
+            if self.tets[t as usize].v[3] == INF {
                 return Located::Tet(t);
             }
         }
@@ -402,7 +410,7 @@ impl Workspace {
     fn locate_brute_force(&self, pi: u32) -> Located {
         let pts = &self.pts;
         let p = &pts[pi as usize];
-        for (t, v) in self.tv.iter().enumerate() {
+        for (t, Tet { v, .. }) in self.tets.iter().enumerate() {
             if v[0] == DEAD {
                 continue;
             }
@@ -461,7 +469,7 @@ impl Workspace {
         let pts = &self.pts;
         let rank = &self.rank;
         while let Some(t) = self.stack.pop() {
-            let tn = self.tn[t as usize];
+            let Tet { v: tv, n: tn } = self.tets[t as usize];
             for (f, &nb) in tn.iter().enumerate() {
                 let n = (nb >> 2) as usize;
                 let m = self.mark[n];
@@ -469,7 +477,7 @@ impl Workspace {
                     continue;
                 }
                 if m != s_out {
-                    let v = self.tv[n];
+                    let v = self.tets[n].v;
                     let conflict = if v[3] == INF {
                         hull_conflict_sos(pts, rank, [v[0], v[1], v[2]], pi)
                     } else {
@@ -483,7 +491,7 @@ impl Workspace {
                     }
                     self.mark[n] = s_out;
                 }
-                let mut v = self.tv[t as usize];
+                let mut v = tv;
                 v[f] = pi;
                 self.boundary.push(BoundaryFacet { v, f: f as u32, nb });
             }
@@ -543,16 +551,15 @@ impl Workspace {
             } else if let Some(t) = self.free.pop() {
                 t
             } else {
-                self.tv.push([0; 4]);
-                self.tn.push([0; 4]);
+                self.tets.push(Tet::default());
                 self.mark.push(0);
-                (self.tv.len() - 1) as u32
+                (self.tets.len() - 1) as u32
             };
             let f = b.f as usize;
-            self.tv[t as usize] = b.v;
+            self.tets[t as usize].v = b.v;
             self.mark[t as usize] = 0;
-            self.tn[t as usize][f] = b.nb;
-            self.tn[(b.nb >> 2) as usize][(b.nb & 3) as usize] = pack(t, f);
+            self.tets[t as usize].n[f] = b.nb;
+            self.tets[(b.nb >> 2) as usize].n[(b.nb & 3) as usize] = pack(t, f);
             for j in 0..4 {
                 if j == f {
                     continue;
@@ -573,8 +580,8 @@ impl Workspace {
                     if e.key == key {
                         let other = e.val;
                         e.key = u64::MAX; // consumed: each edge is shared twice
-                        self.tn[t as usize][j] = other;
-                        self.tn[(other >> 2) as usize][(other & 3) as usize] = pack(t, j);
+                        self.tets[t as usize].n[j] = other;
+                        self.tets[(other >> 2) as usize].n[(other & 3) as usize] = pack(t, j);
                         links += 1;
                         break;
                     }
@@ -586,7 +593,7 @@ impl Workspace {
         // star-shaped cavity (B = 2C + 2); free the rest anyway.
         for i in nb_count..self.cavity.len() {
             let t = self.cavity[i];
-            self.tv[t as usize][0] = DEAD;
+            self.tets[t as usize].v[0] = DEAD;
             self.free.push(t);
         }
         if 2 * links != 3 * nb_count {
@@ -602,7 +609,7 @@ impl Workspace {
     fn write(&mut self, out: &mut Tessellation) {
         // Reuse `mark` as the slot -> output index map.
         let mut count = 0u32;
-        for (t, v) in self.tv.iter().enumerate() {
+        for (t, Tet { v, .. }) in self.tets.iter().enumerate() {
             if v[0] == DEAD || v[3] == INF {
                 self.mark[t] = u32::MAX;
             } else {
@@ -612,13 +619,13 @@ impl Workspace {
         }
         out.simplices.reserve(4 * count as usize);
         out.neighbors.reserve(4 * count as usize);
-        for (t, v) in self.tv.iter().enumerate() {
+        for (t, Tet { v, n }) in self.tets.iter().enumerate() {
             if self.mark[t] == u32::MAX {
                 continue;
             }
             out.simplices
                 .extend(v.iter().map(|&i| self.rank[i as usize]));
-            for &nb in &self.tn[t] {
+            for &nb in n {
                 let m = self.mark[(nb >> 2) as usize];
                 out.neighbors
                     .push(if m == u32::MAX { NO_NEIGHBOR } else { m });
