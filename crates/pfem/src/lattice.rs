@@ -121,6 +121,56 @@ where
     out
 }
 
+/// A uniform hash grid over particle positions, for coincidence queries.
+#[derive(Debug, Clone)]
+pub struct HashGrid<const D: usize> {
+    cell: f64,
+    map: std::collections::HashMap<[i64; 3], Vec<usize>>,
+}
+
+impl<const D: usize> HashGrid<D>
+where
+    Const<D>: Dim,
+{
+    /// An empty grid of cell size `cell` (m).
+    pub fn new(cell: f64) -> Self {
+        Self { cell, map: std::collections::HashMap::new() }
+    }
+
+    fn key(&self, p: &Point<D>) -> [i64; 3] {
+        let mut k = [0i64; 3];
+        for d in 0..D {
+            k[d] = (p[d] / self.cell).floor() as i64;
+        }
+        k
+    }
+
+    /// Records point `index` at `p`.
+    pub fn insert(&mut self, p: &Point<D>, index: usize) {
+        let k = self.key(p);
+        self.map.entry(k).or_default().push(index);
+    }
+
+    /// Whether a recorded point lies within `tol` (≤ cell) of `p`.
+    pub fn near(&self, p: &Point<D>, tol: f64, points: &[Point<D>]) -> bool {
+        let k = self.key(p);
+        let zr = if D == 3 { -1..=1 } else { 0..=0 };
+        for dz in zr {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let kk = [k[0] + dx, k[1] + dy, k[2] + dz];
+                    if let Some(v) = self.map.get(&kk) {
+                        if v.iter().any(|&i| (points[i] - p).norm() < tol) {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

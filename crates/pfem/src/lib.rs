@@ -26,8 +26,11 @@
 //! assert!(sim.time >= 0.02 - 1e-12);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+pub mod cases;
+pub mod cli;
 pub mod error;
 pub mod lattice;
+pub mod observe;
 pub mod output;
 pub mod scene;
 pub mod simulation;
@@ -38,11 +41,13 @@ pub use pfem_constitutive as constitutive;
 pub use pfem_core as core;
 pub use pfem_geometry as geometry;
 pub use pfem_time as time;
+pub use observe::{Probe, StandardOutput};
 pub use scene::{Body, Geometry, RunSettings, Scene, WallMotion};
 pub use simulation::{Observer, Simulation, StageStats, Stages, VolumeLedger};
 
 /// The names most programs need.
 pub mod prelude {
+    pub use crate::observe::{Probe, StandardOutput};
     pub use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
     pub use crate::simulation::{Observer, Simulation};
     pub use pfem_constitutive::{Hypoelastic, Material, MaterialKind, Newtonian};

@@ -107,6 +107,8 @@ where
     pub constraints: Constraints<D>,
     /// Fluid elements of the current step (flat).
     pub fluid_elements: Vec<u32>,
+    /// The alpha-shape fluid mesh of the current step, with adjacency.
+    pub fluid_mesh: Tessellation,
     /// Material of each fluid element.
     pub fluid_material: Vec<u16>,
     /// Solid elements, each solid's own mesh (flat).
@@ -139,6 +141,7 @@ where
     pub controller: CourantController,
     /// Alpha-shape parameters.
     pub alpha: AlphaShapeParams,
+    x0: Vec<Point<D>>,
     tessellator: Box<dyn Tessellator<D>>,
     integrator: Integrator<D>,
     tess: Tessellation,
@@ -200,6 +203,8 @@ where
             ParticleKind::Fluid => 2,
         });
         let mut bodies: Vec<Option<crate::scene::Body<D>>> = bodies.into_iter().map(Some).collect();
+        let cell = bodies.iter().flatten().map(|b| b.spacing).fold(f64::INFINITY, f64::min);
+        let mut grid = lattice::HashGrid::<D>::new(cell);
         for bi in order {
             let b = bodies[bi].take().expect("each body once");
             let id = body_names.len() as u32;
@@ -219,17 +224,15 @@ where
                 None => u16::MAX,
             };
             let tol = 0.25 * b.spacing;
-            let first = x.len();
             let mut local_index = vec![u32::MAX; pts.len()];
             for (li, p) in pts.iter().enumerate() {
-                if b.kind == ParticleKind::Fluid
-                    && x.iter()
-                        .take(first)
-                        .any(|q: &Point<D>| (q - p).norm() < tol)
-                {
+                // A wall or fluid particle that falls on an earlier body's
+                // particle is dropped: that particle takes its place.
+                if b.kind != ParticleKind::Solid && grid.near(p, tol, &x) {
                     continue;
                 }
                 local_index[li] = x.len() as u32;
+                grid.insert(p, x.len());
                 x.push(*p);
                 kind.push(b.kind);
                 body.push(id);
@@ -324,6 +327,7 @@ where
             body_names,
             constraints,
             fluid_elements: Vec::new(),
+            fluid_mesh: Tessellation::default(),
             fluid_material: Vec::new(),
             solid_elements,
             solid_material,
@@ -343,6 +347,7 @@ where
                 alpha: settings.alpha,
                 ..Default::default()
             },
+            x0: Vec::new(),
             tessellator,
             integrator: Integrator::new(params),
             tess: Tessellation::default(),
@@ -415,6 +420,7 @@ where
             self.fluid_elements.extend_from_slice(el);
             self.fluid_material.push(m);
         }
+        self.fluid_mesh = shape.mesh;
         self.stats.remesh.0 += 1;
         self.stats.remesh.1 += t0.elapsed().as_secs_f64();
         Ok(())
@@ -523,6 +529,11 @@ where
             o.finish(self)?;
         }
         Ok(())
+    }
+
+    /// Position of particle `i` at `t = 0` (m).
+    pub fn initial_position(&self, i: usize) -> Point<D> {
+        self.x0[i]
     }
 
     /// Particles of body `name`.

@@ -1,0 +1,107 @@
+//! The command-line contract shared by the bundled examples and the `pfem`
+//! binary: `--out DIR [--spacing H] [--end-time T] [--quiet]` plus
+//! example-specific `--name value` options.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// Parsed command-line options.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Args {
+    /// Output directory (`--out`), default `out/NAME`.
+    pub out: Option<PathBuf>,
+    /// Particle spacing override (`--spacing`, m).
+    pub spacing: Option<f64>,
+    /// End time override (`--end-time`, s).
+    pub end_time: Option<f64>,
+    /// No progress bar (`--quiet`).
+    pub quiet: bool,
+    /// No VTU frames (`--no-vtu`).
+    pub no_vtu: bool,
+    /// Other `--name value` options.
+    pub options: BTreeMap<String, String>,
+    /// Positional arguments.
+    pub positional: Vec<String>,
+}
+
+/// A command-line error.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct ArgsError(pub String);
+
+impl Args {
+    /// Parses `std::env::args()` (skipping the program name).
+    pub fn from_env() -> Result<Self, ArgsError> {
+        Self::parse(std::env::args().skip(1))
+    }
+
+    /// Parses the given arguments.
+    pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Self, ArgsError> {
+        let mut out = Args::default();
+        let mut it = args.into_iter();
+        while let Some(a) = it.next() {
+            match a.as_str() {
+                "--quiet" | "-q" => out.quiet = true,
+                "--no-vtu" => out.no_vtu = true,
+                s if s.starts_with("--") => {
+                    let name = s.trim_start_matches("--").to_string();
+                    let value = it.next().ok_or_else(|| ArgsError(format!("--{name} needs a value")))?;
+                    match name.as_str() {
+                        "out" => out.out = Some(PathBuf::from(value)),
+                        "spacing" => out.spacing = Some(parse_positive(&name, &value)?),
+                        "end-time" => out.end_time = Some(parse_positive(&name, &value)?),
+                        _ => {
+                            out.options.insert(name, value);
+                        }
+                    }
+                }
+                _ => out.positional.push(a),
+            }
+        }
+        Ok(out)
+    }
+
+    /// A positive number option `--name`, or `default`.
+    pub fn number(&self, name: &str, default: f64) -> Result<f64, ArgsError> {
+        match self.options.get(name) {
+            Some(v) => parse_positive(name, v),
+            None => Ok(default),
+        }
+    }
+
+    /// Fails on options not in `known`.
+    pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ArgsError> {
+        for k in self.options.keys() {
+            if !known.contains(&k.as_str()) {
+                return Err(ArgsError(format!("unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu{})",
+                    known.iter().map(|k| format!(" --{k}")).collect::<String>())));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn parse_positive(name: &str, v: &str) -> Result<f64, ArgsError> {
+    match v.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(ArgsError(format!("--{name} must be a positive number, got `{v}`"))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_the_contract_and_rejects_bad_values() {
+        let a = Args::parse(["--out", "d", "--spacing", "0.01", "--quiet", "--aspect", "2"].map(String::from)).unwrap();
+        assert_eq!(a.out, Some(PathBuf::from("d")));
+        assert_eq!(a.spacing, Some(0.01));
+        assert!(a.quiet);
+        assert_eq!(a.number("aspect", 1.0).unwrap(), 2.0);
+        assert!(a.reject_unknown(&["aspect"]).is_ok());
+        assert!(a.reject_unknown(&[]).is_err());
+        assert!(Args::parse(["--spacing", "-1"].map(String::from)).is_err());
+        assert!(Args::parse(["--out"].map(String::from)).is_err());
+    }
+}
