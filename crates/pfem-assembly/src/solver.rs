@@ -78,8 +78,34 @@ fn check_finite(b: &[f64]) -> Result<(), SolveError> {
     }
 }
 
-/// Residual above which a direct solve is refused.
+/// Relative residual `‖A x − b‖ / ‖b‖` above which a direct solve is
+/// refused, unless its backward error is below
+/// [`DIRECT_BACKWARD_ERROR_LIMIT`].
 pub const DIRECT_RESIDUAL_LIMIT: f64 = 1e-8;
+
+/// Normwise backward error `‖A x − b‖ / (‖A‖_F ‖x‖ + ‖b‖)` below which a
+/// direct solution is accepted whatever its relative residual. When `b` is
+/// small beside `A x`'s terms (a solid near equilibrium, where loads and
+/// stresses cancel in `b`, with long steps that make the system
+/// ill-conditioned), `‖r‖/‖b‖` measures the conditioning, not a failure:
+/// the backward error of a successful direct solve stays near `ε`.
+pub const DIRECT_BACKWARD_ERROR_LIMIT: f64 = 1e-13;
+
+/// Normwise backward error `‖A x − b‖₂ / (‖A‖_F ‖x‖₂ + ‖b‖₂)`.
+pub fn backward_error(a: SparseColMatRef<'_, usize, f64>, b: &[f64], x: &[f64]) -> f64 {
+    let mut r = b.to_vec();
+    spmv_sub(a, x, &mut r);
+    let nr = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let nb = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let nx = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let na = a.val().iter().map(|v| v * v).sum::<f64>().sqrt();
+    let den = na * nx + nb;
+    if den > 0.0 {
+        nr / den
+    } else {
+        nr
+    }
+}
 
 /// Sparse LU (faer), the default: robust for any nonsingular system.
 #[derive(Debug, Default)]
@@ -124,7 +150,8 @@ impl LinearSolver for SparseLu {
         })?;
         x.copy_from_slice(b);
         lu.solve_in_place(ColMut::from_slice_mut(x));
-        finish(a, b, x, 1, DIRECT_RESIDUAL_LIMIT, "sparse LU")
+        let steps = refine(a, b, x, |r| lu.solve_in_place(ColMut::from_slice_mut(r)));
+        finish_direct(a, b, x, 1 + steps, "sparse LU")
     }
 }
 
@@ -175,8 +202,81 @@ impl LinearSolver for SparseCholesky {
         })?;
         x.copy_from_slice(b);
         llt.solve_in_place(ColMut::from_slice_mut(x));
-        finish(a, b, x, 1, DIRECT_RESIDUAL_LIMIT, "sparse Cholesky")
+        let steps = refine(a, b, x, |r| llt.solve_in_place(ColMut::from_slice_mut(r)));
+        finish_direct(a, b, x, 1 + steps, "sparse Cholesky")
     }
+}
+
+/// Relative residual below which a direct solution is not refined.
+pub const REFINEMENT_TARGET: f64 = 1e-12;
+
+/// Most refinement steps after a direct solve.
+pub const MAX_REFINEMENT_STEPS: usize = 3;
+
+/// Iterative refinement of a direct solution: `x ← x + A⁻¹ (b − A x)`
+/// with the same factors, while the relative residual is above
+/// [`REFINEMENT_TARGET`] and decreases, at most [`MAX_REFINEMENT_STEPS`]
+/// times. Ill-conditioned but well-posed systems (a slender solid with
+/// many elements through its thickness and long time steps) otherwise miss
+/// [`DIRECT_RESIDUAL_LIMIT`] by round-off in the factors. Returns the steps
+/// kept.
+fn refine(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: &[f64],
+    x: &mut [f64],
+    solve_in_place: impl Fn(&mut [f64]),
+) -> usize {
+    let mut res = relative_residual(a, b, x);
+    let mut kept = 0;
+    let mut r = vec![0.0; b.len()];
+    for _ in 0..MAX_REFINEMENT_STEPS {
+        if !(res > REFINEMENT_TARGET) {
+            break;
+        }
+        r.copy_from_slice(b);
+        spmv_sub(a, x, &mut r);
+        solve_in_place(&mut r);
+        let old: Vec<f64> = x.to_vec();
+        for (xi, di) in x.iter_mut().zip(&r) {
+            *xi += di;
+        }
+        let new_res = relative_residual(a, b, x);
+        if !(new_res < res) {
+            x.copy_from_slice(&old);
+            break;
+        }
+        res = new_res;
+        kept += 1;
+    }
+    kept
+}
+
+/// Accepts a direct solution whose relative residual is below
+/// [`DIRECT_RESIDUAL_LIMIT`] or whose backward error is below
+/// [`DIRECT_BACKWARD_ERROR_LIMIT`].
+fn finish_direct(
+    a: SparseColMatRef<'_, usize, f64>,
+    b: &[f64],
+    x: &[f64],
+    iterations: usize,
+    solver: &'static str,
+) -> Result<SolveReport, SolveError> {
+    let residual = relative_residual(a, b, x);
+    let finite = x.iter().all(|v| v.is_finite());
+    if finite
+        && (residual <= DIRECT_RESIDUAL_LIMIT
+            || backward_error(a, b, x) <= DIRECT_BACKWARD_ERROR_LIMIT)
+    {
+        return Ok(SolveReport {
+            residual,
+            iterations,
+        });
+    }
+    Err(SolveError::Inaccurate {
+        solver,
+        residual,
+        limit: DIRECT_RESIDUAL_LIMIT,
+    })
 }
 
 fn finish(
@@ -454,6 +554,58 @@ mod tests {
                     assert!(d < 1e-6, "{} differs by {d}", s.name());
                 }
             }
+        }
+    }
+
+    /// Issue 4: direct solves of well-posed but ill-conditioned systems
+    /// whose right-hand side is small beside `A x`'s terms were refused as
+    /// `Inaccurate` because `‖r‖/‖b‖` exceeded 1e-8 although the solution
+    /// was as good as the factors allow; they are now refined and judged by
+    /// backward error. The failing case itself is the cantilever of
+    /// `pfem-time/tests/beam.rs` (32 elements through the thickness, 5 s
+    /// backward Euler steps: residual 2.3e-8 unrefined, 1.3e-8 refined at
+    /// equilibrium); this checks that such systems are solved accurately
+    /// and accepted.
+    #[test]
+    fn ill_conditioned_direct_solves_are_refined_and_accepted() {
+        // 1D biharmonic (a clamped beam), condition number ~ n⁴.
+        let n = 3000;
+        let mut t = Vec::new();
+        let stencil = [(-2i64, 1.0), (-1, -4.0), (0, 6.0), (1, -4.0), (2, 1.0)];
+        for i in 0..n as i64 {
+            for (o, v) in stencil {
+                let j = i + o;
+                if (0..n as i64).contains(&j) {
+                    t.push(Triplet::new(i as usize, j as usize, v));
+                }
+            }
+        }
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &t).unwrap();
+        // The smoothest mode: b is tiny beside ‖A‖ ‖x‖.
+        let x_true: Vec<f64> = (0..n)
+            .map(|i| (std::f64::consts::PI * (i + 1) as f64 / (n + 1) as f64).sin())
+            .collect();
+        let mut b = vec![0.0; n];
+        let mut neg = vec![0.0; n];
+        spmv_sub(a.as_ref(), &x_true, &mut neg);
+        for i in 0..n {
+            b[i] = -neg[i];
+        }
+        let mut solvers: Vec<Box<dyn LinearSolver>> = vec![
+            Box::new(SparseLu::default()),
+            Box::new(SparseCholesky::default()),
+        ];
+        for s in solvers.iter_mut() {
+            let mut x = vec![0.0; n];
+            let rep = s.solve(a.as_ref(), 1, &b, &mut x).unwrap();
+            assert!(backward_error(a.as_ref(), &b, &x) < DIRECT_BACKWARD_ERROR_LIMIT);
+            let err = x
+                .iter()
+                .zip(&x_true)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
+            println!("{}: residual {:e}, error {err:e}", s.name(), rep.residual);
+            assert!(err < 1e-3, "{}: error {err}", s.name());
         }
     }
 
