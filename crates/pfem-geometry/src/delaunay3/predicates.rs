@@ -252,4 +252,46 @@ mod tests {
         assert_eq!(insphere(&a, &b, &c, &d, &[2.0, 2.0, 2.0]), -1);
         assert_eq!(insphere(&a, &b, &c, &d, &[1.0, 1.0, 1.0]), 0);
     }
+
+    #[test]
+    fn filtered_predicates_agree_with_adaptive_expansions() {
+        let mut s = 5u64;
+        let mut next = move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let sg = |x: f64| (x > 0.0) as i32 - (x < 0.0) as i32;
+        for round in 0..3000 {
+            // Plain random, near-degenerate (a tiny offset from a lattice,
+            // cospherical), and lattice points far from the origin.
+            let mut p: [[f64; 3]; 5] = std::array::from_fn(|_| [next(), next(), next()]);
+            if round % 3 == 1 {
+                for q in &mut p {
+                    for x in q.iter_mut() {
+                        *x = (*x * 3.0).floor() * 0.1 + (next() - 0.5) * 1e-17;
+                    }
+                }
+            } else if round % 3 == 2 {
+                for q in &mut p {
+                    for x in q.iter_mut() {
+                        *x = 1e6 + (*x * 3.0).floor() * 0.25;
+                    }
+                }
+            }
+            let o = orient3d(&p[0], &p[1], &p[2], &p[3]);
+            let r = -sg(robust::orient3d(c3(&p[0]), c3(&p[1]), c3(&p[2]), c3(&p[3])));
+            assert_eq!(o, r, "{p:?}");
+            let i = insphere(&p[0], &p[1], &p[2], &p[3], &p[4]);
+            let r = -sg(robust::insphere(
+                c3(&p[0]),
+                c3(&p[1]),
+                c3(&p[2]),
+                c3(&p[3]),
+                c3(&p[4]),
+            ));
+            assert_eq!(i, r, "{p:?}");
+        }
+    }
 }
