@@ -181,7 +181,7 @@ fn cloud(n: std::ops::Range<usize>, lo: f64, hi: f64) -> impl Strategy<Value = V
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(ProptestConfig::with_cases(256))]
 
     #[test]
     fn random_clouds_are_delaunay_and_fill_the_hull(pts in cloud(5..30, -1.0, 1.0)) {
@@ -193,7 +193,7 @@ proptest! {
 
     #[test]
     fn lattices_fill_their_box_exactly(
-        kx in 2usize..5, ky in 2usize..5, kz in 2usize..5,
+        kx in 2usize..7, ky in 2usize..7, kz in 2usize..7,
         e in -20i32..20, ox in -3.0f64..3.0, oy in -3.0f64..3.0,
     ) {
         let h = 2f64.powi(e);

@@ -183,6 +183,55 @@ pub(super) fn insphere_det(
     e: &[f64; 3],
 ) -> Option<i32> {
     let [a, b, c, d, e] = to_integers([a, b, c, d, e])?;
+    Some(insphere_det_int(a, b, c, d, e))
+}
+
+/// Converts all points to integers in one common unit 2^k, if every
+/// coordinate then fits in 60 bits; `out` is left empty otherwise.
+pub(super) fn to_integers_all(pts: &[[f64; 3]], out: &mut Vec<[i64; 3]>) {
+    out.clear();
+    let kmin = pts
+        .iter()
+        .flatten()
+        .map(|&x| decompose(x))
+        .filter(|d| d.0 != 0)
+        .map(|d| d.1)
+        .min()
+        .unwrap_or(0);
+    for p in pts {
+        let mut q = [0i64; 3];
+        for (qk, &x) in q.iter_mut().zip(p) {
+            let (m, e) = decompose(x);
+            if m == 0 {
+                continue;
+            }
+            let shift = (e - kmin) as u32;
+            if 64 - m.unsigned_abs().leading_zeros() + shift > 60 {
+                out.clear();
+                return;
+            }
+            *qk = m << shift;
+        }
+        out.push(q);
+    }
+}
+
+/// Exact sign of `det[b − a, c − a, d − a]` for integer coordinates below
+/// 2^60 in magnitude.
+#[inline]
+pub(super) fn orient3d_int(a: [i64; 3], b: [i64; 3], c: [i64; 3], d: [i64; 3]) -> i32 {
+    signum(det3(diff(b, a), diff(c, a), diff(d, a)))
+}
+
+/// Exact sign of Shewchuk's in-sphere determinant for integer coordinates
+/// below 2^60 in magnitude.
+pub(super) fn insphere_det_int(
+    a: [i64; 3],
+    b: [i64; 3],
+    c: [i64; 3],
+    d: [i64; 3],
+    e: [i64; 3],
+) -> i32 {
     let (a, b, c, d) = (diff(a, e), diff(b, e), diff(c, e), diff(d, e));
     let lift = |p: [i64; 3]| {
         p.iter()
@@ -203,7 +252,7 @@ pub(super) fn insphere_det(
         let p: [u64; 5] = mul_mag(limbs(l), mag3);
         det = add(det, twos(neg != minus, p));
     }
-    Some(signum(det))
+    signum(det)
 }
 
 #[cfg(test)]

@@ -147,6 +147,9 @@ struct Workspace {
     /// Input index of each internal vertex: the insertion order, and the
     /// rank of the symbolic perturbation.
     rank: Vec<u32>,
+    /// The same coordinates as exact integers in a common unit, when
+    /// they fit in 60 bits (lattices do), else empty.
+    ints: Vec<[i64; 3]>,
     /// Coordinates in input order (scratch).
     input: Vec<[f64; 3]>,
     /// Hilbert keys (scratch of the ordering).
@@ -208,6 +211,7 @@ impl Tessellator<3> for Delaunay3 {
         ws.load(points)?;
         // Power-of-two rescaling is exact, so distances scale back exactly.
         let scale = ws.rescale();
+        exact::to_integers_all(&ws.pts, &mut ws.ints);
         let n = points.len();
         let Some(first) = ws.initial_tetrahedron() else {
             return Err(GeometryError::Degenerate { count: n, dim: 3 });
@@ -468,6 +472,7 @@ impl Workspace {
         self.stack.push(seed);
         let pts = &self.pts;
         let rank = &self.rank;
+        let ints = &self.ints;
         while let Some(t) = self.stack.pop() {
             let Tet { v: tv, n: tn } = self.tets[t as usize];
             for (f, &nb) in tn.iter().enumerate() {
@@ -481,7 +486,7 @@ impl Workspace {
                     let conflict = if v[3] == INF {
                         hull_conflict_sos(pts, rank, [v[0], v[1], v[2]], pi)
                     } else {
-                        insphere_sos(pts, rank, v, pi)
+                        insphere_sos(pts, ints, rank, v, pi)
                     };
                     if conflict {
                         self.mark[n] = s_in;

@@ -76,6 +76,21 @@ fn orient3d_exact(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3]) -> i32
 /// `(a, b, c, d)` is positively oriented (the sign flips otherwise).
 #[inline]
 pub fn insphere(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3], e: &[f64; 3]) -> i32 {
+    match insphere_filter(a, b, c, d, e) {
+        Some(s) => s,
+        None => insphere_exact(a, b, c, d, e),
+    }
+}
+
+/// The floating-point stage of [`insphere`]: its sign when certain.
+#[inline(always)]
+fn insphere_filter(
+    a: &[f64; 3],
+    b: &[f64; 3],
+    c: &[f64; 3],
+    d: &[f64; 3],
+    e: &[f64; 3],
+) -> Option<i32> {
     let (ax, ay, az) = (a[0] - e[0], a[1] - e[1], a[2] - e[2]);
     let (bx, by, bz) = (b[0] - e[0], b[1] - e[1], b[2] - e[2]);
     let (cx, cy, cz) = (c[0] - e[0], c[1] - e[1], c[2] - e[2]);
@@ -106,13 +121,13 @@ pub fn insphere(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3], d: &[f64; 3], e: &[f64
     let eps = 1.3e-13 * (mx * my * mz) * (big * big);
     if mx.min(my).min(mz) > 1e-55 && big < 1e55 {
         if det > eps {
-            return -1;
+            return Some(-1);
         }
         if det < -eps {
-            return 1;
+            return Some(1);
         }
     }
-    insphere_exact(a, b, c, d, e)
+    None
 }
 
 #[cold]
@@ -157,18 +172,59 @@ fn projection_plane(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]) -> (usize, usize, 
 /// circumsphere of) the positively oriented tetrahedron `t`. Never ties.
 /// `pts` holds the coordinates, `rank` the perturbation rank of each point
 /// (distinct; the point of largest rank is the most perturbed).
-pub fn insphere_sos(pts: &[[f64; 3]], rank: &[u32], t: [u32; 4], e: u32) -> bool {
+///
+/// `ints`, when not empty, holds the same points as exact integers (see
+/// [`exact`]), a faster exact stage than the adaptive expansions.
+#[inline]
+pub(super) fn insphere_sos(
+    pts: &[[f64; 3]],
+    ints: &[[i64; 3]],
+    rank: &[u32],
+    t: [u32; 4],
+    e: u32,
+) -> bool {
     let p = |i: u32| &pts[i as usize];
-    let s = insphere(p(t[0]), p(t[1]), p(t[2]), p(t[3]), p(e));
+    let s = match insphere_filter(p(t[0]), p(t[1]), p(t[2]), p(t[3]), p(e)) {
+        Some(s) => s,
+        None => insphere_exact_ids(pts, ints, t, e),
+    };
     if s != 0 {
         return s > 0;
     }
+    insphere_tie(pts, ints, rank, t, e)
+}
+
+/// Exact stage of [`insphere_sos`].
+#[cold]
+#[inline(never)]
+fn insphere_exact_ids(pts: &[[f64; 3]], ints: &[[i64; 3]], t: [u32; 4], e: u32) -> i32 {
+    if ints.is_empty() {
+        let p = |i: u32| &pts[i as usize];
+        insphere_exact(p(t[0]), p(t[1]), p(t[2]), p(t[3]), p(e))
+    } else {
+        let q = |i: u32| ints[i as usize];
+        -exact::insphere_det_int(q(t[0]), q(t[1]), q(t[2]), q(t[3]), q(e))
+    }
+}
+
+/// Symbolic perturbation of a cospherical in-sphere test.
+#[cold]
+#[inline(never)]
+fn insphere_tie(pts: &[[f64; 3]], ints: &[[i64; 3]], rank: &[u32], t: [u32; 4], e: u32) -> bool {
+    let p = |i: u32| &pts[i as usize];
     // Cospherical: the leading terms of the perturbed determinant decide,
-    // from the most perturbed point (largest index) down (Devillers and
+    // from the most perturbed point (largest rank) down (Devillers and
     // Teillaud 2011, §3.1; two terms suffice for a non-flat tetrahedron).
-    let mut ids = [t[0], t[1], t[2], t[3], e];
-    ids.sort_unstable_by_key(|&i| std::cmp::Reverse(rank[i as usize]));
-    for &top in &ids[..2] {
+    let ids = [t[0], t[1], t[2], t[3], e];
+    let by_rank = |skip: u32| {
+        ids.iter()
+            .copied()
+            .filter(|&i| i != skip)
+            .max_by_key(|&i| rank[i as usize])
+            .unwrap_or(e)
+    };
+    let first = by_rank(u32::MAX);
+    for top in [first, by_rank(first)] {
         if top == e {
             return false;
         }
@@ -179,7 +235,12 @@ pub fn insphere_sos(pts: &[[f64; 3]], rank: &[u32], t: [u32; 4], e: u32) -> bool
                 *v = e;
             }
         }
-        let o = orient3d(p(q[0]), p(q[1]), p(q[2]), p(q[3]));
+        let o = if ints.is_empty() {
+            orient3d(p(q[0]), p(q[1]), p(q[2]), p(q[3]))
+        } else {
+            let r = |i: u32| ints[i as usize];
+            exact::orient3d_int(r(q[0]), r(q[1]), r(q[2]), r(q[3]))
+        };
         if o != 0 {
             return o > 0;
         }
@@ -192,7 +253,7 @@ pub fn insphere_sos(pts: &[[f64; 3]], rank: &[u32], t: [u32; 4], e: u32) -> bool
 /// the hull has positive orientation with it). Coplanar points are decided
 /// by the perturbed in-circle test within the facet's plane, which is the
 /// restriction of [`insphere_sos`] to that plane, so both tests agree.
-pub fn hull_conflict_sos(pts: &[[f64; 3]], rank: &[u32], f: [u32; 3], e: u32) -> bool {
+pub(super) fn hull_conflict_sos(pts: &[[f64; 3]], rank: &[u32], f: [u32; 3], e: u32) -> bool {
     let p = |i: u32| &pts[i as usize];
     let (a, b, c, q) = (p(f[0]), p(f[1]), p(f[2]), p(e));
     let o = orient3d(a, b, c, q);
