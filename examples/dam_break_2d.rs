@@ -24,50 +24,104 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env()?;
-    args.reject_unknown(&["aspect", "width", "tank-length"])?;
+    args.reject_unknown(&["aspect", "width", "tank-length", "solver"])?;
     let mut case = DamBreak::default();
     case.width = args.number("width", case.width)?;
     case.aspect = args.number("aspect", case.aspect)?;
-    case.tank_length = args.number("tank-length", 6.0 * case.width)?;
+    case.tank_length = args.number("tank-length", 10.0 * case.width)?;
     case.spacing = args.spacing.unwrap_or(case.width / 20.0);
-    let t_scale = if case.aspect == 1.0 { (G / (case.aspect * case.width)).sqrt() } else { (2.0 * G / case.width).sqrt() };
+    let t_scale = if case.aspect == 1.0 {
+        (G / (case.aspect * case.width)).sqrt()
+    } else {
+        (2.0 * G / case.width).sqrt()
+    };
     case.end_time = args.end_time.unwrap_or(3.2 / t_scale);
-    let out = args.out.clone().unwrap_or_else(|| "out/dam_break_2d".into());
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| "out/dam_break_2d".into());
 
-    let mut sim = Simulation::new(case.scene(), Box::new(Delaunay2::default()), StepParams::default())?;
-    eprintln!("dam_break_2d: {} particles, a = {} m, n² = {}, h = {} m, end time {:.3} s", sim.state.len(), case.width, case.aspect, case.spacing, case.end_time);
+    let mut sim = Simulation::new(
+        case.scene(),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )?;
+    eprintln!(
+        "dam_break_2d: {} particles, a = {} m, n² = {}, h = {} m, end time {:.3} s",
+        sim.state.len(),
+        case.width,
+        case.aspect,
+        case.spacing,
+        case.end_time
+    );
+    match args.options.get("solver").map(String::as_str) {
+        None | Some("lu") => {}
+        Some("cholesky") => sim.set_solver(Box::new(pfem::assembly::SparseCholesky::default())),
+        Some("cg") => sim.set_solver(Box::new(pfem::assembly::ConjugateGradient::default())),
+        Some(other) => return Err(format!("unknown --solver {other} (lu, cholesky, cg)").into()),
+    }
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
     sim.run(&mut [&mut output])?;
 
     // Compare with Martin & Moyce.
     let a = case.width;
-    let front: Vec<(f64, f64)> = output.probe_series("front_x").iter().map(|&(t, x)| (t * t_scale, x / a)).collect();
+    let front: Vec<(f64, f64)> = output
+        .probe_series("front_x")
+        .iter()
+        .map(|&(t, x)| (t * t_scale, x / a))
+        .collect();
     let (measured, label) = if case.aspect == 1.0 {
-        (parse_reference_csv(reference::MARTIN_MOYCE_N2_1_FRONT)?, "T = t √(g/a)")
+        (
+            parse_reference_csv(reference::MARTIN_MOYCE_N2_1_FRONT)?,
+            "T = t √(g/a)",
+        )
     } else {
-        (parse_reference_csv(reference::MARTIN_MOYCE_N2_2_A2_25IN_FRONT)?, "T = t √(2g/a)")
+        (
+            parse_reference_csv(reference::MARTIN_MOYCE_N2_2_A2_25IN_FRONT)?,
+            "T = t √(2g/a)",
+        )
     };
     let (shift, rms) = best_shift(&front, &measured, 3.0, 0.5, 0.01);
     println!("surge front vs Martin & Moyce (T <= 3): RMS relative error {:.2}% after a fitted time shift of {:+.3} (in T)", 100.0 * rms, shift);
-    output.extra.insert("front_rms_relative_error".into(), rms.into());
-    output.extra.insert("front_time_shift_T".into(), shift.into());
+    output
+        .extra
+        .insert("front_rms_relative_error".into(), rms.into());
+    output
+        .extra
+        .insert("front_time_shift_T".into(), shift.into());
     let shifted: Vec<(f64, f64)> = front.iter().map(|&(t, z)| (t + shift, z)).collect();
     plot_series_png(
         out.join("front.png"),
         &PlotSpec {
-            title: format!("Dam break n² = {}: surge front (shift {shift:+.2})", case.aspect).into(),
+            title: format!(
+                "Dam break n² = {}: surge front (shift {shift:+.2})",
+                case.aspect
+            )
+            .into(),
             x_label: label.into(),
             y_label: "Z = x/a".into(),
-            series: vec![PlotSeries::line("pfem", &shifted), PlotSeries::markers("Martin & Moyce 1952", &measured)],
+            series: vec![
+                PlotSeries::line("pfem", &shifted),
+                PlotSeries::markers("Martin & Moyce 1952", &measured),
+            ],
             ..Default::default()
         },
     )?;
     if case.aspect == 1.0 {
-        let height: Vec<(f64, f64)> = output.probe_series("height_at_wall").iter().map(|&(t, y)| (t * t_scale, y / a)).collect();
+        let height: Vec<(f64, f64)> = output
+            .probe_series("height_at_wall")
+            .iter()
+            .map(|&(t, y)| (t * t_scale, y / a))
+            .collect();
         let measured_h = parse_reference_csv(reference::MARTIN_MOYCE_N2_1_HEIGHT)?;
         let (hs, hrms) = best_shift(&height, &measured_h, 3.0, 0.5, 0.01);
-        println!("residual height vs Martin & Moyce: RMS relative error {:.2}% (shift {hs:+.3})", 100.0 * hrms);
-        output.extra.insert("height_rms_relative_error".into(), hrms.into());
+        println!(
+            "residual height vs Martin & Moyce: RMS relative error {:.2}% (shift {hs:+.3})",
+            100.0 * hrms
+        );
+        output
+            .extra
+            .insert("height_rms_relative_error".into(), hrms.into());
         let shifted: Vec<(f64, f64)> = height.iter().map(|&(t, z)| (t + hs, z)).collect();
         plot_series_png(
             out.join("height.png"),
@@ -75,7 +129,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 title: "Dam break n² = 1: residual height at the back wall".into(),
                 x_label: label.into(),
                 y_label: "h/H".into(),
-                series: vec![PlotSeries::line("pfem", &shifted), PlotSeries::markers("Martin & Moyce 1952", &measured_h)],
+                series: vec![
+                    PlotSeries::line("pfem", &shifted),
+                    PlotSeries::markers("Martin & Moyce 1952", &measured_h),
+                ],
                 ..Default::default()
             },
         )?;

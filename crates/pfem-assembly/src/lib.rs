@@ -17,4 +17,6 @@ pub use assembler::{
 };
 pub use error::{AssemblyError, SolveError};
 pub use kernels::VolumetricTreatment;
-pub use solver::{ConjugateGradient, LinearSolver, SolveReport, SparseCholesky, SparseLu};
+pub use solver::{
+    ConjugateGradient, DirectSolver, LinearSolver, SolveReport, SparseCholesky, SparseLu,
+};

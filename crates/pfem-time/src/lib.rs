@@ -18,8 +18,8 @@
 //! until it succeeds or the step falls below the minimum, a typed error.
 
 use pfem_assembly::{
-    Assembler, AssemblyError, AssemblyInput, Constraints, Inertia, LinearSolver, NodalRate,
-    SolveError, SparseLu, StepMesh, VolumetricTreatment,
+    Assembler, AssemblyError, AssemblyInput, Constraints, DirectSolver, Inertia, LinearSolver,
+    NodalRate, SolveError, StepMesh, VolumetricTreatment,
 };
 use pfem_constitutive::{History, Kinematics, Material, MaterialKind};
 use pfem_core::{Const, Dim, Point, Tensor, Vector};
@@ -224,9 +224,10 @@ impl<const D: usize> Integrator<D>
 where
     Const<D>: Dim,
 {
-    /// An integrator with the default sparse LU solver.
+    /// An integrator with the default direct solver (sparse Cholesky with
+    /// an LU fallback, see [`DirectSolver`]).
     pub fn new(params: StepParams) -> Self {
-        Self::with_solver(params, Box::new(SparseLu::default()))
+        Self::with_solver(params, Box::new(DirectSolver::default()))
     }
 
     /// An integrator with a given linear solver.

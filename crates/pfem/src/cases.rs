@@ -20,7 +20,7 @@ pub struct DamBreak {
     pub width: f64,
     /// Height over width, n². Default 2.
     pub aspect: f64,
-    /// Tank length (m), default 6 a.
+    /// Tank length (m), default 10 a.
     pub tank_length: f64,
     /// Particle spacing (m), default a/20.
     pub spacing: f64,
@@ -31,7 +31,13 @@ pub struct DamBreak {
 impl Default for DamBreak {
     fn default() -> Self {
         let a = 0.05715;
-        Self { width: a, aspect: 2.0, tank_length: 6.0 * a, spacing: a / 20.0, end_time: 3.2 / (2.0 * G / a).sqrt() }
+        Self {
+            width: a,
+            aspect: 2.0,
+            tank_length: 10.0 * a,
+            spacing: a / 20.0,
+            end_time: 3.2 / (2.0 * G / a).sqrt(),
+        }
     }
 }
 
@@ -41,7 +47,10 @@ impl Default for DamBreak {
 fn tank(scene: Scene<2>, x0: f64, x1: f64, walls: &[(f64, f64, f64)], h: f64) -> Scene<2> {
     let mut s = scene.wall(
         "floor",
-        Geometry::Box { min: Point::<2>::new(x0 - h, -h), max: Point::<2>::new(x1 + h, 0.0) },
+        Geometry::Box {
+            min: Point::<2>::new(x0 - h, -h),
+            max: Point::<2>::new(x1 + h, 0.0),
+        },
         h,
         WallMotion::Fixed,
     );
@@ -49,7 +58,10 @@ fn tank(scene: Scene<2>, x0: f64, x1: f64, walls: &[(f64, f64, f64)], h: f64) ->
         let (xa, xb) = if side < 0.0 { (x - h, x) } else { (x, x + h) };
         s = s.wall(
             &format!("wall{i}"),
-            Geometry::Box { min: Point::<2>::new(xa, h), max: Point::<2>::new(xb, top) },
+            Geometry::Box {
+                min: Point::<2>::new(xa, h),
+                max: Point::<2>::new(xb, top),
+            },
             h,
             WallMotion::Fixed,
         );
@@ -73,11 +85,20 @@ impl DamBreak {
                 output_interval: Some(self.end_time / 40.0),
                 alpha: 1.3,
             });
-        let s = tank(s, 0.0, self.tank_length, &[(0.0, -1.0, top), (self.tank_length, 1.0, top)], h);
+        let s = tank(
+            s,
+            0.0,
+            self.tank_length,
+            &[(0.0, -1.0, top), (self.tank_length, 1.0, top)],
+            h,
+        );
         s.fluid(
             "water",
             Box::new(Newtonian::water()),
-            Geometry::Box { min: Point::<2>::new(0.0, 0.0), max: Point::<2>::new(a, height) },
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(a, height),
+            },
             h,
         )
     }
@@ -88,23 +109,55 @@ impl DamBreak {
         let h = self.spacing;
         vec![
             Probe::new("front_x", move |s: &Simulation<2>| front_x(s)),
-            Probe::new("height_at_wall", move |s: &Simulation<2>| height_at_wall(s, 1.5 * h)),
+            Probe::new("height_at_wall", move |s: &Simulation<2>| {
+                height_at_wall(s, 1.5 * h)
+            }),
             Probe::new("volume", |s: &Simulation<2>| s.fluid_volume()),
         ]
     }
 }
 
-/// Leading edge of the fluid: the largest `x` of a fluid particle that is
-/// part of the fluid mesh (flying drops ahead of it do not count).
+/// Fluid particles of the main body: the connected component of fluid
+/// elements with the largest measure (flying drops and particles sliding
+/// ahead of it do not count).
+pub fn main_body(s: &Simulation<2>) -> Vec<bool> {
+    let mut m = vec![false; s.state.len()];
+    let Ok(cls) = pfem_geometry::classify(&s.state.x, &s.kind, &s.fluid_mesh, None) else {
+        return m;
+    };
+    let Some(main) = (0..cls.components.len()).max_by(|&a, &b| {
+        cls.components[a]
+            .measure
+            .total_cmp(&cls.components[b].measure)
+    }) else {
+        return m;
+    };
+    for (e, el) in s.fluid_mesh.simplices.chunks_exact(3).enumerate() {
+        if cls.component[e] as usize == main {
+            for &p in el {
+                if s.kind[p as usize] == ParticleKind::Fluid {
+                    m[p as usize] = true;
+                }
+            }
+        }
+    }
+    m
+}
+
+/// Leading edge of the fluid: the largest `x` of a fluid particle of the
+/// main body ([`main_body`]).
 pub fn front_x(s: &Simulation<2>) -> f64 {
-    let meshed = s.meshed_fluid_particles();
-    (0..s.state.len()).filter(|&i| meshed[i]).map(|i| s.state.x[i].x).fold(0.0, f64::max)
+    let body = main_body(s);
+    (0..s.state.len())
+        .filter(|&i| body[i])
+        .map(|i| s.state.x[i].x)
+        .fold(0.0, f64::max)
 }
 
 /// Height of the fluid at the back wall: the largest `y` of a meshed fluid
 /// particle within `band` of `x = 0`.
 pub fn height_at_wall(s: &Simulation<2>, band: f64) -> f64 {
-    let meshed = s.meshed_fluid_particles();
+    let meshed = main_body(s);
     (0..s.state.len())
         .filter(|&i| meshed[i] && s.state.x[i].x <= band)
         .map(|i| s.state.x[i].y)
@@ -121,7 +174,11 @@ pub fn interpolate(series: &[(f64, f64)], t: f64) -> f64 {
     }
     for w in series.windows(2) {
         if t <= w[1].0 {
-            let f = if w[1].0 > w[0].0 { (t - w[0].0) / (w[1].0 - w[0].0) } else { 1.0 };
+            let f = if w[1].0 > w[0].0 {
+                (t - w[0].0) / (w[1].0 - w[0].0)
+            } else {
+                1.0
+            };
             return w[0].1 + f * (w[1].1 - w[0].1);
         }
     }
@@ -132,17 +189,29 @@ pub fn interpolate(series: &[(f64, f64)], t: f64) -> f64 {
 /// over the measured points with `T ≤ t_max`, after shifting the
 /// simulation by `shift` in `T` (the simulated curve is read at `T − shift`).
 pub fn rms_relative(sim: &[(f64, f64)], measured: &[(f64, f64)], shift: f64, t_max: f64) -> f64 {
-    let pts: Vec<&(f64, f64)> = measured.iter().filter(|(t, _)| *t <= t_max && *t - shift >= 0.0).collect();
+    let pts: Vec<&(f64, f64)> = measured
+        .iter()
+        .filter(|(t, _)| *t <= t_max && *t - shift >= 0.0)
+        .collect();
     if pts.is_empty() {
         return f64::NAN;
     }
-    let s: f64 = pts.iter().map(|(t, z)| ((interpolate(sim, t - shift) - z) / z).powi(2)).sum();
+    let s: f64 = pts
+        .iter()
+        .map(|(t, z)| ((interpolate(sim, t - shift) - z) / z).powi(2))
+        .sum();
     (s / pts.len() as f64).sqrt()
 }
 
 /// The single time shift in `[-max_shift, max_shift]` minimising
 /// [`rms_relative`], found by a scan at `step`; returns `(shift, rms)`.
-pub fn best_shift(sim: &[(f64, f64)], measured: &[(f64, f64)], t_max: f64, max_shift: f64, step: f64) -> (f64, f64) {
+pub fn best_shift(
+    sim: &[(f64, f64)],
+    measured: &[(f64, f64)],
+    t_max: f64,
+    max_shift: f64,
+    step: f64,
+) -> (f64, f64) {
     let mut best = (0.0, rms_relative(sim, measured, 0.0, t_max));
     let n = (max_shift / step).round() as i64;
     for i in -n..=n {
@@ -174,7 +243,13 @@ pub struct ElasticGate {
 
 impl Default for ElasticGate {
     fn default() -> Self {
-        Self { spacing: 0.0025, end_time: 0.4, young: 12e6, poisson: 0.4, density: 1100.0 }
+        Self {
+            spacing: 0.0025,
+            end_time: 0.4,
+            young: 12e6,
+            poisson: 0.4,
+            density: 1100.0,
+        }
     }
 }
 
@@ -220,7 +295,8 @@ impl ElasticGate {
             h,
             WallMotion::Fixed,
         );
-        let gate = Hypoelastic::new(self.density, self.young, self.poisson).expect("valid gate material");
+        let gate =
+            Hypoelastic::new(self.density, self.young, self.poisson).expect("valid gate material");
         let s = s.solid(
             "gate",
             Box::new(gate),
@@ -229,12 +305,18 @@ impl ElasticGate {
                 max: Point::<2>::new(GATE_X + GATE_THICKNESS, y1),
             },
             h,
-            Some((Point::<2>::new(GATE_X - 1.0, y1 - 1e-9), Point::<2>::new(GATE_X + 1.0, y1 + 1.0))),
+            Some((
+                Point::<2>::new(GATE_X - 1.0, y1 - 1e-9),
+                Point::<2>::new(GATE_X + 1.0, y1 + 1.0),
+            )),
         );
         s.fluid(
             "water",
             Box::new(Newtonian::water()),
-            Geometry::Box { min: Point::<2>::new(0.0, 0.0), max: Point::<2>::new(GATE_X, GATE_WATER_HEIGHT) },
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(GATE_X, GATE_WATER_HEIGHT),
+            },
             h,
         )
     }
@@ -288,7 +370,12 @@ pub struct Hydrostatic {
 
 impl Default for Hydrostatic {
     fn default() -> Self {
-        Self { width: 0.5, height: 0.5, spacing: 0.0125, end_time: 1.0 }
+        Self {
+            width: 0.5,
+            height: 0.5,
+            spacing: 0.0125,
+            end_time: 1.0,
+        }
     }
 }
 
@@ -296,19 +383,30 @@ impl Hydrostatic {
     /// The scene.
     pub fn scene(&self) -> Scene<2> {
         let h = self.spacing;
-        let s = Scene::<2>::new("hydrostatic_2d").gravity(Vector::<2>::new(0.0, -G)).settings(RunSettings {
-            end_time: self.end_time,
-            max_dt: 5e-3,
-            courant: 0.5,
-            output_interval: Some(self.end_time / 10.0),
-            alpha: 1.3,
-        });
+        let s = Scene::<2>::new("hydrostatic_2d")
+            .gravity(Vector::<2>::new(0.0, -G))
+            .settings(RunSettings {
+                end_time: self.end_time,
+                max_dt: 5e-3,
+                courant: 0.5,
+                output_interval: Some(self.end_time / 10.0),
+                alpha: 1.3,
+            });
         let top = self.height * 1.2;
-        let s = tank(s, 0.0, self.width, &[(0.0, -1.0, top), (self.width, 1.0, top)], h);
+        let s = tank(
+            s,
+            0.0,
+            self.width,
+            &[(0.0, -1.0, top), (self.width, 1.0, top)],
+            h,
+        );
         s.fluid(
             "water",
             Box::new(Newtonian::water()),
-            Geometry::Box { min: Point::<2>::new(0.0, 0.0), max: Point::<2>::new(self.width, self.height) },
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(self.width, self.height),
+            },
             h,
         )
     }
@@ -337,11 +435,23 @@ pub fn bottom_pressure(s: &Simulation<2>) -> f64 {
         in_fluid[p as usize] = true;
     }
     let (mut sum, mut n) = (0.0, 0);
-    let xs: Vec<f64> = (0..s.state.len()).filter(|&i| s.kind[i] == ParticleKind::Fluid).map(|i| s.state.x[i].x).collect();
-    let (xmin, xmax) = xs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+    let xs: Vec<f64> = (0..s.state.len())
+        .filter(|&i| s.kind[i] == ParticleKind::Fluid)
+        .map(|i| s.state.x[i].x)
+        .collect();
+    let (xmin, xmax) = xs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
     for i in 0..s.state.len() {
         let x = s.state.x[i];
-        if s.kind[i] == ParticleKind::Wall && in_fluid[i] && x.y.abs() < 1e-9 && x.x > xmin + 1e-9 && x.x < xmax - 1e-9 {
+        if s.kind[i] == ParticleKind::Wall
+            && in_fluid[i]
+            && x.y.abs() < 1e-9
+            && x.x > xmin + 1e-9
+            && x.x < xmax - 1e-9
+        {
             sum += s.state.pressure[i];
             n += 1;
         }

@@ -45,7 +45,9 @@ impl Args {
                 "--no-vtu" => out.no_vtu = true,
                 s if s.starts_with("--") => {
                     let name = s.trim_start_matches("--").to_string();
-                    let value = it.next().ok_or_else(|| ArgsError(format!("--{name} needs a value")))?;
+                    let value = it
+                        .next()
+                        .ok_or_else(|| ArgsError(format!("--{name} needs a value")))?;
                     match name.as_str() {
                         "out" => out.out = Some(PathBuf::from(value)),
                         "spacing" => out.spacing = Some(parse_positive(&name, &value)?),
@@ -73,8 +75,10 @@ impl Args {
     pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ArgsError> {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) {
-                return Err(ArgsError(format!("unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu{})",
-                    known.iter().map(|k| format!(" --{k}")).collect::<String>())));
+                return Err(ArgsError(format!(
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu{})",
+                    known.iter().map(|k| format!(" --{k}")).collect::<String>()
+                )));
             }
         }
         Ok(())
@@ -84,7 +88,9 @@ impl Args {
 fn parse_positive(name: &str, v: &str) -> Result<f64, ArgsError> {
     match v.parse::<f64>() {
         Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
-        _ => Err(ArgsError(format!("--{name} must be a positive number, got `{v}`"))),
+        _ => Err(ArgsError(format!(
+            "--{name} must be a positive number, got `{v}`"
+        ))),
     }
 }
 
@@ -94,7 +100,19 @@ mod tests {
 
     #[test]
     fn parses_the_contract_and_rejects_bad_values() {
-        let a = Args::parse(["--out", "d", "--spacing", "0.01", "--quiet", "--aspect", "2"].map(String::from)).unwrap();
+        let a = Args::parse(
+            [
+                "--out",
+                "d",
+                "--spacing",
+                "0.01",
+                "--quiet",
+                "--aspect",
+                "2",
+            ]
+            .map(String::from),
+        )
+        .unwrap();
         assert_eq!(a.out, Some(PathBuf::from("d")));
         assert_eq!(a.spacing, Some(0.01));
         assert!(a.quiet);

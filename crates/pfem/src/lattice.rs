@@ -134,7 +134,10 @@ where
 {
     /// An empty grid of cell size `cell` (m).
     pub fn new(cell: f64) -> Self {
-        Self { cell, map: std::collections::HashMap::new() }
+        Self {
+            cell,
+            map: std::collections::HashMap::new(),
+        }
     }
 
     fn key(&self, p: &Point<D>) -> [i64; 3] {

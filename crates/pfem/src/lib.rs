@@ -36,12 +36,12 @@ pub mod scene;
 pub mod simulation;
 
 pub use error::{RunError, SceneError};
+pub use observe::{Probe, StandardOutput};
 pub use pfem_assembly as assembly;
 pub use pfem_constitutive as constitutive;
 pub use pfem_core as core;
 pub use pfem_geometry as geometry;
 pub use pfem_time as time;
-pub use observe::{Probe, StandardOutput};
 pub use scene::{Body, Geometry, RunSettings, Scene, WallMotion};
 pub use simulation::{Observer, Simulation, StageStats, Stages, VolumeLedger};
 

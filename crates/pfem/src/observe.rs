@@ -9,7 +9,9 @@ use std::time::Instant;
 use pfem_core::{Const, Dim, ParticleKind, Tensor};
 use pfem_geometry::{classify, NodeTag};
 
-use crate::output::{write_summary, CsvProbe, Encoding, Field, Frame, Progress, RunSummary, VtuSeries};
+use crate::output::{
+    write_summary, CsvProbe, Encoding, Field, Frame, Progress, RunSummary, VtuSeries,
+};
 use crate::simulation::{Observer, Simulation};
 use crate::RunError;
 
@@ -32,7 +34,10 @@ where
 {
     /// A probe from a name and a closure.
     pub fn new(name: &str, measure: impl Fn(&Simulation<D>) -> f64 + 'static) -> Self {
-        Self { name: name.into(), measure: Box::new(measure) }
+        Self {
+            name: name.into(),
+            measure: Box::new(measure),
+        }
     }
 }
 
@@ -93,7 +98,9 @@ where
     }
 
     fn write_frame(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
-        let Some(series) = self.series.as_mut() else { return Ok(()) };
+        let Some(series) = self.series.as_mut() else {
+            return Ok(());
+        };
         let n = sim.state.len();
         let nv = D + 1;
         let mut cells = sim.fluid_elements.clone();
@@ -103,7 +110,12 @@ where
         let mut tags = vec![0i32; n];
         let mut vertex_cells = Vec::new();
         if sim.stages.free_surface {
-            if let Ok(cls) = classify(&sim.state.x, &sim.kind, &sim.fluid_mesh, Some(&sim.solid_elements)) {
+            if let Ok(cls) = classify(
+                &sim.state.x,
+                &sim.kind,
+                &sim.fluid_mesh,
+                Some(&sim.solid_elements),
+            ) {
                 for (t, c) in tags.iter_mut().zip(&cls.tags) {
                     *t = match c {
                         NodeTag::Interior => 0,
@@ -117,11 +129,15 @@ where
                 vertex_cells = cls.isolated.clone();
             }
         }
-        let kind: Vec<i32> = sim.kind.iter().map(|k| match k {
-            ParticleKind::Fluid => 0,
-            ParticleKind::Solid => 1,
-            ParticleKind::Wall => 2,
-        }).collect();
+        let kind: Vec<i32> = sim
+            .kind
+            .iter()
+            .map(|k| match k {
+                ParticleKind::Fluid => 0,
+                ParticleKind::Solid => 1,
+                ParticleKind::Wall => 2,
+            })
+            .collect();
         let body: Vec<i32> = sim.body.iter().map(|&b| b as i32).collect();
         let material: Vec<i32> = sim
             .fluid_material
@@ -146,7 +162,10 @@ where
                 Field::int("body", &body),
                 Field::int("boundary_tag", &tags),
             ],
-            cell_data: vec![Field::int("material", &material), Field::sym_tensor("stress", &stress)],
+            cell_data: vec![
+                Field::int("material", &material),
+                Field::sym_tensor("stress", &stress),
+            ],
             time: Some(sim.time),
         };
         series.write_frame(sim.time, &frame)?;
@@ -175,7 +194,12 @@ where
         wall.insert("solve".to_string(), sim.stats.solve.1);
         wall.insert("update".to_string(), sim.stats.update.1);
         wall.insert("output".to_string(), sim.stats.observe.1);
-        wall.insert("total".to_string(), self.started.map(|s| s.elapsed().as_secs_f64()).unwrap_or(0.0));
+        wall.insert(
+            "total".to_string(),
+            self.started
+                .map(|s| s.elapsed().as_secs_f64())
+                .unwrap_or(0.0),
+        );
         let mut causes = BTreeMap::new();
         causes.insert("remeshing".to_string(), sim.volume.remeshing);
         causes.insert("solution".to_string(), sim.volume.solution);
@@ -201,7 +225,8 @@ where
 {
     fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
         self.started = Some(Instant::now());
-        std::fs::create_dir_all(&self.dir).map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
+        std::fs::create_dir_all(&self.dir)
+            .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
         if self.vtu && sim.output_interval.is_some() {
             self.series = Some(VtuSeries::create(&self.dir, &sim.name, Encoding::Base64)?);
         }

@@ -203,7 +203,11 @@ where
             ParticleKind::Fluid => 2,
         });
         let mut bodies: Vec<Option<crate::scene::Body<D>>> = bodies.into_iter().map(Some).collect();
-        let cell = bodies.iter().flatten().map(|b| b.spacing).fold(f64::INFINITY, f64::min);
+        let cell = bodies
+            .iter()
+            .flatten()
+            .map(|b| b.spacing)
+            .fold(f64::INFINITY, f64::min);
         let mut grid = lattice::HashGrid::<D>::new(cell);
         for bi in order {
             let b = bodies[bi].take().expect("each body once");
@@ -529,6 +533,12 @@ where
             o.finish(self)?;
         }
         Ok(())
+    }
+
+    /// Replaces the linear solver (default: sparse LU).
+    pub fn set_solver(&mut self, solver: Box<dyn pfem_assembly::LinearSolver>) {
+        let params = self.integrator.params;
+        self.integrator = Integrator::with_solver(params, solver);
     }
 
     /// Position of particle `i` at `t = 0` (m).
