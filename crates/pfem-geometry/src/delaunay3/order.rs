@@ -4,7 +4,7 @@
 //! the point-location walk stays short.
 
 /// Bits per axis of the Hilbert grid.
-const BITS: u32 = 16;
+const BITS: u32 = 12;
 
 /// SplitMix64: a small, fast, deterministic generator.
 #[derive(Debug, Clone)]
