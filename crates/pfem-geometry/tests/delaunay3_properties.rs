@@ -433,3 +433,17 @@ fn reusing_the_tessellator_gives_the_same_result() {
     mesher.tessellate(&pts, &mut b).unwrap();
     assert_eq!(a, b);
 }
+
+#[test]
+fn lattices_far_from_the_origin() {
+    for k in [3, 4, 5, 6, 8] {
+        for shift in [1e6, 1e3, 12345.678] {
+            let pts: Vec<Point<3>> = lattice([k, k, k], 0.01, [0.0; 3])
+                .iter()
+                .map(|p| p.map(|x| x + shift))
+                .collect();
+            let t = tess(&pts).unwrap();
+            check_delaunay(&pts, &t);
+        }
+    }
+}
