@@ -253,6 +253,7 @@ where
     /// first step (eq. 48) starts from the right acceleration instead of
     /// zero. Prescribed components get zero, particles outside every
     /// element the body force.
+    #[allow(clippy::needless_range_loop)] // loops index several parallel arrays
     pub fn initialize_acceleration(
         &mut self,
         state: &mut ParticleState<D>,
@@ -352,6 +353,7 @@ where
 
     /// One attempt of a step of size `dt` (§6). Leaves `state` and
     /// `history` unchanged on failure.
+    #[allow(clippy::needless_range_loop)] // loops index several parallel arrays
     pub fn try_step(
         &mut self,
         time: f64,
