@@ -51,7 +51,7 @@ where
     }
     let f = edge_matrix::<D>(&x[..nv]) * e_n.try_inverse()?; // eq. 8
     let j = f.determinant(); // eq. 7
-    if !(j > 0.0) {
+    if j.is_nan() || j <= 0.0 {
         return None;
     }
     let mut l = Tensor::<D>::zeros(); // eq. 18: L = grad V

@@ -230,7 +230,7 @@ fn refine(
     let mut kept = 0;
     let mut r = vec![0.0; b.len()];
     for _ in 0..MAX_REFINEMENT_STEPS {
-        if !(res > REFINEMENT_TARGET) {
+        if res.is_nan() || res <= REFINEMENT_TARGET {
             break;
         }
         r.copy_from_slice(b);
@@ -241,7 +241,7 @@ fn refine(
             *xi += di;
         }
         let new_res = relative_residual(a, b, x);
-        if !(new_res < res) {
+        if new_res.is_nan() || new_res >= res {
             x.copy_from_slice(&old);
             break;
         }
@@ -288,7 +288,7 @@ fn finish(
     solver: &'static str,
 ) -> Result<SolveReport, SolveError> {
     let residual = relative_residual(a, b, x);
-    if !(residual <= limit) || x.iter().any(|v| !v.is_finite()) {
+    if residual.is_nan() || residual > limit || x.iter().any(|v| !v.is_finite()) {
         return Err(SolveError::Inaccurate {
             solver,
             residual,
@@ -408,7 +408,7 @@ impl Ic0 {
                 }
             }
             let d = val[s];
-            if !(d > 0.0) || !d.is_finite() {
+            if !d.is_finite() || d <= 0.0 {
                 return None;
             }
             let d = d.sqrt();
@@ -518,7 +518,7 @@ impl LinearSolver for ConjugateGradient {
                 ap[i] = -neg[i];
             }
             let pap: f64 = p.iter().zip(&ap).map(|(a, b)| a * b).sum();
-            if !(pap > 0.0) {
+            if pap.is_nan() || pap <= 0.0 {
                 return Err(SolveError::NotPositiveDefinite {
                     solver: "PCG (IC(0))",
                     iteration: it,
