@@ -12,8 +12,6 @@ use pfem::constitutive::{History, Kinematics, MaterialKind, Unified};
 use pfem::core::{Const, Dim, Tensor};
 use pfem::prelude::*;
 
-
-
 /// Papanastasiou-regularised Bingham fluid.
 #[derive(Debug, Clone, Copy)]
 pub struct Bingham {
@@ -110,18 +108,58 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     args.reject_unknown(&[])?;
     let h = args.spacing.unwrap_or(0.005);
     let end_time = args.end_time.unwrap_or(0.3);
-    let out = args.out.clone().unwrap_or_else(|| "out/custom_material".into());
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| "out/custom_material".into());
     let scene = Scene::<2>::new("custom_material")
         .gravity(Vector::<2>::new(0.0, -9.81))
-        .settings(RunSettings { end_time, max_dt: 2e-3, output_interval: Some(end_time / 30.0), ..Default::default() })
-        .wall("floor", Geometry::Box { min: Point::<2>::new(-h, -h), max: Point::<2>::new(0.4, 0.0) }, h, WallMotion::Fixed)
-        .wall("back", Geometry::Box { min: Point::<2>::new(-h, h), max: Point::<2>::new(0.0, 0.15) }, h, WallMotion::Fixed)
-        .fluid("mud", Box::new(mud()), Geometry::Box { min: Point::<2>::new(0.0, 0.0), max: Point::<2>::new(0.05, 0.1) }, h);
+        .settings(RunSettings {
+            end_time,
+            max_dt: 2e-3,
+            output_interval: Some(end_time / 30.0),
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-h, -h),
+                max: Point::<2>::new(0.4, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .wall(
+            "back",
+            Geometry::Box {
+                min: Point::<2>::new(-h, h),
+                max: Point::<2>::new(0.0, 0.15),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "mud",
+            Box::new(mud()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.05, 0.1),
+            },
+            h,
+        );
     let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())?;
-    let probes = vec![Probe::new("front_x", front_x), Probe::new("volume", |s: &Simulation<2>| s.fluid_volume())];
+    let probes = vec![
+        Probe::new("front_x", front_x),
+        Probe::new("volume", |s: &Simulation<2>| s.fluid_volume()),
+    ];
     let mut output = StandardOutput::new(&out, !args.no_vtu, probes, args.quiet);
     sim.run(&mut [&mut output])?;
     let front = output.probe_series("front_x");
-    println!("Bingham mud column: front {:.4} m -> {:.4} m after {} s", front[0].1, front.last().map(|f| f.1).unwrap_or(f64::NAN), sim.time);
+    println!(
+        "Bingham mud column: front {:.4} m -> {:.4} m after {} s",
+        front[0].1,
+        front.last().map(|f| f.1).unwrap_or(f64::NAN),
+        sim.time
+    );
     Ok(())
 }

@@ -23,7 +23,10 @@ fn main() {
 
 /// Largest value of a series and its time.
 fn peak(series: &[(f64, f64)]) -> (f64, f64) {
-    series.iter().copied().fold((0.0, f64::NEG_INFINITY), |b, p| if p.1 > b.1 { p } else { b })
+    series.iter().copied().fold(
+        (0.0, f64::NEG_INFINITY),
+        |b, p| if p.1 > b.1 { p } else { b },
+    )
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
@@ -33,9 +36,22 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     case.spacing = args.spacing.unwrap_or(case.spacing);
     case.end_time = args.end_time.unwrap_or(case.end_time);
     case.young = args.number("young", case.young)?;
-    let out = args.out.clone().unwrap_or_else(|| "out/elastic_gate_2d".into());
-    let mut sim = Simulation::new(case.scene(), Box::new(Delaunay2::default()), StepParams::default())?;
-    eprintln!("elastic_gate_2d: {} particles, h = {} m, E = {} Pa, end time {} s", sim.state.len(), case.spacing, case.young, case.end_time);
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| "out/elastic_gate_2d".into());
+    let mut sim = Simulation::new(
+        case.scene(),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )?;
+    eprintln!(
+        "elastic_gate_2d: {} particles, h = {} m, E = {} Pa, end time {} s",
+        sim.state.len(),
+        case.spacing,
+        case.young,
+        case.end_time
+    );
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
     sim.run(&mut [&mut output])?;
 
@@ -47,12 +63,32 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (t_exp, ux_max) = peak(&ux_exp);
     let (ty_sim, uy_sim) = peak(&uy);
     let (ty_exp, uy_max) = peak(&uy_exp);
-    println!("peak ux: {:.2} mm at {:.3} s (experiment {:.2} mm at {:.3} s): {:+.1}%", 1e3 * ux_sim, t_sim, 1e3 * ux_max, t_exp, 100.0 * (ux_sim / ux_max - 1.0));
-    println!("peak uy: {:.2} mm at {:.3} s (experiment {:.2} mm at {:.3} s): {:+.1}%", 1e3 * uy_sim, ty_sim, 1e3 * uy_max, ty_exp, 100.0 * (uy_sim / uy_max - 1.0));
+    println!(
+        "peak ux: {:.2} mm at {:.3} s (experiment {:.2} mm at {:.3} s): {:+.1}%",
+        1e3 * ux_sim,
+        t_sim,
+        1e3 * ux_max,
+        t_exp,
+        100.0 * (ux_sim / ux_max - 1.0)
+    );
+    println!(
+        "peak uy: {:.2} mm at {:.3} s (experiment {:.2} mm at {:.3} s): {:+.1}%",
+        1e3 * uy_sim,
+        ty_sim,
+        1e3 * uy_max,
+        ty_exp,
+        100.0 * (uy_sim / uy_max - 1.0)
+    );
     output.extra.insert("peak_ux_m".into(), ux_sim.into());
     output.extra.insert("peak_ux_time_s".into(), t_sim.into());
-    output.extra.insert("peak_ux_relative_error".into(), (ux_sim / ux_max - 1.0).into());
-    output.extra.insert("peak_uy_relative_error".into(), (uy_sim / uy_max - 1.0).into());
+    output.extra.insert(
+        "peak_ux_relative_error".into(),
+        (ux_sim / ux_max - 1.0).into(),
+    );
+    output.extra.insert(
+        "peak_uy_relative_error".into(),
+        (uy_sim / uy_max - 1.0).into(),
+    );
     plot_series_png(
         out.join("gate.png"),
         &PlotSpec {

@@ -22,20 +22,51 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut case = Hydrostatic::default();
     case.spacing = args.spacing.unwrap_or(case.spacing);
     case.end_time = args.end_time.unwrap_or(case.end_time);
-    let out = args.out.clone().unwrap_or_else(|| "out/hydrostatic_2d".into());
-    let mut sim = Simulation::new(case.scene(), Box::new(Delaunay2::default()), StepParams::default())?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| "out/hydrostatic_2d".into());
+    let mut sim = Simulation::new(
+        case.scene(),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )?;
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
     sim.run(&mut [&mut output])?;
     let p = output.probe_series("bottom_pressure");
-    let vmax = output.probe_series("max_speed").iter().map(|v| v.1).fold(0.0, f64::max);
+    let vmax = output
+        .probe_series("max_speed")
+        .iter()
+        .map(|v| v.1)
+        .fold(0.0, f64::max);
     let exact = 1000.0 * G * case.height;
     let p_end = p.last().map(|v| v.1).unwrap_or(f64::NAN);
-    println!("bottom pressure {:.1} Pa vs rho g H = {:.1} Pa ({:+.2}%)", p_end, exact, 100.0 * (p_end / exact - 1.0));
-    println!("largest fluid speed {:.2e} m/s = {:.2e} sqrt(gH)", vmax, vmax / (G * case.height).sqrt());
-    output.extra.insert("bottom_pressure_relative_error".into(), (p_end / exact - 1.0).into());
-    output.extra.insert("max_speed_over_sqrt_gh".into(), (vmax / (G * case.height).sqrt()).into());
+    println!(
+        "bottom pressure {:.1} Pa vs rho g H = {:.1} Pa ({:+.2}%)",
+        p_end,
+        exact,
+        100.0 * (p_end / exact - 1.0)
+    );
+    println!(
+        "largest fluid speed {:.2e} m/s = {:.2e} sqrt(gH)",
+        vmax,
+        vmax / (G * case.height).sqrt()
+    );
+    output.extra.insert(
+        "bottom_pressure_relative_error".into(),
+        (p_end / exact - 1.0).into(),
+    );
+    output.extra.insert(
+        "max_speed_over_sqrt_gh".into(),
+        (vmax / (G * case.height).sqrt()).into(),
+    );
     let summary = output.summary(&sim);
-    println!("volume change {:+.4}%, {} steps, wall time {:.1} s", 100.0 * summary.relative_volume_change(), summary.steps, summary.wall_time_s["total"]);
+    println!(
+        "volume change {:+.4}%, {} steps, wall time {:.1} s",
+        100.0 * summary.relative_volume_change(),
+        summary.steps,
+        summary.wall_time_s["total"]
+    );
     pfem::output::write_summary(out.join("summary.json"), &summary)?;
     Ok(())
 }

@@ -303,12 +303,16 @@ where
                     // same hydrostatic nodal pressure (eq. 62 puts pressure
                     // on every node of a fluid element).
                     let (lo, hi) = idx.iter().fold(
-                        (Point::<D>::repeat(f64::INFINITY), Point::<D>::repeat(f64::NEG_INFINITY)),
+                        (
+                            Point::<D>::repeat(f64::INFINITY),
+                            Point::<D>::repeat(f64::NEG_INFINITY),
+                        ),
                         |(lo, hi), &i| (lo.inf(&state.x[i]), hi.sup(&state.x[i])),
                     );
                     let h = spacing[idx[0]] * 1.01;
                     for i in 0..n {
-                        let inside = (0..D).all(|k| state.x[i][k] >= lo[k] - h && state.x[i][k] <= hi[k] + h);
+                        let inside = (0..D)
+                            .all(|k| state.x[i][k] >= lo[k] - h && state.x[i][k] <= hi[k] + h);
                         if kind[i] != ParticleKind::Fluid && inside {
                             state.pressure[i] = (rho * gn * (state.x[i].dot(&dir) - top)).max(0.0);
                         }

@@ -1,0 +1,174 @@
+//! A scene pays only for the effects it calls for: which stages ran, by
+//! counters, for several scenes.
+
+use pfem::prelude::*;
+
+fn solid_only() -> Scene<2> {
+    let beam = Hypoelastic::new(1000.0, 5.6e6, 0.4).unwrap();
+    Scene::<2>::new("beam")
+        .gravity(Vector::<2>::new(0.0, -2.0))
+        .settings(RunSettings {
+            end_time: 0.02,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .solid(
+            "beam",
+            Box::new(beam),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.35, 0.02),
+            },
+            0.005,
+            Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(1e-9, 1.0))),
+        )
+}
+
+#[test]
+fn a_solid_only_scene_never_remeshes_nor_updates_pressure() {
+    let mut sim = Simulation::new(
+        solid_only(),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    sim.run(&mut []).unwrap();
+    assert!(sim.steps > 0);
+    assert!(!sim.stages.remesh && !sim.stages.pressure && !sim.stages.free_surface);
+    assert!(sim.stages.solid_stress && sim.stages.body_force);
+    assert_eq!(sim.stats.remesh, (0, 0.0), "no time at all in remeshing");
+    assert_eq!(sim.stats.pressure_updates, 0);
+    assert_eq!(sim.stats.stress_updates, sim.steps);
+    // The beam sags under its weight.
+    let tip = sim
+        .state
+        .x
+        .iter()
+        .map(|p| p.y)
+        .fold(f64::INFINITY, f64::min);
+    assert!(tip < 0.0);
+}
+
+#[test]
+fn a_fluid_scene_without_gravity_assembles_no_body_force_and_has_no_solid_stage() {
+    let h = 0.02;
+    let scene = Scene::<2>::new("drop")
+        .settings(RunSettings {
+            end_time: 0.01,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Ball {
+                center: Point::<2>::new(0.0, 0.0),
+                radius: 0.1,
+            },
+            h,
+        )
+        .with_velocity(Vector::<2>::new(1.0, 0.0));
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    sim.run(&mut []).unwrap();
+    assert!(sim.stages.remesh && sim.stages.pressure);
+    assert!(!sim.stages.body_force && !sim.stages.solid_stress);
+    assert_eq!(sim.stats.stress_updates, 0);
+    assert_eq!(sim.stats.pressure_updates, sim.steps);
+    // Remeshed once at set-up and once per step after the first.
+    assert_eq!(sim.stats.remesh.0, sim.steps);
+    // A drop in free flight keeps its velocity.
+    let mean = sim.state.v.iter().fold(Vector::<2>::zeros(), |a, v| a + v) / sim.state.len() as f64;
+    assert!(
+        (mean.x - 1.0).abs() < 1e-6 && mean.y.abs() < 1e-6,
+        "{mean:?}"
+    );
+}
+
+#[test]
+fn impossible_scenes_are_typed_errors_before_any_step() {
+    let bad_dt = solid_only().settings(RunSettings {
+        end_time: -1.0,
+        ..Default::default()
+    });
+    assert!(matches!(
+        Simulation::new(
+            bad_dt,
+            Box::new(Delaunay2::default()),
+            StepParams::default()
+        ),
+        Err(pfem::SceneError::InvalidSetting {
+            setting: "end_time",
+            ..
+        })
+    ));
+    let beam = Hypoelastic::new(1000.0, 5.6e6, 0.4).unwrap();
+    let unsupported = Scene::<2>::new("falling beam")
+        .gravity(Vector::<2>::new(0.0, -9.81))
+        .solid(
+            "beam",
+            Box::new(beam),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.35, 0.02),
+            },
+            0.005,
+            None,
+        );
+    assert!(matches!(
+        unsupported.validate(),
+        Err(pfem::SceneError::Unsupported { .. })
+    ));
+    let too_coarse = Scene::<2>::new("coarse").fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        Geometry::Box {
+            min: Point::<2>::new(0.0, 0.0),
+            max: Point::<2>::new(0.1, 0.1),
+        },
+        0.5,
+    );
+    assert!(matches!(
+        too_coarse.validate(),
+        Err(pfem::SceneError::SpacingLargerThanBody { .. })
+    ));
+    let h = 0.01;
+    let overlap = Scene::<2>::new("overlap")
+        .fluid(
+            "a",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.1, 0.1),
+            },
+            h,
+        )
+        .fluid(
+            "b",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.05, 0.05),
+                max: Point::<2>::new(0.2, 0.2),
+            },
+            h,
+        );
+    assert!(matches!(
+        overlap.validate(),
+        Err(pfem::SceneError::Overlap { .. })
+    ));
+    let wrong_kind = Scene::<2>::new("wrong").fluid(
+        "rubber",
+        Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+        Geometry::Box {
+            min: Point::<2>::new(0.0, 0.0),
+            max: Point::<2>::new(0.1, 0.1),
+        },
+        h,
+    );
+    assert!(matches!(
+        wrong_kind.validate(),
+        Err(pfem::SceneError::MaterialKindMismatch { .. })
+    ));
+}
