@@ -289,7 +289,7 @@ where
             }
             let extent = (hi - lo).max();
             if let Geometry::Ball { radius, .. } = b.geometry {
-                if !(radius > 0.0) {
+                if radius.is_nan() || radius <= 0.0 {
                     return Err(SceneError::InvalidGeometry {
                         body: b.name.clone(),
                         why: "radius must be positive".into(),

@@ -367,7 +367,6 @@ where
             controller,
             alpha: AlphaShapeParams {
                 alpha: settings.alpha,
-                ..Default::default()
             },
             x0: Vec::new(),
             tessellator,
