@@ -33,6 +33,7 @@ pub mod lattice;
 pub mod observe;
 pub mod output;
 pub mod scene;
+pub mod scene_file;
 pub mod simulation;
 
 pub use error::{RunError, SceneError};

@@ -1,0 +1,813 @@
+//! Scenes from TOML files: the serde description of a 2D or 3D scene
+//! ([`SceneFile`]) and its conversion into a [`Scene`] and its probes.
+//!
+//! Units are SI throughout (m, s, kg, Pa). A file looks like this (the
+//! bundled ones are in `examples/scenes/`):
+//!
+//! ```toml
+//! name = "puddle"
+//! dimension = 2              # 2 (plane strain) or 3
+//! gravity = [0.0, -9.81]     # m/s²; omit for none
+//! spacing = 0.025            # m, default particle spacing of every body
+//! probes = ["volume", "max_speed"]   # columns of probes.csv
+//!
+//! [run]                      # every key optional (defaults of RunSettings)
+//! end_time = 0.02            # s
+//! max_dt = 5e-3              # s
+//! courant = 0.5
+//! output_interval = 0.01     # s between VTU frames
+//! alpha = 1.3                # alpha-shape parameter
+//!
+//! [[body]]
+//! name = "floor"
+//! kind = "wall"              # fluid | solid | wall
+//! geometry.box = { min = [-0.1, -0.025], max = [0.3, 0.0] }   # m
+//!
+//! [[body]]
+//! name = "water"
+//! kind = "fluid"
+//! material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+//! geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
+//! ```
+//!
+//! Loading it:
+//!
+//! ```
+//! use pfem::scene_file::SceneFile;
+//! # let text = r#"
+//! # name = "puddle"
+//! # dimension = 2
+//! # gravity = [0.0, -9.81]
+//! # spacing = 0.025
+//! # probes = ["volume", "max_speed"]
+//! # [run]
+//! # end_time = 0.02
+//! # [[body]]
+//! # name = "floor"
+//! # kind = "wall"
+//! # geometry.box = { min = [-0.1, -0.025], max = [0.3, 0.0] }
+//! # [[body]]
+//! # name = "water"
+//! # kind = "fluid"
+//! # material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+//! # geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
+//! # "#;
+//! let file = SceneFile::parse(text, "puddle.toml")?;
+//! assert_eq!(file.dimension(), 2);
+//! let scene = file.scene::<2>()?; // validated
+//! assert_eq!(scene.bodies.len(), 2);
+//! let probes = file.probes_2d()?;
+//! assert_eq!(probes[0].name, "volume");
+//! # Ok::<(), pfem::SceneError>(())
+//! ```
+//!
+//! Keys:
+//!
+//! | key | meaning |
+//! |---|---|
+//! | `name` | scene name (output file names); default: the file's stem |
+//! | `dimension` | `2` or `3` |
+//! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
+//! | `spacing` | default particle spacing of every body (m) |
+//! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
+//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `clamp` (solids: `{ min, max }`, m) |
+//! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson }` (kg/m³, Pa, –) |
+//! | `geometry` | `box = { min, max }`, `ball = { center, radius }` or `particles = [[x, y], …]` (m) |
+//! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
+//!
+//! A malformed file (syntax, unknown key, wrong type, wrong number of
+//! coordinates) is a [`SceneError::File`] naming the line; impossible values
+//! (negative spacing, `end_time ≤ 0`, a fluid without material…) are the
+//! typed errors of [`Scene::validate`].
+
+use std::cell::OnceCell;
+use std::ops::Range;
+use std::path::Path;
+
+use pfem_constitutive::{Hypoelastic, Material, Newtonian};
+use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::observe::Probe;
+use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
+use crate::simulation::Simulation;
+use crate::SceneError;
+
+/// A list of coordinates (`[x, y]` or `[x, y, z]`) with its place in the
+/// file, so that a wrong length can name its line.
+pub type Coords = Spanned<Vec<f64>>;
+
+/// A scene file: the top-level table.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Scene name (output file names, summary); default: the file's stem.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Dimension: 2 (plane strain) or 3.
+    pub dimension: Spanned<u32>,
+    /// Body force per unit mass (m/s²); `None` for none.
+    #[serde(default)]
+    pub gravity: Option<Coords>,
+    /// Default particle spacing (m) of the bodies that give none.
+    #[serde(default)]
+    pub spacing: Option<f64>,
+    /// Run settings.
+    #[serde(default)]
+    pub run: RunSpec,
+    /// The bodies (`[[body]]` tables), in order.
+    #[serde(default, rename = "body")]
+    pub bodies: Vec<Spanned<BodySpec>>,
+    /// The probes written to `probes.csv`, in order.
+    #[serde(default)]
+    pub probes: Vec<Spanned<ProbeSpec>>,
+    /// The file's text, to turn spans into line numbers.
+    #[serde(skip)]
+    source: String,
+    /// The file's path, for messages.
+    #[serde(skip)]
+    path: String,
+}
+
+/// The `[run]` table; every key defaults to [`RunSettings::default`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    /// End time (s).
+    pub end_time: Option<f64>,
+    /// Largest time step (s).
+    pub max_dt: Option<f64>,
+    /// Courant number.
+    pub courant: Option<f64>,
+    /// Interval between VTU frames (s).
+    pub output_interval: Option<f64>,
+    /// Alpha of the alpha shape.
+    pub alpha: Option<f64>,
+}
+
+/// What a body is made of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BodyKind {
+    /// A fluid (needs a `newtonian` material).
+    Fluid,
+    /// A solid (needs a `hypoelastic` material; a box).
+    Solid,
+    /// A rigid wall (no material).
+    Wall,
+}
+
+/// A `[[body]]` table.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Name, used by probes and in messages.
+    pub name: String,
+    /// Fluid, solid or wall.
+    pub kind: BodyKind,
+    /// Material (fluids and solids).
+    #[serde(default)]
+    pub material: Option<Spanned<MaterialSpec>>,
+    /// Where its particles are.
+    pub geometry: Spanned<GeometrySpec>,
+    /// Particle spacing (m); default the file's top-level `spacing`.
+    #[serde(default)]
+    pub spacing: Option<f64>,
+    /// Initial velocity (m/s) of a fluid or solid.
+    #[serde(default)]
+    pub velocity: Option<Coords>,
+    /// Prescribed velocity (m/s) of a wall; fixed when omitted.
+    #[serde(default)]
+    pub wall_velocity: Option<Coords>,
+    /// Solids: particles in this box are clamped (zero velocity).
+    #[serde(default)]
+    pub clamp: Option<BoxSpec>,
+}
+
+/// A material table: `newtonian = { … }` or `hypoelastic = { … }`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum MaterialSpec {
+    /// A quasi-incompressible Newtonian fluid.
+    Newtonian {
+        /// Density (kg/m³).
+        density: f64,
+        /// Dynamic viscosity (Pa·s).
+        viscosity: f64,
+        /// Bulk modulus (Pa).
+        bulk_modulus: f64,
+    },
+    /// A hypoelastic solid.
+    Hypoelastic {
+        /// Density (kg/m³).
+        density: f64,
+        /// Young's modulus (Pa).
+        young: f64,
+        /// Poisson's ratio.
+        poisson: f64,
+    },
+}
+
+/// An axis-aligned box `{ min = [..], max = [..] }` (m).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Lower corner (m).
+    pub min: Coords,
+    /// Upper corner (m).
+    pub max: Coords,
+}
+
+/// A geometry table: `box = { … }`, `ball = { … }` or `particles = [ … ]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum GeometrySpec {
+    /// An axis-aligned box filled with a lattice.
+    Box(BoxSpec),
+    /// A disk (2D) or ball (3D) filled with a lattice.
+    Ball {
+        /// Centre (m).
+        center: Coords,
+        /// Radius (m).
+        radius: f64,
+    },
+    /// The particles themselves (m).
+    Particles(Vec<Coords>),
+}
+
+/// A probe: a column of `probes.csv`, sampled after every step. Written as
+/// a name (`"volume"`) or, with parameters, as a one-key table
+/// (`{ body_displacement = { body = "gate", point = [0.1025, 0.0025] } }`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum ProbeSpec {
+    /// `volume`: fluid volume (m³; m² per metre in 2D).
+    Volume,
+    /// `max_speed`: largest fluid particle speed (m/s).
+    MaxSpeed,
+    /// `front_x` (2D): largest `x` of the main fluid body (m), as
+    /// [`crate::cases::front_x`].
+    FrontX,
+    /// `height_at_wall` (2D): height of the main fluid body within 1.5
+    /// spacings of `x = 0` (m), as [`crate::cases::height_at_wall`].
+    HeightAtWall,
+    /// `bottom_pressure` (2D): mean pressure of the wetted floor particles
+    /// at `y = 0` (Pa), as [`crate::cases::bottom_pressure`].
+    BottomPressure,
+    /// `body_displacement`: displacement (m) of the particles of `body`
+    /// that started within `radius` of `point` (the nearest one when
+    /// `radius` is omitted or no particle is that close); columns
+    /// `ux_NAME`, `uy_NAME` (and `uz_NAME`), `NAME` defaulting to the body.
+    BodyDisplacement {
+        /// The body.
+        body: String,
+        /// Initial position of the point followed (m).
+        point: Coords,
+        /// Radius around `point` (m).
+        #[serde(default)]
+        radius: Option<f64>,
+        /// Column suffix; default the body's name.
+        #[serde(default)]
+        name: Option<String>,
+    },
+}
+
+impl ProbeSpec {
+    fn label(&self) -> &'static str {
+        match self {
+            ProbeSpec::Volume => "volume",
+            ProbeSpec::MaxSpeed => "max_speed",
+            ProbeSpec::FrontX => "front_x",
+            ProbeSpec::HeightAtWall => "height_at_wall",
+            ProbeSpec::BottomPressure => "bottom_pressure",
+            ProbeSpec::BodyDisplacement { .. } => "body_displacement",
+        }
+    }
+}
+
+/// A loaded scene of either dimension with its probes.
+pub enum LoadedScene {
+    /// A 2D (plane strain) scene.
+    Two(Scene<2>, Vec<Probe<2>>),
+    /// A 3D scene.
+    Three(Scene<3>, Vec<Probe<3>>),
+}
+
+impl std::fmt::Debug for LoadedScene {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names = |p: &mut dyn Iterator<Item = &String>| p.cloned().collect::<Vec<_>>();
+        match self {
+            LoadedScene::Two(s, p) => f
+                .debug_tuple("Two")
+                .field(s)
+                .field(&names(&mut p.iter().map(|p| &p.name)))
+                .finish(),
+            LoadedScene::Three(s, p) => f
+                .debug_tuple("Three")
+                .field(s)
+                .field(&names(&mut p.iter().map(|p| &p.name)))
+                .finish(),
+        }
+    }
+}
+
+impl SceneFile {
+    /// Reads and parses the file at `path`.
+    ///
+    /// # Errors
+    ///
+    /// [`SceneError::File`] if it cannot be read or is malformed (with the
+    /// line and the field).
+    pub fn read(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::File {
+            path: path.display().to_string(),
+            why: e.to_string(),
+        })?;
+        let mut file = Self::parse(&text, &path.display().to_string())?;
+        if file.name.is_none() {
+            file.name = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned());
+        }
+        Ok(file)
+    }
+
+    /// Parses `text`; `path` only names the file in messages.
+    ///
+    /// # Errors
+    ///
+    /// [`SceneError::File`] if the text is malformed: TOML syntax, an
+    /// unknown or missing key, a value of the wrong type, a dimension other
+    /// than 2 or 3. The message names the line and column.
+    pub fn parse(text: &str, path: &str) -> Result<Self, SceneError> {
+        let mut file: SceneFile = toml::from_str(text).map_err(|e| {
+            let why = match e.span() {
+                Some(span) => {
+                    let (line, col) = line_col(text, span.start);
+                    format!("line {line}, column {col}: {}", e.message().trim_end())
+                }
+                None => e.message().trim_end().to_string(),
+            };
+            SceneError::File {
+                path: path.to_string(),
+                why,
+            }
+        })?;
+        file.source = text.to_string();
+        file.path = path.to_string();
+        let d = *file.dimension.get_ref();
+        if d != 2 && d != 3 {
+            return Err(file.error(
+                file.dimension.span(),
+                format!("`dimension` must be 2 or 3, got {d}"),
+            ));
+        }
+        Ok(file)
+    }
+
+    /// Reads the file at `path` and builds its scene (validated) and
+    /// probes in the file's dimension, after the overrides: `spacing`
+    /// replaces every body's spacing, `end_time` the run's end time.
+    ///
+    /// # Errors
+    ///
+    /// [`SceneError::File`] for a malformed file, the typed errors of
+    /// [`Scene::validate`] for impossible values.
+    pub fn load(
+        path: impl AsRef<Path>,
+        spacing: Option<f64>,
+        end_time: Option<f64>,
+    ) -> Result<LoadedScene, SceneError> {
+        let mut file = Self::read(path)?;
+        if let Some(h) = spacing {
+            file.override_spacing(h);
+        }
+        if let Some(t) = end_time {
+            file.run.end_time = Some(t);
+        }
+        file.build()
+    }
+
+    /// Builds the scene (validated) and the probes in the file's dimension.
+    ///
+    /// # Errors
+    ///
+    /// As [`SceneFile::scene`] and [`SceneFile::probes_2d`].
+    pub fn build(&self) -> Result<LoadedScene, SceneError> {
+        Ok(match self.dimension() {
+            2 => LoadedScene::Two(self.scene::<2>()?, self.probes_2d()?),
+            _ => LoadedScene::Three(self.scene::<3>()?, self.probes_3d()?),
+        })
+    }
+
+    /// The dimension, 2 or 3.
+    pub fn dimension(&self) -> usize {
+        *self.dimension.get_ref() as usize
+    }
+
+    /// The scene name: `name`, else the file's stem, else `"scene"`.
+    pub fn scene_name(&self) -> String {
+        self.name.clone().unwrap_or_else(|| "scene".into())
+    }
+
+    /// Replaces the spacing of every body (and the default) by `h` (m).
+    pub fn override_spacing(&mut self, h: f64) {
+        self.spacing = Some(h);
+        for b in &mut self.bodies {
+            b.get_mut().spacing = Some(h);
+        }
+    }
+
+    /// The run settings: the `[run]` table over [`RunSettings::default`].
+    pub fn settings(&self) -> RunSettings {
+        let d = RunSettings::default();
+        let r = &self.run;
+        RunSettings {
+            end_time: r.end_time.unwrap_or(d.end_time),
+            max_dt: r.max_dt.unwrap_or(d.max_dt),
+            courant: r.courant.unwrap_or(d.courant),
+            output_interval: r.output_interval.or(d.output_interval),
+            alpha: r.alpha.unwrap_or(d.alpha),
+        }
+    }
+
+    /// The scene in `D` dimensions, checked with [`Scene::validate`].
+    ///
+    /// # Errors
+    ///
+    /// [`SceneError::File`] (with the line) if `D` is not the file's
+    /// dimension, a coordinate list has the wrong length, a body has no
+    /// spacing, a material's parameters are invalid or a key does not fit
+    /// the body's kind (a wall's material, a fluid's clamp…);
+    /// [`SceneError::MissingMaterial`] for a fluid or solid without one;
+    /// any error of [`Scene::validate`].
+    pub fn scene<const D: usize>(&self) -> Result<Scene<D>, SceneError>
+    where
+        Const<D>: Dim,
+    {
+        if self.dimension() != D {
+            return Err(self.error(
+                self.dimension.span(),
+                format!(
+                    "the file is a {}D scene, not {D}D",
+                    self.dimension.get_ref()
+                ),
+            ));
+        }
+        let mut scene = Scene::<D>::new(self.scene_name()).settings(self.settings());
+        if let Some(g) = &self.gravity {
+            scene = scene.gravity(self.vector::<D>(g, "gravity")?);
+        }
+        for spanned in &self.bodies {
+            let b = spanned.get_ref();
+            let at = spanned.span();
+            let what = |key: &str| format!("body `{}`: `{key}`", b.name);
+            let spacing = b.spacing.or(self.spacing).ok_or_else(|| {
+                self.error(
+                    at.clone(),
+                    format!(
+                        "body `{}` has no `spacing` (give it in the body or at the top)",
+                        b.name
+                    ),
+                )
+            })?;
+            let geometry = self.geometry::<D>(&b.geometry, &b.name)?;
+            let material = match (&b.material, b.kind) {
+                (Some(m), BodyKind::Wall) => {
+                    return Err(self.error(
+                        m.span(),
+                        format!("body `{}`: a wall has no material", b.name),
+                    ))
+                }
+                (Some(m), _) => Some(self.material::<D>(m, &b.name)?),
+                (None, BodyKind::Wall) => None,
+                (None, _) => {
+                    return Err(SceneError::MissingMaterial {
+                        body: b.name.clone(),
+                    })
+                }
+            };
+            if b.kind != BodyKind::Wall {
+                if let Some(w) = &b.wall_velocity {
+                    return Err(self.error(
+                        w.span(),
+                        format!("{} is for walls only", what("wall_velocity")),
+                    ));
+                }
+            }
+            if b.kind == BodyKind::Wall {
+                if let Some(v) = &b.velocity {
+                    return Err(self.error(
+                        v.span(),
+                        format!(
+                            "{} is the initial velocity of a fluid or solid; a wall moves with `wall_velocity`",
+                            what("velocity")
+                        ),
+                    ));
+                }
+            }
+            if b.kind != BodyKind::Solid {
+                if let Some(c) = &b.clamp {
+                    return Err(self.error(
+                        c.min.span(),
+                        format!("{} is for solids only", what("clamp")),
+                    ));
+                }
+            }
+            scene = match (b.kind, material) {
+                // (A fluid or solid without material returned above.)
+                (BodyKind::Wall, _) | (_, None) => {
+                    let motion = match &b.wall_velocity {
+                        Some(w) => WallMotion::Velocity(self.vector::<D>(w, &what("wall_velocity"))?),
+                        None => WallMotion::Fixed,
+                    };
+                    scene.wall(&b.name, geometry, spacing, motion)
+                }
+                (BodyKind::Fluid, Some(m)) => scene.fluid(&b.name, m, geometry, spacing),
+                (BodyKind::Solid, Some(m)) => {
+                    let clamp = match &b.clamp {
+                        Some(c) => Some((
+                            Point::from(self.vector::<D>(&c.min, &what("clamp.min"))?),
+                            Point::from(self.vector::<D>(&c.max, &what("clamp.max"))?),
+                        )),
+                        None => None,
+                    };
+                    scene.solid(&b.name, m, geometry, spacing, clamp)
+                }
+            };
+            if let Some(v) = &b.velocity {
+                scene = scene.with_velocity(self.vector::<D>(v, &what("velocity"))?);
+            }
+        }
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// The probes of a 2D file.
+    ///
+    /// # Errors
+    ///
+    /// [`SceneError::File`] for a probe naming an unknown body, a point of
+    /// the wrong dimension or a repeated column.
+    pub fn probes_2d(&self) -> Result<Vec<Probe<2>>, SceneError> {
+        let band = 1.5 * self.fluid_spacing();
+        let mut out = Vec::new();
+        for p in &self.probes {
+            match p.get_ref() {
+                ProbeSpec::FrontX => out.push(Probe::new("front_x", |s: &Simulation<2>| {
+                    crate::cases::front_x(s)
+                })),
+                ProbeSpec::HeightAtWall => {
+                    out.push(Probe::new("height_at_wall", move |s: &Simulation<2>| {
+                        crate::cases::height_at_wall(s, band)
+                    }))
+                }
+                ProbeSpec::BottomPressure => {
+                    out.push(Probe::new("bottom_pressure", |s: &Simulation<2>| {
+                        crate::cases::bottom_pressure(s)
+                    }))
+                }
+                _ => out.extend(self.any_dimension_probe::<2>(p)?),
+            }
+        }
+        self.unique(&out)?;
+        Ok(out)
+    }
+
+    /// The probes of a 3D file.
+    ///
+    /// # Errors
+    ///
+    /// As [`SceneFile::probes_2d`], and [`SceneError::File`] for a 2D-only
+    /// probe (`front_x`, `height_at_wall`, `bottom_pressure`).
+    pub fn probes_3d(&self) -> Result<Vec<Probe<3>>, SceneError> {
+        let mut out = Vec::new();
+        for p in &self.probes {
+            match p.get_ref() {
+                ProbeSpec::FrontX | ProbeSpec::HeightAtWall | ProbeSpec::BottomPressure => {
+                    return Err(self.error(
+                        p.span(),
+                        format!("probe `{}` is for 2D scenes only", p.get_ref().label()),
+                    ))
+                }
+                _ => out.extend(self.any_dimension_probe::<3>(p)?),
+            }
+        }
+        self.unique(&out)?;
+        Ok(out)
+    }
+
+    /// Smallest spacing of the fluid bodies (of all bodies if none).
+    fn fluid_spacing(&self) -> f64 {
+        let of = |b: &BodySpec| b.spacing.or(self.spacing).unwrap_or(f64::INFINITY);
+        let fluid = self
+            .bodies
+            .iter()
+            .map(|b| b.get_ref())
+            .filter(|b| b.kind == BodyKind::Fluid)
+            .map(of)
+            .fold(f64::INFINITY, f64::min);
+        if fluid.is_finite() {
+            fluid
+        } else {
+            self.bodies
+                .iter()
+                .map(|b| of(b.get_ref()))
+                .fold(f64::INFINITY, f64::min)
+        }
+    }
+
+    fn any_dimension_probe<const D: usize>(
+        &self,
+        p: &Spanned<ProbeSpec>,
+    ) -> Result<Vec<Probe<D>>, SceneError>
+    where
+        Const<D>: Dim,
+    {
+        Ok(match p.get_ref() {
+            ProbeSpec::Volume => vec![Probe::new("volume", |s: &Simulation<D>| {
+                s.fluid_volume()
+            })],
+            ProbeSpec::MaxSpeed => vec![Probe::new("max_speed", |s: &Simulation<D>| {
+                (0..s.state.len())
+                    .filter(|&i| s.kind[i] == ParticleKind::Fluid)
+                    .map(|i| s.state.v[i].norm())
+                    .fold(0.0, f64::max)
+            })],
+            ProbeSpec::BodyDisplacement {
+                body,
+                point,
+                radius,
+                name,
+            } => {
+                if !self.bodies.iter().any(|b| &b.get_ref().name == body) {
+                    return Err(self.error(
+                        p.span(),
+                        format!("probe `body_displacement`: no body `{body}`"),
+                    ));
+                }
+                let point = Point::from(self.vector::<D>(point, "body_displacement.point")?);
+                let suffix = name.clone().unwrap_or_else(|| body.clone());
+                (0..D)
+                    .map(|k| {
+                        let body = body.clone();
+                        let radius = *radius;
+                        let chosen: OnceCell<Vec<usize>> = OnceCell::new();
+                        Probe::new(
+                            &format!("u{}_{suffix}", ["x", "y", "z"][k]),
+                            move |s: &Simulation<D>| {
+                                let idx = chosen.get_or_init(|| followed(s, &body, &point, radius));
+                                if idx.is_empty() {
+                                    return f64::NAN;
+                                }
+                                idx.iter()
+                                    .map(|&i| s.state.x[i][k] - s.initial_position(i)[k])
+                                    .sum::<f64>()
+                                    / idx.len() as f64
+                            },
+                        )
+                    })
+                    .collect()
+            }
+            // The 2D-only probes are handled by the callers.
+            _ => Vec::new(),
+        })
+    }
+
+    fn unique<const D: usize>(&self, probes: &[Probe<D>]) -> Result<(), SceneError>
+    where
+        Const<D>: Dim,
+    {
+        for (i, p) in probes.iter().enumerate() {
+            if probes[..i].iter().any(|q| q.name == p.name) {
+                return Err(SceneError::File {
+                    path: self.path.clone(),
+                    why: format!("probe column `{}` appears twice", p.name),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn geometry<const D: usize>(
+        &self,
+        g: &Spanned<GeometrySpec>,
+        body: &str,
+    ) -> Result<Geometry<D>, SceneError>
+    where
+        Const<D>: Dim,
+    {
+        let what = |key: &str| format!("body `{body}`: `geometry.{key}`");
+        Ok(match g.get_ref() {
+            GeometrySpec::Box(b) => Geometry::Box {
+                min: Point::from(self.vector::<D>(&b.min, &what("box.min"))?),
+                max: Point::from(self.vector::<D>(&b.max, &what("box.max"))?),
+            },
+            GeometrySpec::Ball { center, radius } => Geometry::Ball {
+                center: Point::from(self.vector::<D>(center, &what("ball.center"))?),
+                radius: *radius,
+            },
+            GeometrySpec::Particles(ps) => {
+                if ps.is_empty() {
+                    return Err(self.error(g.span(), format!("{} is empty", what("particles"))));
+                }
+                Geometry::Particles(
+                    ps.iter()
+                        .map(|p| self.vector::<D>(p, &what("particles")).map(Point::from))
+                        .collect::<Result<_, _>>()?,
+                )
+            }
+        })
+    }
+
+    fn material<const D: usize>(
+        &self,
+        m: &Spanned<MaterialSpec>,
+        body: &str,
+    ) -> Result<Box<dyn Material<D>>, SceneError>
+    where
+        Const<D>: Dim,
+    {
+        let made: Result<Box<dyn Material<D>>, _> = match *m.get_ref() {
+            MaterialSpec::Newtonian {
+                density,
+                viscosity,
+                bulk_modulus,
+            } => Newtonian::new(density, viscosity, bulk_modulus)
+                .map(|n| Box::new(n) as Box<dyn Material<D>>),
+            MaterialSpec::Hypoelastic {
+                density,
+                young,
+                poisson,
+            } => Hypoelastic::new(density, young, poisson)
+                .map(|h| Box::new(h) as Box<dyn Material<D>>),
+        };
+        made.map_err(|e| self.error(m.span(), format!("body `{body}`: material: {e}")))
+    }
+
+    fn vector<const D: usize>(&self, c: &Coords, what: &str) -> Result<Vector<D>, SceneError>
+    where
+        Const<D>: Dim,
+    {
+        let v = c.get_ref();
+        if v.len() != D {
+            return Err(self.error(
+                c.span(),
+                format!(
+                    "{what} needs {D} numbers in a {D}D scene, got {}",
+                    v.len()
+                ),
+            ));
+        }
+        Ok(Vector::<D>::from_column_slice(v))
+    }
+
+    fn error(&self, span: Range<usize>, why: String) -> SceneError {
+        let (line, col) = line_col(&self.source, span.start);
+        SceneError::File {
+            path: self.path.clone(),
+            why: if self.source.is_empty() {
+                why
+            } else {
+                format!("line {line}, column {col}: {why}")
+            },
+        }
+    }
+}
+
+/// The particles of `body` that started within `radius` of `point`, or the
+/// nearest one.
+fn followed<const D: usize>(
+    s: &Simulation<D>,
+    body: &str,
+    point: &Point<D>,
+    radius: Option<f64>,
+) -> Vec<usize>
+where
+    Const<D>: Dim,
+{
+    let all = s.body_particles(body);
+    let dist = |i: usize| (s.initial_position(i) - point).norm();
+    if let Some(r) = radius {
+        let near: Vec<usize> = all.iter().copied().filter(|&i| dist(i) <= r).collect();
+        if !near.is_empty() {
+            return near;
+        }
+    }
+    all.iter()
+        .copied()
+        .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
+        .into_iter()
+        .collect()
+}
+
+/// 1-based line and column (in characters) of byte `offset` in `text`.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = text.get(..offset).unwrap_or(text);
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[start..].chars().count() + 1)
+}

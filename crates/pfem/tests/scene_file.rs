@@ -1,0 +1,291 @@
+//! Scene files: the bundled `examples/scenes/*.toml` give the same particles
+//! as the `pfem::cases` scenes, and bad files give clear errors.
+
+use std::path::PathBuf;
+
+use pfem::cases::{DamBreak, ElasticGate, Hydrostatic};
+use pfem::prelude::*;
+use pfem::scene_file::{LoadedScene, SceneFile};
+use pfem::SceneError;
+
+fn scenes_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes")
+}
+
+fn simulation(scene: Scene<2>) -> Simulation<2> {
+    Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
+        .expect("valid scene")
+}
+
+/// Loads `file`, builds both simulations and compares particles, kinds,
+/// bodies and the run settings.
+fn same_as_case(file: &str, case: Scene<2>, probes: &[&str]) {
+    let loaded = SceneFile::load(scenes_dir().join(file), None, None).expect(file);
+    let LoadedScene::Two(scene, file_probes) = loaded else {
+        panic!("{file} is not 2D");
+    };
+    assert_eq!(scene.name, case.name);
+    assert_eq!(scene.settings, case.settings, "{file}: run settings");
+    assert_eq!(scene.gravity, case.gravity, "{file}: gravity");
+    let names: Vec<&str> = file_probes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, probes, "{file}: probes");
+    let a = simulation(scene);
+    let b = simulation(case);
+    assert_eq!(a.state.len(), b.state.len(), "{file}: particle count");
+    assert_eq!(a.kind, b.kind, "{file}: kinds");
+    assert_eq!(a.body_names, b.body_names, "{file}: bodies");
+    assert_eq!(a.body, b.body, "{file}: body of each particle");
+    for (i, (p, q)) in a.state.x.iter().zip(&b.state.x).enumerate() {
+        assert!((p - q).norm() <= 1e-12, "{file}: particle {i} at {p} vs {q}");
+    }
+    assert_eq!(a.solid_elements, b.solid_elements, "{file}: solid mesh");
+    assert_eq!(
+        a.constraints, b.constraints,
+        "{file}: walls and clamped particles"
+    );
+}
+
+#[test]
+fn dam_break_file_matches_the_case() {
+    same_as_case(
+        "dam_break_2d.toml",
+        DamBreak::default().scene(),
+        &["front_x", "height_at_wall", "volume"],
+    );
+}
+
+#[test]
+fn elastic_gate_file_matches_the_case() {
+    same_as_case(
+        "elastic_gate_2d.toml",
+        ElasticGate::default().scene(),
+        &["ux_tip", "uy_tip", "volume"],
+    );
+}
+
+#[test]
+fn hydrostatic_file_matches_the_case() {
+    same_as_case(
+        "hydrostatic_2d.toml",
+        Hydrostatic::default().scene(),
+        &["bottom_pressure", "max_speed", "volume"],
+    );
+}
+
+#[test]
+fn spacing_and_end_time_overrides_apply_to_every_body() {
+    let loaded = SceneFile::load(
+        scenes_dir().join("hydrostatic_2d.toml"),
+        Some(0.025),
+        Some(0.05),
+    )
+    .unwrap();
+    let LoadedScene::Two(scene, _) = loaded else {
+        panic!("2D")
+    };
+    assert!(scene.bodies.iter().all(|b| b.spacing == 0.025));
+    assert_eq!(scene.settings.end_time, 0.05);
+}
+
+/// A small valid 2D file; `extra_top` goes before the first table,
+/// `water` is the water body's table body.
+fn puddle(extra_top: &str, run: &str, water: &str) -> String {
+    format!(
+        r#"name = "puddle"
+dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.025
+{extra_top}
+[run]
+{run}
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = {{ min = [-0.1, -0.025], max = [0.3, 0.0] }}
+
+[[body]]
+name = "water"
+kind = "fluid"
+{water}
+"#
+    )
+}
+
+const WATER: &str = r#"material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }"#;
+
+fn file_error(text: &str) -> String {
+    let err = SceneFile::parse(text, "bad.toml")
+        .and_then(|f| f.build())
+        .expect_err("a bad file");
+    match err {
+        SceneError::File { path, why } => {
+            assert_eq!(path, "bad.toml");
+            why
+        }
+        other => panic!("expected a file error, got {other:?}"),
+    }
+}
+
+fn build(text: &str) -> Result<LoadedScene, SceneError> {
+    SceneFile::parse(text, "t.toml")?.build()
+}
+
+#[test]
+fn the_puddle_is_valid_and_runs() {
+    let text = puddle("probes = [\"volume\"]", "end_time = 0.01\nmax_dt = 5e-3", WATER);
+    let LoadedScene::Two(scene, probes) = build(&text).unwrap() else {
+        panic!("2D")
+    };
+    let mut sim = simulation(scene);
+    let mut out = StandardOutput::new(
+        std::env::temp_dir().join("pfem_scene_file_puddle"),
+        false,
+        probes,
+        true,
+    );
+    sim.run(&mut [&mut out]).unwrap();
+    assert!(sim.time >= 0.01 - 1e-12);
+    assert!(out.probe_series("volume").iter().all(|v| v.1 > 0.0));
+}
+
+#[test]
+fn unknown_field_names_the_field_and_its_line() {
+    let text = puddle("", "end_time = 0.01", &format!("{WATER}\ncolour = \"blue\""));
+    let why = file_error(&text);
+    assert!(why.contains("colour"), "{why}");
+    let line = text.lines().position(|l| l.starts_with("colour")).unwrap() + 1;
+    assert!(why.contains(&format!("line {line}")), "{why}");
+}
+
+#[test]
+fn unknown_field_in_run_and_material() {
+    let why = file_error(&puddle("", "end_tme = 1.0", WATER));
+    assert!(why.contains("end_tme") && why.contains("line 7"), "{why}");
+    let water = WATER.replace("viscosity", "viscosty");
+    let why = file_error(&puddle("", "", &water));
+    assert!(why.contains("viscosty"), "{why}");
+}
+
+#[test]
+fn wrong_type_names_the_line() {
+    let text = puddle("", "end_time = \"soon\"", WATER);
+    let why = file_error(&text);
+    assert!(why.contains("line 7"), "{why}");
+    assert!(why.contains("string"), "{why}");
+}
+
+#[test]
+fn wrong_number_of_coordinates_names_the_line() {
+    let water = WATER.replace("max = [0.2, 0.2]", "max = [0.2, 0.2, 0.2]");
+    let text = puddle("", "", &water);
+    let why = file_error(&text);
+    let line = text.lines().position(|l| l.contains("0.2, 0.2, 0.2")).unwrap() + 1;
+    assert!(why.contains(&format!("line {line}")), "{why}");
+    assert!(why.contains("2 numbers"), "{why}");
+}
+
+#[test]
+fn bad_dimension_and_syntax() {
+    let why = file_error(&puddle("", "", WATER).replace("dimension = 2", "dimension = 4"));
+    assert!(why.contains("dimension") && why.contains("line 2"), "{why}");
+    let why = file_error("dimension = 2\n[[body]\n");
+    assert!(why.contains("line 2"), "{why}");
+    let why = file_error("name = \"x\"\n");
+    assert!(why.contains("dimension"), "{why}");
+}
+
+#[test]
+fn missing_material_is_a_typed_error() {
+    let water = "geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }";
+    let err = build(&puddle("", "", water)).unwrap_err();
+    assert_eq!(
+        err,
+        SceneError::MissingMaterial {
+            body: "water".into()
+        }
+    );
+}
+
+#[test]
+fn negative_spacing_is_a_typed_error() {
+    let err = build(&puddle("", "", &format!("{WATER}\nspacing = -0.01"))).unwrap_err();
+    assert!(
+        matches!(err, SceneError::InvalidSpacing { ref body, spacing } if body == "water" && spacing == -0.01),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn non_positive_end_time_is_a_typed_error() {
+    for t in ["0.0", "-1.0"] {
+        let err = build(&puddle("", &format!("end_time = {t}"), WATER)).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                SceneError::InvalidSetting {
+                    setting: "end_time",
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+    }
+}
+
+#[test]
+fn invalid_material_and_misplaced_keys_name_their_line() {
+    let water = WATER.replace("density = 1000.0", "density = -1.0");
+    let why = file_error(&puddle("", "", &water));
+    assert!(why.contains("density") && why.contains("line 17"), "{why}");
+    let why = file_error(&puddle(
+        "",
+        "",
+        &format!("{WATER}\nclamp = {{ min = [0.0, 0.0], max = [1.0, 1.0] }}"),
+    ));
+    assert!(why.contains("clamp") && why.contains("line 19"), "{why}");
+}
+
+#[test]
+fn probes_are_checked() {
+    let why = file_error(&puddle(
+        "probes = [{ body_displacement = { body = \"gate\", point = [0.0, 0.0] } }]",
+        "",
+        WATER,
+    ));
+    assert!(why.contains("gate") && why.contains("line 5"), "{why}");
+    let why = file_error(&puddle("probes = [\"volume\", \"volume\"]", "", WATER));
+    assert!(why.contains("twice"), "{why}");
+    let why = file_error(&puddle("probes = [\"frontx\"]", "", WATER));
+    assert!(why.contains("frontx") && why.contains("line 5"), "{why}");
+}
+
+#[test]
+fn a_3d_file_builds_a_3d_scene() {
+    let text = r#"
+dimension = 3
+gravity = [0.0, 0.0, -9.81]
+spacing = 0.05
+probes = ["volume", { body_displacement = { body = "water", point = [0.0, 0.0, 0.0] } }]
+[run]
+end_time = 0.01
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = { min = [-0.05, -0.05, -0.05], max = [0.25, 0.25, 0.0] }
+[[body]]
+name = "water"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.0, 0.0, 0.0], max = [0.2, 0.2, 0.2] }
+"#;
+    let LoadedScene::Three(scene, probes) = build(text).unwrap() else {
+        panic!("3D")
+    };
+    assert_eq!(scene.bodies.len(), 2);
+    let names: Vec<&str> = probes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["volume", "ux_water", "uy_water", "uz_water"]);
+    let why = file_error(&text.replace("\"volume\"", "\"front_x\""));
+    assert!(why.contains("2D"), "{why}");
+}
