@@ -327,9 +327,7 @@ impl SceneFile {
         })?;
         let mut file = Self::parse(&text, &path.display().to_string())?;
         if file.name.is_none() {
-            file.name = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned());
+            file.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());
         }
         Ok(file)
     }
@@ -346,7 +344,10 @@ impl SceneFile {
             let why = match e.span() {
                 Some(span) => {
                     let (line, col) = line_col(text, span.start);
-                    format!("line {line}, column {col}: {}", e.message().trim_end())
+                    let key = key_before(text, span.start)
+                        .map(|k| format!("`{k}`: "))
+                        .unwrap_or_default();
+                    format!("line {line}, column {col}: {key}{}", e.message().trim_end())
                 }
                 None => e.message().trim_end().to_string(),
             };
@@ -520,7 +521,9 @@ impl SceneFile {
                 // (A fluid or solid without material returned above.)
                 (BodyKind::Wall, _) | (_, None) => {
                     let motion = match &b.wall_velocity {
-                        Some(w) => WallMotion::Velocity(self.vector::<D>(w, &what("wall_velocity"))?),
+                        Some(w) => {
+                            WallMotion::Velocity(self.vector::<D>(w, &what("wall_velocity"))?)
+                        }
                         None => WallMotion::Fixed,
                     };
                     scene.wall(&b.name, geometry, spacing, motion)
@@ -559,16 +562,14 @@ impl SceneFile {
                 ProbeSpec::FrontX => out.push(Probe::new("front_x", |s: &Simulation<2>| {
                     crate::cases::front_x(s)
                 })),
-                ProbeSpec::HeightAtWall => {
-                    out.push(Probe::new("height_at_wall", move |s: &Simulation<2>| {
+                ProbeSpec::HeightAtWall => out
+                    .push(Probe::new("height_at_wall", move |s: &Simulation<2>| {
                         crate::cases::height_at_wall(s, band)
-                    }))
-                }
-                ProbeSpec::BottomPressure => {
-                    out.push(Probe::new("bottom_pressure", |s: &Simulation<2>| {
+                    })),
+                ProbeSpec::BottomPressure => out
+                    .push(Probe::new("bottom_pressure", |s: &Simulation<2>| {
                         crate::cases::bottom_pressure(s)
-                    }))
-                }
+                    })),
                 _ => out.extend(self.any_dimension_probe::<2>(p)?),
             }
         }
@@ -627,9 +628,7 @@ impl SceneFile {
         Const<D>: Dim,
     {
         Ok(match p.get_ref() {
-            ProbeSpec::Volume => vec![Probe::new("volume", |s: &Simulation<D>| {
-                s.fluid_volume()
-            })],
+            ProbeSpec::Volume => vec![Probe::new("volume", |s: &Simulation<D>| s.fluid_volume())],
             ProbeSpec::MaxSpeed => vec![Probe::new("max_speed", |s: &Simulation<D>| {
                 (0..s.state.len())
                     .filter(|&i| s.kind[i] == ParticleKind::Fluid)
@@ -715,7 +714,7 @@ impl SceneFile {
                 }
                 Geometry::Particles(
                     ps.iter()
-                        .map(|p| self.vector::<D>(p, &what("particles")).map(Point::from))
+                        .map(|p| self.vector::<D>(p, &what("particles")))
                         .collect::<Result<_, _>>()?,
                 )
             }
@@ -755,10 +754,7 @@ impl SceneFile {
         if v.len() != D {
             return Err(self.error(
                 c.span(),
-                format!(
-                    "{what} needs {D} numbers in a {D}D scene, got {}",
-                    v.len()
-                ),
+                format!("{what} needs {D} numbers in a {D}D scene, got {}", v.len()),
             ));
         }
         Ok(Vector::<D>::from_column_slice(v))
@@ -810,4 +806,22 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let start = before.rfind('\n').map_or(0, |i| i + 1);
     (line, before[start..].chars().count() + 1)
+}
+
+/// The key whose value starts at byte `offset`: the dotted key before the
+/// last `=` on the same line, if any (for messages about a value).
+fn key_before(text: &str, offset: usize) -> Option<&str> {
+    let before = text.get(..offset.min(text.len()))?;
+    let line = &before[before.rfind('\n').map_or(0, |i| i + 1)..];
+    let key = line[..line.rfind('=')?].trim_end();
+    let start = key
+        .rfind(|c: char| !(c.is_alphanumeric() || c == '_' || c == '-' || c == '.'))
+        .map_or(0, |i| i + c_len(key, i));
+    let key = &key[start..];
+    (!key.is_empty()).then_some(key)
+}
+
+/// Length in bytes of the character at byte `i` of `s`.
+fn c_len(s: &str, i: usize) -> usize {
+    s[i..].chars().next().map_or(1, char::len_utf8)
 }

@@ -36,7 +36,10 @@ fn same_as_case(file: &str, case: Scene<2>, probes: &[&str]) {
     assert_eq!(a.body_names, b.body_names, "{file}: bodies");
     assert_eq!(a.body, b.body, "{file}: body of each particle");
     for (i, (p, q)) in a.state.x.iter().zip(&b.state.x).enumerate() {
-        assert!((p - q).norm() <= 1e-12, "{file}: particle {i} at {p} vs {q}");
+        assert!(
+            (p - q).norm() <= 1e-12,
+            "{file}: particle {i} at {p} vs {q}"
+        );
     }
     assert_eq!(a.solid_elements, b.solid_elements, "{file}: solid mesh");
     assert_eq!(
@@ -134,7 +137,11 @@ fn build(text: &str) -> Result<LoadedScene, SceneError> {
 
 #[test]
 fn the_puddle_is_valid_and_runs() {
-    let text = puddle("probes = [\"volume\"]", "end_time = 0.01\nmax_dt = 5e-3", WATER);
+    let text = puddle(
+        "probes = [\"volume\"]",
+        "end_time = 0.01\nmax_dt = 5e-3",
+        WATER,
+    );
     let LoadedScene::Two(scene, probes) = build(&text).unwrap() else {
         panic!("2D")
     };
@@ -152,7 +159,11 @@ fn the_puddle_is_valid_and_runs() {
 
 #[test]
 fn unknown_field_names_the_field_and_its_line() {
-    let text = puddle("", "end_time = 0.01", &format!("{WATER}\ncolour = \"blue\""));
+    let text = puddle(
+        "",
+        "end_time = 0.01",
+        &format!("{WATER}\ncolour = \"blue\""),
+    );
     let why = file_error(&text);
     assert!(why.contains("colour"), "{why}");
     let line = text.lines().position(|l| l.starts_with("colour")).unwrap() + 1;
@@ -173,7 +184,17 @@ fn wrong_type_names_the_line() {
     let text = puddle("", "end_time = \"soon\"", WATER);
     let why = file_error(&text);
     assert!(why.contains("line 7"), "{why}");
+    assert!(why.contains("`end_time`"), "{why}");
     assert!(why.contains("string"), "{why}");
+    let why = file_error(&puddle(
+        "",
+        "",
+        &WATER.replace("density = 1000.0", "density = [1]"),
+    ));
+    assert!(
+        why.contains("line 17") && why.contains("`density`"),
+        "{why}"
+    );
 }
 
 #[test]
@@ -181,7 +202,11 @@ fn wrong_number_of_coordinates_names_the_line() {
     let water = WATER.replace("max = [0.2, 0.2]", "max = [0.2, 0.2, 0.2]");
     let text = puddle("", "", &water);
     let why = file_error(&text);
-    let line = text.lines().position(|l| l.contains("0.2, 0.2, 0.2")).unwrap() + 1;
+    let line = text
+        .lines()
+        .position(|l| l.contains("0.2, 0.2, 0.2"))
+        .unwrap()
+        + 1;
     assert!(why.contains(&format!("line {line}")), "{why}");
     assert!(why.contains("2 numbers"), "{why}");
 }
@@ -288,4 +313,71 @@ geometry.box = { min = [0.0, 0.0, 0.0], max = [0.2, 0.2, 0.2] }
     assert_eq!(names, ["volume", "ux_water", "uy_water", "uz_water"]);
     let why = file_error(&text.replace("\"volume\"", "\"front_x\""));
     assert!(why.contains("2D"), "{why}");
+}
+
+fn pfem(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_pfem"))
+        .args(args)
+        .output()
+        .expect("the pfem binary runs")
+}
+
+#[test]
+fn the_binary_checks_runs_and_fails_cleanly() {
+    for f in ["dam_break_2d", "elastic_gate_2d", "hydrostatic_2d"] {
+        let path = scenes_dir().join(format!("{f}.toml"));
+        let o = pfem(&["check", path.to_str().unwrap()]);
+        assert!(o.status.success(), "{f}: {o:?}");
+    }
+    let help = pfem(&["--help"]);
+    assert!(help.status.success());
+    assert!(String::from_utf8_lossy(&help.stdout).contains("pfem run FILE"));
+
+    let out = std::env::temp_dir().join(format!("pfem_bin_run_{}", std::process::id()));
+    let scene = scenes_dir().join("hydrostatic_2d.toml");
+    let o = pfem(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--spacing",
+        "0.025",
+        "--end-time",
+        "0.01",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{o:?}");
+    for f in ["hydrostatic_2d.pvd", "probes.csv", "summary.json"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(out.join("probes.csv")).unwrap();
+    assert!(
+        csv.starts_with("t,bottom_pressure,max_speed,volume"),
+        "{csv}"
+    );
+    std::fs::remove_dir_all(&out).ok();
+
+    let bad = std::env::temp_dir().join(format!("pfem_bad_{}.toml", std::process::id()));
+    std::fs::write(&bad, puddle("", "", &format!("{WATER}\ncolour = 1"))).unwrap();
+    let o = pfem(&["check", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("colour") && err.contains("line 19"), "{err}");
+    std::fs::remove_file(&bad).ok();
+
+    for args in [
+        &["run"][..],
+        &["frobnicate", "x.toml"],
+        &["check", "/nonexistent/x.toml"],
+        &["run", "x.toml", "--spacing", "-1"],
+        &["run", "x.toml", "--colour", "red"],
+        &[],
+    ] {
+        let o = pfem(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {o:?}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).starts_with("error: "),
+            "{args:?}: {o:?}"
+        );
+    }
 }
