@@ -24,7 +24,7 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env()?;
-    args.reject_unknown(&["aspect", "width", "tank-length", "solver"])?;
+    args.reject_unknown(&["aspect", "width", "tank-length", "alpha"])?;
     let mut case = DamBreak::default();
     case.width = args.number("width", case.width)?;
     case.aspect = args.number("aspect", case.aspect)?;
@@ -44,8 +44,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut sim = Simulation::new(
         case.scene(),
         Box::new(Delaunay2::default()),
-        StepParams::default(),
+        args.step_params()?,
     )?;
+    sim.set_solver(args.solver()?);
+    sim.alpha.alpha = args.number("alpha", sim.alpha.alpha)?;
     eprintln!(
         "dam_break_2d: {} particles, a = {} m, n² = {}, h = {} m, end time {:.3} s",
         sim.state.len(),
@@ -54,12 +56,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         case.spacing,
         case.end_time
     );
-    match args.options.get("solver").map(String::as_str) {
-        None | Some("lu") => {}
-        Some("cholesky") => sim.set_solver(Box::new(pfem::assembly::SparseCholesky::default())),
-        Some("cg") => sim.set_solver(Box::new(pfem::assembly::ConjugateGradient::default())),
-        Some(other) => return Err(format!("unknown --solver {other} (lu, cholesky, cg)").into()),
-    }
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
     sim.run(&mut [&mut output])?;
 

@@ -43,8 +43,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut sim = Simulation::new(
         case.scene(),
         Box::new(Delaunay2::default()),
-        StepParams::default(),
+        args.step_params()?,
     )?;
+    sim.set_solver(args.solver()?);
     eprintln!(
         "elastic_gate_2d: {} particles, h = {} m, E = {} Pa, end time {} s",
         sim.state.len(),

@@ -29,8 +29,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut sim = Simulation::new(
         case.scene(),
         Box::new(Delaunay2::default()),
-        StepParams::default(),
+        args.step_params()?,
     )?;
+    sim.set_solver(args.solver()?);
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
     sim.run(&mut [&mut output])?;
     let p = output.probe_series("bottom_pressure");

@@ -189,10 +189,25 @@ where
     if measure.is_nan() || measure <= 0.0 {
         return (measure.max(0.0), false);
     }
+    // Slivers: a simplex whose measure is a vanishing fraction of its
+    // circumball's is flat (4 nearly cospherical lattice points in 3D whose
+    // rounded coordinates the exact predicates see as a thin tetrahedron).
+    // It would be a J ≈ 0 element that any motion inverts; it is dropped,
+    // losing no measure worth counting.
+    let r_d = if D == 2 { r2 } else { r2 * r2.sqrt() };
+    if measure <= MIN_SHAPE_QUALITY * r_d {
+        return (measure, false);
+    }
     let ah = alpha * simplex_spacing(spacing, s);
     // §8 alpha criterion: keep when the circumradius R ≤ α h.
     (measure, r2 <= ah * ah)
 }
+
+/// Smallest `measure / Rᴰ` (`R` the circumradius) of a kept simplex: flatter
+/// ones (slivers) are never kept by the alpha shape. The regular triangle
+/// has `3√3/4 ≈ 1.3`, the regular tetrahedron `8/(9√3) ≈ 0.51`, a Kuhn
+/// tetrahedron of a cubic lattice `≈ 0.26`.
+pub const MIN_SHAPE_QUALITY: f64 = 1e-3;
 
 /// Signed measure and squared circumradius of a simplex (`∞` when
 /// degenerate). The circumcentre offset `c` from `p[0]` solves
@@ -243,7 +258,8 @@ where
 /// is [`ParticleKind::Fluid`]; simplices of wall particles only, of solid
 /// particles only (a solid keeps its own mesh, which the driver supplies) or
 /// bridging solids and walls without a fluid node are never kept. A
-/// candidate is kept when it is positively oriented and its circumradius
+/// candidate is kept when it is positively oriented, not a sliver
+/// (`measure > MIN_SHAPE_QUALITY · Rᴰ`) and its circumradius
 /// satisfies `R ≤ α·h` (§8), `h` the mean of its nodes' `spacing`.
 ///
 /// The per-simplex test runs in parallel (rayon); the sums are taken

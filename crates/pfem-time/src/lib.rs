@@ -189,6 +189,10 @@ pub struct StepReport {
     pub iterations: usize,
     /// Rejected attempts before it.
     pub rejections: usize,
+    /// Of those, rejected because an element degenerated or inverted.
+    pub rejected_inverted: usize,
+    /// Of those, rejected because the Picard loop did not converge.
+    pub rejected_picard: usize,
     /// Last relative velocity change.
     pub change: f64,
     /// Largest linear-solve residual in the accepted attempt.
@@ -328,14 +332,22 @@ where
     ) -> Result<StepReport, StepError> {
         let mut dt = dt;
         let mut rejections = 0;
+        let (mut inverted, mut picard) = (0, 0);
         loop {
             match self.try_step(time, dt, state, history, input) {
                 Ok(mut rep) => {
                     rep.rejections = rejections;
+                    rep.rejected_inverted = inverted;
+                    rep.rejected_picard = picard;
                     return Ok(rep);
                 }
                 Err(e @ StepError::InvalidInput { .. }) => return Err(e),
                 Err(e) => {
+                    match &e {
+                        StepError::Assembly { .. } => inverted += 1,
+                        StepError::PicardDiverged { .. } => picard += 1,
+                        _ => {}
+                    }
                     rejections += 1;
                     dt *= 0.5;
                     if dt < self.params.min_dt {

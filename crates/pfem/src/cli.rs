@@ -71,12 +71,49 @@ impl Args {
         }
     }
 
-    /// Fails on options not in `known`.
+    /// Time-integration parameters from `--scheme newmark|euler` and
+    /// `--picard-tol TOL` (defaults: the paper's Newmark, tolerance 1e-6).
+    pub fn step_params(&self) -> Result<pfem_time::StepParams, ArgsError> {
+        let mut p = pfem_time::StepParams::default();
+        match self.options.get("scheme").map(String::as_str) {
+            None | Some("newmark") => {}
+            Some("euler") => p.scheme = pfem_time::Scheme::BackwardEuler,
+            Some(other) => {
+                return Err(ArgsError(format!(
+                    "--scheme must be newmark or euler, got `{other}`"
+                )))
+            }
+        }
+        p.picard_tolerance = self.number("picard-tol", p.picard_tolerance)?;
+        Ok(p)
+    }
+
+    /// The linear solver chosen by `--solver direct|lu|cholesky|cg`
+    /// (default `direct`: Cholesky with LU fallback).
+    pub fn solver(&self) -> Result<Box<dyn pfem_assembly::LinearSolver>, ArgsError> {
+        use pfem_assembly::{ConjugateGradient, DirectSolver, SparseCholesky, SparseLu};
+        Ok(match self.options.get("solver").map(String::as_str) {
+            None | Some("direct") => Box::new(DirectSolver::default()),
+            Some("lu") => Box::new(SparseLu::default()),
+            Some("cholesky") => Box::new(SparseCholesky::default()),
+            Some("cg") => Box::new(ConjugateGradient::default()),
+            Some(other) => {
+                return Err(ArgsError(format!(
+                    "--solver must be direct, lu, cholesky or cg, got `{other}`"
+                )))
+            }
+        })
+    }
+
+    /// Fails on options not in `known` (besides the common `scheme`,
+    /// `picard-tol` and `solver`).
     pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ArgsError> {
         for k in self.options.keys() {
-            if !known.contains(&k.as_str()) {
+            if !known.contains(&k.as_str())
+                && !["scheme", "picard-tol", "solver"].contains(&k.as_str())
+            {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --scheme --picard-tol --solver{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }

@@ -121,6 +121,46 @@ where
     out
 }
 
+/// Lattice nodes of a cylinder along coordinate `axis` (3D): disks of
+/// lattice nodes (spacing `h`, centred on the axis) within `radius`, at
+/// `base + k · height / n` along the axis, `k = 0..=n`, `n = round(height / h)`
+/// (the ends are nodes). In 2D the "disk" is the segment across the axis,
+/// so the cylinder is a rectangle.
+pub fn cylinder_points<const D: usize>(
+    base: &Point<D>,
+    axis: usize,
+    radius: f64,
+    height: f64,
+    h: f64,
+) -> Vec<Point<D>>
+where
+    Const<D>: Dim,
+{
+    let axis = axis.min(D - 1);
+    let n = (height / h).round().max(1.0) as usize;
+    let m = (radius / h).floor() as i64;
+    let across: Vec<usize> = (0..D).filter(|&k| k != axis).collect();
+    let (ra, rb) = (-m..=m, if D == 3 { -m..=m } else { 0..=0 });
+    let mut out = Vec::new();
+    for k in 0..=n {
+        for j in rb.clone() {
+            for i in ra.clone() {
+                let off = [i as f64 * h, j as f64 * h];
+                if (off[0] * off[0] + off[1] * off[1]).sqrt() > radius + 1e-9 * h {
+                    continue;
+                }
+                let mut p = *base;
+                p[axis] += height * k as f64 / n as f64;
+                for (c, &d) in across.iter().enumerate() {
+                    p[d] += off[c];
+                }
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
 /// A uniform hash grid over particle positions, for coincidence queries.
 #[derive(Debug, Clone)]
 pub struct HashGrid<const D: usize> {
@@ -203,5 +243,18 @@ mod tests {
             })
             .sum();
         assert!((vol - 0.125).abs() < 1e-12);
+    }
+
+    #[test]
+    fn cylinder_lattice_is_inside_and_has_its_ends() {
+        let base = Point::<3>::new(0.3, 0.0, 0.07);
+        let p = cylinder_points::<3>(&base, 1, 0.015, 0.15, 0.0075);
+        // 13 nodes per disk (r = 2 h), 21 disks.
+        assert_eq!(p.len(), 13 * 21);
+        for q in &p {
+            let r = ((q.x - base.x).powi(2) + (q.z - base.z).powi(2)).sqrt();
+            assert!(r <= 0.015 + 1e-12 && q.y >= -1e-12 && q.y <= 0.15 + 1e-12);
+        }
+        assert!(p.iter().any(|q| (q.y - 0.15).abs() < 1e-12));
     }
 }

@@ -27,6 +27,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 pub mod cases;
+pub mod cases3d;
 pub mod cli;
 pub mod error;
 pub mod lattice;
@@ -35,6 +36,7 @@ pub mod output;
 pub mod scene;
 pub mod scene_file;
 pub mod simulation;
+pub mod solid_mesh;
 
 pub use error::{RunError, SceneError};
 pub use observe::{Probe, StandardOutput};
@@ -53,6 +55,6 @@ pub mod prelude {
     pub use crate::simulation::{Observer, Simulation};
     pub use pfem_constitutive::{Hypoelastic, Material, MaterialKind, Newtonian};
     pub use pfem_core::{Point, Vector};
-    pub use pfem_geometry::{Delaunay2, Tessellator};
+    pub use pfem_geometry::{Delaunay2, Delaunay3, Tessellator};
     pub use pfem_time::{Scheme, StepParams};
 }

@@ -214,7 +214,19 @@ where
             fluid_volume_initial: sim.volume.initial,
             fluid_volume_final: sim.fluid_volume(),
             volume_change_by_cause: causes,
-            extra: self.extra.clone(),
+            extra: {
+                let mut e = self.extra.clone();
+                e.insert(
+                    "rejected_inverted_element".into(),
+                    sim.rejected_by_cause.0.into(),
+                );
+                e.insert(
+                    "rejected_picard_divergence".into(),
+                    sim.rejected_by_cause.1.into(),
+                );
+                e.insert("picard_iterations".into(), sim.stats.assemble.0.into());
+                e
+            },
         }
     }
 }

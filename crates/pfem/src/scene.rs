@@ -29,6 +29,21 @@ where
         /// Radius (m).
         radius: f64,
     },
+    /// A right circular cylinder (3D only) standing on `base` (the centre
+    /// of its bottom disk) along coordinate axis `axis` (0, 1 or 2): the
+    /// disks of lattice nodes inside `radius`, one every spacing from
+    /// `base` to `base + height` along the axis. In 2D it is rejected by
+    /// [`Scene::validate`] (use a box).
+    Cylinder {
+        /// Centre of the bottom disk (m).
+        base: Point<D>,
+        /// Coordinate axis of the cylinder (0, 1 or 2).
+        axis: usize,
+        /// Radius (m).
+        radius: f64,
+        /// Height along the axis (m).
+        height: f64,
+    },
     /// The user's own particles (m).
     Particles(Vec<Point<D>>),
 }
@@ -45,6 +60,20 @@ where
                 center - Vector::<D>::repeat(*radius),
                 center + Vector::<D>::repeat(*radius),
             ),
+            Geometry::Cylinder {
+                base,
+                axis,
+                radius,
+                height,
+            } => {
+                let mut lo = base - Vector::<D>::repeat(*radius);
+                let mut hi = base + Vector::<D>::repeat(*radius);
+                if *axis < D {
+                    lo[*axis] = base[*axis];
+                    hi[*axis] = base[*axis] + height;
+                }
+                (lo, hi)
+            }
             Geometry::Particles(p) => {
                 let mut lo = Point::<D>::repeat(f64::INFINITY);
                 let mut hi = Point::<D>::repeat(f64::NEG_INFINITY);
@@ -237,7 +266,7 @@ where
 
     /// Checks the scene before any step runs: positive finite spacing no
     /// larger than its body, materials where needed and of the right kind,
-    /// valid run settings, solids supported, fluids not overlapping other
+    /// valid run settings, cylinders in 3D only, solids supported, fluids not overlapping other
     /// bodies' interiors.
     pub fn validate(&self) -> Result<(), SceneError> {
         let s = &self.settings;
@@ -296,6 +325,29 @@ where
                     });
                 }
             }
+            if let Geometry::Cylinder {
+                axis,
+                radius,
+                height,
+                ..
+            } = b.geometry
+            {
+                let why = if D != 3 {
+                    Some("a cylinder is a 3D geometry (use a box in 2D)")
+                } else if axis >= D {
+                    Some("cylinder axis must be 0, 1 or 2")
+                } else if !(radius > 0.0 && height > 0.0) {
+                    Some("cylinder radius and height must be positive")
+                } else {
+                    None
+                };
+                if let Some(why) = why {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: why.into(),
+                    });
+                }
+            }
             if !matches!(b.geometry, Geometry::Particles(_)) && b.spacing > extent + 1e-12 {
                 return Err(SceneError::SpacingLargerThanBody {
                     body: b.name.clone(),
@@ -331,12 +383,8 @@ where
                 _ => {}
             }
             if b.kind == ParticleKind::Solid {
-                if !matches!(b.geometry, Geometry::Box { .. }) {
-                    return Err(SceneError::InvalidGeometry {
-                        body: b.name.clone(),
-                        why: "solid bodies are boxes for now (they keep a structured mesh of their own)".into(),
-                    });
-                }
+                // Boxes keep a structured mesh; any other geometry is meshed
+                // by `solid_mesh` (Delaunay of its particles + alpha shape).
                 let supported = b.clamp.is_some() || self.gravity.is_none();
                 let floating = self.bodies.iter().any(|o| o.kind == ParticleKind::Fluid);
                 if !supported && !floating {

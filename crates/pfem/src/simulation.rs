@@ -129,6 +129,8 @@ where
     pub steps: u64,
     /// Rejected attempts.
     pub rejected: u64,
+    /// Rejected attempts by cause: (inverted element, Picard divergence).
+    pub rejected_by_cause: (u64, u64),
     /// Volume ledger.
     pub volume: VolumeLedger,
     /// Body force (m/s²).
@@ -173,7 +175,7 @@ where
     /// time scheme and Picard loop.
     pub fn new(
         scene: Scene<D>,
-        tessellator: Box<dyn Tessellator<D>>,
+        mut tessellator: Box<dyn Tessellator<D>>,
         params: StepParams,
     ) -> Result<Self, SceneError> {
         scene.validate()?;
@@ -218,6 +220,12 @@ where
                 Geometry::Ball { center, radius } => {
                     lattice::ball_points::<D>(center, *radius, b.spacing)
                 }
+                Geometry::Cylinder {
+                    base,
+                    axis,
+                    radius,
+                    height,
+                } => lattice::cylinder_points::<D>(base, *axis, *radius, *height, b.spacing),
                 Geometry::Particles(p) => p.clone(),
             };
             let mat = match b.material {
@@ -259,13 +267,32 @@ where
                 }
             }
             if b.kind == ParticleKind::Solid {
-                if let Geometry::Box { min, max } = &b.geometry {
-                    let conn = lattice::box_simplices::<D>(min, max, b.spacing);
-                    for &q in &conn {
-                        solid_elements.push(local_index[q as usize]);
+                // Boxes: structured mesh; any other geometry: Delaunay of
+                // its own particles trimmed by the alpha shape.
+                let conn = match &b.geometry {
+                    Geometry::Box { min, max } => lattice::box_simplices::<D>(min, max, b.spacing),
+                    _ => {
+                        let params = crate::solid_mesh::SolidMeshParams {
+                            alpha: settings.alpha,
+                            ..Default::default()
+                        };
+                        crate::solid_mesh::solid_mesh::<D>(
+                            &pts,
+                            b.spacing,
+                            tessellator.as_mut(),
+                            &params,
+                        )
+                        .map_err(|e| SceneError::InvalidGeometry {
+                            body: b.name.clone(),
+                            why: e.to_string(),
+                        })?
+                        .simplices
                     }
-                    solid_material.extend(std::iter::repeat_n(mat, conn.len() / (D + 1)));
+                };
+                for &q in &conn {
+                    solid_elements.push(local_index[q as usize]);
                 }
+                solid_material.extend(std::iter::repeat_n(mat, conn.len() / (D + 1)));
             }
         }
         if x.is_empty() {
@@ -360,6 +387,7 @@ where
             dt: settings.max_dt,
             steps: 0,
             rejected: 0,
+            rejected_by_cause: (0, 0),
             volume: VolumeLedger::default(),
             gravity: if stages.body_force { gravity } else { None },
             end_time: settings.end_time,
@@ -506,6 +534,8 @@ where
         self.dt = rep.dt;
         self.steps += 1;
         self.rejected += rep.rejections as u64;
+        self.rejected_by_cause.0 += rep.rejected_inverted as u64;
+        self.rejected_by_cause.1 += rep.rejected_picard as u64;
         self.stats.assemble.0 += rep.iterations as u64;
         self.stats.assemble.1 += rep.assemble_seconds;
         self.stats.solve.0 += rep.iterations as u64;
