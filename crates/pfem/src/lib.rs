@@ -30,6 +30,7 @@ pub mod cases;
 pub mod cases3d;
 pub mod cli;
 pub mod error;
+pub mod fidelity;
 pub mod lattice;
 pub mod observe;
 pub mod output;
