@@ -6,7 +6,8 @@
 //! cargo run --release --example water_column_3d -- --out out/water_column_3d \
 //!     [--spacing H] [--end-time T] [--depth W] [--solver direct|cg] [--quiet] [--no-vtu]
 //! ```
-//! Defaults: h = 0.0146 m (a/10), depth 0.146 m, end time 1 s. Writes
+//! Defaults: h = 0.0146 m (a/10), depth 0.0584 m (a slice of the
+//! experiment's 0.146 m), end time 1 s. Writes
 //! `water_column_3d.pvd` + `.vtu` frames (tetrahedra), `probes.csv`
 //! (`t, front_x, height_at_wall, volume`) and `summary.json`.
 

@@ -118,7 +118,8 @@ pub struct WaterColumn3d {
     pub height: f64,
     /// Tank length (m). Default 0.584.
     pub tank_length: f64,
-    /// Depth of column and tank (m). Default 0.146.
+    /// Depth of column and tank (m). Default 0.0584 (4 spacings: a slice
+    /// of the 0.146 m deep experiment, to keep the run short).
     pub depth: f64,
     /// Particle spacing (m). Default `width / 10`.
     pub spacing: f64,
@@ -132,7 +133,7 @@ impl Default for WaterColumn3d {
             width: 0.146,
             height: 0.292,
             tank_length: 0.584,
-            depth: 0.146,
+            depth: 0.0584,
             spacing: 0.0146,
             end_time: 1.0,
         }
