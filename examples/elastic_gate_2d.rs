@@ -31,11 +31,12 @@ fn peak(series: &[(f64, f64)]) -> (f64, f64) {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env()?;
-    args.reject_unknown(&["young"])?;
+    args.reject_unknown(&["young", "gate-spacing"])?;
     let mut case = ElasticGate::default();
     case.spacing = args.spacing.unwrap_or(case.spacing);
     case.end_time = args.end_time.unwrap_or(case.end_time);
     case.young = args.number("young", case.young)?;
+    case.gate_spacing = args.number("gate-spacing", case.gate_spacing)?;
     let out = args
         .out
         .clone()

@@ -41,6 +41,15 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
         b: &[f64],
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError>;
+
+    /// Solves `A₀ x = b` with the factorisation kept from the last
+    /// successful [`LinearSolver::solve`] (a frozen-matrix correction inside
+    /// the Picard loop, where the matrix changes little between
+    /// iterations). `None` when the solver keeps no factorisation; the
+    /// caller then calls `solve`.
+    fn resolve(&mut self, _b: &[f64], _x: &mut [f64]) -> Option<Result<(), SolveError>> {
+        None
+    }
 }
 
 /// Relative residual `‖A x − b‖₂ / ‖b‖₂` (absolute if `b = 0`).
@@ -54,6 +63,12 @@ pub fn relative_residual(a: SparseColMatRef<'_, usize, f64>, b: &[f64], x: &[f64
     } else {
         nr
     }
+}
+
+/// `r = b − A x` for a CSC matrix.
+pub fn residual(a: SparseColMatRef<'_, usize, f64>, b: &[f64], x: &[f64], r: &mut [f64]) {
+    r.copy_from_slice(b);
+    spmv_sub(a, x, r);
 }
 
 /// `r ← r − A x` for a CSC matrix.
@@ -111,6 +126,7 @@ pub fn backward_error(a: SparseColMatRef<'_, usize, f64>, b: &[f64], x: &[f64]) 
 #[derive(Debug, Default)]
 pub struct SparseLu {
     symbolic: Option<(u64, SymbolicLu<usize>)>,
+    last: Option<Lu<usize, f64>>,
 }
 
 impl LinearSolver for SparseLu {
@@ -151,7 +167,28 @@ impl LinearSolver for SparseLu {
         x.copy_from_slice(b);
         lu.solve_in_place(ColMut::from_slice_mut(x));
         let steps = refine(a, b, x, |r| lu.solve_in_place(ColMut::from_slice_mut(r)));
-        finish_direct(a, b, x, 1 + steps, "sparse LU")
+        let rep = finish_direct(a, b, x, 1 + steps, "sparse LU");
+        self.last = if rep.is_ok() { Some(lu) } else { None };
+        rep
+    }
+
+    fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
+        let lu = self.last.as_ref()?;
+        Some(resolve_with(b, x, |r| {
+            lu.solve_in_place(ColMut::from_slice_mut(r))
+        }))
+    }
+}
+
+/// `x ← A₀⁻¹ b` through a kept factorisation, refusing non-finite input or
+/// output.
+fn resolve_with(b: &[f64], x: &mut [f64], solve: impl Fn(&mut [f64])) -> Result<(), SolveError> {
+    check_finite(b)?;
+    x.copy_from_slice(b);
+    solve(x);
+    match x.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(SolveError::NonFinite { index }),
+        None => Ok(()),
     }
 }
 
@@ -160,6 +197,7 @@ impl LinearSolver for SparseLu {
 #[derive(Debug, Default)]
 pub struct SparseCholesky {
     symbolic: Option<(u64, SymbolicLlt<usize>)>,
+    last: Option<Llt<usize, f64>>,
 }
 
 impl LinearSolver for SparseCholesky {
@@ -203,7 +241,16 @@ impl LinearSolver for SparseCholesky {
         x.copy_from_slice(b);
         llt.solve_in_place(ColMut::from_slice_mut(x));
         let steps = refine(a, b, x, |r| llt.solve_in_place(ColMut::from_slice_mut(r)));
-        finish_direct(a, b, x, 1 + steps, "sparse Cholesky")
+        let rep = finish_direct(a, b, x, 1 + steps, "sparse Cholesky");
+        self.last = if rep.is_ok() { Some(llt) } else { None };
+        rep
+    }
+
+    fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
+        let llt = self.last.as_ref()?;
+        Some(resolve_with(b, x, |r| {
+            llt.solve_in_place(ColMut::from_slice_mut(r))
+        }))
     }
 }
 
@@ -311,6 +358,7 @@ pub struct DirectSolver {
     cholesky: SparseCholesky,
     lu: SparseLu,
     lu_generation: Option<u64>,
+    using_lu: bool,
 }
 
 impl LinearSolver for DirectSolver {
@@ -327,14 +375,26 @@ impl LinearSolver for DirectSolver {
     ) -> Result<SolveReport, SolveError> {
         if self.lu_generation != Some(generation) {
             match self.cholesky.solve(a, generation, b, x) {
-                Ok(r) => return Ok(r),
+                Ok(r) => {
+                    self.using_lu = false;
+                    return Ok(r);
+                }
                 Err(SolveError::NonFinite { index }) => {
                     return Err(SolveError::NonFinite { index })
                 }
                 Err(_) => self.lu_generation = Some(generation),
             }
         }
+        self.using_lu = true;
         self.lu.solve(a, generation, b, x)
+    }
+
+    fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
+        if self.using_lu {
+            self.lu.resolve(b, x)
+        } else {
+            self.cholesky.resolve(b, x)
+        }
     }
 }
 
@@ -645,6 +705,40 @@ mod tests {
             println!("{}: residual {:e}, error {err:e}", s.name(), rep.residual);
             assert!(err < 1e-3, "{}: error {err}", s.name());
         }
+    }
+
+    #[test]
+    fn direct_solvers_resolve_with_the_kept_factorisation() {
+        let a = laplacian(50);
+        let b: Vec<f64> = (0..50).map(|i| (i as f64).cos()).collect();
+        let mut solvers: Vec<Box<dyn LinearSolver>> = vec![
+            Box::new(SparseLu::default()),
+            Box::new(SparseCholesky::default()),
+            Box::new(DirectSolver::default()),
+        ];
+        for s in solvers.iter_mut() {
+            let mut y = vec![0.0; 50];
+            assert!(
+                s.resolve(&b, &mut y).is_none(),
+                "{}: nothing kept yet",
+                s.name()
+            );
+            let mut x = vec![0.0; 50];
+            s.solve(a.as_ref(), 1, &b, &mut x).unwrap();
+            s.resolve(&b, &mut y).unwrap().unwrap();
+            let d = x
+                .iter()
+                .zip(&y)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
+            assert!(d < 1e-10, "{}: {d}", s.name());
+            let mut bad = b.clone();
+            bad[3] = f64::NAN;
+            assert!(s.resolve(&bad, &mut y).unwrap().is_err());
+        }
+        assert!(ConjugateGradient::default()
+            .resolve(&b, &mut vec![0.0; 50])
+            .is_none());
     }
 
     #[test]

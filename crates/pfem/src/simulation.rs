@@ -497,6 +497,16 @@ where
         self.spacing.iter().copied().fold(f64::INFINITY, f64::min)
     }
 
+    /// Shortest time a particle needs to cross its own spacing,
+    /// `min_i h_i / |v_i|` (s); infinite when nothing moves. Wall particles
+    /// are skipped.
+    pub fn crossing_time(&self) -> f64 {
+        (0..self.state.len())
+            .filter(|&i| self.kind[i] != ParticleKind::Wall)
+            .map(|i| self.spacing[i] / self.state.v[i].norm())
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Largest particle speed (m/s).
     pub fn v_max(&self) -> f64 {
         self.state.v.iter().map(|v| v.norm()).fold(0.0, f64::max)
@@ -511,7 +521,14 @@ where
             self.volume.remeshing += self.fluid_volume() - before;
         }
         self.assemble_mesh();
-        let mut dt = self.controller.next(self.h_min(), self.v_max(), self.dt);
+        // Courant bound per particle, on its own spacing: Δt ≤ C min_i h_i/|v_i|,
+        // passed to the controller as (h, v) = (min_i h_i/|v_i|, 1).
+        let crossing = self.crossing_time();
+        let mut dt = if crossing.is_finite() {
+            self.controller.next(crossing, 1.0, self.dt)
+        } else {
+            self.controller.next(0.0, 0.0, self.dt)
+        };
         if self.time + dt > self.end_time {
             dt = (self.end_time - self.time).max(self.controller.dt_min);
         }
