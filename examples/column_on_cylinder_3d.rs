@@ -53,10 +53,11 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     sim.run(&mut [&mut output])?;
     let ux = output.probe_series("ux_top");
     let fx = output.probe_series("force_x");
-    let (t_max, ux_max) = ux
-        .iter()
-        .copied()
-        .fold((0.0f64, 0.0f64), |a, b| if b.1.abs() > a.1.abs() { b } else { a });
+    let (t_max, ux_max) =
+        ux.iter().copied().fold(
+            (0.0f64, 0.0f64),
+            |a, b| if b.1.abs() > a.1.abs() { b } else { a },
+        );
     let f_max = fx.iter().map(|&(_, f)| f.abs()).fold(0.0, f64::max);
     println!("largest top displacement {ux_max:+.4e} m at t = {t_max:.3} s; largest |force_x| {f_max:.3} N");
     output.extra.insert("ux_top_max".into(), ux_max.into());
