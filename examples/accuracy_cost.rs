@@ -240,8 +240,10 @@ fn cantilever(varied: &str, p: Point3) -> Res<Record> {
         })
         .ok_or("empty beam")?;
     let y0 = sim.state.x[tip].y;
-    let (series, wall, status) =
-        run_recorded(&mut sim, Box::new(move |s: &Simulation<2>| s.state.x[tip].y - y0));
+    let (series, wall, status) = run_recorded(
+        &mut sim,
+        Box::new(move |s: &Simulation<2>| s.state.x[tip].y - y0),
+    );
     let deflection = series.last().map_or(f64::NAN, |q| q.1);
     let mut r = record("cantilever", varied, p, &sim, wall, status);
     r.error = (deflection / CSM2_TIP - 1.0).abs();
@@ -291,7 +293,13 @@ impl Sweep {
         }
         for &t in &self.tols {
             if t != self.base.tol {
-                v.push(("picard_tol".into(), Point3 { tol: t, ..self.base }));
+                v.push((
+                    "picard_tol".into(),
+                    Point3 {
+                        tol: t,
+                        ..self.base
+                    },
+                ));
             }
         }
         for &f in &self.presets {
@@ -395,7 +403,7 @@ fn sweeps(quick: bool) -> Vec<Sweep> {
                     courant: 0.5,
                     tol: 1e-6,
                 },
-                spacings: vec![0.01, 0.005, 0.0025, 0.00125],
+                spacings: vec![0.01, 0.005, 0.0025, 0.00125, 0.000625],
                 courants: cs,
                 tols,
                 presets: vec![],
@@ -444,7 +452,9 @@ fn run() -> Res<()> {
         match a.as_str() {
             "--out" => out = Some(args.next().ok_or("--out needs a value")?.into()),
             "--quick" => quick = true,
-            other => return Err(format!("unknown argument `{other}` (use --out DIR [--quick])").into()),
+            other => {
+                return Err(format!("unknown argument `{other}` (use --out DIR [--quick])").into())
+            }
         }
     }
     let out = out.unwrap_or_else(|| "out/accuracy_cost".into());
@@ -496,7 +506,13 @@ fn run() -> Res<()> {
             write_csv(&out, &records)?;
         }
     }
-    write_outputs(&out, &records, &sweeps, quick, started.elapsed().as_secs_f64())?;
+    write_outputs(
+        &out,
+        &records,
+        &sweeps,
+        quick,
+        started.elapsed().as_secs_f64(),
+    )?;
     println!(
         "wrote {} ({} runs, {:.0} s)",
         out.display(),

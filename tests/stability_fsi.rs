@@ -1,0 +1,170 @@
+//! Hard fluid–structure cases: stiffness contrast (E = 1e9 Pa and
+//! E = 1e3 Pa in water), density ratio (free solids 10× heavier and 10×
+//! lighter than water) and a thin structure (aspect ratio 1:50) hit by a
+//! wave. Release mode: `cargo test --release --test stability_fsi`.
+//!
+//! Checks as in `stability_fluid.rs`: ends at its end time or with a typed
+//! error, no NaN, no inverted fluid or solid element after a step, kinetic
+//! + gravitational potential energy of the non-wall particles never above
+//! the initial total + `ENERGY_TOL`.
+
+#[path = "stability_support.rs"]
+mod support;
+
+use pfem::core::Point;
+use pfem::prelude::*;
+use support::*;
+
+/// Energy growth allowed over the initial total: 5 %. The flows only lose
+/// energy physically, but the remeshing changes the fluid volume by a few
+/// percent (issue 5) and a volume gain lifts the centre of mass.
+const ENERGY_TOL: f64 = 0.05;
+
+/// A 0.1 m × 0.1 m column released in a 0.4 m tank onto two posts
+/// 0.02 m × 0.06 m clamped at their base: E = 1e9 Pa at x = 0.2 m and
+/// E = 1e3 Pa (softer than its own weight: ρ g H ≈ 600 Pa) at x = 0.3 m.
+fn stiffness_contrast() -> Scene<2> {
+    let h = 0.01;
+    let s = Scene::<2>::new("stiffness_contrast")
+        .gravity(g())
+        .settings(settings(0.4, 1e-3, 0.5));
+    let post = |s: Scene<2>, name: &str, x: f64, e: f64| {
+        let m = Hypoelastic::new(1000.0, e, 0.3).expect("valid solid");
+        s.solid(
+            name,
+            Box::new(m),
+            rect(x, h, x + 0.02, h + 0.06),
+            h,
+            Some((
+                Point::<2>::new(x - 1.0, -1.0),
+                Point::<2>::new(x + 1.0, h + 1e-9),
+            )),
+        )
+    };
+    let s = tank(s, 0.0, 0.4, 0.3, h);
+    let s = post(s, "stiff", 0.2, 1e9);
+    let s = post(s, "soft", 0.3, 1e3);
+    s.fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        rect(0.0, 0.0, 0.1, 0.1),
+        h,
+    )
+}
+
+#[test]
+fn stiffness_contrast_in_water() {
+    let o = run_checked(stiffness_contrast(), StepParams::default());
+    o.report("stiffness contrast");
+    o.assert_stable(ENERGY_TOL);
+}
+
+/// Two free 0.04 m boxes (E = 1e6 Pa) resting on the surface of a 0.4 m ×
+/// 0.1 m pool: ρ = 10 000 kg/m³ (sinks) and ρ = 100 kg/m³ (floats).
+fn density_ratio() -> Scene<2> {
+    let h = 0.01;
+    let s = Scene::<2>::new("density_ratio")
+        .gravity(g())
+        .settings(settings(0.4, 1e-3, 0.5));
+    let s = tank(s, 0.0, 0.4, 0.3, h);
+    let heavy = Hypoelastic::new(10_000.0, 1e6, 0.3).expect("valid solid");
+    let light = Hypoelastic::new(100.0, 1e6, 0.3).expect("valid solid");
+    s.solid(
+        "heavy",
+        Box::new(heavy),
+        rect(0.08, 0.11, 0.12, 0.15),
+        h,
+        None,
+    )
+    .solid(
+        "light",
+        Box::new(light),
+        rect(0.28, 0.11, 0.32, 0.15),
+        h,
+        None,
+    )
+    .fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        rect(0.0, 0.0, 0.4, 0.1),
+        h,
+    )
+}
+
+/// Bug (measured): no panic, NaN or inverted element, but the energy of the
+/// non-wall particles grows from 46.9 J/m to 213 J/m (+354 %, largest at
+/// t = 0.371 s, step 634) with a particle at 35 m/s (t = 0.368 s); 115 of
+/// 916 attempts rejected.
+/// `cargo test --release --test stability_fsi -- --ignored density_ratio`
+#[test]
+#[ignore = "bug: energy grows +354% (46.9 -> 213 J/m, t = 0.37 s), particle at 35 m/s"]
+fn density_ratio_free_solids_in_water() {
+    let o = run_checked(density_ratio(), StepParams::default());
+    o.report("density ratio");
+    o.assert_stable(ENERGY_TOL);
+}
+
+/// A plate 0.1 m high and 0.002 m thick (1:50, one cell through the
+/// thickness at its spacing 0.002 m, E = 1e6 Pa, ρ = 1100 kg/m³) clamped at
+/// its base at x = 0.15 m, hit by the wave of a 0.08 m × 0.08 m column
+/// (fluid spacing 0.005 m).
+fn thin_structure() -> Scene<2> {
+    let hf = 0.005;
+    let hp = 0.002;
+    let s = Scene::<2>::new("thin_structure")
+        .gravity(g())
+        .settings(settings(0.3, 1e-3, 0.5));
+    let s = tank(s, 0.0, 0.3, 0.2, hf);
+    let plate = Hypoelastic::new(1100.0, 1e6, 0.4).expect("valid solid");
+    s.solid(
+        "plate",
+        Box::new(plate),
+        rect(0.15, hf, 0.15 + hp, hf + 0.1),
+        hp,
+        Some((Point::<2>::new(0.0, -1.0), Point::<2>::new(1.0, hf + 1e-9))),
+    )
+    .fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        rect(0.0, 0.0, 0.08, 0.08),
+        hf,
+    )
+}
+
+/// Bug (measured): no panic, NaN or inverted element, but the energy of the
+/// non-wall particles grows from 2.57 J/m to 33.8 J/m (×13, largest at
+/// t = 0.283 s, step 462) with a particle at 14.8 m/s (t = 0.285 s).
+/// `cargo test --release --test stability_fsi -- --ignored thin_structure`
+#[test]
+#[ignore = "bug: energy grows x13 (2.57 -> 33.8 J/m, t = 0.28 s), particle at 14.8 m/s"]
+fn thin_structure_hit_by_a_wave() {
+    let o = run_checked(thin_structure(), StepParams::default());
+    o.report("thin structure");
+    o.assert_stable(ENERGY_TOL);
+}
+
+/// The volume bound issue 5 implies (1 % at every step) on the cases of
+/// this file. Not met; measured max |ΔV|/V: stiffness contrast 26 %,
+/// density ratio 6.5 %, thin structure 18 %.
+/// `cargo test --release --test stability_fsi -- --ignored hard_cases_keep`
+#[test]
+#[ignore = "known gap: fluid volume deviates 26% (stiffness), 6.5% (density), 18% (thin), bound 1% (issue 5)"]
+fn hard_cases_keep_fluid_volume_within_one_percent() {
+    let mut worst = Vec::new();
+    for (name, scene) in [
+        ("stiffness contrast", stiffness_contrast()),
+        ("density ratio", density_ratio()),
+        ("thin structure", thin_structure()),
+    ] {
+        let o = run_checked(scene, StepParams::default());
+        o.report(name);
+        worst.push((name, o.watch.dv_max));
+    }
+    for (name, dv) in worst {
+        assert!(
+            dv <= 0.01,
+            "{name}: fluid volume deviated by {:.2}%",
+            100.0 * dv
+        );
+    }
+}

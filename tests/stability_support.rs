@@ -1,0 +1,315 @@
+//! Shared checks of the hard-case suite (`tests/stability_*.rs`), included
+//! by each of them with `#[path]`. Compiled on its own too, as a test
+//! target without tests.
+#![allow(dead_code)]
+
+use pfem::core::{simplex_measure, ParticleKind, Point};
+use pfem::prelude::*;
+use pfem::RunError;
+
+/// What a run did, checked after every accepted step.
+#[derive(Debug, Default, Clone)]
+pub struct Watch {
+    /// Kinetic + gravitational potential energy of all non-wall particles
+    /// at the start (J per metre of depth), potential measured from the
+    /// lowest non-wall particle.
+    pub e0: f64,
+    /// Largest energy seen.
+    pub e_max: f64,
+    /// Energy at the end.
+    pub e_end: f64,
+    /// Fluid volume at the start.
+    pub v0: f64,
+    /// Largest relative fluid-volume deviation from `v0`.
+    pub dv_max: f64,
+    /// Relative fluid-volume change at the end.
+    pub dv_end: f64,
+    /// Elements (fluid or solid) with a non-positive signed measure after a
+    /// step, summed over steps; and the first step at which one was seen.
+    pub inverted: usize,
+    /// First step with an inverted element.
+    pub first_inverted: Option<u64>,
+    /// Steps with a non-finite position, velocity or pressure.
+    pub non_finite: usize,
+    /// Steps observed.
+    pub steps: u64,
+    /// Time (s) and step at which the energy was largest.
+    pub at_e_max: (f64, u64),
+    /// Largest non-wall particle speed seen (m/s) and its time (s).
+    pub v_max: (f64, f64),
+    mass: Vec<f64>,
+    y_ref: f64,
+}
+
+/// Mass per particle (kg per metre of depth): `ρ h²` of its body; zero for
+/// walls.
+fn masses(sim: &Simulation<2>) -> Vec<f64> {
+    (0..sim.state.len())
+        .map(|i| {
+            if sim.kind[i] == ParticleKind::Wall {
+                0.0
+            } else {
+                let rho = sim.materials[sim.material_of[i] as usize].density();
+                rho * sim.spacing[i] * sim.spacing[i]
+            }
+        })
+        .collect()
+}
+
+impl Watch {
+    /// Kinetic + potential energy of the non-wall particles.
+    pub fn energy(&self, sim: &Simulation<2>) -> f64 {
+        let g = sim.gravity.map_or(0.0, |g| -g.y);
+        (0..sim.state.len())
+            .map(|i| {
+                let m = self.mass[i];
+                m * (0.5 * sim.state.v[i].norm_squared() + g * (sim.state.x[i].y - self.y_ref))
+            })
+            .sum()
+    }
+
+    fn check(&mut self, sim: &Simulation<2>) {
+        let e = self.energy(sim);
+        if e > self.e_max {
+            self.e_max = e;
+            self.at_e_max = (sim.time, sim.steps);
+        }
+        for i in 0..sim.state.len() {
+            let v = sim.state.v[i].norm();
+            if self.mass[i] > 0.0 && v > self.v_max.0 {
+                self.v_max = (v, sim.time);
+            }
+        }
+        self.e_end = e;
+        if self.v0 > 0.0 {
+            let dv = (sim.fluid_volume() - self.v0) / self.v0;
+            self.dv_max = self.dv_max.max(dv.abs());
+            self.dv_end = dv;
+        }
+        let bad = inverted_elements(sim);
+        if bad > 0 && self.first_inverted.is_none() {
+            self.first_inverted = Some(sim.steps);
+        }
+        self.inverted += bad;
+        let finite = sim.state.x.iter().all(|p| p.iter().all(|v| v.is_finite()))
+            && sim.state.v.iter().all(|p| p.iter().all(|v| v.is_finite()))
+            && sim.state.pressure.iter().all(|p| p.is_finite());
+        if !finite || !e.is_finite() {
+            self.non_finite += 1;
+        }
+        self.steps = sim.steps;
+    }
+
+    /// Relative energy growth over the start: `(e_max − e0) / e0`.
+    pub fn energy_growth(&self) -> f64 {
+        (self.e_max - self.e0) / self.e0
+    }
+}
+
+impl Observer<2> for Watch {
+    fn start(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+        self.mass = masses(sim);
+        self.y_ref = (0..sim.state.len())
+            .filter(|&i| sim.kind[i] != ParticleKind::Wall)
+            .map(|i| sim.state.x[i].y)
+            .fold(f64::INFINITY, f64::min);
+        self.e0 = self.energy(sim);
+        self.e_max = self.e0;
+        self.v0 = sim.fluid_volume();
+        self.check(sim);
+        Ok(())
+    }
+    fn step(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+        self.check(sim);
+        Ok(())
+    }
+}
+
+/// Fluid and solid elements whose signed area at the current positions is
+/// not positive.
+pub fn inverted_elements(sim: &Simulation<2>) -> usize {
+    let measure = |el: &[u32]| {
+        let p: [Point<2>; 3] = [
+            sim.state.x[el[0] as usize],
+            sim.state.x[el[1] as usize],
+            sim.state.x[el[2] as usize],
+        ];
+        simplex_measure::<2>(&p)
+    };
+    sim.fluid_elements
+        .chunks_exact(3)
+        .chain(sim.solid_elements.chunks_exact(3))
+        .filter(|el| !(measure(el) > 0.0))
+        .count()
+}
+
+/// How a run ended.
+#[derive(Debug)]
+pub struct Outcome {
+    /// The run's checks.
+    pub watch: Watch,
+    /// `Ok` or the typed error it stopped with.
+    pub result: Result<(), RunError>,
+    /// Simulated time reached (s).
+    pub time: f64,
+    /// End time asked for (s).
+    pub end_time: f64,
+    /// Accepted and rejected steps.
+    pub steps: u64,
+    /// Rejected attempts.
+    pub rejected: u64,
+    /// Wall time (s).
+    pub wall: f64,
+}
+
+impl Outcome {
+    /// One line for the test log.
+    pub fn report(&self, name: &str) {
+        eprintln!(
+            "{name}: {} at t = {:.4} s of {:.4} s, {} steps ({} rejected), energy {:.4e} -> max {:.4e} ({:+.2}%), end {:.4e}; fluid volume max |dV|/V {:.2}%, end {:+.2}%; inverted {} (first at step {:?}); non-finite steps {}; energy largest at t = {:.4} s (step {}); fastest particle {:.2} m/s at t = {:.4} s; wall {:.1} s",
+            match &self.result {
+                Ok(()) => "ok".to_string(),
+                Err(e) => format!("error `{e}`"),
+            },
+            self.time,
+            self.end_time,
+            self.steps,
+            self.rejected,
+            self.watch.e0,
+            self.watch.e_max,
+            100.0 * self.watch.energy_growth(),
+            self.watch.e_end,
+            100.0 * self.watch.dv_max,
+            100.0 * self.watch.dv_end,
+            self.watch.inverted,
+            self.watch.first_inverted,
+            self.watch.non_finite,
+            self.watch.at_e_max.0,
+            self.watch.at_e_max.1,
+            self.watch.v_max.0,
+            self.watch.v_max.1,
+            self.wall
+        );
+    }
+
+    /// The common assertions: the run reached its end time or stopped with
+    /// a typed error; no NaN; no inverted element after any step; energy
+    /// never above `e0 (1 + energy_tol)`.
+    pub fn assert_stable(&self, energy_tol: f64) {
+        match &self.result {
+            Ok(()) => assert!(
+                self.time >= self.end_time - 1e-9,
+                "run returned Ok at t = {} before its end time {}",
+                self.time,
+                self.end_time
+            ),
+            Err(e) => eprintln!("(ended with a typed error: {e})"),
+        }
+        assert_eq!(self.watch.non_finite, 0, "non-finite state");
+        assert_eq!(
+            self.watch.inverted, 0,
+            "inverted elements after a step (first at step {:?})",
+            self.watch.first_inverted
+        );
+        assert!(
+            self.watch.energy_growth() <= energy_tol,
+            "energy grew by {:.2}% (> {:.2}%): {:e} -> {:e}",
+            100.0 * self.watch.energy_growth(),
+            100.0 * energy_tol,
+            self.watch.e0,
+            self.watch.e_max
+        );
+    }
+
+    /// The fluid volume stayed within `tol` (relative) at every step.
+    pub fn assert_volume(&self, tol: f64) {
+        assert!(
+            self.watch.dv_max <= tol,
+            "fluid volume deviated by {:.2}% (> {:.2}%)",
+            100.0 * self.watch.dv_max,
+            100.0 * tol
+        );
+    }
+}
+
+/// Builds and runs a scene with the checks; `Simulation::new` must succeed.
+pub fn run_checked(scene: Scene<2>, params: StepParams) -> Outcome {
+    let end_time = scene.settings.end_time;
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), params).expect("scene builds");
+    run_sim(&mut sim, end_time)
+}
+
+/// Runs a built simulation with the checks.
+pub fn run_sim(sim: &mut Simulation<2>, end_time: f64) -> Outcome {
+    let mut watch = Watch::default();
+    let t0 = std::time::Instant::now();
+    let result = sim.run(&mut [&mut watch]);
+    Outcome {
+        watch,
+        result,
+        time: sim.time,
+        end_time,
+        steps: sim.steps,
+        rejected: sim.rejected,
+        wall: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// A tank: floor from `x0` to `x1` (two layers below `y = 0`) and walls at
+/// `x0` (left) and `x1` (right) up to `top`, spacing `h`.
+pub fn tank(scene: Scene<2>, x0: f64, x1: f64, top: f64, h: f64) -> Scene<2> {
+    use pfem::scene::{Geometry, WallMotion};
+    scene
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(x0 - h, -h),
+                max: Point::<2>::new(x1 + h, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .wall(
+            "left",
+            Geometry::Box {
+                min: Point::<2>::new(x0 - h, h),
+                max: Point::<2>::new(x0, top),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .wall(
+            "right",
+            Geometry::Box {
+                min: Point::<2>::new(x1, h),
+                max: Point::<2>::new(x1 + h, top),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+}
+
+/// Settings with no output.
+pub fn settings(end_time: f64, max_dt: f64, courant: f64) -> RunSettings {
+    RunSettings {
+        end_time,
+        max_dt,
+        courant,
+        output_interval: None,
+        alpha: 1.3,
+    }
+}
+
+/// A box geometry.
+pub fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Geometry<2> {
+    Geometry::Box {
+        min: Point::<2>::new(x0, y0),
+        max: Point::<2>::new(x1, y1),
+    }
+}
+
+/// Gravity (0, −9.81).
+pub fn g() -> Vector<2> {
+    Vector::<2>::new(0.0, -9.81)
+}
