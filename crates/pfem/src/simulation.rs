@@ -611,6 +611,39 @@ where
         self.x0[i]
     }
 
+    /// Pressure force the fluid exerts on body `name` (N, per metre of depth
+    /// in 2D): the nodal pressure force `Gᵀ p` of eq. 58 taken at the
+    /// body's particles, `f_i = Σ_e Σ_{a∈e} p_a (V_e/(D+1)) grad W_i` over
+    /// the fluid elements `e` holding particle `i`. The viscous part is
+    /// left out (negligible for water).
+    pub fn pressure_force_on(&self, name: &str) -> Vector<D> {
+        let Some(id) = self.body_names.iter().position(|b| b == name) else {
+            return Vector::<D>::zeros();
+        };
+        let nv = D + 1;
+        let mut f = Vector::<D>::zeros();
+        let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+        let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
+        for el in self.fluid_elements.chunks_exact(nv) {
+            if !el.iter().any(|&q| self.body[q as usize] == id as u32) {
+                continue;
+            }
+            for a in 0..nv {
+                p[a] = self.state.x[el[a] as usize];
+            }
+            let Some(vol) = pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]) else {
+                continue;
+            };
+            let p_sum: f64 = el.iter().map(|&q| self.state.pressure[q as usize]).sum();
+            for (a, &q) in el.iter().enumerate() {
+                if self.body[q as usize] == id as u32 {
+                    f += g[a] * (p_sum * vol / nv as f64);
+                }
+            }
+        }
+        f
+    }
+
     /// Particles of body `name`.
     pub fn body_particles(&self, name: &str) -> Vec<usize> {
         match self.body_names.iter().position(|b| b == name) {
