@@ -4,9 +4,9 @@
 //! wave. Release mode: `cargo test --release --test stability_fsi`.
 //!
 //! Checks as in `stability_fluid.rs`: ends at its end time or with a typed
-//! error, no NaN, no inverted fluid or solid element after a step, kinetic
-//! + gravitational potential energy of the non-wall particles never above
-//! the initial total + `ENERGY_TOL`.
+//! error, no NaN, no inverted fluid or solid element after a step, the
+//! kinetic and gravitational potential energy of the non-wall particles
+//! never above the initial total + `ENERGY_TOL`.
 
 #[path = "stability_support.rs"]
 mod support;

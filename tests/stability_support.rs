@@ -139,7 +139,7 @@ pub fn inverted_elements(sim: &Simulation<2>) -> usize {
     sim.fluid_elements
         .chunks_exact(3)
         .chain(sim.solid_elements.chunks_exact(3))
-        .filter(|el| !(measure(el) > 0.0))
+        .filter(|el| measure(el).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater))
         .count()
 }
 

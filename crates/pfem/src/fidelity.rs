@@ -44,9 +44,8 @@ pub enum Fidelity {
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
     /// Dam break (a/28.6): front RMS error 1.3 %, 120 s wall time (study):
     /// no more accurate than Standard on this measure (the front error
-    /// stops falling below a/20), for elastic-gate or beam-like solids
-    /// where refinement does pay (cantilever: 4.7 % at t/8, 2.0 % at
-    /// t/16). Tested bound 6 %.
+    /// stops falling below a/14). Meant for solids, where refinement does
+    /// pay (cantilever: 4.7 % at t/8, 2.0 % at t/16). Tested bound 6 %.
     Fine,
 }
 
