@@ -58,6 +58,15 @@ fn dam_break_file_matches_the_case() {
 }
 
 #[test]
+fn dam_break_obstacle_file_matches_the_case() {
+    same_as_case(
+        "dam_break_obstacle_2d.toml",
+        pfem::cases::DamBreakObstacle::default().scene(),
+        &["ux_top", "uy_top", "volume"],
+    );
+}
+
+#[test]
 fn elastic_gate_file_matches_the_case() {
     same_as_case(
         "elastic_gate_2d.toml",

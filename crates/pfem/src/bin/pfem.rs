@@ -17,7 +17,6 @@ use pfem::cli::Args;
 use pfem::core::{Const, Dim};
 use pfem::geometry::{Delaunay2, Delaunay3, Tessellator};
 use pfem::scene_file::{LoadedScene, SceneFile};
-use pfem::time::StepParams;
 use pfem::{Probe, Scene, Simulation, StandardOutput};
 
 const HELP: &str = "\
@@ -39,6 +38,9 @@ Options:
   --end-time T    simulated time (s), overriding the file
   --quiet, -q     no progress bar
   --no-vtu        no VTU frames (probes.csv and summary.json are still written)
+  --scheme S      newmark (default, the paper's) or euler (damped)
+  --picard-tol X  Picard tolerance (default 1e-6)
+  --solver S      direct (default: Cholesky, LU fallback), lu, cholesky or cg
   --help, -h      this help
 
 Scene files: see examples/scenes/*.toml and the pfem::scene_file docs.
@@ -73,11 +75,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
     }
     let command = args[0].as_str();
     let parsed = Args::parse(args[1..].iter().cloned()).map_err(|e| e.to_string())?;
-    if let Some(k) = parsed.options.keys().next() {
-        return Err(format!(
-            "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu; see pfem --help)"
-        ));
-    }
+    parsed.reject_unknown(&[]).map_err(|e| e.to_string())?;
     let file = match parsed.positional.as_slice() {
         [f] => PathBuf::from(f),
         [] => {
@@ -147,8 +145,9 @@ where
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
     let name = scene.name.clone();
-    let mut sim =
-        Simulation::new(scene, tessellator, StepParams::default()).map_err(|e| e.to_string())?;
+    let params = args.step_params().map_err(|e| e.to_string())?;
+    let mut sim = Simulation::new(scene, tessellator, params).map_err(|e| e.to_string())?;
+    sim.set_solver(args.solver().map_err(|e| e.to_string())?);
     eprintln!(
         "{name}: {D}D, {} particles, h_min = {} m, end time {} s -> {}",
         sim.state.len(),
