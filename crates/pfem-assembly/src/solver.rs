@@ -1,8 +1,10 @@
 //! Linear solvers behind an object-safe trait.
 //!
-//! The default is faer's sparse LU; sparse Cholesky serves when the system
-//! is symmetric positive definite (one fluid, or hypoelastic solids, with
-//! symmetric constraint elimination, which [`crate::Assembler`] does); a
+//! The default, [`DirectSolver`], is faer's sparse Cholesky, since the
+//! assembled system is symmetric positive definite by construction
+//! (symmetric constraint elimination in [`crate::Assembler`], symmetric
+//! nodal volumetric term), with faer's sparse LU as its fallback; both are
+//! also available alone ([`SparseCholesky`], [`SparseLu`]). A
 //! preconditioned conjugate gradient with an incomplete Cholesky (IC(0))
 //! preconditioner is the iterative option. Every solver checks the residual
 //! of what it returns and reports it.
@@ -122,7 +124,7 @@ pub fn backward_error(a: SparseColMatRef<'_, usize, f64>, b: &[f64], x: &[f64]) 
     }
 }
 
-/// Sparse LU (faer), the default: robust for any nonsingular system.
+/// Sparse LU (faer): robust for any nonsingular system; the fallback of [`DirectSolver`].
 #[derive(Debug, Default)]
 pub struct SparseLu {
     symbolic: Option<(u64, SymbolicLu<usize>)>,

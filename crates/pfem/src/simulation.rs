@@ -624,7 +624,7 @@ where
         Ok(())
     }
 
-    /// Replaces the linear solver (default: sparse LU).
+    /// Replaces the linear solver (default: [`pfem_assembly::DirectSolver`], sparse Cholesky with an LU fallback).
     pub fn set_solver(&mut self, solver: Box<dyn pfem_assembly::LinearSolver>) {
         let params = self.integrator.params;
         self.integrator = Integrator::with_solver(params, solver);
