@@ -80,11 +80,8 @@ fn fluid_particles_1e9_apart_do_not_panic() {
 /// Delaunay mesh would hold a sliver; `Simulation::new` must return a
 /// typed error (solids keep every particle), not panic.
 ///
-/// Measured: accepted without error (the run then stays finite for 20
-/// steps, no inverted element).
-/// `cargo test --release --test stability_degenerate -- --ignored`
+/// (Regression: it used to be accepted without error.)
 #[test]
-#[ignore = "known gap: Simulation::new accepts solid particles 1e-9 m apart without a typed error"]
 fn solid_particles_1e9_apart_give_a_typed_error() {
     let h = 0.01;
     let mut pts = Vec::new();

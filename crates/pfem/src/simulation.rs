@@ -250,6 +250,17 @@ where
                 if b.kind != ParticleKind::Solid && grid.near(p, tol, &x) {
                     continue;
                 }
+                // A solid keeps every particle (its own mesh uses them all):
+                // one that falls on another particle is an error, not a merge.
+                if b.kind == ParticleKind::Solid && grid.near(p, tol, &x) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: format!(
+                            "particle at {:?} lies within a quarter spacing ({tol:e} m) of another particle",
+                            p.as_slice()
+                        ),
+                    });
+                }
                 local_index[li] = x.len() as u32;
                 grid.insert(p, x.len());
                 x.push(*p);
