@@ -4,10 +4,11 @@
 //! `cargo test --release --test presets` (Draft, Standard);
 //! Fine: `cargo test --release --test presets -- --ignored`.
 //!
-//! Bounds: measured by `examples/accuracy_cost.rs` (full study,
-//! `docs/accuracy-cost.md`) plus a margin for the run-to-run variation the
-//! library shows while it changes (a/20 measured 1.3 % in the study and
-//! 4.8 % on an earlier state of the tree).
+//! Bounds: the 5 % target for the front error, widened to 6 %
+//! because the front error does not converge with refinement (study at
+//! commit 7d54ae3, `docs/accuracy-cost.md`: a/10 1.4 %, a/14 3.6 %, a/20
+//! 4.8 %, a/28 1.8 %), so a preset's figure moves with small changes of the
+//! library; Standard's 4.8 % would pass 5 % by only 0.2 points.
 
 use pfem::cases::{best_shift, DamBreak, G};
 use pfem::fidelity::Fidelity;
@@ -54,22 +55,21 @@ fn front_error(f: Fidelity) -> (f64, f64) {
     (rms, wall)
 }
 
-/// Draft (a/10): study 3.3 % in 3.5 s; bound 6 %.
+/// Draft (a/10): study 1.44 % in 0.6 s; bound 6 %.
 #[test]
 fn draft_front_error_within_six_percent() {
     let (rms, _) = front_error(Fidelity::Draft);
     assert!(rms < 0.06, "front RMS error {rms}");
 }
 
-/// Standard (a/20): study 1.3 % in 65 s (loaded 2-core machine), 4.8 % in
-/// 21 s on the tree of the next hour; bound 6 %.
+/// Standard (a/20): study 4.80 % in 17 s (loaded 2-core machine); bound 6 %.
 #[test]
 fn standard_front_error_within_six_percent() {
     let (rms, _) = front_error(Fidelity::Standard);
     assert!(rms < 0.06, "front RMS error {rms}");
 }
 
-/// Fine (a/28.6): study 1.3 % in 120 s; bound 6 %.
+/// Fine (a/28.6): study 2.66 % in 123 s; bound 6 %.
 /// `cargo test --release --test presets -- --ignored`
 #[test]
 #[ignore = "slow: about 2 minutes"]
