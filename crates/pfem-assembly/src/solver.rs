@@ -124,24 +124,36 @@ pub fn backward_error(a: SparseColMatRef<'_, usize, f64>, b: &[f64], x: &[f64]) 
     }
 }
 
-/// Sparse LU (faer): robust for any nonsingular system; the fallback of [`DirectSolver`].
-#[derive(Debug, Default)]
-pub struct SparseLu {
-    symbolic: Option<(u64, SymbolicLu<usize>)>,
-    last: Option<Lu<usize, f64>>,
+/// The path every direct solver shares: reuse the symbolic analysis while
+/// the pattern's `generation` stays the same, factorise, solve, refine,
+/// judge the residual, and keep the factorisation for
+/// [`LinearSolver::resolve`].
+struct Direct<S, F> {
+    name: &'static str,
+    symbolic: Option<(u64, S)>,
+    last: Option<F>,
 }
 
-impl LinearSolver for SparseLu {
-    fn name(&self) -> &str {
-        "sparse LU"
+impl<S: Clone, F> Direct<S, F> {
+    const fn new(name: &'static str) -> Self {
+        Self {
+            name,
+            symbolic: None,
+            last: None,
+        }
     }
 
-    fn solve(
+    #[allow(clippy::too_many_arguments)]
+    fn solve<E1: std::fmt::Debug, E2: std::fmt::Debug>(
         &mut self,
         a: SparseColMatRef<'_, usize, f64>,
         generation: u64,
         b: &[f64],
         x: &mut [f64],
+        analyse: impl FnOnce() -> Result<S, E1>,
+        factorise: impl FnOnce(S) -> Result<F, E2>,
+        apply: impl Fn(&F, &mut [f64]),
+        hint: &str,
     ) -> Result<SolveReport, SolveError> {
         check_finite(b)?;
         if a.nrows() == 0 {
@@ -150,35 +162,45 @@ impl LinearSolver for SparseLu {
                 iterations: 0,
             });
         }
+        let fail = |detail: String| SolveError::Factorization {
+            solver: self.name,
+            detail,
+        };
         let sym = match &self.symbolic {
             Some((g, s)) if *g == generation => s.clone(),
             _ => {
-                let s =
-                    SymbolicLu::try_new(a.symbolic()).map_err(|e| SolveError::Factorization {
-                        solver: "sparse LU",
-                        detail: format!("{e:?}"),
-                    })?;
+                let s = analyse().map_err(|e| fail(format!("{e:?}")))?;
                 self.symbolic = Some((generation, s.clone()));
                 s
             }
         };
-        let lu = Lu::try_new_with_symbolic(sym, a).map_err(|e| SolveError::Factorization {
-            solver: "sparse LU",
-            detail: format!("{e:?}"),
-        })?;
+        let f = factorise(sym).map_err(|e| fail(format!("{e:?}{hint}")))?;
         x.copy_from_slice(b);
-        lu.solve_in_place(ColMut::from_slice_mut(x));
-        let steps = refine(a, b, x, |r| lu.solve_in_place(ColMut::from_slice_mut(r)));
-        let rep = finish_direct(a, b, x, 1 + steps, "sparse LU");
-        self.last = if rep.is_ok() { Some(lu) } else { None };
+        apply(&f, x);
+        let steps = refine(a, b, x, |r| apply(&f, r));
+        let rep = finish_direct(a, b, x, 1 + steps, self.name);
+        self.last = if rep.is_ok() { Some(f) } else { None };
         rep
     }
 
-    fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
-        let lu = self.last.as_ref()?;
-        Some(resolve_with(b, x, |r| {
-            lu.solve_in_place(ColMut::from_slice_mut(r))
-        }))
+    fn resolve(
+        &self,
+        b: &[f64],
+        x: &mut [f64],
+        apply: impl Fn(&F, &mut [f64]),
+    ) -> Option<Result<(), SolveError>> {
+        let f = self.last.as_ref()?;
+        Some(resolve_with(b, x, |r| apply(f, r)))
+    }
+}
+
+impl<S, F> std::fmt::Debug for Direct<S, F> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Direct")
+            .field("name", &self.name)
+            .field("analysed", &self.symbolic.as_ref().map(|(g, _)| *g))
+            .field("factorised", &self.last.is_some())
+            .finish()
     }
 }
 
@@ -194,12 +216,63 @@ fn resolve_with(b: &[f64], x: &mut [f64], solve: impl Fn(&mut [f64])) -> Result<
     }
 }
 
+/// Sparse LU (faer): robust for any nonsingular system; the fallback of
+/// [`DirectSolver`].
+#[derive(Debug)]
+pub struct SparseLu(Direct<SymbolicLu<usize>, Lu<usize, f64>>);
+
+impl Default for SparseLu {
+    fn default() -> Self {
+        Self(Direct::new("sparse LU"))
+    }
+}
+
+fn lu_apply(lu: &Lu<usize, f64>, r: &mut [f64]) {
+    lu.solve_in_place(ColMut::from_slice_mut(r));
+}
+
+impl LinearSolver for SparseLu {
+    fn name(&self) -> &str {
+        "sparse LU"
+    }
+
+    fn solve(
+        &mut self,
+        a: SparseColMatRef<'_, usize, f64>,
+        generation: u64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolveError> {
+        self.0.solve(
+            a,
+            generation,
+            b,
+            x,
+            || SymbolicLu::try_new(a.symbolic()),
+            |sym| Lu::try_new_with_symbolic(sym, a),
+            lu_apply,
+            "",
+        )
+    }
+
+    fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
+        self.0.resolve(b, x, lu_apply)
+    }
+}
+
 /// Sparse Cholesky (faer, supernodal/simplicial `LLᵀ`) for symmetric
 /// positive definite systems; fails with a typed error otherwise.
-#[derive(Debug, Default)]
-pub struct SparseCholesky {
-    symbolic: Option<(u64, SymbolicLlt<usize>)>,
-    last: Option<Llt<usize, f64>>,
+#[derive(Debug)]
+pub struct SparseCholesky(Direct<SymbolicLlt<usize>, Llt<usize, f64>>);
+
+impl Default for SparseCholesky {
+    fn default() -> Self {
+        Self(Direct::new("sparse Cholesky"))
+    }
+}
+
+fn llt_apply(llt: &Llt<usize, f64>, r: &mut [f64]) {
+    llt.solve_in_place(ColMut::from_slice_mut(r));
 }
 
 impl LinearSolver for SparseCholesky {
@@ -214,45 +287,20 @@ impl LinearSolver for SparseCholesky {
         b: &[f64],
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
-        check_finite(b)?;
-        if a.nrows() == 0 {
-            return Ok(SolveReport {
-                residual: 0.0,
-                iterations: 0,
-            });
-        }
-        let sym = match &self.symbolic {
-            Some((g, s)) if *g == generation => s.clone(),
-            _ => {
-                let s = SymbolicLlt::try_new(a.symbolic(), Side::Lower).map_err(|e| {
-                    SolveError::Factorization {
-                        solver: "sparse Cholesky",
-                        detail: format!("{e:?}"),
-                    }
-                })?;
-                self.symbolic = Some((generation, s.clone()));
-                s
-            }
-        };
-        let llt = Llt::try_new_with_symbolic(sym, a, Side::Lower).map_err(|e| {
-            SolveError::Factorization {
-                solver: "sparse Cholesky",
-                detail: format!("{e:?} (is the system symmetric positive definite?)"),
-            }
-        })?;
-        x.copy_from_slice(b);
-        llt.solve_in_place(ColMut::from_slice_mut(x));
-        let steps = refine(a, b, x, |r| llt.solve_in_place(ColMut::from_slice_mut(r)));
-        let rep = finish_direct(a, b, x, 1 + steps, "sparse Cholesky");
-        self.last = if rep.is_ok() { Some(llt) } else { None };
-        rep
+        self.0.solve(
+            a,
+            generation,
+            b,
+            x,
+            || SymbolicLlt::try_new(a.symbolic(), Side::Lower),
+            |sym| Llt::try_new_with_symbolic(sym, a, Side::Lower),
+            llt_apply,
+            " (is the system symmetric positive definite?)",
+        )
     }
 
     fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
-        let llt = self.last.as_ref()?;
-        Some(resolve_with(b, x, |r| {
-            llt.solve_in_place(ColMut::from_slice_mut(r))
-        }))
+        self.0.resolve(b, x, llt_apply)
     }
 }
 
