@@ -147,8 +147,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             },
             h,
         );
-    let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), args.step_params()?)?;
-    sim.set_solver(args.solver()?);
+    let mut sim = args.simulation(scene, Box::new(Delaunay2::default()))?;
     let probes = vec![
         Probe::new("front_x", front_x),
         Probe::new("volume", |s: &Simulation<2>| s.fluid_volume()),

@@ -41,12 +41,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .clone()
         .unwrap_or_else(|| "out/dam_break_2d".into());
 
-    let mut sim = Simulation::new(
-        case.scene(),
-        Box::new(Delaunay2::default()),
-        args.step_params()?,
-    )?;
-    sim.set_solver(args.solver()?);
+    let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
     sim.alpha.alpha = args.number("alpha", sim.alpha.alpha)?;
     eprintln!(
         "dam_break_2d: {} particles, a = {} m, n² = {}, h = {} m, end time {:.3} s",

@@ -33,12 +33,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .out
         .clone()
         .unwrap_or_else(|| "out/dam_break_obstacle_2d".into());
-    let mut sim = Simulation::new(
-        case.scene(),
-        Box::new(Delaunay2::default()),
-        args.step_params()?,
-    )?;
-    sim.set_solver(args.solver()?);
+    let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
     eprintln!(
         "dam_break_obstacle_2d: {} particles, end time {} s",
         sim.state.len(),

@@ -41,12 +41,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .out
         .clone()
         .unwrap_or_else(|| "out/elastic_gate_2d".into());
-    let mut sim = Simulation::new(
-        case.scene(),
-        Box::new(Delaunay2::default()),
-        args.step_params()?,
-    )?;
-    sim.set_solver(args.solver()?);
+    let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
     eprintln!(
         "elastic_gate_2d: {} particles, h = {} m, E = {} Pa, end time {} s",
         sim.state.len(),

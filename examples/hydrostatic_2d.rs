@@ -26,12 +26,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .out
         .clone()
         .unwrap_or_else(|| "out/hydrostatic_2d".into());
-    let mut sim = Simulation::new(
-        case.scene(),
-        Box::new(Delaunay2::default()),
-        args.step_params()?,
-    )?;
-    sim.set_solver(args.solver()?);
+    let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
     sim.run(&mut [&mut output])?;
     let p = output.probe_series("bottom_pressure");

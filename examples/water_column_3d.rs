@@ -33,11 +33,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .out
         .clone()
         .unwrap_or_else(|| "out/water_column_3d".into());
-    let mut sim = Simulation::new(
-        case.scene(),
-        Box::new(Delaunay3::default()),
-        StepParams::default(),
-    )?;
+    let mut sim = args.simulation(case.scene(), Box::new(Delaunay3::default()))?;
     eprintln!(
         "water_column_3d: {} particles ({} fluid), h = {} m, depth {} m, end time {} s",
         sim.state.len(),

@@ -105,6 +105,21 @@ impl Args {
         })
     }
 
+    /// A simulation of `scene` with the time scheme and linear solver these
+    /// arguments choose (`--scheme`, `--picard-tol`, `--solver`).
+    pub fn simulation<const D: usize>(
+        &self,
+        scene: crate::Scene<D>,
+        tessellator: Box<dyn pfem_geometry::Tessellator<D>>,
+    ) -> Result<crate::Simulation<D>, Box<dyn std::error::Error>>
+    where
+        pfem_core::Const<D>: pfem_core::Dim,
+    {
+        let mut sim = crate::Simulation::new(scene, tessellator, self.step_params()?)?;
+        sim.set_solver(self.solver()?);
+        Ok(sim)
+    }
+
     /// Fails on options not in `known` (besides the common `scheme`,
     /// `picard-tol` and `solver`).
     pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ArgsError> {
