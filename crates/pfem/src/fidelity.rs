@@ -35,11 +35,11 @@ use crate::scene::RunSettings;
 pub enum Fidelity {
     /// Quick look: twice the default spacing, Courant 1, Picard 1e-3.
     /// Dam break (a/10): front RMS error 1.44 %, 0.6 s wall time (study);
-    /// tested bound 6 %.
+    /// tested bound 5 %.
     Draft,
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
     /// Dam break (a/20): front RMS error 4.80 %, 17.2 s wall time (study);
-    /// tested bound 6 %.
+    /// tested bound 5 %.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
@@ -47,7 +47,7 @@ pub enum Fidelity {
     /// (study): more accurate than Standard but not than Draft on this
     /// measure (the front error does not decrease with refinement). Meant
     /// for solids, where refinement does pay (cantilever: 4.88 % at t/8,
-    /// 2.46 % at t/16). Tested bound 6 %.
+    /// 2.46 % at t/16). Tested bound 5 %.
     Fine,
 }
 
