@@ -170,6 +170,8 @@ where
     elem_slots: Vec<u32>,
     /// P_a² block positions per patch, row i, column j.
     patch_block_ptr: Vec<usize>,
+    /// Block position of each system node's diagonal block.
+    diag_block: Vec<u32>,
     patch_blocks: Vec<u32>,
     /// Fluid material of each patch node (first fluid element seen).
     node_fluid_material: Vec<u16>,
@@ -353,6 +355,9 @@ where
             }
             self.patch_block_ptr.push(self.patch_blocks.len());
         }
+        self.diag_block.clear();
+        self.diag_block
+            .extend((0..ns as u32).map(|a| self.pattern.block(a, a).expect("diagonal block")));
         self.values.resize(self.pattern.nnz(), 0.0);
         self.rhs.resize(self.pattern.dofs(), 0.0);
         Ok(())
@@ -546,10 +551,7 @@ where
             if let Some(b) = input.body_force {
                 f += b * m; // eq. 59, lumped
             }
-            let p = sink
-                .pattern
-                .block(a as u32, a as u32)
-                .expect("diagonal block");
+            let p = self.diag_block[a];
             for k in 0..D {
                 sink.rhs(a as u32, k, f[k]);
                 sink.entry(p, a as u32, k, a as u32, k, cm * m);
@@ -561,10 +563,7 @@ where
             if input.constraints.mask[part] == 0 {
                 continue;
             }
-            let p = self
-                .pattern
-                .block(a as u32, a as u32)
-                .expect("diagonal block");
+            let p = self.diag_block[a];
             for k in 0..D {
                 if input.constraints.is_fixed(part, k) {
                     let idx = self.pattern.value_index(p, a as u32, k, k);

@@ -151,6 +151,8 @@ where
     /// not stop the energy growth of the violent-splash case.
     pub free_surface_pressure_zero: bool,
     x0: Vec<Point<D>>,
+    /// Fluid volume of the current mesh at the current positions.
+    volume_now: f64,
     tessellator: Box<dyn Tessellator<D>>,
     integrator: Integrator<D>,
     tess: Tessellation,
@@ -416,6 +418,7 @@ where
             },
             free_surface_pressure_zero: false,
             x0: Vec::new(),
+            volume_now: 0.0,
             tessellator,
             integrator: Integrator::new(params),
             tess: Tessellation::default(),
@@ -427,6 +430,7 @@ where
         sim.remesh()
             .map_err(|e| SceneError::Mesh { why: e.to_string() })?;
         sim.volume.initial = sim.fluid_volume();
+        sim.volume_now = sim.volume.initial;
         sim.assemble_mesh();
         let input = StepInput {
             mesh: StepMesh {
@@ -550,10 +554,13 @@ where
     /// One accepted step: remesh (if the scene has a fluid), then the
     /// Newmark–Picard step with rejection and retry.
     pub fn step(&mut self) -> Result<(), RunError> {
+        // The fluid volume at the end of the last step is `volume_now`; it is
+        // measured once after remeshing and once after the solution.
         if self.steps > 0 {
-            let before = self.fluid_volume();
             self.remesh()?;
-            self.volume.remeshing += self.fluid_volume() - before;
+            let after = self.fluid_volume();
+            self.volume.remeshing += after - self.volume_now;
+            self.volume_now = after;
         }
         self.assemble_mesh();
         // Courant bound per particle, on its own spacing: Δt ≤ C min_i h_i/|v_i|,
@@ -567,7 +574,6 @@ where
         if self.time + dt > self.end_time {
             dt = (self.end_time - self.time).max(self.controller.dt_min);
         }
-        let before = self.fluid_volume();
         let input = StepInput {
             mesh: StepMesh {
                 elements: &self.elements,
@@ -600,7 +606,9 @@ where
         if self.stages.solid_stress {
             self.stats.stress_updates += 1;
         }
-        self.volume.solution += self.fluid_volume() - before;
+        let end = self.fluid_volume();
+        self.volume.solution += end - self.volume_now;
+        self.volume_now = end;
         if let Some(i) = self
             .state
             .x
