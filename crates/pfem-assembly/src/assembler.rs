@@ -87,9 +87,9 @@ where
 pub struct Inertia {
     /// Factor `c` of `c M` on the left and `c M Vⁿ` on the right (1/s).
     pub mass_factor: f64,
-    /// Whether `M Aⁿ` enters the right-hand side (Newmark) or not
-    /// (backward Euler).
-    pub with_acceleration: bool,
+    /// Factor `c_a` of `c_a M Aⁿ` on the right (dimensionless): 1 for
+    /// trapezoidal Newmark, 0 for backward Euler, between for Bossak.
+    pub acceleration_factor: f64,
 }
 
 /// The mesh of one step: all elements (fluid from the tessellation, solid
@@ -545,8 +545,9 @@ where
             let part = self.particle_of[a] as usize;
             let m = self.mass[a];
             let mut f = input.v_n[part] * (cm * m);
-            if input.inertia.with_acceleration {
-                f += input.a_n[part] * m;
+            let ca = input.inertia.acceleration_factor;
+            if ca != 0.0 {
+                f += input.a_n[part] * (ca * m);
             }
             if let Some(b) = input.body_force {
                 f += b * m; // eq. 59, lumped

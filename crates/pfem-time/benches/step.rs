@@ -90,7 +90,7 @@ fn input(t: &Tank) -> AssemblyInput<'_, 2> {
         dt,
         inertia: Inertia {
             mass_factor: 2.0 / dt,
-            with_acceleration: true,
+            acceleration_factor: 1.0,
         },
     }
 }

@@ -71,16 +71,17 @@ impl Args {
         }
     }
 
-    /// Time-integration parameters from `--scheme newmark|euler` and
-    /// `--picard-tol TOL` (defaults: the paper's Newmark, tolerance 1e-6).
+    /// Time-integration parameters from `--scheme newmark|bossak|euler` and
+    /// `--picard-tol TOL` (defaults: Bossak with α_B = −0.3, tolerance 1e-6).
     pub fn step_params(&self) -> Result<pfem_time::StepParams, ArgsError> {
         let mut p = pfem_time::StepParams::default();
         match self.options.get("scheme").map(String::as_str) {
-            None | Some("newmark") => {}
+            None | Some("bossak") => p.scheme = pfem_time::Scheme::Bossak,
+            Some("newmark") => p.scheme = pfem_time::Scheme::Newmark,
             Some("euler") => p.scheme = pfem_time::Scheme::BackwardEuler,
             Some(other) => {
                 return Err(ArgsError(format!(
-                    "--scheme must be newmark or euler, got `{other}`"
+                    "--scheme must be newmark, bossak or euler, got `{other}`"
                 )))
             }
         }
