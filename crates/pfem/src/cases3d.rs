@@ -109,7 +109,7 @@ pub fn tank3d(scene: Scene<3>, length: f64, depth: f64, top: f64, h: f64, sides:
 
 /// §9.1: the collapse of a water column 0.146 m wide and 0.292 m high at
 /// the back of a tank 0.584 m long (Koshizuka et al. 1995), `depth` deep,
-/// between no-slip side walls.
+/// between no-slip side walls or, with `side_walls = false`, slip side planes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WaterColumn3d {
     /// Column width `a` (m). Default 0.146.
@@ -125,6 +125,12 @@ pub struct WaterColumn3d {
     pub spacing: f64,
     /// End time (s). Default 1 (as in the paper).
     pub end_time: f64,
+    /// No-slip side walls at `z = 0` and `z = depth` (default `true`). With
+    /// `false` the tank has none: the side planes must then be made slip
+    /// (symmetry) planes with [`slip_sides`] once the simulation is built,
+    /// so the slice stands for the middle of a wide tank (what the example
+    /// `water_column_3d` does).
+    pub side_walls: bool,
 }
 
 impl Default for WaterColumn3d {
@@ -136,6 +142,7 @@ impl Default for WaterColumn3d {
             depth: 0.0584,
             spacing: 0.0146,
             end_time: 1.0,
+            side_walls: true,
         }
     }
 }
@@ -153,7 +160,14 @@ impl WaterColumn3d {
                 output_interval: Some(self.end_time / 50.0),
                 alpha: 1.3,
             });
-        let s = tank3d(s, self.tank_length, self.depth, self.height * 1.5, h, true);
+        let s = tank3d(
+            s,
+            self.tank_length,
+            self.depth,
+            self.height * 1.5,
+            h,
+            self.side_walls,
+        );
         s.fluid(
             "water",
             Box::new(Newtonian::water()),

@@ -106,8 +106,9 @@ impl Args {
         })
     }
 
-    /// A simulation of `scene` with the time scheme and linear solver these
-    /// arguments choose (`--scheme`, `--picard-tol`, `--solver`).
+    /// A simulation of `scene` with the time scheme, linear solver and mass
+    /// correction these arguments choose (`--scheme`, `--picard-tol`,
+    /// `--solver`, `--volume-correction BETA`, 0 to turn it off).
     pub fn simulation<const D: usize>(
         &self,
         scene: crate::Scene<D>,
@@ -118,18 +119,25 @@ impl Args {
     {
         let mut sim = crate::Simulation::new(scene, tessellator, self.step_params()?)?;
         sim.set_solver(self.solver()?);
+        let beta = self.number("volume-correction", sim.volume_correction)?;
+        if !(0.0..=1.0).contains(&beta) {
+            return Err(Box::new(ArgsError(format!(
+                "--volume-correction must be in [0, 1], got {beta}"
+            ))));
+        }
+        sim.volume_correction = beta;
         Ok(sim)
     }
 
     /// Fails on options not in `known` (besides the common `scheme`,
-    /// `picard-tol` and `solver`).
+    /// `picard-tol`, `solver` and `volume-correction`).
     pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ArgsError> {
         for k in self.options.keys() {
             if !known.contains(&k.as_str())
-                && !["scheme", "picard-tol", "solver"].contains(&k.as_str())
+                && !["scheme", "picard-tol", "solver", "volume-correction"].contains(&k.as_str())
             {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --scheme --picard-tol --solver{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --scheme --picard-tol --solver --volume-correction{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }

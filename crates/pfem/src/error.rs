@@ -101,6 +101,16 @@ pub enum RunError {
     /// Writing output failed.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// A run option set on the `Simulation` is out of range.
+    #[error("invalid setting `{name}` = {value}: {reason}")]
+    InvalidSetting {
+        /// The field.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// The allowed range.
+        reason: &'static str,
+    },
     /// A particle position became non-finite.
     #[error("particle {particle} has a non-finite position at t = {time} s")]
     NonFinite {

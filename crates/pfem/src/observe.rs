@@ -203,6 +203,7 @@ where
         let mut causes = BTreeMap::new();
         causes.insert("remeshing".to_string(), sim.volume.remeshing);
         causes.insert("solution".to_string(), sim.volume.solution);
+        causes.insert("correction".to_string(), sim.volume.correction);
         RunSummary {
             scene: sim.name.clone(),
             dimension: D,
