@@ -168,13 +168,10 @@ fn thin_structure_hit_by_a_wave_with_backward_euler() {
 }
 
 /// The volume bound issue 5 implies (1 % at every step) on the cases of
-/// this file. Not met; measured max |ΔV|/V with the volume correction:
-/// stiffness contrast 4.13 %, density ratio 0.31 %, thin structure 1.39 %
-/// (ends −0.19 %, −0.00 %, +0.00 %; without the correction 26 %, 6.5 %,
-/// 18 %).
-/// `cargo test --release --test stability_fsi -- --ignored hard_cases_keep`
+/// this file. Measured max |ΔV|/V with the volume correction: stiffness
+/// contrast 0.36 %, density ratio 0.02 %, thin structure 0.05 % (without it
+/// 26 %, 6.5 %, 18 %).
 #[test]
-#[ignore = "known gap: fluid volume deviates 4.13% (stiffness), 0.31% (density), 1.39% (thin), bound 1% (issue 5)"]
 fn hard_cases_keep_fluid_volume_within_one_percent() {
     let mut worst = Vec::new();
     for (name, scene) in [

@@ -165,7 +165,7 @@ where
     /// `δ = β e / A` (`e` the volume error against the start, with the
     /// elastic compression `Σ V p / K` of both states discounted so a soft
     /// fluid keeps its physical compression; `A` the free-surface measure),
-    /// at most 5 % of the smallest spacing per step. Velocities, pressures
+    /// at most 20 % of the smallest spacing per step. Velocities, pressures
     /// and accelerations are untouched: the correction is geometric, adds
     /// no momentum and cannot feed back into the dynamics. Its effect is
     /// measured and booked as `volume.correction`.
@@ -595,7 +595,10 @@ where
             .filter(|&i| self.kind[i] == ParticleKind::Fluid)
             .map(|i| self.spacing[i])
             .fold(f64::INFINITY, f64::min);
-        let cap = 0.05 * h_min;
+        // 5 % of a spacing could not follow single remeshings that change
+        // a coarse (a/10) thin layer's volume by 4 %; 20 % keeps every hard
+        // case of `tests/stability_*.rs` within 1 %.
+        let cap = 0.2 * h_min;
         let delta = (beta * e / area).clamp(-cap, cap);
         let old: Vec<Point<D>> = self.state.x.clone();
         for (x, m) in self.state.x.iter_mut().zip(&normal) {
