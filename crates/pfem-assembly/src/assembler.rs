@@ -1,13 +1,15 @@
 //! Parallel sparse assembly of the monolithic system, eqs. 55–59.
 //!
-//! With `c = 2/Δt` (Newmark, β = ¼, γ = ½) the system solved for the
-//! velocity `V` at the Picard iterate is eq. 55 divided by `Δt`:
+//! The system solved for the velocity `V` at the Picard iterate is eq. 55
+//! divided by `Δt`:
 //!
-//! `(c M + K) V = c M Vⁿ + M Aⁿ − D σ̂⁽ⁿ⁾ + F`
+//! `(c M + K) V = c M Vⁿ + c_a M Aⁿ − D σ̂⁽ⁿ⁾ + F`
 //!
-//! (the paper prints `M Aⁿ/Δt` in eq. 49; dimensional consistency and
-//! Newmark's eq. 48 give `M Aⁿ`). With backward Euler `c = 1/Δt` and the
-//! `M Aⁿ` term is absent. `M` is the lumped mass `ρ Vₑⁿ / (D + 1)` per node.
+//! with the time scheme's weights `(c, c_a)` ([`Inertia`]): `(2/Δt, 1)` for
+//! the trapezoidal Newmark (β = ¼, γ = ½; the paper prints `M Aⁿ/Δt` in
+//! eq. 49, dimensional consistency and Newmark's eq. 48 give `M Aⁿ`),
+//! Bossak's weights (`pfem-time`), `(1/Δt, 0)` for backward Euler. `M` is
+//! the lumped mass `ρ Vₑⁿ / (D + 1)` per node.
 //!
 //! Fluids carry their pressure on nodes (eq. 62). The volumetric term of a
 //! fluid is assembled as `Gᵀ M̂⁻¹ 𝒦 G` with the lumped `M̂` of eq. 56 and

@@ -1,5 +1,6 @@
 //! Time integration of the monolithic PFEM system (Marti & Idelsohn 2007,
-//! §4–§6): Newmark (β = ¼, γ = ½) or backward Euler in time, Picard
+//! §4–§6): Bossak–Newmark (the default), the paper's trapezoidal Newmark
+//! (β = ¼, γ = ½) or backward Euler in time, Picard
 //! iterations on the geometry, a Courant time-step controller, and
 //! rejection of steps that diverge or invert an element.
 //!
@@ -7,8 +8,9 @@
 //!
 //! 1. `x⁽⁰⁾ = Xⁿ`, `V⁽⁰⁾ = Vⁿ`;
 //! 2. while not converged: assemble on `x⁽ⁱ⁾` and solve eq. 60 for
-//!    `V⁽ⁱ⁺¹⁾`; move the particles, `x⁽ⁱ⁺¹⁾ = Xⁿ + Δt (Vⁿ + V⁽ⁱ⁺¹⁾)/2`
-//!    (eq. 61 with Newmark's eq. 47); `F`, `J` follow from the positions
+//!    `V⁽ⁱ⁺¹⁾`; move the particles, `x⁽ⁱ⁺¹⁾ = Xⁿ + Δt Vⁿ + Δt² [(½ − β) Aⁿ + β Aⁿ⁺¹]`
+//!    (eq. 61 with Newmark's eq. 47; `Xⁿ + Δt (Vⁿ + V⁽ⁱ⁺¹⁾)/2` for the
+//!    trapezoidal rule, `Xⁿ + Δt V⁽ⁱ⁺¹⁾` for backward Euler); `F`, `J` follow from the positions
 //!    (eqs. 7–8) in the next assembly;
 //! 3. converged when `‖V⁽ⁱ⁺¹⁾ − V⁽ⁱ⁾‖ ≤ tol · max(‖V⁽ⁱ⁺¹⁾‖, v_floor)`;
 //!    then the fluid pressure is updated on nodes (eq. 62), the solid stress

@@ -314,8 +314,8 @@ where
 /// particle transmit (their internal force less their own inertia). The
 /// probe returns `Σᵢ fᶠᵢ = Σᵢ (mˢᵢ (aᵢ − g) − fˢᵢ)` over the free
 /// particles: the load the fluid puts on the solid, the clamp's reaction
-/// excluded. It inherits the trapezoidal rule's undamped accelerations, so
-/// it is noisy from step to step.
+/// excluded. It inherits the step-to-step noise of the accelerations
+/// (strong with the undamped trapezoidal rule, less with Bossak).
 pub fn fluid_force<const D: usize>(s: &Simulation<D>, body: &str) -> Vector<D>
 where
     Const<D>: Dim,

@@ -119,13 +119,16 @@ impl Args {
     {
         let mut sim = crate::Simulation::new(scene, tessellator, self.step_params()?)?;
         sim.set_solver(self.solver()?);
-        let beta = self.number("volume-correction", sim.volume_correction)?;
-        if !(0.0..=1.0).contains(&beta) {
-            return Err(Box::new(ArgsError(format!(
-                "--volume-correction must be in [0, 1], got {beta}"
-            ))));
+        if let Some(v) = self.options.get("volume-correction") {
+            sim.volume_correction = match v.parse::<f64>() {
+                Ok(b) if (0.0..=1.0).contains(&b) => b,
+                _ => {
+                    return Err(Box::new(ArgsError(format!(
+                        "--volume-correction must be a number in [0, 1], got `{v}`"
+                    ))))
+                }
+            };
         }
-        sim.volume_correction = beta;
         Ok(sim)
     }
 

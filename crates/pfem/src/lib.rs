@@ -4,8 +4,8 @@
 //! (2007): fluid and solid are one continuum with one momentum and one
 //! continuity equation; a quasi-incompressible Newtonian fluid and a
 //! hypoelastic solid share one discrete constitutive form (eqs. 43–44), so
-//! one system (eqs. 55–56), advanced by Newmark with Picard iterations
-//! (§6), moves every particle; the particles are re-meshed by Delaunay
+//! one system (eqs. 55–56), advanced by a Newmark-family scheme (Bossak by
+//! default) with Picard iterations (§6), moves every particle; the particles are re-meshed by Delaunay
 //! tessellation every step and the free surface is found with an alpha
 //! shape (§8). 2D (plane strain) and 3D share one code path.
 //!

@@ -193,6 +193,10 @@ where
         wall.insert("assemble".to_string(), sim.stats.assemble.1);
         wall.insert("solve".to_string(), sim.stats.solve.1);
         wall.insert("update".to_string(), sim.stats.update.1);
+        wall.insert(
+            "volume_correction".to_string(),
+            sim.stats.volume_correction.1,
+        );
         wall.insert("output".to_string(), sim.stats.observe.1);
         wall.insert(
             "total".to_string(),

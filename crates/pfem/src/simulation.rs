@@ -45,6 +45,9 @@ pub struct StageStats {
     pub update: (u64, f64),
     /// Observers (output): calls and seconds.
     pub observe: (u64, f64),
+    /// Volume correction (see [`Simulation::volume_correction`]): calls
+    /// and seconds.
+    pub volume_correction: (u64, f64),
     /// Pressure updates (eq. 62) done.
     pub pressure_updates: u64,
     /// Solid stress updates (eq. 63) done.
@@ -160,15 +163,16 @@ where
     /// joins particles to walls as the fluid spreads, drops stretched
     /// boundary elements, closes and opens pockets), while the fluid's mass
     /// is fixed. After each remeshing the driver moves the free-surface
-    /// particles (except those of elements touching a solid)
-    /// along their outward normals by the same distance
-    /// `δ = β e / A` (`e` the volume error against the start, with the
-    /// elastic compression `Σ V p / K` of both states discounted so a soft
-    /// fluid keeps its physical compression; `A` the free-surface measure),
-    /// at most 20 % of the smallest spacing per step. Velocities, pressures
-    /// and accelerations are untouched: the correction is geometric, adds
-    /// no momentum and cannot feed back into the dynamics. Its effect is
-    /// measured and booked as `volume.correction`.
+    /// fluid particles (not those of elements touching a solid, never walls
+    /// or constrained components) by the minimum-norm displacement
+    /// `uᵢ = −β e mᵢ / Σ|m|²` that restores `β e` to first order, `e` the
+    /// volume error against the start (net of the elastic compression
+    /// `Σ V p / K`, so a soft fluid keeps its physical compression) and `mᵢ`
+    /// the particle's share of the free surface's area-weighted outward
+    /// normals; each move is capped at 20 % of the smallest spacing and
+    /// undone where it would halve an element. Velocities, pressures and
+    /// accelerations are untouched: the correction is geometric and adds
+    /// no momentum. Its effect is booked as `volume.correction`.
     pub volume_correction: f64,
     /// Elastic compression `Σ V p / K` of the fluid mesh at the start (m³).
     compression0: f64,
@@ -478,13 +482,7 @@ where
         let nv = D + 1;
         self.fluid_elements
             .chunks_exact(nv)
-            .map(|el| {
-                let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
-                for a in 0..nv {
-                    p[a] = self.state.x[el[a] as usize];
-                }
-                simplex_measure::<D>(&p[..nv])
-            })
+            .map(|el| simplex_measure::<D>(&self.gather(el)[..nv]))
             .sum()
     }
 
@@ -506,14 +504,12 @@ where
             if !(k.is_finite() && k > 0.0) {
                 continue;
             }
-            let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
-            let mut pm = 0.0;
-            for a in 0..nv {
-                let i = el[a] as usize;
-                p[a] = self.state.x[i];
-                pm += self.state.pressure[i] / nv as f64;
-            }
-            c += simplex_measure::<D>(&p[..nv]) * pm / k;
+            let pm = el
+                .iter()
+                .map(|&i| self.state.pressure[i as usize])
+                .sum::<f64>()
+                / nv as f64;
+            c += simplex_measure::<D>(&self.gather(el)[..nv]) * pm / k;
         }
         c
     }
@@ -533,32 +529,39 @@ where
             return Ok(());
         }
         let t0 = Instant::now();
-        let c = self.fluid_compression();
-        let e = (self.volume_now + c) - (self.volume.initial + self.compression0);
-        // Area-weighted outward normal of the free surface at each fluid
-        // node: the facet opposite vertex k of element e has outward
-        // normal × measure −D Vₑ ∇W_k, shared equally by its D nodes.
+        let e = (self.volume_now + self.fluid_compression())
+            - (self.volume.initial + self.compression0);
+        if !e.is_finite() || e == 0.0 {
+            return Ok(());
+        }
         let nv = D + 1;
         let n = self.state.len();
-        let mut normal = vec![Vector::<D>::zeros(); n];
-        let mut grads = [Vector::<D>::zeros(); pfem_core::MAX_NV];
-        let mesh = &self.fluid_mesh;
-        // Particles of an element that touches a solid stay put: moving
-        // them squeezes the fluid against a structure that answers (the
-        // thin plate of the hard cases gained 7.8 % energy with backward
-        // Euler). Walls do not move, and the guard below keeps elements
-        // against them from flattening.
-        let mut anchored = vec![false; n];
-        for el in mesh.simplices.chunks_exact(nv) {
+        // Particles that may move: fluid, not touching a solid (moving them
+        // squeezes the fluid against a structure that answers: the thin
+        // plate of the hard cases gained 7.8 % energy with backward Euler).
+        let mut movable: Vec<bool> = self
+            .kind
+            .iter()
+            .map(|&k| k == ParticleKind::Fluid)
+            .collect();
+        for el in self.fluid_elements.chunks_exact(nv) {
             if el
                 .iter()
                 .any(|&i| self.kind[i as usize] == ParticleKind::Solid)
             {
                 for &i in el {
-                    anchored[i as usize] = true;
+                    movable[i as usize] = false;
                 }
             }
         }
+        // Area-weighted outward normal of the free surface at each movable
+        // particle: the facet opposite vertex k of element e has outward
+        // normal × measure −D Vₑ ∇W_k, shared equally by its D nodes. Only
+        // facets with a fluid node are free surface (all-wall or all-solid
+        // facets lie on a wall or a structure).
+        let mut normal = vec![Vector::<D>::zeros(); n];
+        let mut grads = [Vector::<D>::zeros(); pfem_core::MAX_NV];
+        let mesh = &self.fluid_mesh;
         for (el, nb) in mesh
             .simplices
             .chunks_exact(nv)
@@ -567,28 +570,39 @@ where
             if !nb.contains(&pfem_geometry::NO_NEIGHBOR) {
                 continue;
             }
-            let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
-            for a in 0..nv {
-                p[a] = self.state.x[el[a] as usize];
-            }
+            let p = self.gather(el);
             let Some(vol) = pfem_core::shape_gradients::<D>(&p[..nv], &mut grads[..nv]) else {
                 continue;
             };
-            for k in 0..nv {
-                if nb[k] != pfem_geometry::NO_NEIGHBOR {
+            for k in (0..nv).filter(|&k| nb[k] == pfem_geometry::NO_NEIGHBOR) {
+                let facet = (0..nv).filter(|&a| a != k);
+                if !facet
+                    .clone()
+                    .any(|a| self.kind[el[a] as usize] == ParticleKind::Fluid)
+                {
                     continue;
                 }
-                let facet = grads[k] * (-(D as f64) * vol / D as f64);
-                for a in (0..nv).filter(|&a| a != k) {
+                let share = grads[k] * (-vol);
+                for a in facet {
                     let i = el[a] as usize;
-                    if !anchored[i] {
-                        normal[i] += facet;
+                    if movable[i] {
+                        normal[i] += share;
                     }
                 }
             }
         }
-        let area: f64 = normal.iter().map(|m| m.norm()).sum();
-        if area.is_nan() || area <= 0.0 {
+        // Constrained components (slip planes, clamps) do not move.
+        for (i, m) in normal.iter_mut().enumerate() {
+            for k in 0..D {
+                if self.constraints.is_fixed(i, k) {
+                    m[k] = 0.0;
+                }
+            }
+        }
+        // Minimum-norm move restoring β e to first order:
+        // uᵢ = −β e mᵢ / Σ|m|², so Σ mᵢ·uᵢ = −β e; each move capped.
+        let m2: f64 = normal.iter().map(|m| m.norm_squared()).sum();
+        if !(m2.is_finite() && m2 > 0.0) {
             return Ok(());
         }
         let h_min = (0..n)
@@ -599,17 +613,16 @@ where
         // a coarse (a/10) thin layer's volume by 4 %; 20 % keeps every hard
         // case of `tests/stability_*.rs` within 1 %.
         let cap = 0.2 * h_min;
-        let delta = (beta * e / area).clamp(-cap, cap);
+        let s = beta * e / m2;
         let old: Vec<Point<D>> = self.state.x.clone();
         for (x, m) in self.state.x.iter_mut().zip(&normal) {
-            let norm = m.norm();
-            if norm > 0.0 {
-                *x -= m * (delta / norm);
-            }
+            let u = m * (-s);
+            let len = u.norm();
+            *x += if len > cap { u * (cap / len) } else { u };
         }
         // A move that would flatten an element (measure below half its
-        // value) is undone for that element's nodes.
-        for _ in 0..4 {
+        // value) is undone for that element's nodes, until none is left.
+        loop {
             let mut undone = false;
             for el in self.fluid_elements.chunks_exact(nv) {
                 if !el
@@ -618,11 +631,10 @@ where
                 {
                     continue;
                 }
+                let p1 = self.gather(el);
                 let mut p0 = [Point::<D>::zeros(); pfem_core::MAX_NV];
-                let mut p1 = [Point::<D>::zeros(); pfem_core::MAX_NV];
                 for a in 0..nv {
                     p0[a] = old[el[a] as usize];
-                    p1[a] = self.state.x[el[a] as usize];
                 }
                 if simplex_measure::<D>(&p1[..nv]) < 0.5 * simplex_measure::<D>(&p0[..nv]) {
                     for &i in el {
@@ -638,9 +650,18 @@ where
         let after = self.fluid_volume();
         self.volume.correction += after - self.volume_now;
         self.volume_now = after;
-        self.stats.free_surface.0 += 1;
-        self.stats.free_surface.1 += t0.elapsed().as_secs_f64();
+        self.stats.volume_correction.0 += 1;
+        self.stats.volume_correction.1 += t0.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// Positions of the vertices of a simplex.
+    fn gather(&self, el: &[u32]) -> [Point<D>; pfem_core::MAX_NV] {
+        let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+        for (a, &i) in el.iter().enumerate() {
+            p[a] = self.state.x[i as usize];
+        }
+        p
     }
 
     /// Regenerates the fluid mesh: Delaunay of all particles, alpha shape

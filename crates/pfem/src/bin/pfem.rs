@@ -17,7 +17,7 @@ use pfem::cli::Args;
 use pfem::core::{Const, Dim};
 use pfem::geometry::{Delaunay2, Delaunay3, Tessellator};
 use pfem::scene_file::{LoadedScene, SceneFile};
-use pfem::{Probe, Scene, Simulation, StandardOutput};
+use pfem::{Probe, Scene, StandardOutput};
 
 const HELP: &str = "\
 pfem: Particle Finite Element Method for fluid-structure interaction
@@ -38,9 +38,13 @@ Options:
   --end-time T    simulated time (s), overriding the file
   --quiet, -q     no progress bar
   --no-vtu        no VTU frames (probes.csv and summary.json are still written)
-  --scheme S      newmark (default, the paper's) or euler (damped)
+  --scheme S      bossak (default, α_B = -0.3), newmark (the paper's
+                  undamped trapezoidal rule) or euler (backward Euler)
   --picard-tol X  Picard tolerance (default 1e-6)
   --solver S      direct (default: Cholesky, LU fallback), lu, cholesky or cg
+  --volume-correction B
+                  fraction of the fluid-volume error restored per step,
+                  in [0, 1] (default 1; 0 = off, as in the paper)
   --help, -h      this help
 
 Scene files: see examples/scenes/*.toml and the pfem::scene_file docs.
@@ -145,9 +149,9 @@ where
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
     let name = scene.name.clone();
-    let params = args.step_params().map_err(|e| e.to_string())?;
-    let mut sim = Simulation::new(scene, tessellator, params).map_err(|e| e.to_string())?;
-    sim.set_solver(args.solver().map_err(|e| e.to_string())?);
+    let mut sim = args
+        .simulation(scene, tessellator)
+        .map_err(|e| e.to_string())?;
     eprintln!(
         "{name}: {D}D, {} particles, h_min = {} m, end time {} s -> {}",
         sim.state.len(),
