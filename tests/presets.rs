@@ -56,24 +56,24 @@ fn front_error(f: Fidelity) -> (f64, f64) {
     (rms, wall)
 }
 
-/// Draft (a/10): study 1.44 % in 0.6 s; bound 5 %.
+/// Draft (a/10): study 1.58 % in 0.5 s; bound 5 %.
 #[test]
 fn draft_front_error_within_five_percent() {
     let (rms, _) = front_error(Fidelity::Draft);
     assert!(rms < 0.05, "front RMS error {rms}");
 }
 
-/// Standard (a/20): study 4.80 % in 17 s (loaded 2-core machine); bound 5 %.
+/// Standard (a/20): study 1.72 % in 11.8 s; bound 5 %.
 #[test]
 fn standard_front_error_within_five_percent() {
     let (rms, _) = front_error(Fidelity::Standard);
     assert!(rms < 0.05, "front RMS error {rms}");
 }
 
-/// Fine (a/28.6): study 2.66 % in 123 s; bound 5 %.
+/// Fine (a/28.6): study 1.54 % in 36 s; bound 5 %.
 /// `cargo test --release --test presets -- --ignored`
 #[test]
-#[ignore = "slow: about 2 minutes"]
+#[ignore = "slow: about 40 s"]
 fn fine_front_error_within_five_percent() {
     let (rms, _) = front_error(Fidelity::Fine);
     assert!(rms < 0.05, "front RMS error {rms}");

@@ -20,11 +20,11 @@
 //! The errors and times quoted on each preset are those of the 2D dam break
 //! (Martin & Moyce 1952, n² = 2, a = 2.25 in, front RMS relative error for
 //! T = t √(2g/a) ≤ 3 after the best time shift), measured by the full study
-//! at commit `7d54ae3` on a 2-core Intel Xeon shared with other jobs (load
-//! average 2.3–6.7); `tests/presets.rs` checks the error bounds. On the dam
-//! break the front error does not decrease with refinement (a/10 1.38 %,
-//! a/14 3.60 %, a/20 4.80 %, a/28 1.78 %), so the presets are not ordered
-//! by accuracy there; refinement pays on solids (cantilever: order 1.09).
+//! at commit `ef0bcbe` on a 2-core Intel Xeon (load average 1.7);
+//! `tests/presets.rs` checks the error bounds. On the dam break the front
+//! error does not decrease with refinement (a/10 1.76 %, a/14 1.85 %,
+//! a/20 1.72 %, a/28 2.69 %), so the presets are not ordered by accuracy
+//! there; refinement pays on solids (cantilever: order 1.09).
 
 use pfem_time::StepParams;
 
@@ -34,18 +34,18 @@ use crate::scene::RunSettings;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Fidelity {
     /// Quick look: twice the default spacing, Courant 1, Picard 1e-3.
-    /// Dam break (a/10): front RMS error 1.44 %, 0.6 s wall time (study);
+    /// Dam break (a/10): front RMS error 1.58 %, 0.5 s wall time (study);
     /// tested bound 5 %.
     Draft,
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
-    /// Dam break (a/20): front RMS error 4.80 %, 17.2 s wall time (study);
+    /// Dam break (a/20): front RMS error 1.72 %, 11.8 s wall time (study);
     /// tested bound 5 %.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
-    /// Dam break (a/28.6): front RMS error 2.66 %, 122.8 s wall time
-    /// (study): more accurate than Standard but not than Draft on this
-    /// measure (the front error does not decrease with refinement). Meant
+    /// Dam break (a/28.6): front RMS error 1.54 %, 36.4 s wall time
+    /// (study): within 0.2 % of Draft and Standard on this measure (the
+    /// front error does not decrease with refinement). Meant
     /// for solids, where refinement does pay (cantilever: 4.88 % at t/8,
     /// 2.46 % at t/16). Tested bound 5 %.
     Fine,
