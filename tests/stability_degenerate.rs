@@ -38,6 +38,7 @@ fn lattice_aligned_particles_run() {
     let o = run_checked(scene, StepParams::default());
     o.report("lattice-aligned");
     o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
 }
 
 /// A fluid block with one particle duplicated at 1e-9 m: building must not

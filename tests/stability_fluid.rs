@@ -8,7 +8,9 @@
 //! time or with a typed error, no NaN, no inverted fluid or solid element
 //! after any step, and the kinetic + gravitational potential energy of the
 //! non-wall particles never exceeds its initial value by more than the
-//! stated tolerance.
+//! stated tolerance; the default-scheme cases also check that the fluid
+//! volume changes by at most `VOLUME_CHANGE_TOL` (1 %) over the run. The
+//! stricter 1 % at every step is a separate, ignored test (known gap).
 
 #[path = "stability_support.rs"]
 mod support;
@@ -37,6 +39,7 @@ fn real_bulk_modulus_at_courant_one() {
     let o = run_checked(scene, StepParams::default());
     o.report("bulk modulus, C = 1");
     o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
 }
 
 /// A column 0.1 m × 0.25 m released into a 0.25 m tank: it hits the far
@@ -67,6 +70,7 @@ fn violent_splash_stays_bounded() {
     let o = run_checked(splash(), StepParams::default());
     o.report("splash");
     o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
 }
 
 /// The same case with backward Euler, the other damped scheme: the energy
@@ -129,6 +133,7 @@ fn short_sloshing_is_stable() {
     let o = run_checked(sloshing(0.5), StepParams::default());
     o.report("sloshing 0.5 s");
     o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
 }
 
 /// Long sloshing: 1e4 steps (10 s at max_dt = 1 ms) without drift: energy

@@ -6,7 +6,8 @@
 //! Checks as in `stability_fluid.rs`: ends at its end time or with a typed
 //! error, no NaN, no inverted fluid or solid element after a step, the
 //! kinetic and gravitational potential energy of the non-wall particles
-//! never above the initial total + `ENERGY_TOL`.
+//! never above the initial total + `ENERGY_TOL`; with the default scheme,
+//! fluid volume change over the run within `VOLUME_CHANGE_TOL` (1 %).
 
 #[path = "stability_support.rs"]
 mod support;
@@ -57,6 +58,7 @@ fn stiffness_contrast_in_water() {
     let o = run_checked(stiffness_contrast(), StepParams::default());
     o.report("stiffness contrast");
     o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
 }
 
 /// Two free 0.04 m boxes (E = 1e6 Pa) resting on the surface of a 0.4 m ×
@@ -101,6 +103,7 @@ fn density_ratio_free_solids_in_water() {
     let o = run_checked(density_ratio(), StepParams::default());
     o.report("density ratio");
     o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
 }
 
 /// The same case with backward Euler, the other damped scheme: the energy
@@ -152,6 +155,7 @@ fn thin_structure_hit_by_a_wave() {
     let o = run_checked(thin_structure(), StepParams::default());
     o.report("thin structure");
     o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
 }
 
 /// The same case with backward Euler, the other damped scheme: the energy
