@@ -39,6 +39,7 @@ fn lattice_aligned_particles_run() {
     o.report("lattice-aligned");
     o.assert_stable(ENERGY_TOL);
     o.assert_volume_change(VOLUME_CHANGE_TOL);
+    o.assert_volume(VOLUME_STEP_TOL);
 }
 
 /// A fluid block with one particle duplicated at 1e-9 m: building must not

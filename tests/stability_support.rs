@@ -12,6 +12,14 @@ use pfem::RunError;
 /// case ends within 0.01 %.
 pub const VOLUME_CHANGE_TOL: f64 = 0.01;
 
+/// Fluid volume deviation allowed after any step of a hard-case run: 5 %,
+/// the per-step bound the suite has stated since it was written (long
+/// sloshing). Measured largest with the volume correction: 3.85 % (splash),
+/// 2.42 % (stiffness contrast), under 1 % for the others; the stricter 1 %
+/// is checked by the ignored `hard_cases_keep_fluid_volume_within_one_percent`
+/// tests (known gap).
+pub const VOLUME_STEP_TOL: f64 = 0.05;
+
 /// What a run did, checked after every accepted step.
 #[derive(Debug, Default, Clone)]
 pub struct Watch {
