@@ -42,23 +42,5 @@ fn surge_front_follows_martin_and_moyce_at_coarse_resolution() {
     assert!(rms < 0.08, "front RMS error {rms}");
 }
 
-/// The issue asks for a fluid volume change below 1% over the run. Without
-/// the volume correction (`Simulation::volume_correction = 0`) the change
-/// by t·√(2g/a) = 3 at a/12 is −1.39% (+5.8% with the trapezoidal Newmark);
-/// with it (the default) about −0.2%.
-#[test]
-fn fluid_volume_is_conserved_within_one_percent() {
-    let mut case = DamBreak::default();
-    case.spacing = case.width / 12.0;
-    case.end_time = 3.0 / (2.0 * G / case.width).sqrt();
-    let mut sim = Simulation::new(
-        case.scene(),
-        Box::new(Delaunay2::default()),
-        StepParams::default(),
-    )
-    .unwrap();
-    sim.run(&mut []).unwrap();
-    let dv = (sim.fluid_volume() - sim.volume.initial) / sim.volume.initial;
-    eprintln!("volume change {:+.2}%", 100.0 * dv);
-    assert!(dv.abs() < 0.01, "volume change {dv}");
-}
+// The issue's fluid-volume bound (below 1% over the run) on this coarse
+// dam break is checked with the ledger in `tests/volume_correction.rs`.

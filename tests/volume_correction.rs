@@ -6,21 +6,27 @@ use pfem::cases::{DamBreak, G};
 use pfem::prelude::*;
 use pfem::RunError;
 
-fn dam_break(beta: f64) -> Simulation<2> {
-    let mut case = DamBreak::default();
-    case.spacing = case.width / 12.0;
-    case.end_time = 3.0 / (2.0 * G / case.width).sqrt();
-    let mut sim = Simulation::new(
-        case.scene(),
-        Box::new(Delaunay2::default()),
-        StepParams::default(),
-    )
-    .unwrap();
+/// A 2D simulation of `scene` with the default scheme and correction `beta`.
+fn build(scene: Scene<2>, beta: f64) -> Simulation<2> {
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
     sim.volume_correction = beta;
     sim
 }
 
-/// With the correction the ledger balances: final − initial volume equals
+/// The coarse dam break (a/12, to t·√(2g/a) = 3) of
+/// `tests/validation_dam_break.rs`.
+fn dam_break(beta: f64) -> Simulation<2> {
+    let mut case = DamBreak::default();
+    case.spacing = case.width / 12.0;
+    case.end_time = 3.0 / (2.0 * G / case.width).sqrt();
+    build(case.scene(), beta)
+}
+
+/// Issue 5's bound on the coarse dam break: with the correction (the
+/// default) the fluid volume changes by less than 1 % over the run
+/// (measured −0.001 %; without it −1.39 %, and +5.8 % with the trapezoidal
+/// Newmark). The ledger balances: final − initial volume equals
 /// remeshing + correction + solution, and the correction is what keeps the
 /// total small while remeshing alone drifts by more. Without it the
 /// correction entry stays exactly zero.
@@ -75,18 +81,8 @@ fn correction_restores_volume_without_adding_momentum() {
         spacing: 0.025,
         ..Default::default()
     };
-    let build = |beta: f64| {
-        let mut sim = Simulation::new(
-            case.scene(),
-            Box::new(Delaunay2::default()),
-            StepParams::default(),
-        )
-        .unwrap();
-        sim.volume_correction = beta;
-        sim
-    };
-    let mut with = build(1.0);
-    let mut without = build(0.0);
+    let mut with = build(case.scene(), 1.0);
+    let mut without = build(case.scene(), 0.0);
     let v0 = with.volume.initial;
     with.volume.initial = 1.003 * v0;
     for _ in 0..2 {
