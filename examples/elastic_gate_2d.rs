@@ -101,15 +101,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             ..Default::default()
         },
     )?;
-    let summary = output.summary(&sim);
-    println!(
-        "{} steps ({} rejected), fluid volume {:+.3}%, wall time {:.1} s",
-        summary.steps,
-        summary.rejected_steps,
-        100.0 * summary.relative_volume_change(),
-        summary.wall_time_s.get("total").copied().unwrap_or(0.0)
-    );
-    pfem::output::write_summary(out.join("summary.json"), &summary)?;
-    println!("wrote {}", out.display());
+    output.report(&sim)?;
     Ok(())
 }

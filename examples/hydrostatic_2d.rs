@@ -56,13 +56,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         "max_speed_over_sqrt_gh".into(),
         (vmax / (G * case.height).sqrt()).into(),
     );
-    let summary = output.summary(&sim);
-    println!(
-        "volume change {:+.4}%, {} steps, wall time {:.1} s",
-        100.0 * summary.relative_volume_change(),
-        summary.steps,
-        summary.wall_time_s["total"]
-    );
-    pfem::output::write_summary(out.join("summary.json"), &summary)?;
+    output.report(&sim)?;
     Ok(())
 }

@@ -68,17 +68,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         );
         output.extra.insert(format!("front_x_at_{t:.1}s"), x.into());
     }
-    let summary = output.summary(&sim);
-    println!(
-        "{} steps ({} rejected), fluid volume {:.6e} -> {:.6e} ({:+.3}%), wall time {:.1} s",
-        summary.steps,
-        summary.rejected_steps,
-        summary.fluid_volume_initial,
-        summary.fluid_volume_final,
-        100.0 * summary.relative_volume_change(),
-        summary.wall_time_s.get("total").copied().unwrap_or(0.0)
-    );
-    pfem::output::write_summary(out.join("summary.json"), &summary)?;
-    println!("wrote {}", out.display());
+    output.report(&sim)?;
     Ok(())
 }

@@ -186,6 +186,27 @@ where
         Ok(())
     }
 
+    /// Ends a run for a command-line program: writes `summary.json` (with
+    /// the `extra` entries added since [`Observer::finish`] wrote it),
+    /// prints one line of steps, simulated time, fluid volume and wall
+    /// time and the output directory on stdout, and returns the summary.
+    pub fn report(&self, sim: &Simulation<D>) -> Result<RunSummary, RunError> {
+        let summary = self.summary(sim);
+        write_summary(self.dir.join("summary.json"), &summary)?;
+        println!(
+            "{} steps ({} rejected), simulated {:.4} s, fluid volume {:.6e} -> {:.6e} ({:+.3}%), wall time {:.1} s",
+            summary.steps,
+            summary.rejected_steps,
+            summary.simulated_time,
+            summary.fluid_volume_initial,
+            summary.fluid_volume_final,
+            100.0 * summary.relative_volume_change(),
+            summary.wall_time_s.get("total").copied().unwrap_or(0.0)
+        );
+        println!("wrote {}", self.dir.display());
+        Ok(summary)
+    }
+
     /// The run's summary as it stands.
     pub fn summary(&self, sim: &Simulation<D>) -> RunSummary {
         let mut wall = BTreeMap::new();

@@ -161,17 +161,6 @@ where
     );
     let mut output = StandardOutput::new(&out, !args.no_vtu, probes, args.quiet);
     sim.run(&mut [&mut output]).map_err(|e| e.to_string())?;
-    let summary = output.summary(&sim);
-    println!(
-        "{} steps ({} rejected), simulated {:.4} s, fluid volume {:.6e} -> {:.6e} ({:+.3}%), wall time {:.1} s",
-        summary.steps,
-        summary.rejected_steps,
-        summary.simulated_time,
-        summary.fluid_volume_initial,
-        summary.fluid_volume_final,
-        100.0 * summary.relative_volume_change(),
-        summary.wall_time_s.get("total").copied().unwrap_or(0.0)
-    );
-    println!("wrote {}", out.display());
+    output.report(&sim).map_err(|e| e.to_string())?;
     Ok(())
 }
