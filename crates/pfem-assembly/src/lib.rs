@@ -16,7 +16,9 @@ pub use assembler::{
     Assembler, AssemblyInfo, AssemblyInput, Constraints, Inertia, NodalRate, StepMesh,
 };
 pub use error::{AssemblyError, SolveError};
+pub use faer::Par;
 pub use kernels::VolumetricTreatment;
 pub use solver::{
     ConjugateGradient, DirectSolver, LinearSolver, SolveReport, SparseCholesky, SparseLu,
+    DEFAULT_PARALLELISM,
 };
