@@ -148,13 +148,14 @@ fn a_cylinder_in_2d_is_rejected() {
 
 /// Runs the 2D dam break (Martin & Moyce, n² = 2) and the same case as a
 /// 3D slab one spacing deep with slip side planes, at the same spacing
-/// (a/10), and returns the RMS difference of their fronts (m), the column
-/// width, and the RMS of the relative difference `(x₃ − x₂)/x₂`.
-fn dam_break_2d_vs_slab(end_time: f64) -> (f64, f64, f64) {
+/// (`a / divisions`), and returns the RMS difference of their fronts (m),
+/// the column width, and the RMS of the relative difference
+/// `(x₃ − x₂)/x₂`.
+fn dam_break_2d_vs_slab(end_time: f64, divisions: f64) -> (f64, f64, f64) {
     use pfem::cases::DamBreak;
     use pfem::cases3d::{slip_sides, thin_dam_break};
     let mut case = DamBreak::default();
-    case.spacing = case.width / 10.0;
+    case.spacing = case.width / divisions;
     case.end_time = end_time;
     let mut s2 = Simulation::new(
         case.scene(),
@@ -191,7 +192,7 @@ fn dam_break_2d_vs_slab(end_time: f64) -> (f64, f64, f64) {
     let rms = (sq / front3.len() as f64).sqrt();
     let rel = (rel / front3.len() as f64).sqrt();
     eprintln!(
-        "dam break a/10: 2D {} steps, 3D slab {} steps ({} rejected); fronts at the end 2D {:.4} m, 3D {:.4} m; largest difference {:.4} m ({:.1}% of a), RMS {:.4} m ({:.1}% of a)",
+        "dam break a/{divisions}: 2D {} steps, 3D slab {} steps ({} rejected); fronts at the end 2D {:.4} m, 3D {:.4} m; largest difference {:.4} m ({:.1}% of a), RMS {:.4} m ({:.1}% of a)",
         s2.steps, s3.steps, s3.rejected,
         front2.last().unwrap().1, front3.last().unwrap().1, worst, 100.0 * worst / case.width, rms, 100.0 * rms / case.width
     );
@@ -199,17 +200,31 @@ fn dam_break_2d_vs_slab(end_time: f64) -> (f64, f64, f64) {
     (rms, case.width, rel)
 }
 
-/// Quasi-2D check of 3D against 2D (issue 6: within 5 %): the dam break as
-/// a slab one spacing deep with slip side planes follows the 2D front to
-/// T = t √(2g/a) = 3.2, RMS of the relative front difference below 5 %
-/// (about a minute on 2 cores; figures in docs/benchmarks.md).
+/// T = t √(2g/a) at which the quasi-2D comparisons end.
+const QUASI_2D_T: f64 = 3.2;
+
+/// Quasi-2D check of 3D against 2D (issue 6: within 5 %) at the 2D
+/// example's default resolution (a/20): the dam break as a slab one
+/// spacing deep with slip side planes follows the 2D front to
+/// T = t √(2g/a) = 3.2, RMS of the relative front difference below 5 %.
+/// Measured 1.88 % (docs/benchmarks.md); about 100 s in release on 2 cores.
 ///
 /// ```text
 /// cargo test --release --test three_d -- --ignored --nocapture quasi_2d
 /// ```
 #[test]
-#[ignore = "known gap: relative front difference 5.10% RMS (target 5%); about 20 s in release"]
+#[ignore = "long (about 100 s in release): cargo test --release --test three_d -- --ignored quasi_2d"]
 fn quasi_2d_dam_break_follows_the_2d_front() {
-    let (_, _, rel) = dam_break_2d_vs_slab(3.2 / (2.0 * G / 0.05715f64).sqrt());
+    let (_, _, rel) = dam_break_2d_vs_slab(QUASI_2D_T / (2.0 * G / 0.05715f64).sqrt(), 20.0);
+    assert!(rel < 0.05, "fronts differ by {:.2}% (RMS)", 100.0 * rel);
+}
+
+/// The same check at a/14 in the default suite (about 35 s in release),
+/// same 5 % bound: measured 1.34 %. At a/10 the comparison gives 5.10 %:
+/// there the 2D front itself advances in jumps (0.132, 0.178, 0.220,
+/// 0.221 m at T = 2.0, 2.4, 2.8, 3.2), too coarse to compare with.
+#[test]
+fn quasi_2d_dam_break_follows_the_2d_front_at_a_14() {
+    let (_, _, rel) = dam_break_2d_vs_slab(QUASI_2D_T / (2.0 * G / 0.05715f64).sqrt(), 14.0);
     assert!(rel < 0.05, "fronts differ by {:.2}% (RMS)", 100.0 * rel);
 }
