@@ -228,3 +228,56 @@ fn quasi_2d_dam_break_follows_the_2d_front_at_a_14() {
     let (_, _, rel) = dam_break_2d_vs_slab(QUASI_2D_T / (2.0 * G / 0.05715f64).sqrt(), 14.0);
     assert!(rel < 0.05, "fronts differ by {:.2}% (RMS)", 100.0 * rel);
 }
+
+/// Water at rest in a closed 3D tank (0.2 m cube of water, h = 0.02 m, side
+/// walls, 0.3 s) should stay at rest: largest fluid speed below
+/// 0.05 √(gH). Known gap, measured 0.163 m/s = 0.116 √(gH) (2D at the same
+/// resolution: 0.049 m/s = 0.03 √(gH)); see docs/benchmarks.md ("3D water
+/// at rest").
+///
+/// ```text
+/// cargo test --release --test three_d -- --ignored --nocapture water_at_rest
+/// ```
+#[test]
+#[ignore = "known gap: spurious speeds 0.12 sqrt(gH) in 3D water at rest (bound 0.05); about 1 min in release"]
+fn water_at_rest_in_a_3d_tank_stays_at_rest() {
+    use pfem::cases3d::tank3d;
+    let (a, h) = (0.2, 0.02);
+    let scene = Scene::<3>::new("rest3d")
+        .gravity(Vector::<3>::new(0.0, -G, 0.0))
+        .settings(RunSettings {
+            end_time: 0.3,
+            max_dt: 5e-3,
+            courant: 0.5,
+            output_interval: None,
+            alpha: 1.3,
+        });
+    let scene = tank3d(scene, a, a, 1.2 * a, h, true).fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        Geometry::Box {
+            min: Point::<3>::new(0.0, 0.0, 0.0),
+            max: Point::<3>::new(a, a, a),
+        },
+        h,
+    );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    let mut vmax: f64 = 0.0;
+    while sim.time < 0.3 - 1e-12 {
+        sim.step().unwrap();
+        for i in 0..sim.state.len() {
+            if sim.kind[i] == pfem::core::ParticleKind::Fluid {
+                vmax = vmax.max(sim.state.v[i].norm());
+            }
+        }
+    }
+    let speed = (G * a).sqrt();
+    eprintln!(
+        "3D water at rest: largest speed {vmax:.3} m/s = {:.3} sqrt(gH), {} steps ({} rejected)",
+        vmax / speed,
+        sim.steps,
+        sim.rejected
+    );
+    assert!(vmax < 0.05 * speed, "largest speed {vmax} m/s");
+}
