@@ -602,6 +602,23 @@ pub struct DirectSolver {
 impl DirectSolver {
     /// With the given parallelism inside faer for both factorisations
     /// (default [`DEFAULT_PARALLELISM`]).
+    ///
+    /// ```
+    /// use pfem_assembly::{DirectSolver, LinearSolver, Par};
+    /// use faer::sparse::{SparseColMat, Triplet};
+    ///
+    /// // Rayon-parallel factorisations, for large 3D systems on many cores.
+    /// let mut solver = DirectSolver::with_parallelism(Par::rayon(0));
+    /// let a = SparseColMat::<usize, f64>::try_new_from_triplets(
+    ///     2,
+    ///     2,
+    ///     &[Triplet::new(0, 0, 4.0), Triplet::new(1, 1, 2.0)],
+    /// )
+    /// .unwrap();
+    /// let mut x = [0.0; 2];
+    /// solver.solve(a.as_ref(), 1, &[8.0, 2.0], &mut x).unwrap();
+    /// assert!((x[0] - 2.0).abs() < 1e-12 && (x[1] - 1.0).abs() < 1e-12);
+    /// ```
     pub fn with_parallelism(par: Par) -> Self {
         Self {
             cholesky: SparseCholesky::with_parallelism(par),
