@@ -172,3 +172,49 @@ fn impossible_scenes_are_typed_errors_before_any_step() {
         Err(pfem::SceneError::MaterialKindMismatch { .. })
     ));
 }
+
+/// Rejected attempts are counted and timed apart from the accepted ones
+/// (`stats.rejected`, `wall_time_s.rejected_attempts` in `summary.json`),
+/// so the stage times add up to no more than the run's wall time. A coarse
+/// dam break (a/8) with oversized steps (Courant 50, `max_dt` 0.05 s)
+/// rejects attempts, as in `stability_fluid.rs`.
+#[test]
+fn rejected_attempts_are_counted_and_timed() {
+    let case = pfem::cases::DamBreak {
+        spacing: 0.05715 / 8.0,
+        end_time: 0.1,
+        ..Default::default()
+    };
+    let mut scene = case.scene();
+    scene.settings.max_dt = 0.05;
+    scene.settings.courant = 50.0;
+    scene.settings.output_interval = None;
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    let out = StandardOutput::new(
+        std::env::temp_dir().join("pfem-test-rejected"),
+        false,
+        vec![],
+        true,
+    );
+    let t0 = std::time::Instant::now();
+    sim.run(&mut []).unwrap();
+    let wall = t0.elapsed().as_secs_f64();
+    assert!(sim.rejected > 0, "the case should reject some attempts");
+    assert_eq!(sim.stats.rejected.0, sim.rejected);
+    assert!(sim.stats.rejected.1 > 0.0);
+    let w = out.summary(&sim).wall_time_s;
+    assert_eq!(w["rejected_attempts"], sim.stats.rejected.1);
+    let stages: f64 = [
+        "remesh",
+        "assemble",
+        "solve",
+        "update",
+        "volume_correction",
+        "rejected_attempts",
+    ]
+    .iter()
+    .map(|k| w[*k])
+    .sum();
+    assert!(stages <= wall, "stages {stages} s > wall {wall} s");
+}

@@ -335,6 +335,9 @@ pub struct StepReport {
     pub solve_seconds: f64,
     /// Wall time spent updating the history and state (s).
     pub update_seconds: f64,
+    /// Wall time spent in the rejected attempts before this one (s): the
+    /// three times above are the accepted attempt's only.
+    pub rejected_seconds: f64,
 }
 
 /// The Newmark–Picard integrator: owns the assembler, the linear solver
@@ -467,16 +470,20 @@ where
         let mut dt = dt;
         let mut rejections = 0;
         let (mut inverted, mut picard) = (0, 0);
+        let mut rejected_seconds = 0.0;
         loop {
+            let t0 = std::time::Instant::now();
             match self.try_step(time, dt, state, history, input) {
                 Ok(mut rep) => {
                     rep.rejections = rejections;
                     rep.rejected_inverted = inverted;
                     rep.rejected_picard = picard;
+                    rep.rejected_seconds = rejected_seconds;
                     return Ok(rep);
                 }
                 Err(e @ StepError::InvalidInput { .. }) => return Err(e),
                 Err(e) => {
+                    rejected_seconds += t0.elapsed().as_secs_f64();
                     match &e {
                         StepError::Assembly { .. } => inverted += 1,
                         StepError::PicardDiverged { .. } => picard += 1,

@@ -219,6 +219,7 @@ where
             sim.stats.volume_correction.1,
         );
         wall.insert("output".to_string(), sim.stats.observe.1);
+        wall.insert("rejected_attempts".to_string(), sim.stats.rejected.1);
         wall.insert(
             "total".to_string(),
             self.started

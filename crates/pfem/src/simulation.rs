@@ -48,6 +48,10 @@ pub struct StageStats {
     /// Volume correction (see [`Simulation::volume_correction`]): calls
     /// and seconds.
     pub volume_correction: (u64, f64),
+    /// Rejected step attempts (inverted element, Picard divergence, failed
+    /// solve): count and seconds. `assemble`, `solve` and `update` count
+    /// accepted attempts only.
+    pub rejected: (u64, f64),
     /// Pressure updates (eq. 62) done.
     pub pressure_updates: u64,
     /// Solid stress updates (eq. 63) done.
@@ -815,6 +819,8 @@ where
         self.stats.solve.1 += rep.solve_seconds;
         self.stats.update.0 += 1;
         self.stats.update.1 += rep.update_seconds;
+        self.stats.rejected.0 += rep.rejections as u64;
+        self.stats.rejected.1 += rep.rejected_seconds;
         if self.stages.pressure {
             self.stats.pressure_updates += 1;
         }
