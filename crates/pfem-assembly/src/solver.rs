@@ -363,11 +363,11 @@ impl<K: Kind> Direct<K> {
             }
         };
         apply(x);
-        let steps = refine(a, b, x, &mut apply);
+        let (steps, residual) = refine(a, b, x, &mut apply);
         if let Some(e) = err {
             return Err(fail(e));
         }
-        let rep = finish_direct(a, b, x, 1 + steps, name);
+        let rep = finish_direct(a, b, x, 1 + steps, residual, name);
         self.factored = rep.is_ok();
         rep
     }
@@ -504,16 +504,17 @@ pub const MAX_REFINEMENT_STEPS: usize = 3;
 /// times. Ill-conditioned but well-posed systems (a slender solid with
 /// many elements through its thickness and long time steps) otherwise miss
 /// [`DIRECT_RESIDUAL_LIMIT`] by round-off in the factors. Returns the steps
-/// kept.
+/// kept and the relative residual of the returned `x`.
 fn refine(
     a: SparseColMatRef<'_, usize, f64>,
     b: &[f64],
     x: &mut [f64],
     mut solve_in_place: impl FnMut(&mut [f64]),
-) -> usize {
+) -> (usize, f64) {
     let mut res = relative_residual(a, b, x);
     let mut kept = 0;
     let mut r = vec![0.0; b.len()];
+    let mut old = vec![0.0; b.len()];
     for _ in 0..MAX_REFINEMENT_STEPS {
         if res.is_nan() || res <= REFINEMENT_TARGET {
             break;
@@ -521,7 +522,7 @@ fn refine(
         r.copy_from_slice(b);
         spmv_sub(a, x, &mut r);
         solve_in_place(&mut r);
-        let old: Vec<f64> = x.to_vec();
+        old.copy_from_slice(x);
         for (xi, di) in x.iter_mut().zip(&r) {
             *xi += di;
         }
@@ -533,20 +534,21 @@ fn refine(
         res = new_res;
         kept += 1;
     }
-    kept
+    (kept, res)
 }
 
 /// Accepts a direct solution whose relative residual is below
 /// [`DIRECT_RESIDUAL_LIMIT`] or whose backward error is below
-/// [`DIRECT_BACKWARD_ERROR_LIMIT`].
+/// [`DIRECT_BACKWARD_ERROR_LIMIT`]. `residual` is `x`'s relative residual
+/// (from [`refine`]).
 fn finish_direct(
     a: SparseColMatRef<'_, usize, f64>,
     b: &[f64],
     x: &[f64],
     iterations: usize,
+    residual: f64,
     solver: &'static str,
 ) -> Result<SolveReport, SolveError> {
-    let residual = relative_residual(a, b, x);
     let finite = x.iter().all(|v| v.is_finite());
     if finite
         && (residual <= DIRECT_RESIDUAL_LIMIT

@@ -406,14 +406,12 @@ where
             body_force: gravity.is_some_and(|g| g.norm() > 0.0),
             free_surface: has_fluid,
         };
-        let h_min = spacing.iter().copied().fold(f64::INFINITY, f64::min);
         let controller = CourantController {
             courant: settings.courant,
             dt_max: settings.max_dt,
             dt_min: params.min_dt,
             growth: 1.25,
         };
-        let _ = h_min;
         let n_solid = solid_material.len();
         let mut sim = Self {
             name,
