@@ -238,9 +238,9 @@ fn quasi_2d_dam_break_follows_the_2d_front_at_a_14() {
 /// ```text
 /// cargo test --release --test three_d -- --ignored --nocapture water_at_rest
 /// ```
-#[test]
-#[ignore = "known gap: spurious speeds 0.12 sqrt(gH) in 3D water at rest (bound 0.05); about 1 min in release"]
-fn water_at_rest_in_a_3d_tank_stays_at_rest() {
+/// Water (a 0.2 m cube, h = 0.02 m) at rest in a closed tank with no-slip
+/// side walls, to 0.3 s.
+fn rest_tank() -> Simulation<3> {
     use pfem::cases3d::tank3d;
     let (a, h) = (0.2, 0.02);
     let scene = Scene::<3>::new("rest3d")
@@ -261,8 +261,49 @@ fn water_at_rest_in_a_3d_tank_stays_at_rest() {
         },
         h,
     );
-    let mut sim =
-        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap()
+}
+
+/// The walls and the water of the tank are lattices generated from
+/// different origins, so the same grid point can be `0.04` in one and
+/// `0.039999999999999994` in the other; the last-bit differences make flat
+/// slivers of cospherical lattice cubes, which the alpha shape drops as
+/// elements. The holes they leave are sealed voids, not free surface: only
+/// the top layer of the water is free surface. (Before sealing, hundreds of
+/// interior particles were tagged free surface and the volume correction
+/// moved nearly all of them.)
+#[test]
+fn sliver_holes_in_a_3d_tank_are_not_free_surface() {
+    use pfem::geometry::{alpha_shape, classify, AlphaShapeParams, NodeTag, Tessellation};
+    let sim = rest_tank();
+    let mut t = Tessellation::default();
+    Delaunay3::default()
+        .tessellate(&sim.state.x, &mut t)
+        .unwrap();
+    let shape = alpha_shape(
+        &sim.state.x,
+        &sim.kind,
+        &sim.spacing,
+        &t,
+        &AlphaShapeParams::default(),
+    )
+    .unwrap();
+    let cls = classify(&sim.state.x, &sim.kind, &shape.mesh, None).unwrap();
+    let below_top = (0..sim.state.len())
+        .filter(|&i| cls.tags[i] == NodeTag::FreeSurface && sim.state.x[i].y < 0.19)
+        .count();
+    assert_eq!(
+        below_top, 0,
+        "{below_top} particles below the top layer tagged free surface ({} slivers sealed)",
+        shape.sealed
+    );
+    assert!(shape.sealed > 0, "the lattices no longer make slivers");
+}
+
+#[test]
+#[ignore = "known gap: spurious speeds 0.08 sqrt(gH) in 3D water at rest (bound 0.05); about 1 min in release"]
+fn water_at_rest_in_a_3d_tank_stays_at_rest() {
+    let (a, mut sim) = (0.2, rest_tank());
     let mut vmax: f64 = 0.0;
     while sim.time < 0.3 - 1e-12 {
         sim.step().unwrap();

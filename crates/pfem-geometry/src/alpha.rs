@@ -3,7 +3,7 @@
 use pfem_core::{edge_matrix, Const, Dim, ParticleKind, Point, Vector, MAX_NV};
 use rayon::prelude::*;
 
-use crate::{GeometryError, Tessellation, NO_NEIGHBOR};
+use crate::{GeometryError, Tessellation, NO_NEIGHBOR, SEALED};
 
 /// Parameters of the alpha shape.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,7 +43,8 @@ pub struct AlphaShape {
     /// The kept simplices, in Delaunay order, as a tessellation of the same
     /// particles. Its neighbour across a facet whose other side is not kept
     /// is [`NO_NEIGHBOR`]: those facets are the boundary (see
-    /// [`classify`](crate::classify())).
+    /// [`classify`](crate::classify())); or [`SEALED`] when the other side
+    /// is a sealed void of slivers (not boundary, see [`alpha_shape_into`]).
     pub mesh: Tessellation,
     /// `source[m]` is the Delaunay simplex that mesh simplex `m` is.
     pub source: Vec<u32>,
@@ -52,6 +53,8 @@ pub struct AlphaShape {
     pub candidate_measure: f64,
     /// Total measure of the kept simplices: the fluid volume of the mesh.
     pub kept_measure: f64,
+    /// Number of dropped slivers in sealed voids (see [`alpha_shape_into`]).
+    pub sealed: usize,
 }
 
 impl AlphaShape {
@@ -139,7 +142,7 @@ where
     if tess
         .neighbors
         .iter()
-        .any(|&t| t != NO_NEIGHBOR && t as usize >= ns)
+        .any(|&t| t != NO_NEIGHBOR && t != SEALED && t as usize >= ns)
     {
         return Err(GeometryError::InvalidConnectivity {
             reason: "neighbour index out of range",
@@ -167,7 +170,14 @@ pub(crate) fn simplex_spacing(spacing: &[f64], s: &[u32]) -> f64 {
     s.iter().map(|&v| spacing[v as usize]).sum::<f64>() / s.len() as f64
 }
 
-/// Decides one simplex: `(fluid candidate measure, kept)`.
+/// What [`decide`] makes of a Delaunay simplex.
+const DROPPED: u8 = 0;
+const KEPT: u8 = 1;
+/// A flat fluid candidate whose edges are all within the alpha reach: not
+/// an element, but not a gap in the fluid either (it may be sealed).
+const SLIVER: u8 = 2;
+
+/// Decides one simplex: `(fluid candidate measure, verdict)`.
 #[inline]
 fn decide<const D: usize>(
     points: &[Point<D>],
@@ -175,32 +185,101 @@ fn decide<const D: usize>(
     spacing: &[f64],
     s: &[u32],
     alpha: f64,
-) -> (f64, bool)
+) -> (f64, u8)
 where
     Const<D>: Dim,
 {
     // Candidates: at least one fluid node (NOTES point 4: wall-only, solid-only
     // and solid/wall bridges are not fluid elements).
     if !s.iter().any(|&v| kinds[v as usize] == ParticleKind::Fluid) {
-        return (0.0, false);
+        return (0.0, DROPPED);
     }
     let p = gather::<D>(points, s);
     let (measure, r2) = measure_and_circumradius2::<D>(&p[..s.len()]);
-    if measure.is_nan() || measure <= 0.0 {
-        return (measure.max(0.0), false);
-    }
+    let ah = alpha * simplex_spacing(spacing, s);
     // Slivers: a simplex whose measure is a vanishing fraction of its
     // circumball's is flat (4 nearly cospherical lattice points in 3D whose
     // rounded coordinates the exact predicates see as a thin tetrahedron).
     // It would be a J ≈ 0 element that any motion inverts; it is dropped,
-    // losing no measure worth counting.
+    // losing no measure worth counting. When its edges are short enough
+    // for the alpha shape (each ≤ 2αh, the diameter of the alpha ball) it
+    // is a SLIVER: fluid on both sides of it is one body.
     let r_d = if D == 2 { r2 } else { r2 * r2.sqrt() };
-    if measure <= MIN_SHAPE_QUALITY * r_d {
-        return (measure, false);
+    let flat = measure.is_nan() || measure <= 0.0 || measure <= MIN_SHAPE_QUALITY * r_d;
+    if flat {
+        let reach = (2.0 * ah) * (2.0 * ah);
+        let short =
+            (0..s.len()).all(|a| (a + 1..s.len()).all(|b| (p[a] - p[b]).norm_squared() <= reach));
+        let m = if measure.is_nan() {
+            0.0
+        } else {
+            measure.max(0.0)
+        };
+        return (m, if short { SLIVER } else { DROPPED });
     }
-    let ah = alpha * simplex_spacing(spacing, s);
     // §8 alpha criterion: keep when the circumradius R ≤ α h.
-    (measure, r2 <= ah * ah)
+    (measure, if r2 <= ah * ah { KEPT } else { DROPPED })
+}
+
+/// Marks the slivers of `verdict` that lie in *sealed voids*: connected
+/// (through shared facets) groups of slivers whose every outer facet meets
+/// a kept simplex or, when it meets anything else (a dropped simplex, the
+/// hull), has no fluid node (it lies on a wall or a structure). Returns the
+/// per-simplex flag and the number of sealed slivers.
+fn sealed_voids<const D: usize>(
+    kinds: &[ParticleKind],
+    delaunay: &Tessellation,
+    verdict: &[u8],
+) -> (Vec<bool>, usize)
+where
+    Const<D>: Dim,
+{
+    let ns = verdict.len();
+    let mut sealed = vec![false; ns];
+    let mut seen = vec![false; ns];
+    let mut group: Vec<u32> = Vec::new();
+    let mut stack: Vec<u32> = Vec::new();
+    let mut count = 0usize;
+    for start in 0..ns {
+        if verdict[start] != SLIVER || seen[start] {
+            continue;
+        }
+        group.clear();
+        stack.push(start as u32);
+        seen[start] = true;
+        let mut closed = true;
+        while let Some(s) = stack.pop() {
+            let s = s as usize;
+            group.push(s as u32);
+            let vs = delaunay.simplex(s);
+            for (k, &t) in delaunay.simplex_neighbors(s).iter().enumerate() {
+                let inside = (t as usize) < ns;
+                if inside && verdict[t as usize] == SLIVER {
+                    if !seen[t as usize] {
+                        seen[t as usize] = true;
+                        stack.push(t);
+                    }
+                    continue;
+                }
+                if inside && verdict[t as usize] == KEPT {
+                    continue;
+                }
+                let wet = <Const<D> as Dim>::facet(k)
+                    .iter()
+                    .any(|&l| kinds[vs[l] as usize] == ParticleKind::Fluid);
+                if wet {
+                    closed = false;
+                }
+            }
+        }
+        if closed {
+            count += group.len();
+            for &s in &group {
+                sealed[s as usize] = true;
+            }
+        }
+    }
+    (sealed, count)
 }
 
 /// Smallest `measure / Rᴰ` (`R` the circumradius) of a kept simplex: flatter
@@ -262,6 +341,20 @@ where
 /// (`measure > MIN_SHAPE_QUALITY · Rᴰ`) and its circumradius
 /// satisfies `R ≤ α·h` (§8), `h` the mean of its nodes' `spacing`.
 ///
+/// *Sealed voids.* A sliver is never an element (any motion would invert
+/// it), but the hole it leaves is not a gap in the fluid: it holds no
+/// volume. Slivers whose edges are all within the alpha reach (`≤ 2αh`)
+/// are grouped through shared facets; a group whose every outer facet meets
+/// a kept simplex, or else has no fluid node (it lies on a wall or a
+/// structure), is a sealed void, and the kept simplices' facets against it
+/// get the neighbour [`SEALED`] instead of [`NO_NEIGHBOR`]: they are not
+/// boundary, so [`classify`](crate::classify()) does not make the particles
+/// around it free-surface ones. Lattices built from different origins
+/// produce such slivers by last-bit rounding (`0.04` against
+/// `0.039999999999999994`) in every 3D scene. Open slivers, with a wet
+/// facet on the outside, leave their kept neighbours' facets on the
+/// boundary.
+///
 /// The per-simplex test runs in parallel (rayon); the sums are taken
 /// sequentially so results are bitwise reproducible.
 pub fn alpha_shape_into<const D: usize>(
@@ -282,34 +375,37 @@ where
     let ns = delaunay.simplices.len() / nv;
     let alpha = params.alpha;
 
-    // Candidate measure per simplex, negative-signed when dropped so that one
-    // f64 per simplex carries both facts (0 = not a candidate).
-    let mut signed = vec![0.0f64; ns];
+    // Candidate measure and verdict per simplex.
+    let mut decided = vec![(0.0f64, DROPPED); ns];
     delaunay
         .simplices
         .par_chunks(nv)
-        .zip(signed.par_iter_mut())
+        .zip(decided.par_iter_mut())
         .with_min_len(2048)
         .for_each(|(s, out)| {
-            let (m, keep) = decide::<D>(points, kinds, spacing, s, alpha);
-            *out = if keep { m } else { -m };
+            *out = decide::<D>(points, kinds, spacing, s, alpha);
         });
+    let verdict: Vec<u8> = decided.iter().map(|d| d.1).collect();
+    let (sealed, n_sealed) = sealed_voids::<D>(kinds, delaunay, &verdict);
 
     out.kept.clear();
     out.kept.reserve(ns);
     out.source.clear();
     out.candidate_measure = 0.0;
     out.kept_measure = 0.0;
-    // Delaunay simplex → mesh simplex.
+    out.sealed = n_sealed;
+    // Delaunay simplex → mesh simplex (SEALED across a sealed void).
     let mut new_index = vec![NO_NEIGHBOR; ns];
-    for (s, &m) in signed.iter().enumerate() {
-        let keep = m > 0.0;
+    for (s, &(m, v)) in decided.iter().enumerate() {
+        let keep = v == KEPT;
         out.kept.push(keep);
-        out.candidate_measure += m.abs();
+        out.candidate_measure += m;
         if keep {
             out.kept_measure += m;
             new_index[s] = out.source.len() as u32;
             out.source.push(s as u32);
+        } else if sealed[s] {
+            new_index[s] = SEALED;
         }
     }
     let mesh = &mut out.mesh;
@@ -322,12 +418,60 @@ where
         let s = s as usize;
         mesh.simplices.extend_from_slice(delaunay.simplex(s));
         for &t in delaunay.simplex_neighbors(s) {
-            mesh.neighbors.push(if t == NO_NEIGHBOR {
-                NO_NEIGHBOR
-            } else {
+            mesh.neighbors.push(if (t as usize) < ns {
                 new_index[t as usize]
+            } else {
+                NO_NEIGHBOR
             });
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A kept tetrahedron `A` with a flat sliver `B` glued to one facet;
+    /// `B`'s other facets are wet and on the hull, so `B` is an open sliver:
+    /// the shared facet stays boundary. (Sealed voids in a real scene:
+    /// `sliver_holes_in_a_3d_tank_are_not_free_surface` in `tests/three_d.rs`.)
+    #[test]
+    fn an_open_sliver_leaves_the_facet_on_the_boundary() {
+        let p = [
+            Point::<3>::new(0.0, 0.0, 0.0),
+            Point::<3>::new(1.0, 0.0, 0.0),
+            Point::<3>::new(0.0, 1.0, 0.0),
+            Point::<3>::new(0.0, 0.0, 1.0),
+            // In the plane x + y + z = 1 of the shared facet: B is flat.
+            Point::<3>::new(0.7, 0.7, -0.4),
+        ];
+        let kinds = [ParticleKind::Fluid; 5];
+        let spacing = [1.0; 5];
+        let tess = Tessellation {
+            nv: 4,
+            simplices: vec![0, 1, 2, 3, 1, 2, 3, 4],
+            neighbors: vec![1, NO_NEIGHBOR, NO_NEIGHBOR, NO_NEIGHBOR]
+                .into_iter()
+                .chain([NO_NEIGHBOR, NO_NEIGHBOR, NO_NEIGHBOR, 0])
+                .collect(),
+        };
+        let params = AlphaShapeParams::default();
+        let a = alpha_shape::<3>(&p, &kinds, &spacing, &tess, &params).unwrap();
+        assert_eq!(a.kept, vec![true, false]);
+        assert_eq!(a.sealed, 0);
+        assert_eq!(a.mesh.neighbors, vec![NO_NEIGHBOR; 4]);
+        // The sliver's verdict: flat, with edges inside the alpha reach.
+        assert_eq!(
+            decide::<3>(&p, &kinds, &spacing, &[1, 2, 3, 4], 1.3).1,
+            SLIVER
+        );
+        // Too long an edge: merely dropped.
+        let mut far = p;
+        far[4] = Point::<3>::new(3.0, 3.0, -5.0);
+        assert_eq!(
+            decide::<3>(&far, &kinds, &spacing, &[1, 2, 3, 4], 1.3).1,
+            DROPPED
+        );
+    }
 }

@@ -316,7 +316,8 @@ fn connected_components<const D: usize>(
     let mut parent: Vec<u32> = (0..ns as u32).collect();
     for (s, nb) in mesh.neighbors.chunks_exact(nv).enumerate() {
         for &t in nb {
-            if t != NO_NEIGHBOR && (t as usize) > s {
+            // NO_NEIGHBOR and SEALED are both ≥ ns: no simplex to join.
+            if (t as usize) < ns && (t as usize) > s {
                 let (a, b) = (find(&mut parent, s as u32), find(&mut parent, t));
                 if a != b {
                     let (lo, hi) = (a.min(b), a.max(b));
@@ -383,6 +384,9 @@ fn count_boundary_loops_2d(mesh: &Tessellation, ns: usize) -> usize {
             if t == NO_NEIGHBOR {
                 next[e] = id[3 * s + f];
                 break;
+            }
+            if t as usize >= ns {
+                break; // a sealed void: the walk cannot cross it
             }
             s = t as usize;
             let Some(jb) = (0..3).find(|&j| mesh.simplices[3 * s + j] == b) else {

@@ -53,4 +53,4 @@ pub use particles::{
     REMOVED,
 };
 pub use quality::{mesh_quality, radius_ratio, QualityParams, QualityReport};
-pub use tessellation::{Tessellation, Tessellator, NO_NEIGHBOR};
+pub use tessellation::{Tessellation, Tessellator, NO_NEIGHBOR, SEALED};

@@ -9,6 +9,13 @@ use crate::GeometryError;
 /// Sentinel in [`Tessellation::neighbors`] for a facet on the convex hull.
 pub const NO_NEIGHBOR: u32 = u32::MAX;
 
+/// Sentinel in the neighbours of an alpha-shape mesh
+/// ([`AlphaShape::mesh`](crate::AlphaShape::mesh)) for a facet against a
+/// *sealed void*: flat slivers that the alpha shape drops from the mesh but
+/// that the fluid encloses (see [`alpha_shape_into`](crate::alpha_shape_into)).
+/// There is no simplex across such a facet, yet it is not boundary.
+pub const SEALED: u32 = u32::MAX - 1;
+
 /// A simplicial tessellation of a point set. Vertex `i` of the tessellation
 /// is point `i` of the input: no point is reordered or dropped.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -20,7 +27,8 @@ pub struct Tessellation {
     pub simplices: Vec<u32>,
     /// Adjacency, flat, `nv` entries per simplex: entry `k` of simplex `s`
     /// is the simplex across the facet opposite local vertex `k`
-    /// (`Dim::facet(k)`), or [`NO_NEIGHBOR`] on the convex hull.
+    /// (`Dim::facet(k)`), or [`NO_NEIGHBOR`] on the convex hull (in an
+    /// alpha-shape mesh also [`SEALED`]).
     pub neighbors: Vec<u32>,
 }
 

@@ -23,9 +23,7 @@
 //! ```
 
 use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, MAX_NV};
-use pfem_geometry::{
-    alpha_shape, radius_ratio, AlphaShapeParams, Tessellation, Tessellator, NO_NEIGHBOR,
-};
+use pfem_geometry::{alpha_shape, radius_ratio, AlphaShapeParams, Tessellation, Tessellator};
 
 use crate::SceneError;
 
@@ -126,7 +124,8 @@ where
         )));
     }
     // Drop boundary slivers one at a time, worst first; a simplex is on the
-    // boundary when one of its facets has no kept neighbour.
+    // boundary when one of its facets has no kept neighbour (NO_NEIGHBOR,
+    // or SEALED: a sliver hole inside the solid counts as boundary here).
     let mut kept = vec![true; ns];
     let mut order: Vec<usize> = (0..ns)
         .filter(|&s| ratio[s] < params.sliver_ratio)
@@ -137,7 +136,7 @@ where
         let on_boundary = mesh
             .simplex_neighbors(s)
             .iter()
-            .any(|&n| n == NO_NEIGHBOR || !kept[n as usize]);
+            .any(|&n| n as usize >= ns || !kept[n as usize]);
         let orphans = mesh.simplex(s).iter().any(|&v| valence[v as usize] <= 1);
         if on_boundary && !orphans {
             kept[s] = false;
