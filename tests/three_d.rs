@@ -207,7 +207,7 @@ const QUASI_2D_T: f64 = 3.2;
 /// example's default resolution (a/20): the dam break as a slab one
 /// spacing deep with slip side planes follows the 2D front to
 /// T = t √(2g/a) = 3.2, RMS of the relative front difference below 5 %.
-/// Measured 1.88 % (docs/benchmarks.md); about 100 s in release on 2 cores.
+/// Measured 2.57 % (docs/benchmarks.md); about 100 s in release on 2 cores.
 ///
 /// ```text
 /// cargo test --release --test three_d -- --ignored --nocapture quasi_2d
@@ -220,7 +220,7 @@ fn quasi_2d_dam_break_follows_the_2d_front() {
 }
 
 /// The same check at a/14 in the default suite (about 35 s in release),
-/// same 5 % bound: measured 1.34 %. At a/10 the comparison gives 5.10 %:
+/// same 5 % bound: measured 1.38 %. At a/10 the comparison gives 5.10 %:
 /// there the 2D front itself advances in jumps (0.132, 0.178, 0.220,
 /// 0.221 m at T = 2.0, 2.4, 2.8, 3.2), too coarse to compare with.
 #[test]
@@ -231,7 +231,7 @@ fn quasi_2d_dam_break_follows_the_2d_front_at_a_14() {
 
 /// Water at rest in a closed 3D tank (0.2 m cube of water, h = 0.02 m, side
 /// walls, 0.3 s) should stay at rest: largest fluid speed below
-/// 0.05 √(gH). Known gap, measured 0.163 m/s = 0.116 √(gH) (2D at the same
+/// 0.05 √(gH). Known gap, measured 0.113 m/s = 0.081 √(gH) (2D at the same
 /// resolution: 0.049 m/s = 0.03 √(gH)); see docs/benchmarks.md ("3D water
 /// at rest").
 ///
