@@ -166,7 +166,7 @@ fn gate(varied: &str, p: Point3) -> Res<Record> {
         end_time: 0.2,
         ..ElasticGate::default()
     };
-    let mut scene = case.scene();
+    let mut scene = case.scene()?;
     scene.settings.courant = p.courant;
     scene.settings.output_interval = None;
     let mut sim = Simulation::new(

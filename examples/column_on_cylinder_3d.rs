@@ -36,7 +36,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .out
         .clone()
         .unwrap_or_else(|| "out/column_on_cylinder_3d".into());
-    let mut sim = args.simulation(case.scene(), Box::new(Delaunay3::default()))?;
+    let mut sim = args.simulation(case.scene()?, Box::new(Delaunay3::default()))?;
     eprintln!(
         "column_on_cylinder_3d: {} particles ({} in the cylinder, {} solid elements), h = {} m, end time {} s",
         sim.state.len(),

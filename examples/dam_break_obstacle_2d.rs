@@ -33,7 +33,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .out
         .clone()
         .unwrap_or_else(|| "out/dam_break_obstacle_2d".into());
-    let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
+    let mut sim = args.simulation(case.scene()?, Box::new(Delaunay2::default()))?;
     eprintln!(
         "dam_break_obstacle_2d: {} particles, end time {} s",
         sim.state.len(),

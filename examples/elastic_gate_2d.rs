@@ -41,7 +41,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .out
         .clone()
         .unwrap_or_else(|| "out/elastic_gate_2d".into());
-    let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
+    let mut sim = args.simulation(case.scene()?, Box::new(Delaunay2::default()))?;
     eprintln!(
         "elastic_gate_2d: {} particles, h = {} m, E = {} Pa, end time {} s",
         sim.state.len(),

@@ -102,7 +102,7 @@ fn clamped_cylinder_in_water_builds_and_steps() {
         ..Default::default()
     };
     let mut sim = Simulation::new(
-        case.scene(),
+        case.scene().expect("valid cylinder"),
         Box::new(Delaunay3::default()),
         StepParams::default(),
     )

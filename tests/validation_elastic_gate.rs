@@ -29,7 +29,7 @@ fn run() -> ((f64, f64), (f64, f64)) {
         ..Default::default()
     };
     let mut sim = Simulation::new(
-        case.scene(),
+        case.scene().unwrap(),
         Box::new(Delaunay2::default()),
         StepParams::default(),
     )

@@ -5,6 +5,7 @@
 use pfem_constitutive::{Hypoelastic, Newtonian};
 use pfem_core::{ParticleKind, Point, Vector};
 
+use crate::error::SceneError;
 use crate::observe::Probe;
 use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
 use crate::simulation::Simulation;
@@ -273,8 +274,9 @@ impl ElasticGate {
         self.spacing
     }
 
-    /// The scene.
-    pub fn scene(&self) -> Scene<2> {
+    /// The scene; [`SceneError::InvalidMaterial`] when the gate's density,
+    /// `young` or `poisson` is out of range.
+    pub fn scene(&self) -> Result<Scene<2>, SceneError> {
         let h = self.spacing;
         let y0 = self.gate_bottom();
         let y1 = y0 + GATE_LENGTH;
@@ -300,8 +302,12 @@ impl ElasticGate {
             h,
             WallMotion::Fixed,
         );
-        let gate =
-            Hypoelastic::new(self.density, self.young, self.poisson).expect("valid gate material");
+        let gate = Hypoelastic::new(self.density, self.young, self.poisson).map_err(|source| {
+            SceneError::InvalidMaterial {
+                body: "gate".into(),
+                source,
+            }
+        })?;
         let s = s.solid(
             "gate",
             Box::new(gate),
@@ -315,7 +321,7 @@ impl ElasticGate {
                 Point::<2>::new(GATE_X + 1.0, y1 + 1.0),
             )),
         );
-        s.fluid(
+        Ok(s.fluid(
             "water",
             Box::new(Newtonian::water()),
             Geometry::Box {
@@ -323,7 +329,7 @@ impl ElasticGate {
                 max: Point::<2>::new(GATE_X, GATE_WATER_HEIGHT),
             },
             h,
-        )
+        ))
     }
 
     /// Probes `ux_tip`, `uy_tip` (m, displacement of the gate's free end
@@ -504,8 +510,9 @@ pub const OBSTACLE_WIDTH: f64 = 0.03;
 pub const OBSTACLE_HEIGHT: f64 = 0.15;
 
 impl DamBreakObstacle {
-    /// The scene.
-    pub fn scene(&self) -> Scene<2> {
+    /// The scene; [`SceneError::InvalidMaterial`] when `young` is out of
+    /// range.
+    pub fn scene(&self) -> Result<Scene<2>, SceneError> {
         let h = self.spacing;
         let length = 0.584;
         let s = Scene::<2>::new("dam_break_obstacle_2d")
@@ -518,7 +525,12 @@ impl DamBreakObstacle {
                 alpha: 1.3,
             });
         let s = tank(s, 0.0, length, &[(0.0, -1.0, 0.45), (length, 1.0, 0.45)], h);
-        let obstacle = Hypoelastic::new(2500.0, self.young, 0.3).expect("valid obstacle material");
+        let obstacle = Hypoelastic::new(2500.0, self.young, 0.3).map_err(|source| {
+            SceneError::InvalidMaterial {
+                body: "obstacle".into(),
+                source,
+            }
+        })?;
         let ho = self.obstacle_spacing;
         let s = s.solid(
             "obstacle",
@@ -533,7 +545,7 @@ impl DamBreakObstacle {
                 Point::<2>::new(OBSTACLE_X + 1.0, ho + 1e-9),
             )),
         );
-        s.fluid(
+        Ok(s.fluid(
             "water",
             Box::new(Newtonian::water()),
             Geometry::Box {
@@ -541,7 +553,7 @@ impl DamBreakObstacle {
                 max: Point::<2>::new(0.146, 0.292),
             },
             h,
-        )
+        ))
     }
 
     /// Probes `ux_top` (m, mean horizontal displacement of the obstacle's
@@ -568,5 +580,40 @@ impl DamBreakObstacle {
             }),
             Probe::new("volume", |s: &Simulation<2>| s.fluid_volume()),
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cases3d::ColumnOnCylinder3d;
+
+    /// A case with an impossible solid gets a typed error naming the body,
+    /// not a panic.
+    #[test]
+    fn cases_with_invalid_solids_are_errors() {
+        let gate = ElasticGate {
+            poisson: 0.5,
+            ..Default::default()
+        };
+        match gate.scene() {
+            Err(SceneError::InvalidMaterial { body, .. }) => assert_eq!(body, "gate"),
+            other => panic!("expected an invalid-material error, got {:?}", other.err()),
+        }
+        let obstacle = DamBreakObstacle {
+            young: -1.0,
+            ..Default::default()
+        };
+        let e = obstacle.scene().err().expect("rejected");
+        assert!(e.to_string().contains("obstacle"), "{e}");
+        let cylinder = ColumnOnCylinder3d {
+            density: f64::NAN,
+            ..Default::default()
+        };
+        assert!(matches!(
+            cylinder.scene(),
+            Err(SceneError::InvalidMaterial { .. })
+        ));
+        assert!(ElasticGate::default().scene().is_ok());
     }
 }

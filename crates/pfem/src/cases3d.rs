@@ -16,6 +16,7 @@ use pfem_constitutive::{Hypoelastic, Newtonian};
 use pfem_core::{shape_gradients, Const, Dim, ParticleKind, Point, Vector, MAX_NV};
 
 use crate::cases::{DamBreak, G};
+use crate::error::SceneError;
 use crate::observe::Probe;
 use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
 use crate::simulation::Simulation;
@@ -243,14 +244,19 @@ impl ColumnOnCylinder3d {
         )
     }
 
-    /// The scene.
-    pub fn scene(&self) -> Scene<3> {
+    /// The scene; [`SceneError::InvalidMaterial`] when the cylinder's
+    /// density, `young` or `poisson` is out of range.
+    pub fn scene(&self) -> Result<Scene<3>, SceneError> {
         let mut s = self.column.scene();
         s.name = "column_on_cylinder_3d".into();
         let base = self.base();
-        let cyl = Hypoelastic::new(self.density, self.young, self.poisson)
-            .expect("valid cylinder material");
-        s.solid(
+        let cyl = Hypoelastic::new(self.density, self.young, self.poisson).map_err(|source| {
+            SceneError::InvalidMaterial {
+                body: "cylinder".into(),
+                source,
+            }
+        })?;
+        Ok(s.solid(
             "cylinder",
             Box::new(cyl),
             Geometry::Cylinder {
@@ -265,7 +271,7 @@ impl ColumnOnCylinder3d {
                 Point::<3>::new(-1.0, base.y - 1.0, -1.0),
                 Point::<3>::new(1.0, base.y + 1e-9, 1.0),
             )),
-        )
+        ))
     }
 
     /// Probes `ux_top` (m, mean `x` displacement of the top disk),

@@ -46,6 +46,14 @@ pub enum SceneError {
         /// What is wrong.
         why: String,
     },
+    /// A body's material parameters are out of range.
+    #[error("body `{body}`: {source}")]
+    InvalidMaterial {
+        /// Body name.
+        body: String,
+        /// What the material's constructor rejected.
+        source: pfem_constitutive::MaterialError,
+    },
     /// A fluid or solid without material.
     #[error("body `{body}` needs a material")]
     MissingMaterial {

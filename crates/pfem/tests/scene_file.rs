@@ -61,7 +61,7 @@ fn dam_break_file_matches_the_case() {
 fn dam_break_obstacle_file_matches_the_case() {
     same_as_case(
         "dam_break_obstacle_2d.toml",
-        pfem::cases::DamBreakObstacle::default().scene(),
+        pfem::cases::DamBreakObstacle::default().scene().unwrap(),
         &["ux_top", "uy_top", "volume"],
     );
 }
@@ -70,7 +70,7 @@ fn dam_break_obstacle_file_matches_the_case() {
 fn elastic_gate_file_matches_the_case() {
     same_as_case(
         "elastic_gate_2d.toml",
-        ElasticGate::default().scene(),
+        ElasticGate::default().scene().unwrap(),
         &["ux_tip", "uy_tip", "volume"],
     );
 }
