@@ -351,7 +351,7 @@ where
 /// boundary, so [`classify`](crate::classify()) does not make the particles
 /// around it free-surface ones. Lattices built from different origins
 /// produce such slivers by last-bit rounding (`0.04` against
-/// `0.039999999999999994`) in every 3D scene. Open slivers, with a wet
+/// `0.039999999999999994`) in 3D scenes. Open slivers, with a wet
 /// facet on the outside, leave their kept neighbours' facets on the
 /// boundary.
 ///
