@@ -604,7 +604,10 @@ mod tests {
             young: -1.0,
             ..Default::default()
         };
-        let e = obstacle.scene().err().expect("rejected");
+        let e = match obstacle.scene() {
+            Err(e) => e,
+            Ok(_) => panic!("a negative Young's modulus was accepted"),
+        };
         assert!(e.to_string().contains("obstacle"), "{e}");
         let cylinder = ColumnOnCylinder3d {
             density: f64::NAN,
