@@ -207,7 +207,7 @@ const QUASI_2D_T: f64 = 3.2;
 /// example's default resolution (a/20): the dam break as a slab one
 /// spacing deep with slip side planes follows the 2D front to
 /// T = t √(2g/a) = 3.2, RMS of the relative front difference below 5 %.
-/// Measured 2.57 % (docs/benchmarks.md); about 100 s in release on 2 cores.
+/// Measured 2.76 % (docs/benchmarks.md); about 100 s in release on 2 cores.
 ///
 /// ```text
 /// cargo test --release --test three_d -- --ignored --nocapture quasi_2d
