@@ -308,5 +308,61 @@ mod properties {
                 prop_assert_eq!(*tag, expect);
             }
         }
+
+        /// The same invariants in 3D on lattice points whose coordinates
+        /// are computed from one of two origins (last-bit rounding, as
+        /// scenes make them), so that flat slivers and sealed voids occur:
+        /// sealed facets are never boundary facets, the measures add up and
+        /// the tags follow the rules.
+        #[test]
+        fn alpha_and_classification_invariants_3d_with_sealed_voids(
+            cells in prop::collection::vec((0usize..5, 0usize..5, 0usize..5, any::<u8>(), any::<bool>()), 8..100),
+        ) {
+            use pfem_geometry::{Delaunay3, SEALED};
+            let h = 0.02;
+            let fill = |lo: f64, i: usize| lo + (lo.abs() + 4.0 * h) * i as f64 / (4.0 + lo.abs() / h);
+            let mut p: Vec<Point<3>> = Vec::new();
+            let mut kinds = Vec::new();
+            for &(i, j, k, kk, shifted) in &cells {
+                let q = if shifted {
+                    // Filled from −h: (−h + (5h)·(i+1)/5) is i·h up to rounding.
+                    Point::<3>::new(fill(-h, i + 1), fill(-h, j + 1), fill(-h, k + 1))
+                } else {
+                    Point::<3>::new(i as f64 * h, j as f64 * h, k as f64 * h)
+                };
+                if p.iter().any(|o| (o - q).norm() < 0.5 * h) {
+                    continue;
+                }
+                p.push(q);
+                kinds.push(kind(kk));
+            }
+            let spacing = vec![h; p.len()];
+            let mut t = Tessellation::default();
+            if Delaunay3::default().tessellate(&p, &mut t).is_err() {
+                return Ok(());
+            }
+            let a = alpha_shape(&p, &kinds, &spacing, &t, &AlphaShapeParams::default()).unwrap();
+            prop_assert!(a.kept_measure <= a.candidate_measure * (1.0 + 1e-12));
+            let c = classify(&p, &kinds, &a.mesh, None).unwrap();
+            let sum: f64 = c.components.iter().map(|c| c.measure).sum();
+            prop_assert!((sum - a.kept_measure).abs() <= 1e-12 * (1.0 + sum));
+            let sealed_facets = a.mesh.neighbors.iter().filter(|&&n| n == SEALED).count();
+            prop_assert_eq!(sealed_facets > 0, a.sealed > 0);
+            for f in &c.boundary_facets {
+                prop_assert_eq!(a.mesh.simplex_neighbors(f.simplex as usize)[f.facet as usize], pfem_geometry::NO_NEIGHBOR);
+            }
+            for (i, tag) in c.tags.iter().enumerate() {
+                let in_mesh = a.mesh.simplices.contains(&(i as u32));
+                let expect = match (kinds[i], in_mesh, c.boundary_nodes.contains(&(i as u32))) {
+                    (ParticleKind::Fluid, false, _) => NodeTag::Isolated,
+                    (ParticleKind::Fluid, true, false) => NodeTag::Interior,
+                    (ParticleKind::Fluid, true, true) => NodeTag::FreeSurface,
+                    (ParticleKind::Wall, true, _) => NodeTag::Wall,
+                    (ParticleKind::Solid, true, _) => NodeTag::Interface,
+                    (_, false, _) => NodeTag::Dry,
+                };
+                prop_assert_eq!(*tag, expect);
+            }
+        }
     }
 }
