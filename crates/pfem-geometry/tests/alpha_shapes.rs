@@ -264,6 +264,27 @@ mod properties {
         }
     }
 
+    /// The documented tag rules (`NodeTag`), derived again from the mesh.
+    fn check_tags(
+        kinds: &[ParticleKind],
+        a: &AlphaShape,
+        c: &Classification,
+    ) -> Result<(), TestCaseError> {
+        for (i, tag) in c.tags.iter().enumerate() {
+            let in_mesh = a.mesh.simplices.contains(&(i as u32));
+            let expect = match (kinds[i], in_mesh, c.boundary_nodes.contains(&(i as u32))) {
+                (ParticleKind::Fluid, false, _) => NodeTag::Isolated,
+                (ParticleKind::Fluid, true, false) => NodeTag::Interior,
+                (ParticleKind::Fluid, true, true) => NodeTag::FreeSurface,
+                (ParticleKind::Wall, true, _) => NodeTag::Wall,
+                (ParticleKind::Solid, true, _) => NodeTag::Interface,
+                (_, false, _) => NodeTag::Dry,
+            };
+            prop_assert_eq!(*tag, expect);
+        }
+        Ok(())
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(64))]
         /// Invariants of alpha shape and classification on random clouds of
@@ -295,18 +316,7 @@ mod properties {
             let loops = c.boundary_loops.unwrap();
             prop_assert!(3 * loops <= c.boundary_facets.len());
             prop_assert_eq!(loops == 0, a.is_empty());
-            for (i, tag) in c.tags.iter().enumerate() {
-                let in_mesh = a.mesh.simplices.contains(&(i as u32));
-                let expect = match (kinds[i], in_mesh, c.boundary_nodes.contains(&(i as u32))) {
-                    (ParticleKind::Fluid, false, _) => NodeTag::Isolated,
-                    (ParticleKind::Fluid, true, false) => NodeTag::Interior,
-                    (ParticleKind::Fluid, true, true) => NodeTag::FreeSurface,
-                    (ParticleKind::Wall, true, _) => NodeTag::Wall,
-                    (ParticleKind::Solid, true, _) => NodeTag::Interface,
-                    (_, false, _) => NodeTag::Dry,
-                };
-                prop_assert_eq!(*tag, expect);
-            }
+            check_tags(&kinds, &a, &c)?;
         }
 
         /// The same invariants in 3D on lattice points whose coordinates
@@ -351,18 +361,7 @@ mod properties {
             for f in &c.boundary_facets {
                 prop_assert_eq!(a.mesh.simplex_neighbors(f.simplex as usize)[f.facet as usize], pfem_geometry::NO_NEIGHBOR);
             }
-            for (i, tag) in c.tags.iter().enumerate() {
-                let in_mesh = a.mesh.simplices.contains(&(i as u32));
-                let expect = match (kinds[i], in_mesh, c.boundary_nodes.contains(&(i as u32))) {
-                    (ParticleKind::Fluid, false, _) => NodeTag::Isolated,
-                    (ParticleKind::Fluid, true, false) => NodeTag::Interior,
-                    (ParticleKind::Fluid, true, true) => NodeTag::FreeSurface,
-                    (ParticleKind::Wall, true, _) => NodeTag::Wall,
-                    (ParticleKind::Solid, true, _) => NodeTag::Interface,
-                    (_, false, _) => NodeTag::Dry,
-                };
-                prop_assert_eq!(*tag, expect);
-            }
+            check_tags(&kinds, &a, &c)?;
         }
     }
 }
