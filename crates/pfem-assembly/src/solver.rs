@@ -309,6 +309,7 @@ struct Direct<K: Kind> {
     /// The numeric factors match `symbolic` and passed the residual check.
     factored: bool,
     ws: Workspace,
+    refine: RefineBuffers,
 }
 
 impl<K: Kind> Direct<K> {
@@ -320,6 +321,7 @@ impl<K: Kind> Direct<K> {
             numeric: K::Numeric::default(),
             factored: false,
             ws: Workspace::default(),
+            refine: RefineBuffers::default(),
         }
     }
 
@@ -363,7 +365,7 @@ impl<K: Kind> Direct<K> {
             }
         };
         apply(x);
-        let (steps, residual) = refine(a, b, x, &mut apply);
+        let (steps, residual) = refine(a, b, x, &mut apply, &mut self.refine);
         if let Some(e) = err {
             return Err(fail(e));
         }
@@ -510,31 +512,58 @@ fn refine(
     b: &[f64],
     x: &mut [f64],
     mut solve_in_place: impl FnMut(&mut [f64]),
+    buf: &mut RefineBuffers,
 ) -> (usize, f64) {
-    let mut res = relative_residual(a, b, x);
+    let n = b.len();
+    let RefineBuffers { r, d, old } = buf;
+    for v in [&mut *r, &mut *d, &mut *old] {
+        v.resize(n, 0.0);
+    }
+    let nb = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+    // `r ← b − A x` and its relative norm, as `relative_residual` computes it.
+    let residual_into = |x: &[f64], r: &mut [f64]| {
+        residual(a, b, x, r);
+        let nr = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if nb > 0.0 {
+            nr / nb
+        } else {
+            nr
+        }
+    };
+    let mut res = residual_into(x, r);
     let mut kept = 0;
-    let mut r = vec![0.0; b.len()];
-    let mut old = vec![0.0; b.len()];
     for _ in 0..MAX_REFINEMENT_STEPS {
         if res.is_nan() || res <= REFINEMENT_TARGET {
             break;
         }
-        r.copy_from_slice(b);
-        spmv_sub(a, x, &mut r);
-        solve_in_place(&mut r);
+        // `r` holds `b − A x` for the current `x`.
+        d.copy_from_slice(r);
+        solve_in_place(d);
         old.copy_from_slice(x);
-        for (xi, di) in x.iter_mut().zip(&r) {
+        for (xi, di) in x.iter_mut().zip(d.iter()) {
             *xi += di;
         }
-        let new_res = relative_residual(a, b, x);
+        let new_res = residual_into(x, r);
         if new_res.is_nan() || new_res >= res {
-            x.copy_from_slice(&old);
+            x.copy_from_slice(old);
             break;
         }
         res = new_res;
         kept += 1;
     }
     (kept, res)
+}
+
+/// Vectors [`refine`] works in, kept by each direct solver so that a solve
+/// (one per Picard iteration) allocates nothing once the size is reached.
+#[derive(Default)]
+struct RefineBuffers {
+    /// `b − A x`.
+    r: Vec<f64>,
+    /// The correction `A⁻¹ r`.
+    d: Vec<f64>,
+    /// `x` before the correction, restored when it does not help.
+    old: Vec<f64>,
 }
 
 /// Accepts a direct solution whose relative residual is below

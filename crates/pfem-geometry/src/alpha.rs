@@ -221,27 +221,29 @@ where
     (measure, if r2 <= ah * ah { KEPT } else { DROPPED })
 }
 
-/// Marks the slivers of `verdict` that lie in *sealed voids*: connected
-/// (through shared facets) groups of slivers whose every outer facet meets
-/// a kept simplex or, when it meets anything else (a dropped simplex, the
-/// hull), has no fluid node (it lies on a wall or a structure). Returns the
-/// per-simplex flag and the number of sealed slivers.
+/// Marks the slivers of `decided` (what [`decide`] returned per simplex)
+/// that lie in *sealed voids*: connected (through shared facets) groups of
+/// slivers whose every outer facet meets a kept simplex or, when it meets
+/// anything else (a dropped simplex, the hull), has no fluid node (it lies
+/// on a wall or a structure). Returns the per-simplex flag and the number
+/// of sealed slivers.
 fn sealed_voids<const D: usize>(
     kinds: &[ParticleKind],
     delaunay: &Tessellation,
-    verdict: &[u8],
+    decided: &[(f64, u8)],
 ) -> (Vec<bool>, usize)
 where
     Const<D>: Dim,
 {
-    let ns = verdict.len();
+    let ns = decided.len();
+    let verdict = |s: usize| decided[s].1;
     let mut sealed = vec![false; ns];
     let mut seen = vec![false; ns];
     let mut group: Vec<u32> = Vec::new();
     let mut stack: Vec<u32> = Vec::new();
     let mut count = 0usize;
     for start in 0..ns {
-        if verdict[start] != SLIVER || seen[start] {
+        if verdict(start) != SLIVER || seen[start] {
             continue;
         }
         group.clear();
@@ -254,14 +256,14 @@ where
             let vs = delaunay.simplex(s);
             for (k, &t) in delaunay.simplex_neighbors(s).iter().enumerate() {
                 let inside = (t as usize) < ns;
-                if inside && verdict[t as usize] == SLIVER {
+                if inside && verdict(t as usize) == SLIVER {
                     if !seen[t as usize] {
                         seen[t as usize] = true;
                         stack.push(t);
                     }
                     continue;
                 }
-                if inside && verdict[t as usize] == KEPT {
+                if inside && verdict(t as usize) == KEPT {
                     continue;
                 }
                 let wet = <Const<D> as Dim>::facet(k)
@@ -385,15 +387,14 @@ where
         .for_each(|(s, out)| {
             *out = decide::<D>(points, kinds, spacing, s, alpha);
         });
-    let verdict: Vec<u8> = decided.iter().map(|d| d.1).collect();
     // 3D only: a 2D square lattice makes no flat triangles, and in 2D a
     // sealed void next to a wall would break the boundary loops that
     // `classify` walks (it was tried: the square column improved, the
     // loop-count property test failed on random clouds).
     let (sealed, n_sealed) = if D == 3 {
-        sealed_voids::<D>(kinds, delaunay, &verdict)
+        sealed_voids::<D>(kinds, delaunay, &decided)
     } else {
-        (vec![false; ns], 0)
+        (Vec::new(), 0)
     };
 
     out.kept.clear();
@@ -412,7 +413,7 @@ where
             out.kept_measure += m;
             new_index[s] = out.source.len() as u32;
             out.source.push(s as u32);
-        } else if sealed[s] {
+        } else if sealed.get(s) == Some(&true) {
             new_index[s] = SEALED;
         }
     }

@@ -10,6 +10,20 @@ use crate::observe::Probe;
 use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
 use crate::simulation::Simulation;
 
+/// The hypoelastic material of a case's solid `body`, or
+/// [`SceneError::InvalidMaterial`] naming that body.
+pub(crate) fn solid_material(
+    body: &str,
+    density: f64,
+    young: f64,
+    poisson: f64,
+) -> Result<Hypoelastic, SceneError> {
+    Hypoelastic::new(density, young, poisson).map_err(|source| SceneError::InvalidMaterial {
+        body: body.into(),
+        source,
+    })
+}
+
 /// Standard gravity (m/s²).
 pub const G: f64 = 9.81;
 
@@ -302,12 +316,7 @@ impl ElasticGate {
             h,
             WallMotion::Fixed,
         );
-        let gate = Hypoelastic::new(self.density, self.young, self.poisson).map_err(|source| {
-            SceneError::InvalidMaterial {
-                body: "gate".into(),
-                source,
-            }
-        })?;
+        let gate = solid_material("gate", self.density, self.young, self.poisson)?;
         let s = s.solid(
             "gate",
             Box::new(gate),
@@ -525,12 +534,7 @@ impl DamBreakObstacle {
                 alpha: 1.3,
             });
         let s = tank(s, 0.0, length, &[(0.0, -1.0, 0.45), (length, 1.0, 0.45)], h);
-        let obstacle = Hypoelastic::new(2500.0, self.young, 0.3).map_err(|source| {
-            SceneError::InvalidMaterial {
-                body: "obstacle".into(),
-                source,
-            }
-        })?;
+        let obstacle = solid_material("obstacle", 2500.0, self.young, 0.3)?;
         let ho = self.obstacle_spacing;
         let s = s.solid(
             "obstacle",

@@ -12,10 +12,10 @@
 //! The probes ([`front_x`], [`height_at_wall`], [`main_body`]) are generic
 //! over the dimension: `x` is the flow direction, `y` is up.
 
-use pfem_constitutive::{Hypoelastic, Newtonian};
+use pfem_constitutive::Newtonian;
 use pfem_core::{shape_gradients, Const, Dim, ParticleKind, Point, Vector, MAX_NV};
 
-use crate::cases::{DamBreak, G};
+use crate::cases::{solid_material, DamBreak, G};
 use crate::error::SceneError;
 use crate::observe::Probe;
 use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
@@ -250,12 +250,7 @@ impl ColumnOnCylinder3d {
         let mut s = self.column.scene();
         s.name = "column_on_cylinder_3d".into();
         let base = self.base();
-        let cyl = Hypoelastic::new(self.density, self.young, self.poisson).map_err(|source| {
-            SceneError::InvalidMaterial {
-                body: "cylinder".into(),
-                source,
-            }
-        })?;
+        let cyl = solid_material("cylinder", self.density, self.young, self.poisson)?;
         Ok(s.solid(
             "cylinder",
             Box::new(cyl),
