@@ -92,6 +92,11 @@ pub struct Inertia {
     /// Factor `c_a` of `c_a M Aⁿ` on the right (dimensionless): 1 for
     /// trapezoidal Newmark, 0 for backward Euler, between for Bossak.
     pub acceleration_factor: f64,
+    /// How the step's displacement depends on the solved velocity,
+    /// `∂Δu/∂Vⁿ⁺¹` (s): `Δt` for backward Euler, `(β/γ) Δt` for the
+    /// Newmark family. Handed to the materials as
+    /// [`pfem_constitutive::Kinematics::displacement_weight`].
+    pub displacement_weight: f64,
 }
 
 /// The mesh of one step: all elements (fluid from the tessellation, solid
@@ -408,7 +413,13 @@ where
                     xn[a] = input.x_n[p];
                     v[a] = input.v[p];
                 }
-                match element_state::<D>(&x[..nv], &xn[..nv], &v[..nv], input.dt) {
+                match element_state::<D>(
+                    &x[..nv],
+                    &xn[..nv],
+                    &v[..nv],
+                    input.dt,
+                    input.inertia.displacement_weight,
+                ) {
                     Some(s) => {
                         *st = s;
                         let mat = &input.materials[self.elem_material[e] as usize];

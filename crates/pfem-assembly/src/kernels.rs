@@ -36,6 +36,7 @@ pub fn element_state<const D: usize>(
     x_n: &[Point<D>],
     v: &[Vector<D>],
     dt: f64,
+    displacement_weight: f64,
 ) -> Option<ElementState<D>>
 where
     Const<D>: Dim,
@@ -63,7 +64,13 @@ where
         grads,
         volume,
         volume_n,
-        kin: Kinematics { f, j, d, dt },
+        kin: Kinematics {
+            f,
+            j,
+            d,
+            dt,
+            displacement_weight,
+        },
     })
 }
 
@@ -182,7 +189,7 @@ mod tests {
             Vector::<2>::new(0.2, 0.0),
             Vector::<2>::zeros(),
         ];
-        let st = element_state::<2>(&x, &x_n, &v, 0.5).unwrap();
+        let st = element_state::<2>(&x, &x_n, &v, 0.5, 0.5).unwrap();
         assert_relative_eq!(st.kin.j, 1.1, epsilon = 1e-14);
         assert_relative_eq!(st.kin.f[(0, 0)], 1.1, epsilon = 1e-14);
         assert_relative_eq!(st.kin.d[(0, 0)], 0.2 / 1.1, epsilon = 1e-14);
@@ -194,7 +201,7 @@ mod tests {
             Point::<2>::new(0.0, 1.0),
             Point::<2>::new(1.0, 0.0),
         ];
-        assert!(element_state::<2>(&xi, &x_n, &v, 0.5).is_none());
+        assert!(element_state::<2>(&xi, &x_n, &v, 0.5, 0.5).is_none());
     }
 
     #[test]
@@ -206,7 +213,7 @@ mod tests {
             Point::<3>::new(0.1, 0.2, 1.0),
         ];
         let v = [Vector::<3>::zeros(); 4];
-        let st = element_state::<3>(&x, &x, &v, 1.0).unwrap();
+        let st = element_state::<3>(&x, &x, &v, 1.0, 1.0).unwrap();
         let u = Unified {
             mu: 2.0,
             kappa: 7.0,

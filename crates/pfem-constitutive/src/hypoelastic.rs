@@ -20,18 +20,37 @@ use crate::material::{History, Kinematics, Material, MaterialKind, Unified};
 /// - `𝒦 = λ̄ + ⅔ μ̄ = (λ_h + ⅔ μ_h) Δt / J` (eq. 41);
 /// - `σⁿ⁺¹ = σ̂ + 𝒦 ε_v I + 2 μ̄ D'` (eqs. 39–42, 63).
 ///
-/// These are the unified triple of eq. 44; [`Material::update_history`]
-/// stores exactly [`Unified::cauchy_stress`] (and
-/// [`Unified::cauchy_stress_zz`]) of that triple.
+/// **Where the implementation goes further** (ARCHITECTURE.md, deviation
+/// 6): the paper's strain increment `Δt D⁽ⁿ⁺¹⁾` is taken from the
+/// end-of-step velocity on the end-of-step shape. That is not the
+/// displacement the time scheme makes: under a rotation θ within one step
+/// it registers a spurious dilatation of order `1 − cos θ` (a spinning or
+/// swinging solid strains itself), and under the trapezoidal rule, whose
+/// positions move by `Δt (Vⁿ + Vⁿ⁺¹)/2`, it is a backward-Euler increment
+/// that damps the vibration by a ratio `ω Δt / 4`. Here the increment is
+/// the objective strain of the step's own displacement,
+/// `Δε` = [`Kinematics::strain_increment`] (a function of `F` alone), so
 ///
-/// **2D is plane strain.** `F_zz = 1`, `D_zz = 0`, but the out-of-plane
-/// stress [`History::stress_zz`] evolves: `σ̂_zz = σ_zzⁿ / J` and
-/// `σ_zzⁿ⁺¹ = σ̂_zz + 𝒦 ε_v + 2 μ̄ D'_zz` with `D'_zz = −⅓ tr D`. In the
-/// small-strain limit this gives `σ_zz = ν (σ_xx + σ_yy)`. In 3D
-/// `stress_zz` is unused and left at zero.
+/// `J σⁿ⁺¹ = F σⁿ Fᵀ + λ_h (tr Δε) I + 2 μ_h Δε` ([`Hypoelastic::stress_after`]),
 ///
-/// The Truesdell rate is objective: under a rigid rotation `F = R`
-/// (`J = 1`, `D = 0`) the update is `σⁿ⁺¹ = R σⁿ Rᵀ`.
+/// exact for rigid rotations of any size, and its linearisation in the
+/// velocity is `w D` with `w = ∂Δu/∂V` ([`Kinematics::displacement_weight`]:
+/// `Δt` for backward Euler, where this is the paper's form to first order,
+/// `Δt/2` for the trapezoidal rule). The unified triple keeps the paper's
+/// shape with `w` for `Δt`; `σ̂` becomes the stress at the iterate less its
+/// part linear in the velocity, `σ̂ = σ(F) − (𝒦 ε_v I + 2 μ D')`, so eq. 43
+/// returns `σ(F)` at every Picard iterate and the converged step satisfies
+/// the momentum equation with it. [`Material::update_history`] stores
+/// `σ(F)`.
+///
+/// **2D is plane strain.** `F_zz = 1`, `D_zz = 0`, `Δε_zz = 0`, but the
+/// out-of-plane stress [`History::stress_zz`] evolves:
+/// `σ_zzⁿ⁺¹ = (σ_zzⁿ + λ_h tr Δε) / J`. In the small-strain limit this
+/// gives `σ_zz = ν (σ_xx + σ_yy)`. In 3D `stress_zz` is unused and left at
+/// zero.
+///
+/// The update is incrementally objective: under a rigid rotation `F = R`
+/// (`J = 1`) it is `σⁿ⁺¹ = R σⁿ Rᵀ` to rounding, at any angle.
 ///
 /// `J` is taken from [`Kinematics::j`]; the solver rejects steps with
 /// `J ≤ 0` (an inverted element), for which the result is meaningless
@@ -181,33 +200,78 @@ where
         Self::wave_speed(self)
     }
 
-    /// `μ = μ_h Δt / J`, `𝒦 = (λ_h + ⅔ μ_h) Δt / J`, `σ̂ = F σⁿ Fᵀ / J`
-    /// (eqs. 37–38, 41, 44); in 2D `σ̂_zz = σ_zzⁿ / J` (`F_zz = 1`).
-    ///
-    /// `σ̂` is symmetrised (`½ (A + Aᵀ)`) so that rounding never makes the
-    /// stress unsymmetric.
+    /// `μ = μ_h w / J`, `𝒦 = (λ_h + ⅔ μ_h) w / J` (eqs. 37, 41 with
+    /// `w = ∂Δu/∂V` for `Δt`) and
+    /// `σ̂ = σ(F) − (𝒦 ε_v I + 2 μ D')` with `σ(F)` the stress the
+    /// displacement of the iterate gives ([`Hypoelastic::stress_after`]) and
+    /// `D` the rate of the iterate: eq. 43 then returns `σ(F)` exactly at
+    /// the iterate, and its linearisation in the velocity is the paper's.
     fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D> {
-        let dt_over_j = kin.dt / kin.j;
-        let a = kin.f * history.stress * kin.f.transpose() / kin.j; // eq. 38
-        let sigma_hat: Tensor<D> = (a + a.transpose()) * 0.5;
+        let w_over_j = kin.displacement_weight / kin.j;
+        let mu = self.mu * w_over_j; // eq. 37
+        let kappa = (self.lambda + 2.0 / 3.0 * self.mu) * w_over_j; // eq. 41
+        let (sigma, sigma_zz) = self.stress_after(kin, history);
+        let ev = kin.volumetric_rate();
+        let linear = Tensor::<D>::identity() * (kappa * ev) + kin.deviatoric_rate() * (2.0 * mu);
         Unified {
-            mu: self.mu * dt_over_j,                                // eq. 37
-            kappa: (self.lambda + 2.0 / 3.0 * self.mu) * dt_over_j, // eq. 41
-            sigma_hat,
+            mu,
+            kappa,
+            sigma_hat: sigma - linear,
             sigma_hat_zz: if D == 2 {
-                history.stress_zz / kin.j
+                sigma_zz - (kappa * ev + 2.0 * mu * kin.deviatoric_rate_zz())
             } else {
                 0.0
             },
         }
     }
 
-    /// `σⁿ⁺¹ = σ̂ + 𝒦 ε_v I + 2 μ̄ D'` (eqs. 42, 63), and in 2D
-    /// `σ_zzⁿ⁺¹ = σ̂_zz + 𝒦 ε_v − ⅔ μ̄ ε_v`. The pressure is not touched.
+    /// `σⁿ⁺¹ = F σⁿ Fᵀ / J + (λ_h tr Δε I + 2 μ_h Δε) / J` (eqs. 36–39, 63,
+    /// with the objective strain increment `Δε` for `Δt D`); in 2D also
+    /// `σ_zz`. The pressure is not touched.
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>) {
-        let u = <Self as Material<D>>::unified(self, kin, history);
-        history.stress = u.cauchy_stress(kin); // eq. 63
-        history.stress_zz = u.cauchy_stress_zz(kin);
+        let (sigma, sigma_zz) = self.stress_after(kin, history);
+        history.stress = sigma; // eq. 63
+        history.stress_zz = sigma_zz;
+    }
+}
+
+impl Hypoelastic {
+    /// The Cauchy stress after the step's displacement (eq. 36 in the
+    /// Updated Lagrangian form, `Jⁿ = 1`, `f = F`):
+    ///
+    /// `J σⁿ⁺¹ = F σⁿ Fᵀ + λ_h (tr Δε) I + 2 μ_h Δε`,
+    ///
+    /// with `Δε` = [`Kinematics::strain_increment`] where the paper has
+    /// `Δt D⁽ⁿ⁺¹⁾`. Both terms follow the positions only: a rigid rotation
+    /// `F = R` gives `R σⁿ Rᵀ` exactly at any angle, and under the
+    /// trapezoidal rule the increment is `Δt (Vⁿ + Vⁿ⁺¹)/2`, not
+    /// `Δt Vⁿ⁺¹` (which damps). Returns `(σ, σ_zz)`, `σ_zz` zero in 3D;
+    /// in 2D plane strain `F_zz = 1`, `Δε_zz = 0`, so
+    /// `σ_zzⁿ⁺¹ = (σ_zzⁿ + λ_h tr Δε) / J`.
+    ///
+    /// `σ` is symmetrised (`½ (A + Aᵀ)`) so that rounding never makes it
+    /// unsymmetric.
+    pub fn stress_after<const D: usize>(
+        &self,
+        kin: &Kinematics<D>,
+        history: &History<D>,
+    ) -> (Tensor<D>, f64)
+    where
+        Const<D>: Dim,
+    {
+        let de = kin.strain_increment();
+        let tr = de.trace();
+        let a = (kin.f * history.stress * kin.f.transpose() // eq. 38
+            + Tensor::<D>::identity() * (self.lambda * tr)
+            + de * (2.0 * self.mu))
+            / kin.j;
+        let sigma = (a + a.transpose()) * 0.5;
+        let sigma_zz = if D == 2 {
+            (history.stress_zz + self.lambda * tr) / kin.j
+        } else {
+            0.0
+        };
+        (sigma, sigma_zz)
     }
 }
 
@@ -431,9 +495,16 @@ mod tests {
         let j = f.determinant();
         assert!((u.mu - 4.0e6 * 1e-3 / j).abs() <= 1e-12 * u.mu);
         assert!((u.kappa - (2.0e7 + 2.0 / 3.0 * 4.0e6) * 1e-3 / j).abs() <= 1e-12 * u.kappa);
-        let sh = f * h.stress * f.transpose() / j;
+        // D = 0: σ̂ is the whole stress after the displacement F, the
+        // convected stress plus Hooke's law on Δε = (B − I)(B + I)⁻¹.
+        let b = f * f.transpose();
+        let id = Tensor::<2>::identity();
+        let de = (b - id) * (b + id).try_inverse().unwrap();
+        let hooke = id * (2.0e7 * de.trace()) + de * (2.0 * 4.0e6);
+        let sh = (f * h.stress * f.transpose() + hooke) / j;
         assert!((u.sigma_hat - sh).norm() <= 1e-14 * sh.norm());
-        assert!((u.sigma_hat_zz - 4.0 / j).abs() < 1e-14);
+        let szz = (4.0 + 2.0e7 * de.trace()) / j;
+        assert!((u.sigma_hat_zz - szz).abs() <= 1e-14 * szz.abs());
         let mut h2 = h;
         solid.update_history(&kin, &mut h2);
         assert_eq!(h2.pressure, 99.0);

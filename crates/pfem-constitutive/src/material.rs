@@ -16,6 +16,14 @@ pub struct Kinematics<const D: usize> {
     pub d: Tensor<D>,
     /// Time step `Δt` (s).
     pub dt: f64,
+    /// How the displacement over the step depends on the velocity being
+    /// solved for, `∂Δu/∂Vⁿ⁺¹` (s): `Δt` for backward Euler, `(β/γ) Δt`
+    /// for the Newmark family (`Δt/2` for the trapezoidal rule). A solid
+    /// whose stress follows the displacement ([`Self::strain_increment`])
+    /// stiffens the system by this factor, not by `Δt`; rate materials
+    /// (fluids) ignore it. [`Self::new`] and [`Self::at_rest`] set it to
+    /// `dt`.
+    pub displacement_weight: f64,
 }
 
 impl<const D: usize> Kinematics<D>
@@ -29,6 +37,7 @@ where
             j: 1.0,
             d: Tensor::<D>::zeros(),
             dt,
+            displacement_weight: dt,
         }
     }
 
@@ -40,6 +49,37 @@ where
             j: f.determinant(),
             d,
             dt,
+            displacement_weight: dt,
+        }
+    }
+
+    /// The same kinematics with `∂Δu/∂V` set to `w` (s), see
+    /// [`Self::displacement_weight`].
+    pub fn with_displacement_weight(mut self, w: f64) -> Self {
+        self.displacement_weight = w;
+        self
+    }
+
+    /// Strain increment of the step in the current configuration,
+    /// `Δε = (B − I)(B + I)⁻¹` with `B = F Fᵀ`: the (1,1) Padé approximant
+    /// of the incremental Hencky strain `½ ln B`, to third order in the
+    /// strain. It depends on the displacement the time scheme actually made
+    /// (through `F`) and on nothing else, so it is incrementally objective
+    /// at any rotation: a rigid rotation `F = R` gives `B = I` and
+    /// `Δε = 0` exactly (up to rounding), however large the angle, where
+    /// `Δt D(Vⁿ⁺¹)` registers `1 − cos θ` of spurious dilatation. Its
+    /// linearisation in the velocity is `displacement_weight · D`. In 2D
+    /// plane strain `B_zz = 1`, so `Δε_zz = 0`. Returns zeros if `B + I`
+    /// is singular (it is not for `J > 0`).
+    pub fn strain_increment(&self) -> Tensor<D> {
+        let b = self.f * self.f.transpose();
+        let id = Tensor::<D>::identity();
+        match (b + id).try_inverse() {
+            Some(inv) => {
+                let e = (b - id) * inv;
+                (e + e.transpose()) * 0.5
+            }
+            None => Tensor::<D>::zeros(),
         }
     }
 

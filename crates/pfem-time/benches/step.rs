@@ -92,6 +92,7 @@ fn input(t: &Tank) -> AssemblyInput<'_, 2> {
         inertia: Inertia {
             mass_factor: 2.0 / dt,
             acceleration_factor: 1.0,
+            displacement_weight: 0.5 * dt,
         },
     }
 }

@@ -51,8 +51,21 @@ pub enum Scheme {
 /// and how velocity, acceleration and position follow from the solved
 /// velocity `V = Vⁿ⁺¹` (Newmark's relations, eqs. 47–48 of the paper for
 /// γ = ½, β = ¼).
+///
+/// ```
+/// use pfem_time::{Scheme, SchemeWeights};
+/// use pfem_core::{Point, Vector};
+///
+/// // The trapezoidal rule moves a particle by Δt (Vⁿ + Vⁿ⁺¹)/2.
+/// let w = SchemeWeights::new(Scheme::Newmark, 0.0, 0.1);
+/// assert_eq!(w.displacement_weight(), 0.05);
+/// let (x, v, a) = (Point::<2>::zeros(), Vector::<2>::new(1.0, 0.0), Vector::<2>::zeros());
+/// let target = Point::<2>::new(0.2, 0.0);
+/// let v_new = w.velocity_reaching(&x, &v, &a, &target);
+/// assert!((w.position(&x, &v, &a, &v_new) - target).norm() < 1e-15);
+/// ```
 #[derive(Debug, Clone, Copy)]
-struct Weights {
+pub struct SchemeWeights {
     dt: f64,
     gamma: f64,
     beta: f64,
@@ -60,8 +73,10 @@ struct Weights {
     euler: bool,
 }
 
-impl Weights {
-    fn new(scheme: Scheme, bossak_alpha: f64, dt: f64) -> Self {
+impl SchemeWeights {
+    /// The weights of `scheme` (with `bossak_alpha` for [`Scheme::Bossak`])
+    /// for a step of `dt` seconds.
+    pub fn new(scheme: Scheme, bossak_alpha: f64, dt: f64) -> Self {
         let (gamma, beta, alpha_b, euler) = match scheme {
             Scheme::Newmark => (0.5, 0.25, 0.0, false),
             Scheme::Bossak => {
@@ -79,23 +94,53 @@ impl Weights {
         }
     }
 
-    /// `M [(1 − α_B) Aⁿ⁺¹ + α_B Aⁿ] = c M V − M (c Vⁿ + c_a Aⁿ)`.
-    fn inertia(&self) -> Inertia {
+    /// `M [(1 − α_B) Aⁿ⁺¹ + α_B Aⁿ] = c M V − M (c Vⁿ + c_a Aⁿ)`, and
+    /// the displacement weight the solids' stiffness uses.
+    pub fn inertia(&self) -> Inertia {
         if self.euler {
             return Inertia {
                 mass_factor: 1.0 / self.dt,
                 acceleration_factor: 0.0,
+                displacement_weight: self.displacement_weight(),
             };
         }
         let (g, a) = (self.gamma, self.alpha_b);
         Inertia {
             mass_factor: (1.0 - a) / (g * self.dt),
             acceleration_factor: (1.0 - a) * (1.0 - g) / g - a,
+            displacement_weight: self.displacement_weight(),
         }
     }
 
+    /// `∂Xⁿ⁺¹/∂Vⁿ⁺¹` (s): `Δt` for backward Euler, `(β/γ) Δt` for the
+    /// Newmark family (`Δt/2` for the trapezoidal rule). The position is
+    /// affine in the solved velocity with this slope.
+    pub fn displacement_weight(&self) -> f64 {
+        if self.euler {
+            self.dt
+        } else {
+            self.beta / self.gamma * self.dt
+        }
+    }
+
+    /// The velocity `Vⁿ⁺¹` for which [`Self::position`] is `target`: what a
+    /// prescribed motion must impose to move a particle exactly there.
+    pub fn velocity_reaching<const D: usize>(
+        &self,
+        x_n: &Point<D>,
+        v_n: &Vector<D>,
+        a_n: &Vector<D>,
+        target: &Point<D>,
+    ) -> Vector<D>
+    where
+        Const<D>: Dim,
+    {
+        let at_zero = self.position(x_n, v_n, a_n, &Vector::<D>::zeros());
+        (target - at_zero) / self.displacement_weight()
+    }
+
     /// `Aⁿ⁺¹` from the new velocity.
-    fn acceleration<const D: usize>(
+    pub fn acceleration<const D: usize>(
         &self,
         v_n: &Vector<D>,
         a_n: &Vector<D>,
@@ -112,7 +157,7 @@ impl Weights {
     }
 
     /// `Xⁿ⁺¹ = Xⁿ + Δt Vⁿ + Δt² [(½ − β) Aⁿ + β Aⁿ⁺¹]` (eq. 61).
-    fn position<const D: usize>(
+    pub fn position<const D: usize>(
         &self,
         x_n: &Point<D>,
         v_n: &Vector<D>,
@@ -425,6 +470,7 @@ where
             inertia: Inertia {
                 mass_factor: 1.0,
                 acceleration_factor: 0.0,
+                displacement_weight: dt,
             },
         };
         self.assembler
@@ -549,7 +595,7 @@ where
         self.assembler
             .prepare(n, input.mesh, input.materials)
             .map_err(|source| StepError::Assembly { time, dt, source })?;
-        let w = Weights::new(self.params.scheme, self.params.bossak_alpha, dt);
+        let w = SchemeWeights::new(self.params.scheme, self.params.bossak_alpha, dt);
         let inertia = w.inertia();
         self.x_it.clone_from(&state.x);
         self.v_it.clone_from(&state.v);
@@ -698,16 +744,21 @@ where
                 xn[a] = state.x[p];
                 vs[a] = self.v_it[p];
             }
-            let st =
-                pfem_assembly::kernels::element_state::<D>(&xs[..nv], &xn[..nv], &vs[..nv], dt)
-                    .ok_or(StepError::Assembly {
-                        time,
-                        dt,
-                        source: AssemblyError::InvertedElement {
-                            element: e,
-                            nodes: el.to_vec(),
-                        },
-                    })?;
+            let st = pfem_assembly::kernels::element_state::<D>(
+                &xs[..nv],
+                &xn[..nv],
+                &vs[..nv],
+                dt,
+                inertia.displacement_weight,
+            )
+            .ok_or(StepError::Assembly {
+                time,
+                dt,
+                source: AssemblyError::InvertedElement {
+                    element: e,
+                    nodes: el.to_vec(),
+                },
+            })?;
             let mat = &input.materials[input.mesh.element_material[e] as usize];
             if mat.kind() == MaterialKind::Solid {
                 let mut h = history[e];
@@ -730,6 +781,7 @@ where
                 j: 1.0,
                 d: Tensor::<D>::identity() * (r.rate / D as f64),
                 dt,
+                displacement_weight: inertia.displacement_weight,
             };
             let mut h = History {
                 pressure: state.pressure[p],
@@ -815,7 +867,7 @@ mod tests {
         let period_steps = (2.0 * std::f64::consts::PI / omega / dt).ceil() as usize;
         let mut amplitude: f64 = 0.0;
         for n in 0..steps {
-            let w = Weights::new(scheme, -0.3, dt);
+            let w = SchemeWeights::new(scheme, -0.3, dt);
             let inertia = w.inertia();
             let p = |x: f64| Point::<2>::new(x, 0.0);
             let vec = |v: f64| Vector::<2>::new(v, 0.0);
@@ -841,8 +893,8 @@ mod tests {
     #[test]
     fn bossak_with_zero_alpha_is_the_trapezoidal_rule() {
         let dt = 0.01;
-        let n = Weights::new(Scheme::Newmark, 0.0, dt);
-        let b = Weights::new(Scheme::Bossak, 0.0, dt);
+        let n = SchemeWeights::new(Scheme::Newmark, 0.0, dt);
+        let b = SchemeWeights::new(Scheme::Bossak, 0.0, dt);
         assert!((n.inertia().mass_factor - b.inertia().mass_factor).abs() < 1e-12 * 200.0);
         assert_eq!(b.inertia().acceleration_factor, 1.0);
         let (xn, vn, an) = (
