@@ -613,6 +613,17 @@ where
                 self.v_it[p] = v;
             }
         }
+        // The first iterate is the pair (Xⁿ, V⁽⁰⁾) with V⁽⁰⁾ the velocity for
+        // which the scheme leaves a particle at Xⁿ, so that positions and
+        // velocities agree at every iterate: a solid's stress follows the
+        // positions and is linearised in the velocity about that pair
+        // (`Kinematics::displacement_weight`). Starting from (Xⁿ, Vⁿ)
+        // instead told the solid it had strained by `w D(Vⁿ)`, which a 5 s
+        // quasi-static step of a moving beam could not recover from.
+        for &p in self.assembler.particles() {
+            let p = p as usize;
+            self.v_it[p] = w.velocity_reaching(&state.x[p], &state.v[p], &state.a[p], &state.x[p]);
+        }
         let dofs = self.assembler.dofs();
         rep.dofs = dofs;
         self.sol.resize(dofs, 0.0);
@@ -642,9 +653,11 @@ where
                 .map_err(|source| StepError::Assembly { time, dt, source })?;
             rep.assemble_seconds += ta.elapsed().as_secs_f64();
             let ts = std::time::Instant::now();
+            // Initial guess for iterative solvers: Vⁿ, then the iterate.
+            let guess = if it == 1 { &state.v } else { &self.v_it };
             for (s, &p) in self.assembler.particles().iter().enumerate() {
                 for k in 0..D {
-                    self.sol[s * D + k] = self.v_it[p as usize][k];
+                    self.sol[s * D + k] = guess[p as usize][k];
                 }
             }
             // A frozen-matrix correction when the last one shrank well,
