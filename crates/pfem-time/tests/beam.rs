@@ -277,7 +277,9 @@ fn vibration_frequency(ny: usize, periods: f64, steps_per_period: f64) -> (f64, 
     (1.0 / period, k)
 }
 
-/// Measured: ny = 8, 60 steps per period: 2.1907 Hz (+1.73 %, 4 s);
+/// Measured: ny = 8, 60 steps per period: 2.2016 Hz (+2.24 %; 2.1907 Hz,
+/// +1.73 %, while the stress update still damped the higher modes that
+/// shift the velocity's zero crossings);
 /// ny = 16, 80 steps per period: 2.1641 Hz (+0.50 %, 50 s, too slow for
 /// the suite). The excess follows the too-stiff bending of coarse linear
 /// triangles seen in the static test.
