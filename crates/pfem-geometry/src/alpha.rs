@@ -13,11 +13,31 @@ pub struct AlphaShapeParams {
     /// Dimensionless, finite and `> 0`; PFEM codes use 1.2–1.4 (paper §8:
     /// "close to, but greater than one"). Default `1.3`.
     pub alpha: f64,
+    /// Drop *dry bridges*: candidates whose fluid nodes all lie on the free
+    /// surface and that reach a wall or solid particle lying more than half
+    /// a spacing outside the fluid, across the free surface (see
+    /// [`alpha_shape_into`]). Default `true`; `false` is the paper's plain
+    /// alpha shape.
+    pub drop_dry_bridges: bool,
 }
 
 impl Default for AlphaShapeParams {
     fn default() -> Self {
-        Self { alpha: 1.3 }
+        Self {
+            alpha: 1.3,
+            drop_dry_bridges: true,
+        }
+    }
+}
+
+impl AlphaShapeParams {
+    /// The paper's alpha criterion with `alpha`, and the default handling
+    /// of dry bridges.
+    pub fn with_alpha(alpha: f64) -> Self {
+        Self {
+            alpha,
+            ..Self::default()
+        }
     }
 }
 
@@ -221,6 +241,117 @@ where
     (measure, if r2 <= ah * ah { KEPT } else { DROPPED })
 }
 
+/// Drops the *dry bridges* among the kept simplices of `decided` and says
+/// whether it dropped any: kept
+/// simplices that join free-surface fluid particles to a wall or solid
+/// particle lying outside the fluid, across its free surface.
+///
+/// Where a free surface meets a wall, the alpha shape also keeps the small
+/// simplex between the last fluid particle and the wall particle above the
+/// water line (in 2D the right triangle of legs `h` under the wall's next
+/// particle, `R = 0.71 h`). It is not water: air lies there. Its mass,
+/// lumped onto the fluid particle, has no pressure gradient to hold it
+/// (its nodes all sit at the free surface's `p = 0`, and its only free
+/// node's shape gradient is horizontal), so that particle accelerates
+/// downwards at `g/4` from rest and the tank's water never comes to rest
+/// (issue 13: corner particles sinking at 3–5 cm/s and gravity waves
+/// that last; measured: with these simplices dropped, water at rest
+/// remeshed every step stays at rest to 5e-15 √(gH)).
+///
+/// The rule: the outward normal `n_F` of the free surface at a fluid
+/// particle `F` is the sum of the area-weighted outward normals of the
+/// boundary facets through `F` whose nodes are all fluid. A kept simplex
+/// whose fluid nodes all have such a normal (all lie on the free surface)
+/// and that has a non-fluid node `W` with `(x_W − x_F)·n̂_F > ½ h_F` for
+/// one of its fluid nodes is dropped. A wall particle beside the fluid
+/// (`(x_W − x_F)·n̂_F ≈ 0`, the contact itself) or below it (negative) keeps
+/// its simplices: the contact line, a surge front on a floor and a film
+/// on a wall are unchanged.
+fn drop_dry_bridges<const D: usize>(
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    spacing: &[f64],
+    delaunay: &Tessellation,
+    sealed: &[bool],
+    decided: &mut [(f64, u8)],
+) -> bool
+where
+    Const<D>: Dim,
+{
+    let nv = <Const<D> as Dim>::NV;
+    let ns = decided.len();
+    let fluid = |v: u32| kinds[v as usize] == ParticleKind::Fluid;
+    // Outward normals of the fluid-only boundary facets, per particle.
+    let mut normal: Vec<Vector<D>> = Vec::new();
+    let mut grads = [Vector::<D>::zeros(); MAX_NV];
+    for s in 0..ns {
+        if decided[s].1 != KEPT {
+            continue;
+        }
+        let simplex = delaunay.simplex(s);
+        if !simplex.iter().any(|&v| fluid(v)) {
+            continue;
+        }
+        let nb = delaunay.simplex_neighbors(s);
+        let mut p = [Point::<D>::zeros(); MAX_NV];
+        let mut vol = f64::NAN;
+        for k in 0..nv {
+            let t = nb[k] as usize;
+            let boundary = t >= ns || (decided[t].1 != KEPT && sealed.get(t) != Some(&true));
+            if !boundary || !(0..nv).filter(|&a| a != k).all(|a| fluid(simplex[a])) {
+                continue;
+            }
+            if vol.is_nan() {
+                for a in 0..nv {
+                    p[a] = points[simplex[a] as usize];
+                }
+                match pfem_core::shape_gradients::<D>(&p[..nv], &mut grads[..nv]) {
+                    Some(v) => vol = v,
+                    None => break,
+                }
+            }
+            if normal.is_empty() {
+                normal = vec![Vector::<D>::zeros(); points.len()];
+            }
+            // −V ∇W_k: the facet's outward normal times its measure / D.
+            let share = grads[k] * (-vol);
+            for a in (0..nv).filter(|&a| a != k) {
+                normal[simplex[a] as usize] += share;
+            }
+        }
+    }
+    if normal.is_empty() {
+        return false;
+    }
+    let mut any = false;
+    for s in 0..ns {
+        if decided[s].1 != KEPT {
+            continue;
+        }
+        let simplex = delaunay.simplex(s);
+        if simplex.iter().all(|&v| fluid(v))
+            || simplex
+                .iter()
+                .any(|&v| fluid(v) && normal[v as usize] == Vector::<D>::zeros())
+        {
+            continue;
+        }
+        let dry = simplex.iter().filter(|&&f| fluid(f)).any(|&f| {
+            let (xf, n) = (points[f as usize], normal[f as usize].normalize());
+            let reach = 0.5 * spacing[f as usize];
+            simplex
+                .iter()
+                .filter(|&&w| !fluid(w))
+                .any(|&w| (points[w as usize] - xf).dot(&n) > reach)
+        });
+        if dry {
+            decided[s].1 = DROPPED;
+            any = true;
+        }
+    }
+    any
+}
+
 /// Marks the slivers of `decided` (what [`decide`] returned per simplex)
 /// that lie in *sealed voids*: connected (through shared facets) groups of
 /// slivers whose every outer facet meets a kept simplex or, when it meets
@@ -395,6 +526,18 @@ where
         sealed_voids::<D>(kinds, delaunay, &decided)
     } else {
         (Vec::new(), 0)
+    };
+
+    // Dry bridges are found with the sealed voids in place (a facet
+    // against a sealed void is not free surface); dropping one can open a
+    // void it closed, so the voids are sealed again on the final verdicts.
+    let (sealed, n_sealed) = if params.drop_dry_bridges
+        && drop_dry_bridges::<D>(points, kinds, spacing, delaunay, &sealed, &mut decided)
+        && D == 3
+    {
+        sealed_voids::<D>(kinds, delaunay, &decided)
+    } else {
+        (sealed, n_sealed)
     };
 
     out.kept.clear();

@@ -200,13 +200,13 @@ fn alpha_parameter_is_validated_and_controls_the_shape() {
     let mut t = Tessellation::default();
     Delaunay2::default().tessellate(&p, &mut t).unwrap();
     // Lattice triangles have R = h/√2: α = 0.7 drops them all, 0.75 keeps.
-    let a = alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams { alpha: 0.7 }).unwrap();
+    let a = alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams::with_alpha(0.7)).unwrap();
     assert!(a.is_empty());
     assert!((a.deleted_measure() - 0.16).abs() < 1e-12);
-    let a = alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams { alpha: 0.75 }).unwrap();
+    let a = alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams::with_alpha(0.75)).unwrap();
     assert_eq!(a.len(), 32);
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        assert!(alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams { alpha: bad }).is_err());
+        assert!(alpha_shape(&p, &k, &sp, &t, &AlphaShapeParams::with_alpha(bad)).is_err());
     }
     let mut bad_sp = sp.clone();
     bad_sp[3] = 0.0;
@@ -303,7 +303,7 @@ mod properties {
             if Delaunay2::default().tessellate(&p, &mut t).is_err() {
                 return Ok(());
             }
-            let a = alpha_shape(&p, &kinds, &spacing, &t, &AlphaShapeParams { alpha }).unwrap();
+            let a = alpha_shape(&p, &kinds, &spacing, &t, &AlphaShapeParams::with_alpha(alpha)).unwrap();
             prop_assert!(a.kept_measure <= a.candidate_measure * (1.0 + 1e-12));
             prop_assert!(a.kept_measure >= 0.0);
             let c = classify(&p, &kinds, &a.mesh, None).unwrap();
@@ -363,5 +363,89 @@ mod properties {
             }
             check_tags(&kinds, &a, &c)?;
         }
+    }
+}
+
+/// Issue 13: water resting in a corner, a wall column rising above the
+/// water line on its right, its left face free. The plain alpha shape keeps
+/// two simplices that lie outside the water: the triangle between the last
+/// surface particle and the wall particle above it, and the triangle
+/// between the foot of the free face and the dry floor particle ahead of
+/// it (dry bridges, air in reality). The default drops exactly those two:
+/// the contact with the wall at the water line and with the floor under
+/// the water stays.
+#[test]
+fn dry_bridges_above_the_water_line_are_dropped() {
+    let h = 1.0;
+    let mut p = Vec::new();
+    let mut k = Vec::new();
+    // Water: columns x = 0..4, rows y = 1..3 (surface at y = 3).
+    for i in 0..5 {
+        for j in 1..4 {
+            p.push(Point::<2>::new(i as f64 * h, j as f64 * h));
+            k.push(ParticleKind::Fluid);
+        }
+    }
+    // Floor y = 0 for x = −1..6 (dry ahead of x = 4 on the left side is
+    // the wall), wall column x = 5 for y = 1..6.
+    for i in -1..7 {
+        p.push(Point::<2>::new(i as f64 * h, 0.0));
+        k.push(ParticleKind::Wall);
+    }
+    for j in 1..7 {
+        p.push(Point::<2>::new(5.0 * h, j as f64 * h));
+        k.push(ParticleKind::Wall);
+    }
+    let spacing = vec![h; p.len()];
+    let mut t = Tessellation::default();
+    Delaunay2::default().tessellate(&p, &mut t).unwrap();
+    let plain = AlphaShapeParams {
+        drop_dry_bridges: false,
+        ..AlphaShapeParams::default()
+    };
+    let a0 = alpha_shape(&p, &k, &spacing, &t, &plain).unwrap();
+    let a1 = alpha_shape(&p, &k, &spacing, &t, &AlphaShapeParams::default()).unwrap();
+    // What the default drops: simplices of the plain shape not in it.
+    let key = |s: &[u32]| {
+        let mut v = s.to_vec();
+        v.sort();
+        v
+    };
+    let kept: std::collections::HashSet<Vec<u32>> = a1.mesh.simplices.chunks(3).map(key).collect();
+    let dropped: Vec<&[u32]> = a0
+        .mesh
+        .simplices
+        .chunks(3)
+        .filter(|s| !kept.contains(&key(s)))
+        .collect();
+    assert_eq!(dropped.len(), 2, "dropped {dropped:?}");
+    assert_eq!(a0.mesh.simplices.len(), a1.mesh.simplices.len() + 6);
+    assert!((a0.kept_measure - a1.kept_measure - h * h).abs() < 1e-12);
+    for s in &dropped {
+        let c = s
+            .iter()
+            .fold(Point::<2>::zeros(), |c, &v| c + p[v as usize] / 3.0);
+        let inside = c.x > 0.0 && c.x < 5.0 && c.y > 0.0 && c.y < 3.0;
+        assert!(!inside, "dropped a simplex inside the water: {s:?}");
+        let dry = s.iter().any(|&v| {
+            p[v as usize] == Point::<2>::new(5.0, 4.0)
+                || p[v as usize] == Point::<2>::new(-1.0, 0.0)
+        });
+        assert!(dry, "dropped {s:?}");
+    }
+    // The contact at the water line, (4, 3)–(5, 3), is still an edge of a
+    // kept simplex, and every floor particle under the water is wetted.
+    let has = |a: &AlphaShape, v: Point<2>| {
+        a.mesh
+            .simplices
+            .iter()
+            .any(|&i| (p[i as usize] - v).norm() < 1e-12)
+    };
+    assert!(has(&a1, Point::<2>::new(5.0, 3.0)));
+    for i in 0..5 {
+        assert!(
+            has(&a1, Point::<2>::new(i as f64, 0.0)),
+            "floor particle {i}"
+        );
     }
 }

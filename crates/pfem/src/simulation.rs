@@ -441,9 +441,7 @@ where
             end_time: settings.end_time,
             output_interval: settings.output_interval,
             controller,
-            alpha: AlphaShapeParams {
-                alpha: settings.alpha,
-            },
+            alpha: AlphaShapeParams::with_alpha(settings.alpha),
             free_surface_pressure_zero: false,
             volume_correction: 1.0,
             compression0: 0.0,

@@ -97,6 +97,8 @@ where
         &tess,
         &AlphaShapeParams {
             alpha: params.alpha,
+            // A solid's own mesh has no free surface against walls.
+            drop_dry_bridges: false,
         },
     )
     .map_err(|e| err(format!("solid mesh: {e}")))?;

@@ -1,0 +1,166 @@
+//! Water at rest in an open tank (issue 13's 2D case): 1 m wide, 0.5 m of
+//! water, walls on three sides. Prints the largest and RMS fluid speed (in
+//! √(gH)), the RMS pressure error against ρ g (H − y) below the free-surface
+//! layer, and the fluid volume change, at intervals.
+//!
+//! ```text
+//! cargo run --release --example rest_tank_2d -- [--spacing H] [--end-time T]
+//! ```
+
+use pfem::cli::Args;
+use pfem::core::ParticleKind;
+use pfem::prelude::*;
+
+const G: f64 = 9.81;
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let args = Args::from_env()?;
+    args.reject_unknown(&[])?;
+    let h = args.spacing.unwrap_or(0.025);
+    let end = args.end_time.unwrap_or(2.0);
+    let (w, depth, top) = (1.0, 0.5, 0.6);
+    let scene = Scene::<2>::new("rest_tank_2d")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: end,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-h, -h),
+                max: Point::<2>::new(w + h, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .wall(
+            "left",
+            Geometry::Box {
+                min: Point::<2>::new(-h, h),
+                max: Point::<2>::new(0.0, top),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .wall(
+            "right",
+            Geometry::Box {
+                min: Point::<2>::new(w, h),
+                max: Point::<2>::new(w + h, top),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(w, depth),
+            },
+            h,
+        );
+    let mut sim = args.simulation(scene, Box::new(Delaunay2::default()))?;
+    sim.free_surface_pressure_zero = std::env::var("FSZ").is_ok();
+    if std::env::var("NOREMESH").is_ok() {
+        sim.stages.remesh = false;
+    }
+    if let Ok(b) = std::env::var("VC") {
+        sim.volume_correction = b.parse()?;
+    }
+    let v0 = sim.fluid_volume();
+    let c = (G * depth).sqrt();
+    let fluid: Vec<usize> = (0..sim.state.len())
+        .filter(|&i| sim.kind[i] == ParticleKind::Fluid)
+        .collect();
+    let report = |sim: &Simulation<2>| {
+        let (mut vmax, mut at, mut v2) = (0.0f64, Point::<2>::zeros(), 0.0);
+        let (mut e2, mut p2) = (0.0, 0.0);
+        for &i in &fluid {
+            let s = sim.state.v[i].norm();
+            v2 += s * s;
+            if s > vmax {
+                vmax = s;
+                at = sim.state.x[i];
+            }
+            let y = sim.state.x[i].y;
+            if y < depth - 1.5 * h {
+                let pe = 1000.0 * G * (depth - y);
+                e2 += (sim.state.pressure[i] - pe).powi(2);
+                p2 += pe * pe;
+            }
+        }
+        println!(
+            "t = {:6.3} s  steps {:5}  max speed {:.2e} sqrt(gH) at ({:.3}, {:.3})  rms {:.2e}  pressure rms err {:.3} %  volume {:+.4} %",
+            sim.time,
+            sim.steps,
+            vmax / c,
+            at.x,
+            at.y,
+            (v2 / fluid.len() as f64).sqrt() / c,
+            100.0 * (e2 / p2).sqrt(),
+            100.0 * (sim.fluid_volume() / v0 - 1.0)
+        );
+    };
+    report(&sim);
+    if std::env::var("ACC").is_ok() {
+        let mut idx: Vec<usize> = fluid.clone();
+        idx.sort_by(|&a, &b| {
+            sim.state.a[b]
+                .norm()
+                .partial_cmp(&sim.state.a[a].norm())
+                .unwrap()
+        });
+        for &i in idx.iter().take(8) {
+            println!(
+                "  a0 = ({:+.3e}, {:+.3e}) at ({:.4}, {:.4}) p = {:.1}",
+                sim.state.a[i].x,
+                sim.state.a[i].y,
+                sim.state.x[i].x,
+                sim.state.x[i].y,
+                sim.state.pressure[i]
+            );
+        }
+        let n_el = sim.fluid_elements.len() / 3;
+        for e in 0..n_el {
+            let el = &sim.fluid_elements[3 * e..3 * e + 3];
+            if el
+                .iter()
+                .any(|&i| (sim.state.x[i as usize] - Point::<2>::new(0.975, 0.5)).norm() < 1e-9)
+            {
+                let pts: Vec<String> = el
+                    .iter()
+                    .map(|&i| {
+                        format!(
+                            "({:.3},{:.3},{:?},p={:.0})",
+                            sim.state.x[i as usize].x,
+                            sim.state.x[i as usize].y,
+                            sim.kind[i as usize],
+                            sim.state.pressure[i as usize]
+                        )
+                    })
+                    .collect();
+                println!("  corner element {}", pts.join(" "));
+            }
+        }
+    }
+    let mut next = 0.05;
+    while sim.time < end - 1e-12 {
+        sim.step()?;
+        if sim.time >= next - 1e-12 {
+            report(&sim);
+            next += if next < 0.2 { 0.05 } else { 0.25 };
+        }
+    }
+    Ok(())
+}
