@@ -1,7 +1,8 @@
 //! Water at rest in an open tank (issue 13's 2D case): 1 m wide, 0.5 m of
 //! water, walls on three sides. Prints the largest and RMS fluid speed (in
 //! √(gH)), the RMS pressure error against ρ g (H − y) below the free-surface
-//! layer, and the fluid volume change, at intervals.
+//! layer, and the fluid volume change, at intervals. The test
+//! `tests/water_at_rest_2d.rs` asserts the issue's bounds on the same tank.
 //!
 //! ```text
 //! cargo run --release --example rest_tank_2d -- [--spacing H] [--end-time T]
@@ -71,13 +72,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             h,
         );
     let mut sim = args.simulation(scene, Box::new(Delaunay2::default()))?;
-    sim.free_surface_pressure_zero = std::env::var("FSZ").is_ok();
-    if std::env::var("NOREMESH").is_ok() {
-        sim.stages.remesh = false;
-    }
-    if let Ok(b) = std::env::var("VC") {
-        sim.volume_correction = b.parse()?;
-    }
     let v0 = sim.fluid_volume();
     let c = (G * depth).sqrt();
     let fluid: Vec<usize> = (0..sim.state.len())
@@ -113,47 +107,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         );
     };
     report(&sim);
-    if std::env::var("ACC").is_ok() {
-        let mut idx: Vec<usize> = fluid.clone();
-        idx.sort_by(|&a, &b| {
-            sim.state.a[b]
-                .norm()
-                .partial_cmp(&sim.state.a[a].norm())
-                .unwrap()
-        });
-        for &i in idx.iter().take(8) {
-            println!(
-                "  a0 = ({:+.3e}, {:+.3e}) at ({:.4}, {:.4}) p = {:.1}",
-                sim.state.a[i].x,
-                sim.state.a[i].y,
-                sim.state.x[i].x,
-                sim.state.x[i].y,
-                sim.state.pressure[i]
-            );
-        }
-        let n_el = sim.fluid_elements.len() / 3;
-        for e in 0..n_el {
-            let el = &sim.fluid_elements[3 * e..3 * e + 3];
-            if el
-                .iter()
-                .any(|&i| (sim.state.x[i as usize] - Point::<2>::new(0.975, 0.5)).norm() < 1e-9)
-            {
-                let pts: Vec<String> = el
-                    .iter()
-                    .map(|&i| {
-                        format!(
-                            "({:.3},{:.3},{:?},p={:.0})",
-                            sim.state.x[i as usize].x,
-                            sim.state.x[i as usize].y,
-                            sim.kind[i as usize],
-                            sim.state.pressure[i as usize]
-                        )
-                    })
-                    .collect();
-                println!("  corner element {}", pts.join(" "));
-            }
-        }
-    }
     let mut next = 0.05;
     while sim.time < end - 1e-12 {
         sim.step()?;
