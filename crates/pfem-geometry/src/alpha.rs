@@ -261,12 +261,15 @@ where
 /// The rule: the outward normal `n_F` of the free surface at a fluid
 /// particle `F` is the sum of the area-weighted outward normals of the
 /// boundary facets through `F` whose nodes are all fluid. A kept simplex
-/// whose fluid nodes all have such a normal (all lie on the free surface)
-/// and that has a non-fluid node `W` with `(x_W − x_F)·n̂_F > ½ h_F` for
-/// one of its fluid nodes is dropped. A wall particle beside the fluid
-/// (`(x_W − x_F)·n̂_F ≈ 0`, the contact itself) or below it (negative) keeps
-/// its simplices: the contact line, a surge front on a floor and a film
-/// on a wall are unchanged.
+/// with a single fluid node `F` that has such a normal (it lies on the
+/// free surface) is dropped when a wall or solid node `W` of it lies more
+/// than half a spacing outside, `(x_W − x_F)·n̂_F > ½ h_F`, and its wall
+/// facet runs along `n̂_F` (the facet's unit normal `m̂` has
+/// `|m̂·n̂_F| < ½`): a wall rising above the water line, or a floor ahead of
+/// a front. A wall particle beside the fluid (`(x_W − x_F)·n̂_F ≈ 0`, the
+/// contact itself) or below it keeps its simplices, and so does a wall
+/// that faces an approaching front (`|m̂·n̂_F| ≈ 1`): the contact forms as
+/// the plain alpha shape forms it.
 fn drop_dry_bridges<const D: usize>(
     points: &[Point<D>],
     kinds: &[ParticleKind],
@@ -329,22 +332,35 @@ where
             continue;
         }
         let simplex = delaunay.simplex(s);
-        if simplex.iter().all(|&v| fluid(v))
-            || simplex
-                .iter()
-                .any(|&v| fluid(v) && normal[v as usize] == Vector::<D>::zeros())
-        {
+        // One fluid node F on the free surface, the opposite facet on a
+        // wall or structure.
+        let mut fl = (0..nv).filter(|&a| fluid(simplex[a]));
+        let (Some(a), None) = (fl.next(), fl.next()) else {
+            continue;
+        };
+        let f = simplex[a] as usize;
+        if normal[f] == Vector::<D>::zeros() {
             continue;
         }
-        let dry = simplex.iter().filter(|&&f| fluid(f)).any(|&f| {
-            let (xf, n) = (points[f as usize], normal[f as usize].normalize());
-            let reach = 0.5 * spacing[f as usize];
-            simplex
-                .iter()
-                .filter(|&&w| !fluid(w))
-                .any(|&w| (points[w as usize] - xf).dot(&n) > reach)
-        });
-        if dry {
+        let mut p = [Point::<D>::zeros(); MAX_NV];
+        for b in 0..nv {
+            p[b] = points[simplex[b] as usize];
+        }
+        if pfem_core::shape_gradients::<D>(&p[..nv], &mut grads[..nv]).is_none() {
+            continue;
+        }
+        let n = normal[f].normalize();
+        // The wall facet's normal is ∇W_F's direction: a wall that runs
+        // along the free surface's normal (|m·n| small) rises above the
+        // water line; one that faces the fluid (|m·n| ≈ 1) is the wall a
+        // front is about to touch, which keeps its contact simplices.
+        let m = grads[a].normalize();
+        let along = m.dot(&n).abs() < 0.5;
+        let reach = 0.5 * spacing[f];
+        let outside = (0..nv)
+            .filter(|&b| b != a)
+            .any(|b| (p[b] - p[a]).dot(&n) > reach);
+        if along && outside {
             decided[s].1 = DROPPED;
             any = true;
         }
