@@ -13,12 +13,16 @@ pub struct AlphaShapeParams {
     /// Dimensionless, finite and `> 0`; PFEM codes use 1.2–1.4 (paper §8:
     /// "close to, but greater than one"). Default `1.3`.
     pub alpha: f64,
-    /// Drop *dry bridges*: candidates whose fluid nodes all lie on the free
-    /// surface and that reach a wall or solid particle lying more than half
-    /// a spacing outside the fluid, across the free surface (see
+    /// Drop *dry bridges*: simplices joining a free-surface fluid particle
+    /// to a wall or solid particle above the water line (see
     /// [`alpha_shape_into`]). Default `true`; `false` is the paper's plain
-    /// alpha shape.
+    /// alpha shape. Needs [`Self::up`].
     pub drop_dry_bridges: bool,
+    /// The unit vector opposite to gravity (its first `D` components are
+    /// used), which says where "above the water line" is; `None` (the
+    /// default) when the scene has no gravity, and no simplex is then a dry
+    /// bridge. The driver sets it from the scene's gravity.
+    pub up: Option<[f64; 3]>,
 }
 
 impl Default for AlphaShapeParams {
@@ -26,6 +30,7 @@ impl Default for AlphaShapeParams {
         Self {
             alpha: 1.3,
             drop_dry_bridges: true,
+            up: None,
         }
     }
 }
@@ -262,20 +267,23 @@ where
 /// particle `F` is the sum of the area-weighted outward normals of the
 /// boundary facets through `F` whose nodes are all fluid. A kept simplex
 /// with a single fluid node `F` that has such a normal (it lies on the
-/// free surface) is dropped when a wall or solid node `W` of it lies more
-/// than half a spacing outside, `(x_W − x_F)·n̂_F > ½ h_F`, and its wall
-/// facet runs along `n̂_F` (the facet's unit normal `m̂` has
-/// `|m̂·n̂_F| < ½`): a wall rising above the water line, or a floor ahead of
-/// a front. A wall particle beside the fluid (`(x_W − x_F)·n̂_F ≈ 0`, the
-/// contact itself) or below it keeps its simplices, and so does a wall
-/// that faces an approaching front (`|m̂·n̂_F| ≈ 1`): the contact forms as
-/// the plain alpha shape forms it.
+/// free surface) is dropped when one of its wall or solid nodes `W` lies
+/// more than half a spacing above `F` (along `up`, opposite to gravity) and
+/// more than half a spacing outside the free surface
+/// (`(x_W − x_F)·n̂_F > ½ h_F`): a wall rising above the water line. The
+/// contact at and below the water line, a front's contact with the floor
+/// ahead of it and with a wall it runs into at its own height keep their
+/// simplices. (A first version without the `up` condition also dropped the
+/// floor ahead of a front and delayed contacts with walls facing a front:
+/// the square column's front error rose from 4.1 % to 5.9 % and the
+/// obstacle's peak force from 524 to 954 N/m.)
 fn drop_dry_bridges<const D: usize>(
     points: &[Point<D>],
     kinds: &[ParticleKind],
     spacing: &[f64],
     delaunay: &Tessellation,
     sealed: &[bool],
+    up: &Vector<D>,
     decided: &mut [(f64, u8)],
 ) -> bool
 where
@@ -346,21 +354,13 @@ where
         for b in 0..nv {
             p[b] = points[simplex[b] as usize];
         }
-        if pfem_core::shape_gradients::<D>(&p[..nv], &mut grads[..nv]).is_none() {
-            continue;
-        }
         let n = normal[f].normalize();
-        // The wall facet's normal is ∇W_F's direction: a wall that runs
-        // along the free surface's normal (|m·n| small) rises above the
-        // water line; one that faces the fluid (|m·n| ≈ 1) is the wall a
-        // front is about to touch, which keeps its contact simplices.
-        let m = grads[a].normalize();
-        let along = m.dot(&n).abs() < 0.5;
         let reach = 0.5 * spacing[f];
-        let outside = (0..nv)
-            .filter(|&b| b != a)
-            .any(|b| (p[b] - p[a]).dot(&n) > reach);
-        if along && outside {
+        let dry = (0..nv).filter(|&b| b != a).any(|b| {
+            let d = p[b] - p[a];
+            d.dot(up) > reach && d.dot(&n) > reach
+        });
+        if dry {
             decided[s].1 = DROPPED;
             any = true;
         }
@@ -547,10 +547,14 @@ where
     // Dry bridges are found with the sealed voids in place (a facet
     // against a sealed void is not free surface); dropping one can open a
     // void it closed, so the voids are sealed again on the final verdicts.
-    let (sealed, n_sealed) = if params.drop_dry_bridges
-        && drop_dry_bridges::<D>(points, kinds, spacing, delaunay, &sealed, &mut decided)
-        && D == 3
-    {
+    let up = params
+        .up
+        .filter(|_| params.drop_dry_bridges)
+        .map(|u| Vector::<D>::from_fn(|k, _| u[k]));
+    let dropped = up.is_some_and(|up| {
+        drop_dry_bridges::<D>(points, kinds, spacing, delaunay, &sealed, &up, &mut decided)
+    });
+    let (sealed, n_sealed) = if dropped && D == 3 {
         sealed_voids::<D>(kinds, delaunay, &decided)
     } else {
         (sealed, n_sealed)

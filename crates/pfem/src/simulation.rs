@@ -441,7 +441,14 @@ where
             end_time: settings.end_time,
             output_interval: settings.output_interval,
             controller,
-            alpha: AlphaShapeParams::with_alpha(settings.alpha),
+            alpha: AlphaShapeParams {
+                // Above the water line is against gravity (dry bridges).
+                up: gravity.filter(|g| g.norm() > 0.0).map(|g| {
+                    let u = -g / g.norm();
+                    [u[0], u[1], if D == 3 { u[D - 1] } else { 0.0 }]
+                }),
+                ..AlphaShapeParams::with_alpha(settings.alpha)
+            },
             free_surface_pressure_zero: false,
             volume_correction: 1.0,
             compression0: 0.0,

@@ -99,6 +99,7 @@ where
             alpha: params.alpha,
             // A solid's own mesh has no free surface against walls.
             drop_dry_bridges: false,
+            up: None,
         },
     )
     .map_err(|e| err(format!("solid mesh: {e}")))?;
