@@ -20,11 +20,12 @@
 //! The errors and times quoted on each preset are those of the 2D dam break
 //! (Martin & Moyce 1952, n² = 2, a = 2.25 in, front RMS relative error for
 //! T = t √(2g/a) ≤ 3 after the best time shift), measured by the full study
-//! at commit `ef0bcbe` on a 2-core Intel Xeon (load average 1.7);
+//! of `docs/accuracy-cost.md` (1 December 2026, 2 cores);
 //! `tests/presets.rs` checks the error bounds. On the dam break the front
-//! error does not decrease with refinement (a/10 1.76 %, a/14 1.85 %,
-//! a/20 1.72 %, a/28 2.69 %), so the presets are not ordered by accuracy
-//! there; refinement pays on solids (cantilever: order 1.09).
+//! error now falls with refinement along the spacing sweep (a/10 3.12 %,
+//! a/14 2.66 %, a/20 1.60 %, a/28 1.13 %; order 1.03), though the presets,
+//! which also change the Courant number and tolerance, are not ordered by
+//! it; refinement pays on solids (cantilever: order 1.29).
 
 use pfem_time::StepParams;
 
@@ -34,20 +35,21 @@ use crate::scene::RunSettings;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Fidelity {
     /// Quick look: twice the default spacing, Courant 1, Picard 1e-3.
-    /// Dam break (a/10): front RMS error 1.58 %, 0.5 s wall time (study);
+    /// Dam break (a/10): front RMS error 2.48 %, 0.6 s wall time (study);
     /// tested bound 5 %.
     Draft,
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
-    /// Dam break (a/20): front RMS error 1.72 %, 11.8 s wall time (study);
+    /// Dam break (a/20): front RMS error 1.60 %, 11.0 s wall time (study);
     /// tested bound 5 %.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
-    /// Dam break (a/28.6): front RMS error 1.54 %, 36.4 s wall time
-    /// (study): within 0.2 % of Draft and Standard on this measure (the
-    /// front error does not decrease with refinement). Meant
-    /// for solids, where refinement does pay (cantilever: 4.88 % at t/8,
-    /// 2.46 % at t/16). Tested bound 5 %.
+    /// Dam break (a/28.6): front RMS error 1.64 %, 26.6 s wall time
+    /// (study): no better than Standard on this measure (Fine's Courant
+    /// and tolerance are Standard's; the spacing sweep alone reaches
+    /// 1.13 % at a/28). Meant
+    /// for solids, where refinement does pay (cantilever: 4.20 % at t/8,
+    /// 1.73 % at t/16). Tested bound 5 %.
     Fine,
 }
 
