@@ -879,15 +879,21 @@ where
     }
 
     /// Pressure force the fluid exerts on body `name` (N, per metre of depth
-    /// in 2D): the nodal pressure force `Gᵀ p` of eq. 58 taken at the
-    /// body's particles, `f_i = Σ_e Σ_{a∈e} p_a (V_e/(D+1)) grad W_i` over
-    /// the fluid elements `e` holding particle `i`. The viscous part is
-    /// left out (negligible for water).
+    /// in 2D): at each of the body's particles `i`, the nodal pressure force
+    /// `Gᵀ p` of eq. 58, `Σ_e Σ_{a∈e} p_a (V_e/(D+1)) grad W_i` over the
+    /// fluid elements `e` holding `i`, plus the weight less the inertia of
+    /// the fluid mass those elements lump on `i`, `Σ_e ρ_e V_e/(D+1) (g − aᵢ)`.
+    /// The lumped mass puts part of the adjacent fluid's weight on the
+    /// body's nodes, where the nodal pressure force holds it up; without
+    /// the second term a block held under water at rest read its buoyancy
+    /// +40 % (issue 13; `tests/water_at_rest_2d.rs` now checks it to 2 %).
+    /// The viscous part is left out (negligible for water).
     pub fn pressure_force_on(&self, name: &str) -> Vector<D> {
         let Some(id) = self.body_names.iter().position(|b| b == name) else {
             return Vector::<D>::zeros();
         };
         let nv = D + 1;
+        let gravity = self.gravity.unwrap_or_else(Vector::<D>::zeros);
         let mut f = Vector::<D>::zeros();
         let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
         let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
@@ -902,9 +908,16 @@ where
                 continue;
             };
             let p_sum: f64 = el.iter().map(|&q| self.state.pressure[q as usize]).sum();
+            let rho = el
+                .iter()
+                .find(|&&q| self.kind[q as usize] == ParticleKind::Fluid)
+                .map(|&q| self.materials[self.material_of[q as usize] as usize].density())
+                .unwrap_or(0.0);
             for (a, &q) in el.iter().enumerate() {
                 if self.body[q as usize] == id as u32 {
                     f += g[a] * (p_sum * vol / nv as f64);
+                    let m = rho * vol / nv as f64;
+                    f += (gravity - self.state.a[q as usize]) * m;
                 }
             }
         }
