@@ -29,11 +29,13 @@ use crate::material::{History, Kinematics, Material, MaterialKind, Unified};
 /// positions move by `Δt (Vⁿ + Vⁿ⁺¹)/2`, it is a backward-Euler increment
 /// that damps the vibration by a ratio `ω Δt / 4`. Here the increment is
 /// the objective strain of the step's own displacement,
-/// `Δε` = [`Kinematics::strain_increment`] (a function of `F` alone), so
+/// `Δε` = [`Kinematics::strain_increment`] (a function of `F` alone),
+/// taken at mid-step and convected to the end by the half-step stretch
+/// `P = 2 V (V + I)⁻¹`, `V = √(F Fᵀ)`, so
 ///
-/// `J σⁿ⁺¹ = F σⁿ Fᵀ + λ_h (tr Δε) I + 2 μ_h Δε` ([`Hypoelastic::stress_after`]),
+/// `J σⁿ⁺¹ = F σⁿ Fᵀ + λ_h (tr Δε) P² + 2 μ_h P Δε P` ([`Hypoelastic::stress_after`]),
 ///
-/// exact for rigid rotations of any size, and its linearisation in the
+/// exact for rigid rotations of any size, second order in the step, and its linearisation in the
 /// velocity is `w D` with `w = ∂Δu/∂V` ([`Kinematics::displacement_weight`]:
 /// `Δt` for backward Euler, where this is the paper's form to first order,
 /// `Δt/2` for the trapezoidal rule). The unified triple keeps the paper's
@@ -239,10 +241,18 @@ impl Hypoelastic {
     /// The Cauchy stress after the step's displacement (eq. 36 in the
     /// Updated Lagrangian form, `Jⁿ = 1`, `f = F`):
     ///
-    /// `J σⁿ⁺¹ = F σⁿ Fᵀ + λ_h (tr Δε) I + 2 μ_h Δε`,
+    /// `J σⁿ⁺¹ = F σⁿ Fᵀ + λ_h (tr Δε) P² + 2 μ_h P Δε P`,
     ///
     /// with `Δε` = [`Kinematics::strain_increment`] where the paper has
-    /// `Δt D⁽ⁿ⁺¹⁾`. Both terms follow the positions only: a rigid rotation
+    /// `Δt D⁽ⁿ⁺¹⁾`, and `P = 2 V (V + I)⁻¹` (`V` the step's left stretch):
+    /// the Truesdell integral `∫ F F(t)⁻¹ (C : D) F(t)⁻ᵀ Fᵀ dt` by the
+    /// midpoint rule along the rotation-neutral path `F(t) = R(t) U(t)`.
+    /// Adding `C : Δε` unconvected at the end of the step made the stress
+    /// path first order in Δt: a vibrating beam's energy wandered by 0.23 %
+    /// at 40 steps per period against 0.013 % now. The plain midpoint rule
+    /// on `F` (`F_m = (I + F)/2`) was second order too but mixed a large
+    /// step's rotation into its strain (a beam loaded in one step settled
+    /// 1.6 % off the ramped one, 0.01 % now). Both terms follow the positions only: a rigid rotation
     /// `F = R` gives `R σⁿ Rᵀ` exactly at any angle, and under the
     /// trapezoidal rule the increment is `Δt (Vⁿ + Vⁿ⁺¹)/2`, not
     /// `Δt Vⁿ⁺¹` (which damps). Returns `(σ, σ_zz)`, `σ_zz` zero in 3D;
@@ -259,11 +269,24 @@ impl Hypoelastic {
     where
         Const<D>: Dim,
     {
-        let de = kin.strain_increment();
+        // Midpoint of the rotation-neutral path: the increment C : Δε is
+        // taken at mid-step and convected to the end by the half-step
+        // stretch P = 2 V (V + I)⁻¹ (the Truesdell integral at second
+        // order); V, Δε and P commute, and the rotation does not enter.
+        let id = Tensor::<D>::identity();
+        let v = kin.left_stretch();
+        let (de, pm) = match (v + id).try_inverse() {
+            Some(inv) => {
+                let de = (v - id) * inv * 2.0;
+                let pm = v * inv * 2.0;
+                ((de + de.transpose()) * 0.5, (pm + pm.transpose()) * 0.5)
+            }
+            None => (Tensor::<D>::zeros(), id),
+        };
         let tr = de.trace();
         let a = (kin.f * history.stress * kin.f.transpose() // eq. 38
-            + Tensor::<D>::identity() * (self.lambda * tr)
-            + de * (2.0 * self.mu))
+            + pm * pm * (self.lambda * tr)
+            + pm * de * pm * (2.0 * self.mu))
             / kin.j;
         let sigma = (a + a.transpose()) * 0.5;
         let sigma_zz = if D == 2 {
@@ -496,15 +519,20 @@ mod tests {
         assert!((u.mu - 4.0e6 * 1e-3 / j).abs() <= 1e-12 * u.mu);
         assert!((u.kappa - (2.0e7 + 2.0 / 3.0 * 4.0e6) * 1e-3 / j).abs() <= 1e-12 * u.kappa);
         // D = 0: σ̂ is the whole stress after the displacement F, the
-        // convected stress plus Hooke's law on Δε = (B − I)(B + I)⁻¹.
+        // convected stress plus Hooke's law on Δε = 2 (V − I)(V + I)⁻¹
+        // convected by P = 2 V (V + I)⁻¹, V = √(F Fᵀ) (closed form in 2D).
         let b = f * f.transpose();
         let id = Tensor::<2>::identity();
-        let de = (b - id) * (b + id).try_inverse().unwrap();
-        let hooke = id * (2.0e7 * de.trace()) + de * (2.0 * 4.0e6);
+        let s_det = b.determinant().sqrt();
+        let v = (b + id * s_det) / (b.trace() + 2.0 * s_det).sqrt();
+        assert!((v - kin.left_stretch()).norm() < 1e-14);
+        let inv = (v + id).try_inverse().unwrap();
+        let (de, pm) = (((v - id) * inv) * 2.0, (v * inv) * 2.0);
+        let hooke = pm * pm * (2.0e7 * de.trace()) + pm * de * pm * (2.0 * 4.0e6);
         let sh = (f * h.stress * f.transpose() + hooke) / j;
-        assert!((u.sigma_hat - sh).norm() <= 1e-14 * sh.norm());
+        assert!((u.sigma_hat - sh).norm() <= 1e-13 * sh.norm());
         let szz = (4.0 + 2.0e7 * de.trace()) / j;
-        assert!((u.sigma_hat_zz - szz).abs() <= 1e-14 * szz.abs());
+        assert!((u.sigma_hat_zz - szz).abs() <= 1e-13 * szz.abs());
         let mut h2 = h;
         solid.update_history(&kin, &mut h2);
         assert_eq!(h2.pressure, 99.0);

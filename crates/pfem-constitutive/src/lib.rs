@@ -19,12 +19,12 @@
 //! | law | `μ` | `𝒦` | `σ̂⁽ⁿ⁾` |
 //! |---|---|---|---|
 //! | [`Newtonian`] fluid (eqs. 16–27) | `μ_f` | `Δt K_f` | `−pⁿ I` |
-//! | [`Hypoelastic`] solid (eqs. 28–42) | `μ_h w / J` | `(λ_h + ⅔ μ_h) w / J` | `F σⁿ Fᵀ / J` + `C : Δε / J` − `(𝒦 ε_v I + 2 μ D')` |
+//! | [`Hypoelastic`] solid (eqs. 28–42) | `μ_h w / J` | `(λ_h + ⅔ μ_h) w / J` | `F σⁿ Fᵀ / J` + `P (C : Δε) P / J` − `(𝒦 ε_v I + 2 μ D')` |
 //!
 //! For the solid, `w = ∂Δu/∂V` ([`Kinematics::displacement_weight`]: `Δt`
-//! for backward Euler, `Δt/2` for the trapezoidal rule) and `Δε` the
+//! for backward Euler, `Δt/2` for the trapezoidal rule), `Δε` the
 //! objective strain increment of the step's displacement
-//! ([`Kinematics::strain_increment`]): the stress at the iterate follows the
+//! ([`Kinematics::strain_increment`]) and `P` its half-step convection: the stress at the iterate follows the
 //! displacement the time scheme made, and `σ̂` is that stress less its part
 //! the system treats as linear in the velocity, so that eq. 43 returns it
 //! exactly at every Picard iterate (see [`Hypoelastic`]).

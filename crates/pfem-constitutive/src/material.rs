@@ -60,23 +60,46 @@ where
         self
     }
 
+    /// Left stretch of the step, `V = √(F Fᵀ)` (symmetric positive
+    /// definite; `F = V R` with `R` the step's rotation), by Denman–Beavers
+    /// iteration. `I` for a rigid rotation, to rounding. Returns `I` if `F`
+    /// is singular (the solver rejects such steps).
+    pub fn left_stretch(&self) -> Tensor<D> {
+        let b = self.f * self.f.transpose();
+        let (mut y, mut z) = (b, Tensor::<D>::identity());
+        for _ in 0..40 {
+            let (Some(yi), Some(zi)) = (y.try_inverse(), z.try_inverse()) else {
+                return Tensor::<D>::identity();
+            };
+            let y1 = (y + zi) * 0.5;
+            z = (z + yi) * 0.5;
+            let done = (y1 - y).norm() <= 4.0 * f64::EPSILON * y1.norm();
+            y = y1;
+            if done {
+                break;
+            }
+        }
+        (y + y.transpose()) * 0.5
+    }
+
     /// Strain increment of the step in the current configuration,
-    /// `Δε = (B − I)(B + I)⁻¹` with `B = F Fᵀ`: the (1,1) Padé approximant
-    /// of the incremental Hencky strain `½ ln B`, to third order in the
-    /// strain. It depends on the displacement the time scheme actually made
-    /// (through `F`) and on nothing else, so it is incrementally objective
-    /// at any rotation: a rigid rotation `F = R` gives `B = I` and
-    /// `Δε = 0` exactly (up to rounding), however large the angle, where
+    /// `Δε = 2 (V − I)(V + I)⁻¹` with `V` the step's left stretch
+    /// ([`Self::left_stretch`]): the (1,1) Padé approximant of the
+    /// incremental Hencky strain `ln V`, to third order in the strain. It
+    /// depends on the displacement the time scheme actually made (through
+    /// `F`) and on nothing else, so it is incrementally objective at any
+    /// rotation: a rigid rotation `F = R` gives `V = I` and `Δε = 0`
+    /// exactly (up to rounding), however large the angle, where
     /// `Δt D(Vⁿ⁺¹)` registers `1 − cos θ` of spurious dilatation. Its
     /// linearisation in the velocity is `displacement_weight · D`. In 2D
-    /// plane strain `B_zz = 1`, so `Δε_zz = 0`. Returns zeros if `B + I`
+    /// plane strain `V_zz = 1`, so `Δε_zz = 0`. Returns zeros if `V + I`
     /// is singular (it is not for `J > 0`).
     pub fn strain_increment(&self) -> Tensor<D> {
-        let b = self.f * self.f.transpose();
+        let v = self.left_stretch();
         let id = Tensor::<D>::identity();
-        match (b + id).try_inverse() {
+        match (v + id).try_inverse() {
             Some(inv) => {
-                let e = (b - id) * inv;
+                let e = (v - id) * inv * 2.0;
                 (e + e.transpose()) * 0.5
             }
             None => Tensor::<D>::zeros(),
