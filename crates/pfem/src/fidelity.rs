@@ -35,21 +35,21 @@ use crate::scene::RunSettings;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Fidelity {
     /// Quick look: twice the default spacing, Courant 1, Picard 1e-3.
-    /// Dam break (a/10): front RMS error 2.48 %, 0.6 s wall time (study);
+    /// Dam break (a/10): front RMS error 2.48 %, 0.5 s wall time (study);
     /// tested bound 5 %.
     Draft,
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
-    /// Dam break (a/20): front RMS error 1.60 %, 11.0 s wall time (study);
+    /// Dam break (a/20): front RMS error 1.60 %, 10.1 s wall time (study);
     /// tested bound 5 %.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
-    /// Dam break (a/28.6): front RMS error 1.64 %, 26.6 s wall time
+    /// Dam break (a/28.6): front RMS error 1.64 %, 24.7 s wall time
     /// (study): no better than Standard on this measure (Fine's Courant
     /// and tolerance are Standard's; the spacing sweep alone reaches
     /// 1.13 % at a/28). Meant
     /// for solids, where refinement does pay (cantilever: 4.20 % at t/8,
-    /// 1.73 % at t/16). Tested bound 5 %.
+    /// 1.74 % at t/16). Tested bound 5 %.
     Fine,
 }
 
