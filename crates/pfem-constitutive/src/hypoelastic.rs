@@ -273,16 +273,7 @@ impl Hypoelastic {
         // taken at mid-step and convected to the end by the half-step
         // stretch P = 2 V (V + I)⁻¹ (the Truesdell integral at second
         // order); V, Δε and P commute, and the rotation does not enter.
-        let id = Tensor::<D>::identity();
-        let v = kin.left_stretch();
-        let (de, pm) = match (v + id).try_inverse() {
-            Some(inv) => {
-                let de = (v - id) * inv * 2.0;
-                let pm = v * inv * 2.0;
-                ((de + de.transpose()) * 0.5, (pm + pm.transpose()) * 0.5)
-            }
-            None => (Tensor::<D>::zeros(), id),
-        };
+        let (de, pm) = kin.strain_increment_and_convection();
         let tr = de.trace();
         let a = (kin.f * history.stress * kin.f.transpose() // eq. 38
             + pm * pm * (self.lambda * tr)

@@ -53,13 +53,6 @@ where
         }
     }
 
-    /// The same kinematics with `∂Δu/∂V` set to `w` (s), see
-    /// [`Self::displacement_weight`].
-    pub fn with_displacement_weight(mut self, w: f64) -> Self {
-        self.displacement_weight = w;
-        self
-    }
-
     /// Left stretch of the step, `V = √(F Fᵀ)` (symmetric positive
     /// definite; `F = V R` with `R` the step's rotation), by Denman–Beavers
     /// iteration. `I` for a rigid rotation, to rounding. Returns `I` if `F`
@@ -95,14 +88,24 @@ where
     /// plane strain `V_zz = 1`, so `Δε_zz = 0`. Returns zeros if `V + I`
     /// is singular (it is not for `J > 0`).
     pub fn strain_increment(&self) -> Tensor<D> {
+        self.strain_increment_and_convection().0
+    }
+
+    /// [`Self::strain_increment`] `Δε` together with its half-step
+    /// convection `P = 2 V (V + I)⁻¹`, from one left stretch `V`: the two
+    /// commute, and a solid adds its increment at the end of the step as
+    /// `P (C : Δε) P` (see `Hypoelastic::stress_after`). `(0, I)` if
+    /// `V + I` is singular.
+    pub fn strain_increment_and_convection(&self) -> (Tensor<D>, Tensor<D>) {
         let v = self.left_stretch();
         let id = Tensor::<D>::identity();
         match (v + id).try_inverse() {
             Some(inv) => {
-                let e = (v - id) * inv * 2.0;
-                (e + e.transpose()) * 0.5
+                let de = (v - id) * inv * 2.0;
+                let pm = v * inv * 2.0;
+                ((de + de.transpose()) * 0.5, (pm + pm.transpose()) * 0.5)
             }
-            None => Tensor::<D>::zeros(),
+            None => (Tensor::<D>::zeros(), id),
         }
     }
 
