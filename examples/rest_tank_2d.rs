@@ -8,11 +8,10 @@
 //! cargo run --release --example rest_tank_2d -- [--spacing H] [--end-time T]
 //! ```
 
+use pfem::cases::{RestTank, G};
 use pfem::cli::Args;
 use pfem::core::ParticleKind;
 use pfem::prelude::*;
-
-const G: f64 = 9.81;
 
 fn main() {
     if let Err(e) = run() {
@@ -24,53 +23,13 @@ fn main() {
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env()?;
     args.reject_unknown(&[])?;
-    let h = args.spacing.unwrap_or(0.025);
-    let end = args.end_time.unwrap_or(2.0);
-    let (w, depth, top) = (1.0, 0.5, 0.6);
-    let scene = Scene::<2>::new("rest_tank_2d")
-        .gravity(Vector::<2>::new(0.0, -G))
-        .settings(RunSettings {
-            end_time: end,
-            max_dt: 5e-3,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall(
-            "floor",
-            Geometry::Box {
-                min: Point::<2>::new(-h, -h),
-                max: Point::<2>::new(w + h, 0.0),
-            },
-            h,
-            WallMotion::Fixed,
-        )
-        .wall(
-            "left",
-            Geometry::Box {
-                min: Point::<2>::new(-h, h),
-                max: Point::<2>::new(0.0, top),
-            },
-            h,
-            WallMotion::Fixed,
-        )
-        .wall(
-            "right",
-            Geometry::Box {
-                min: Point::<2>::new(w, h),
-                max: Point::<2>::new(w + h, top),
-            },
-            h,
-            WallMotion::Fixed,
-        )
-        .fluid(
-            "water",
-            Box::new(Newtonian::water()),
-            Geometry::Box {
-                min: Point::<2>::new(0.0, 0.0),
-                max: Point::<2>::new(w, depth),
-            },
-            h,
-        );
+    let case = RestTank {
+        spacing: args.spacing.unwrap_or(0.025),
+        end_time: args.end_time.unwrap_or(2.0),
+        ..RestTank::default()
+    };
+    let (h, end, depth) = (case.spacing, case.end_time, case.depth);
+    let scene = case.scene();
     let mut sim = args.simulation(scene, Box::new(Delaunay2::default()))?;
     let v0 = sim.fluid_volume();
     let c = (G * depth).sqrt();

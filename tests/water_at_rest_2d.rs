@@ -15,6 +15,7 @@
 //! h = 0.0125 m with `-- --ignored` (about 2.5 minutes; measured 1.27e-4 √(gH)
 //! largest, 5.3e-6 RMS, pressure 0.027 %).
 
+use pfem::cases::RestTank;
 use pfem::core::ParticleKind;
 use pfem::prelude::*;
 
@@ -29,28 +30,13 @@ struct Figures {
 }
 
 fn tank(h: f64, end: f64) -> Figures {
-    let (w, top) = (1.0, 0.6);
-    let wall = |min: (f64, f64), max: (f64, f64)| Geometry::Box {
-        min: Point::<2>::new(min.0, min.1),
-        max: Point::<2>::new(max.0, max.1),
-    };
-    let scene = Scene::<2>::new("water_at_rest_2d")
-        .gravity(Vector::<2>::new(0.0, -G))
-        .settings(RunSettings {
-            end_time: end,
-            max_dt: 5e-3,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall("floor", wall((-h, -h), (w + h, 0.0)), h, WallMotion::Fixed)
-        .wall("left", wall((-h, h), (0.0, top)), h, WallMotion::Fixed)
-        .wall("right", wall((w, h), (w + h, top)), h, WallMotion::Fixed)
-        .fluid(
-            "water",
-            Box::new(Newtonian::water()),
-            wall((0.0, 0.0), (w, DEPTH)),
-            h,
-        );
+    let scene = RestTank {
+        spacing: h,
+        end_time: end,
+        depth: DEPTH,
+        ..RestTank::default()
+    }
+    .scene();
     let mut sim =
         Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
     let v0 = sim.fluid_volume();

@@ -375,6 +375,64 @@ fn gate_tip(s: &Simulation<2>, tip0: Point<2>) -> Vector<2> {
     sum / n as f64
 }
 
+/// Issue 13's open tank: `depth` of water at rest, `width` wide, walls on
+/// three sides up to 1.2 × `depth`, open top, water's real bulk modulus.
+/// `examples/rest_tank_2d.rs` and `tests/water_at_rest_2d.rs` run it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RestTank {
+    /// Tank width (m).
+    pub width: f64,
+    /// Water depth (m).
+    pub depth: f64,
+    /// Spacing (m).
+    pub spacing: f64,
+    /// End time (s).
+    pub end_time: f64,
+}
+
+impl Default for RestTank {
+    fn default() -> Self {
+        Self {
+            width: 1.0,
+            depth: 0.5,
+            spacing: 0.025,
+            end_time: 5.0,
+        }
+    }
+}
+
+impl RestTank {
+    /// The scene.
+    pub fn scene(&self) -> Scene<2> {
+        let h = self.spacing;
+        let top = 1.2 * self.depth;
+        let s = Scene::<2>::new("rest_tank_2d")
+            .gravity(Vector::<2>::new(0.0, -G))
+            .settings(RunSettings {
+                end_time: self.end_time,
+                max_dt: 5e-3,
+                output_interval: None,
+                ..Default::default()
+            });
+        tank(
+            s,
+            0.0,
+            self.width,
+            &[(0.0, -1.0, top), (self.width, 1.0, top)],
+            h,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(self.width, self.depth),
+            },
+            h,
+        )
+    }
+}
+
 /// Water at rest in a tank: a column `height` high and `width` wide.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hydrostatic {
