@@ -19,7 +19,7 @@
 //! `−D σ̂⁽ⁿ⁾` with `σ̂ = −pⁿ I` is `Gᵀ pⁿ` in both cases.
 
 use pfem_constitutive::{History, Material, MaterialKind, Unified};
-use pfem_core::{Const, Dim, Point, Tensor, Vector, MAX_NV};
+use pfem_core::{weighted_shape_gradients, Const, Dim, Point, Tensor, Vector, MAX_NV};
 use rayon::prelude::*;
 
 use crate::kernels::{
@@ -107,6 +107,16 @@ pub struct StepMesh<'a> {
     pub elements: &'a [u32],
     /// Material index (into the materials slice) of each element.
     pub element_material: &'a [u16],
+    /// *Closures*: flat simplices (`D + 1` particle indices each) that fill
+    /// sealed voids of the fluid mesh (`pfem_geometry::AlphaShape::closures`).
+    /// They carry no mass and no viscous or solid stiffness, and are never
+    /// checked for inversion; they enter only the nodal pressure terms
+    /// (their measure-weighted gradients `V grad W`, finite however flat the
+    /// simplex, in the rows `G` of eq. 58 and in `M̂` of eq. 56), so that the
+    /// pressure sees the fluid closed across the void. A closure whose nodes
+    /// are not all nodes of elements is ignored. Empty in 2D and when the
+    /// driver turns closing off.
+    pub closures: &'a [u32],
 }
 
 /// What the assembly reads at a Picard iterate.
@@ -182,6 +192,13 @@ where
     patch_blocks: Vec<u32>,
     /// Fluid material of each patch node (first fluid element seen).
     node_fluid_material: Vec<u16>,
+    /// Closure connectivity in system node numbers (see
+    /// [`StepMesh::closures`]) and NV² patch slots per closure.
+    clo_sys: Vec<u32>,
+    clo_slots: Vec<u32>,
+    /// Per closure: `V grad W` of its nodes and `V`, at the iterate.
+    clo_w: Vec<[Vector<D>; MAX_NV]>,
+    clo_vol: Vec<f64>,
     // Per-iteration values.
     values: Vec<f64>,
     rhs: Vec<f64>,
@@ -249,6 +266,21 @@ where
             }
         }
         let ns = self.particle_of.len();
+        if mesh.closures.len() % nv != 0 {
+            return Err(AssemblyError::MeshMismatch {
+                what: "closure connectivity is not a whole number of simplices",
+            });
+        }
+        // Closures count only where all their nodes are element nodes.
+        self.clo_sys.clear();
+        for c in mesh.closures.chunks_exact(nv) {
+            if c.iter()
+                .all(|&p| (p as usize) < n_particles && self.sys_of[p as usize] != NONE)
+            {
+                self.clo_sys
+                    .extend(c.iter().map(|&p| self.sys_of[p as usize]));
+            }
+        }
         self.elem_sys.clear();
         self.elem_sys
             .extend(mesh.elements.iter().map(|&p| self.sys_of[p as usize]));
@@ -276,6 +308,11 @@ where
                 }
             }
         }
+        for c in self.clo_sys.chunks_exact(nv) {
+            for &a in c {
+                count[a as usize] += nv;
+            }
+        }
         let mut ptr = vec![0usize; ns + 1];
         for a in 0..ns {
             ptr[a + 1] = ptr[a] + count[a];
@@ -295,6 +332,13 @@ where
                         self.node_fluid_material[a] = self.elem_material[e];
                     }
                 }
+            }
+        }
+        for c in self.clo_sys.chunks_exact(nv) {
+            for &a in c {
+                let a = a as usize;
+                raw[fill[a]..fill[a] + nv].copy_from_slice(c);
+                fill[a] += nv;
             }
         }
         self.patch_ptr.clear();
@@ -346,6 +390,20 @@ where
                         NONE
                     };
                     self.elem_slots.push(slot);
+                }
+            }
+        }
+        self.clo_slots.clear();
+        for c in self.clo_sys.chunks_exact(nv) {
+            for &a in c {
+                let p =
+                    &self.patch_nodes[self.patch_ptr[a as usize]..self.patch_ptr[a as usize + 1]];
+                for &b in c {
+                    self.clo_slots.push(
+                        (self.patch_ptr[a as usize]
+                            + p.binary_search(&b).expect("patch holds closure"))
+                            as u32,
+                    );
                 }
             }
         }
@@ -509,7 +567,18 @@ where
                 }
             }
         }
-        // 3. Nodal volumetric term and fluid pressure force (eqs. 56, 58).
+        // 3. Nodal volumetric term and fluid pressure force (eqs. 56, 58),
+        // closures included.
+        let nc = self.clo_sys.len() / nv;
+        self.clo_w.resize(nc, [Vector::<D>::zeros(); MAX_NV]);
+        self.clo_vol.resize(nc, 0.0);
+        for c in 0..nc {
+            let mut x = [Point::<D>::zeros(); MAX_NV];
+            for a in 0..nv {
+                x[a] = input.x[self.particle_of[self.clo_sys[c * nv + a] as usize] as usize];
+            }
+            self.clo_vol[c] = weighted_shape_gradients::<D>(&x[..nv], &mut self.clo_w[c]);
+        }
         self.nodal_gradients();
         let mut sink = Sink {
             pattern: &self.pattern,
@@ -626,6 +695,19 @@ where
         for a in 0..ns {
             if self.vol_hat[a] > 0.0 {
                 self.kappa_hat[a] /= self.vol_hat[a];
+            }
+        }
+        // Closures: `V grad W` directly (finite when V → 0); no 𝒦 weight (𝒦_a is
+        // the mean over the elements).
+        for c in 0..self.clo_sys.len() / nv {
+            let wv = self.clo_vol[c] / nv as f64;
+            for a in 0..nv {
+                let na = self.clo_sys[c * nv + a] as usize;
+                self.vol_hat[na] += wv;
+                for b in 0..nv {
+                    let slot = self.clo_slots[c * nv * nv + a * nv + b] as usize;
+                    self.w[slot] += self.clo_w[c][b] / nv as f64;
+                }
             }
         }
     }

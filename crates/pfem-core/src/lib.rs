@@ -148,6 +148,40 @@ where
     Some(det * <Const<D> as Dim>::MEASURE_FACTOR)
 }
 
+/// Measure-weighted shape-function gradients `V grad Wₐ` of a simplex and
+/// its signed measure `V`, defined for every simplex, flat or inverted
+/// included: `V grad W_{k+1}` is `MEASURE_FACTOR` times row `k` of the
+/// adjugate of the edge matrix (cross products of the other edges in 3D,
+/// the rotated other edge in 2D), and `V grad W₀ = −Σ_k V grad W_{k+1}`.
+/// For a non-degenerate simplex it equals `V` times [`shape_gradients`].
+/// `D` is 2 or 3.
+pub fn weighted_shape_gradients<const D: usize>(p: &[Point<D>], out: &mut [Vector<D>]) -> f64
+where
+    Const<D>: Dim,
+{
+    let e = edge_matrix::<D>(p);
+    let f = <Const<D> as Dim>::MEASURE_FACTOR;
+    let mut g0 = Vector::<D>::zeros();
+    for k in 0..D {
+        let mut g = Vector::<D>::zeros();
+        if D == 2 {
+            let o = e.column(1 - k);
+            let s = if k == 0 { 1.0 } else { -1.0 };
+            g[0] = s * o[1] * f;
+            g[1] = -s * o[0] * f;
+        } else {
+            let (a, b) = (e.column((k + 1) % 3), e.column((k + 2) % 3));
+            g[0] = (a[1] * b[2] - a[2] * b[1]) * f;
+            g[1] = (a[2] * b[0] - a[0] * b[2]) * f;
+            g[2] = (a[0] * b[1] - a[1] * b[0]) * f;
+        }
+        g0 -= g;
+        out[k + 1] = g;
+    }
+    out[0] = g0;
+    e.determinant() * f
+}
+
 /// Circumcentre and circumradius of a simplex, `None` if degenerate.
 pub fn circumsphere<const D: usize>(p: &[Point<D>]) -> Option<(Point<D>, f64)>
 where
@@ -207,6 +241,50 @@ mod tests {
     }
 
     #[test]
+    fn weighted_gradients_are_measure_times_gradients() {
+        let p3 = [
+            Point::<3>::new(0.1, 0.0, 0.0),
+            Point::<3>::new(1.0, 0.2, 0.0),
+            Point::<3>::new(0.0, 1.0, 0.3),
+            Point::<3>::new(0.2, 0.1, 1.0),
+        ];
+        let (mut g, mut w) = ([Vector::<3>::zeros(); 4], [Vector::<3>::zeros(); 4]);
+        let v = shape_gradients::<3>(&p3, &mut g).unwrap();
+        assert_relative_eq!(
+            weighted_shape_gradients::<3>(&p3, &mut w),
+            v,
+            epsilon = 1e-15
+        );
+        for k in 0..4 {
+            assert_relative_eq!(w[k], g[k] * v, epsilon = 1e-14);
+        }
+        // Inverted (two vertices swapped): the measure changes sign, and so
+        // does V grad W (the gradients themselves are unchanged).
+        let q3 = [p3[1], p3[0], p3[2], p3[3]];
+        assert_relative_eq!(
+            weighted_shape_gradients::<3>(&q3, &mut w),
+            -v,
+            epsilon = 1e-15
+        );
+        assert_relative_eq!(w[0], g[1] * -v, epsilon = 1e-14);
+        let p2 = [
+            Point::<2>::new(0.1, 0.0),
+            Point::<2>::new(1.0, 0.2),
+            Point::<2>::new(0.3, 0.9),
+        ];
+        let (mut g, mut w) = ([Vector::<2>::zeros(); 3], [Vector::<2>::zeros(); 3]);
+        let v = shape_gradients::<2>(&p2, &mut g).unwrap();
+        assert_relative_eq!(
+            weighted_shape_gradients::<2>(&p2, &mut w),
+            v,
+            epsilon = 1e-15
+        );
+        for k in 0..3 {
+            assert_relative_eq!(w[k], g[k] * v, epsilon = 1e-14);
+        }
+    }
+
+    #[test]
     fn circumsphere_of_right_triangle() {
         let p = [
             Point::<2>::new(0.0, 0.0),
@@ -224,6 +302,10 @@ mod tests {
         assert!(circumsphere::<2>(&flat).is_none());
         let mut g = [Vector::<2>::zeros(); 3];
         assert!(shape_gradients::<2>(&flat, &mut g).is_none());
+        // The weighted gradients stay defined on it: V = 0, finite V grad W.
+        let v = weighted_shape_gradients::<2>(&flat, &mut g);
+        assert_eq!(v, 0.0);
+        assert!(g[..3].iter().all(|w| w.iter().all(|c| c.is_finite())));
     }
 
     #[test]

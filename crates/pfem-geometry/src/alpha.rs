@@ -80,6 +80,15 @@ pub struct AlphaShape {
     pub kept_measure: f64,
     /// Number of dropped slivers in sealed voids (see [`alpha_shape_into`]).
     pub sealed: usize,
+    /// The slivers of the sealed voids, `D + 1` particle indices each
+    /// (Delaunay orientation): *closures*. They are not elements (no mass,
+    /// no viscous or solid stiffness), but a sealed void is no gap in the
+    /// fluid, so the pressure terms must see it closed: the area vectors of
+    /// a closure's facets are finite however flat it is, and without them
+    /// the kept simplices on its two sides split the same quadrilateral
+    /// along different diagonals, which unbalances a hydrostatic pressure
+    /// by `p h²` (see `pfem_assembly::StepMesh::closures`).
+    pub closures: Vec<u32>,
 }
 
 impl AlphaShape {
@@ -266,11 +275,15 @@ where
 /// The rule: the outward normal `n_F` of the free surface at a fluid
 /// particle `F` is the sum of the area-weighted outward normals of the
 /// boundary facets through `F` whose nodes are all fluid. A kept simplex
-/// with a single fluid node `F` that has such a normal (it lies on the
-/// free surface) is dropped when one of its wall or solid nodes `W` lies
-/// more than half a spacing above `F` (along `up`, opposite to gravity) and
-/// more than half a spacing outside the free surface
-/// (`(x_W − x_F)·n̂_F > ½ h_F`): a wall rising above the water line. The
+/// with a wall or solid node whose fluid nodes all have such a normal (they
+/// lie on the free surface) is dropped when one of its wall or solid nodes
+/// `W` lies, seen from each fluid node `F`, more than half a spacing above
+/// `F` (along `up`, opposite to gravity) and more than half a spacing
+/// outside the free surface (`(x_W − x_F)·n̂_F > ½ h_F`): a wall rising
+/// above the water line. (In 2D such a triangle has one fluid node; in 3D
+/// a tetrahedron can also rest an edge or a facet of free surface against
+/// the wall: with only single-fluid-node simplices dropped, the surface
+/// particles along the side walls of a 3D tank at rest started at −g/5.) The
 /// contact at and below the water line, a front's contact with the floor
 /// ahead of it and with a wall it runs into at its own height keep their
 /// simplices. (A first version without the `up` condition also dropped the
@@ -340,25 +353,39 @@ where
             continue;
         }
         let simplex = delaunay.simplex(s);
-        // One fluid node F on the free surface, the opposite facet on a
-        // wall or structure.
-        let mut fl = (0..nv).filter(|&a| fluid(simplex[a]));
-        let (Some(a), None) = (fl.next(), fl.next()) else {
-            continue;
-        };
-        let f = simplex[a] as usize;
-        if normal[f] == Vector::<D>::zeros() {
+        // Every fluid node on the free surface (in 2D a kept triangle has a
+        // single one there; in 3D a tetrahedron may rest two or three
+        // surface particles against the wall above the water line).
+        let mut fl = [0usize; MAX_NV];
+        let mut nf = 0;
+        for a in 0..nv {
+            if fluid(simplex[a]) {
+                fl[nf] = a;
+                nf += 1;
+            }
+        }
+        if nf == 0
+            || nf == nv
+            || fl[..nf]
+                .iter()
+                .any(|&a| normal[simplex[a] as usize] == Vector::<D>::zeros())
+        {
             continue;
         }
         let mut p = [Point::<D>::zeros(); MAX_NV];
         for b in 0..nv {
             p[b] = points[simplex[b] as usize];
         }
-        let n = normal[f].normalize();
-        let reach = 0.5 * spacing[f];
-        let dry = (0..nv).filter(|&b| b != a).any(|b| {
-            let d = p[b] - p[a];
-            d.dot(up) > reach && d.dot(&n) > reach
+        // A wall or solid node above and outside the free surface, seen
+        // from each of its fluid nodes.
+        let dry = (0..nv).filter(|&b| !fluid(simplex[b])).any(|b| {
+            fl[..nf].iter().all(|&a| {
+                let f = simplex[a] as usize;
+                let n = normal[f].normalize();
+                let reach = 0.5 * spacing[f];
+                let d = p[b] - p[a];
+                d.dot(up) > reach && d.dot(&n) > reach
+            })
         });
         if dry {
             decided[s].1 = DROPPED;
@@ -566,6 +593,7 @@ where
     out.candidate_measure = 0.0;
     out.kept_measure = 0.0;
     out.sealed = n_sealed;
+    out.closures.clear();
     // Delaunay simplex → mesh simplex (SEALED across a sealed void).
     let mut new_index = vec![NO_NEIGHBOR; ns];
     for (s, &(m, v)) in decided.iter().enumerate() {
@@ -578,6 +606,7 @@ where
             out.source.push(s as u32);
         } else if sealed.get(s) == Some(&true) {
             new_index[s] = SEALED;
+            out.closures.extend_from_slice(delaunay.simplex(s));
         }
     }
     let mesh = &mut out.mesh;

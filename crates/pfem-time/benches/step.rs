@@ -104,6 +104,7 @@ fn prepared(t: &Tank) -> Assembler<2> {
         StepMesh {
             elements: &t.tris,
             element_material: &t.mat,
+            closures: &[],
         },
         &t.materials,
     )

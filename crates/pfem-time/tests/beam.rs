@@ -143,6 +143,7 @@ impl<'b> Sim<'b> {
                 mesh: StepMesh {
                     elements: &self.b.tris,
                     element_material: &self.mat,
+                    closures: &[],
                 },
                 materials: &self.materials,
                 constraints: &self.b.constraints,

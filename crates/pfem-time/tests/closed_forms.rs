@@ -29,6 +29,7 @@ fn free_fall_of_a_detached_fluid_block() {
         mesh: StepMesh {
             elements: &tris,
             element_material: &mat,
+            closures: &[],
         },
         materials: &materials,
         constraints: &constraints,
@@ -103,6 +104,7 @@ fn run_tank(
         mesh: StepMesh {
             elements: &tris,
             element_material: &mat,
+            closures: &[],
         },
         materials: &materials,
         constraints: &constraints,

@@ -80,6 +80,7 @@ fn collapse(treatment: VolumetricTreatment, union_jack: bool, t_end: f64) -> Col
         mesh: StepMesh {
             elements: &tris,
             element_material: &mat,
+            closures: &[],
         },
         materials: &materials,
         constraints: &constraints,

@@ -85,6 +85,7 @@ where
         mesh: StepMesh {
             elements: &elems,
             element_material: &mat,
+            closures: &[],
         },
         materials: &materials,
         constraints: &constraints,

@@ -108,6 +108,7 @@ where
             mesh: StepMesh {
                 elements: &self.elements,
                 element_material: &self.material_of,
+                closures: &[],
             },
             materials: &self.materials,
             constraints: &constraints,

@@ -108,6 +108,60 @@ pub fn tank3d(scene: Scene<3>, length: f64, depth: f64, top: f64, h: f64, sides:
     s
 }
 
+/// Water at rest in a closed-bottom 3D tank (issue 13's 3D case):
+/// `length` × `width` of water `depth` deep (`y` up), no-slip walls on all
+/// four sides and the floor up to 1.2 × `depth`, open top, water's real
+/// bulk modulus. `examples/rest_tank_3d.rs` and `tests/three_d.rs` run it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RestTank3d {
+    /// Tank length along `x` (m). Default 0.5.
+    pub length: f64,
+    /// Tank width along `z` (m). Default 0.25.
+    pub width: f64,
+    /// Water depth along `y` (m). Default 0.5.
+    pub depth: f64,
+    /// Spacing (m). Default `depth / 10`.
+    pub spacing: f64,
+    /// End time (s). Default 2.
+    pub end_time: f64,
+}
+
+impl Default for RestTank3d {
+    fn default() -> Self {
+        Self {
+            length: 0.5,
+            width: 0.25,
+            depth: 0.5,
+            spacing: 0.05,
+            end_time: 2.0,
+        }
+    }
+}
+
+impl RestTank3d {
+    /// The scene.
+    pub fn scene(&self) -> Scene<3> {
+        let h = self.spacing;
+        let s = Scene::<3>::new("rest_tank_3d")
+            .gravity(Vector::<3>::new(0.0, -G, 0.0))
+            .settings(RunSettings {
+                end_time: self.end_time,
+                max_dt: 5e-3,
+                output_interval: None,
+                ..Default::default()
+            });
+        tank3d(s, self.length, self.width, 1.2 * self.depth, h, true).fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<3>::new(0.0, 0.0, 0.0),
+                max: Point::<3>::new(self.length, self.depth, self.width),
+            },
+            h,
+        )
+    }
+}
+
 /// §9.1: the collapse of a water column 0.146 m wide and 0.292 m high at
 /// the back of a tank 0.584 m long (Koshizuka et al. 1995), `depth` deep,
 /// between no-slip side walls or, with `side_walls = false`, slip side planes.

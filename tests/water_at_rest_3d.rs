@@ -1,0 +1,156 @@
+//! Issue 13, 3D: water at rest in a closed-bottom tank (0.5 m × 0.25 m,
+//! 0.5 m of water, `pfem::cases3d::RestTank3d`), h = H/10, defaults.
+//!
+//! Two causes were measured and cured:
+//! - the alpha shape drops the flat slivers that round-off makes of lattice
+//!   cells; the kept tetrahedra on a sliver's two sides split one
+//!   quadrilateral along different diagonals, so the pressure forces on its
+//!   nodes no longer balance (`p h²` per sliver): the first layer of water
+//!   above the floor started at 14 m/s² along the floor. The sealed slivers
+//!   are now *closures*: the pressure terms see the fluid closed across them
+//!   (`pfem_assembly::StepMesh::closures`);
+//! - tetrahedra resting two or three free-surface particles against a wall
+//!   above the water line kept mass with no pressure to hold it (surface
+//!   particles along the walls at −g/5): dry bridges are now dropped
+//!   whatever the number of their fluid nodes.
+//!
+//! With both, the tank starts in discrete equilibrium (measured 2.5e-14
+//! m/s² largest initial acceleration) and stays at rest to round-off until
+//! the lattice's Delaunay ties flip (see the ignored test below).
+//!
+//! `cargo test --release --test water_at_rest_3d`; the 2 s acceptance runs
+//! with `-- --ignored --nocapture` (about 1.5 min at H/10, 15 min at H/20).
+
+use pfem::cases3d::RestTank3d;
+use pfem::core::ParticleKind;
+use pfem::prelude::*;
+
+const G: f64 = 9.81;
+
+fn fluid(sim: &Simulation<3>) -> Vec<usize> {
+    (0..sim.state.len())
+        .filter(|&i| sim.kind[i] == ParticleKind::Fluid)
+        .collect()
+}
+
+fn largest_speed(sim: &Simulation<3>, idx: &[usize]) -> f64 {
+    idx.iter()
+        .map(|&i| sim.state.v[i].norm())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_3d_tank_at_rest_starts_in_equilibrium_and_stays_at_rest() {
+    let case = RestTank3d::default();
+    let c = (G * case.depth).sqrt();
+    let mut sim = Simulation::new(
+        case.scene(),
+        Box::new(Delaunay3::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    let idx = fluid(&sim);
+    let a0 = idx
+        .iter()
+        .map(|&i| sim.state.a[i].norm())
+        .fold(0.0, f64::max);
+    assert!(a0 < 1e-9 * G, "largest initial acceleration {a0:e} m/s²");
+    while sim.steps < 40 {
+        sim.step().unwrap();
+    }
+    let v = largest_speed(&sim, &idx) / c;
+    println!(
+        "largest initial acceleration {a0:.2e} m/s²; largest speed after 0.2 s {v:.2e} sqrt(gH)"
+    );
+    assert!(
+        v < 1e-12,
+        "largest speed {v:e} sqrt(gH) after {} steps",
+        sim.steps
+    );
+}
+
+/// The control: the same tank with the sealed voids left open moves from
+/// the first step (measured 0.03 √(gH) after one 5 ms step).
+#[test]
+fn without_closures_the_3d_tank_does_not_stay_at_rest() {
+    let case = RestTank3d::default();
+    let c = (G * case.depth).sqrt();
+    let mut sim = Simulation::new(
+        case.scene(),
+        Box::new(Delaunay3::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    sim.close_sealed_voids = false;
+    let idx = fluid(&sim);
+    sim.step().unwrap();
+    sim.step().unwrap();
+    let v = largest_speed(&sim, &idx) / c;
+    println!("without closures: largest speed {v:.2e} sqrt(gH) after two steps");
+    assert!(v > 1e-3, "largest speed {v:e} sqrt(gH)");
+}
+
+/// Issue 13, acceptance 2: 2 s, largest speed ≤ 5·10⁻³ √(gH), pressure
+/// within 2 % RMS of ρ g (H − y). Known gap with the default volume
+/// correction: once round-off flips the Delaunay ties of the lattice cells
+/// at the walls (0.55 s at H/10), the fluid mesh's measure jumps (the
+/// cells in the concave corners of the tank hold tetrahedra with no fluid
+/// node, which are not fluid, and a flip changes how many) and the volume
+/// correction moves the free surface after it: measured 0.1 √(gH) largest
+/// at H/10 by 2 s. With the correction off the same run stays at 3·10⁻⁵
+/// √(gH).
+fn two_seconds(h: f64, volume_correction: f64) {
+    let case = RestTank3d {
+        spacing: h,
+        end_time: 2.0,
+        ..RestTank3d::default()
+    };
+    let (depth, c) = (case.depth, (G * case.depth).sqrt());
+    let mut sim = Simulation::new(
+        case.scene(),
+        Box::new(Delaunay3::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    sim.volume_correction = volume_correction;
+    let idx = fluid(&sim);
+    let mut vmax: f64 = 0.0;
+    while sim.time < case.end_time - 1e-12 {
+        sim.step().unwrap();
+        vmax = vmax.max(largest_speed(&sim, &idx) / c);
+    }
+    let (mut e2, mut p2) = (0.0, 0.0);
+    for &i in &idx {
+        let y = sim.state.x[i].y;
+        if y < depth - 1.5 * h {
+            let exact = 1000.0 * G * (depth - y);
+            e2 += (sim.state.pressure[i] - exact).powi(2);
+            p2 += exact * exact;
+        }
+    }
+    let perr = (e2 / p2).sqrt();
+    println!(
+        "h = {h}, volume correction {volume_correction}: largest speed {vmax:.2e} sqrt(gH), pressure {:.3} % RMS",
+        100.0 * perr
+    );
+    assert!(vmax <= 5e-3, "largest speed {vmax:e} sqrt(gH)");
+    assert!(perr <= 0.02, "pressure {:.2} % RMS", 100.0 * perr);
+}
+
+#[test]
+#[ignore = "known gap: 0.1 sqrt(gH) with the default volume correction (bound 5e-3); 1.5 min"]
+fn three_d_water_at_rest_for_two_seconds_h10() {
+    two_seconds(0.05, 1.0);
+}
+
+#[test]
+#[ignore = "about 1.5 min"]
+fn three_d_water_at_rest_for_two_seconds_h10_without_volume_correction() {
+    two_seconds(0.05, 0.0);
+}
+
+#[test]
+#[ignore = "about 15 min"]
+fn three_d_water_at_rest_for_two_seconds_h20_without_volume_correction() {
+    two_seconds(0.025, 0.0);
+}
