@@ -89,6 +89,24 @@ pub struct AlphaShape {
     /// along different diagonals, which unbalances a hydrostatic pressure
     /// by `p h²` (see `pfem_assembly::StepMesh::closures`).
     pub closures: Vec<u32>,
+    /// *Wall pockets* (3D): non-flat simplices of wall particles only, within the
+    /// alpha reach, whose circumsphere passes near a fluid particle, `D + 1`
+    /// particle indices each, with their weights in [`Self::pocket_weights`].
+    /// They fill the lattice cells in the concave corners of the walls (a
+    /// tank's floor meeting a side wall: wall nodes on two faces of the
+    /// cell, fluid on the rest). Such a cell is a tie of the Delaunay
+    /// criterion, which round-off splits one way or another, and the share
+    /// of the cell in simplices with a fluid node swings with the split (by
+    /// up to half the cell). A pocket's weight is `1 − g/δ`, `g` the
+    /// distance of the nearest fluid particle of its cell from its
+    /// circumsphere and `δ = R/10`: `1` in a tie, so that the cell counts
+    /// whole whichever way it is split, and falling to `0` as the fluid
+    /// leaves the sphere, so that the measure stays continuous. Not
+    /// elements: the driver counts them in the fluid's measure only, so
+    /// that its volume correction does not chase round-off.
+    pub wall_pockets: Vec<u32>,
+    /// Weight in `(0, 1]` of each wall pocket (see [`Self::wall_pockets`]).
+    pub pocket_weights: Vec<f64>,
 }
 
 impl AlphaShape {
@@ -298,7 +316,7 @@ fn drop_dry_bridges<const D: usize>(
     sealed: &[bool],
     up: &Vector<D>,
     decided: &mut [(f64, u8)],
-) -> bool
+) -> (bool, Vec<Vector<D>>)
 where
     Const<D>: Dim,
 {
@@ -345,7 +363,7 @@ where
         }
     }
     if normal.is_empty() {
-        return false;
+        return (false, normal);
     }
     let mut any = false;
     for s in 0..ns {
@@ -392,7 +410,7 @@ where
             any = true;
         }
     }
-    any
+    (any, normal)
 }
 
 /// Marks the slivers of `decided` (what [`decide`] returned per simplex)
@@ -456,6 +474,123 @@ where
         }
     }
     (sealed, count)
+}
+
+/// Appends the wall pockets of the tessellation and their weights to `out`
+/// and `weights` (see [`AlphaShape::wall_pockets`]): from each non-flat
+/// wall-only simplex within the alpha reach, the simplices across shared
+/// facets whose far vertex lies within `δ = R/10` of its circumsphere are
+/// walked (its lattice cell), and the nearest fluid vertex found sets the
+/// weight. With `dry = (up, free-surface normals)`, a fluid vertex that
+/// sees a pocket vertex as a dry bridge would (above and outside it) does
+/// not count: that cell is above the water line.
+#[allow(clippy::too_many_arguments)]
+fn wall_pockets<const D: usize>(
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    spacing: &[f64],
+    delaunay: &Tessellation,
+    decided: &[(f64, u8)],
+    alpha: f64,
+    dry: Option<(&Vector<D>, &[Vector<D>])>,
+    out: &mut Vec<u32>,
+    weights: &mut Vec<f64>,
+) where
+    Const<D>: Dim,
+{
+    const BAND: f64 = 0.1;
+    const CELL: usize = 32;
+    let nv = <Const<D> as Dim>::NV;
+    let ns = decided.len();
+    let wall = |v: u32| kinds[v as usize] == ParticleKind::Wall;
+    let found: Vec<f64> = (0..ns)
+        .into_par_iter()
+        .with_min_len(2048)
+        .map(|s| {
+            let simplex = delaunay.simplex(s);
+            if decided[s].1 != DROPPED || !simplex.iter().all(|&v| wall(v)) {
+                return 0.0;
+            }
+            let p = gather::<D>(points, simplex);
+            let (measure, r2) = measure_and_circumradius2::<D>(&p[..nv]);
+            let r_d = if D == 2 { r2 } else { r2 * r2.sqrt() };
+            let ah = alpha * simplex_spacing(spacing, simplex);
+            if !(measure > MIN_SHAPE_QUALITY * r_d && r2 <= ah * ah) {
+                return 0.0;
+            }
+            let Some((centre, r)) = pfem_core::circumsphere::<D>(&p[..nv]) else {
+                return 0.0;
+            };
+            let delta = BAND * r;
+            let gap = |v: u32| ((points[v as usize] - centre).norm() - r).abs();
+            let mut nearest = f64::INFINITY;
+            // A fluid vertex on the free surface with a pocket vertex above
+            // and outside it (the dry-bridge test) does not make a pocket:
+            // the cell lies above the water line.
+            let dry_of = |f: u32| {
+                let f = f as usize;
+                let Some((up, normals)) = dry else {
+                    return false;
+                };
+                let Some(n) = normals.get(f).filter(|n| **n != Vector::<D>::zeros()) else {
+                    return false;
+                };
+                let n = n.normalize();
+                let reach = 0.5 * spacing[f];
+                p[..nv].iter().any(|w| {
+                    let d = w - points[f];
+                    d.dot(up) > reach && d.dot(&n) > reach
+                })
+            };
+            // Walk the cell: simplices across facets whose far vertex is on
+            // the sphere.
+            let mut cell = [0u32; CELL];
+            let (mut len, mut head) = (1, 0);
+            cell[0] = s as u32;
+            while head < len {
+                let t = cell[head] as usize;
+                head += 1;
+                let ts = delaunay.simplex(t);
+                for &u in delaunay.simplex_neighbors(t) {
+                    if (u as usize) >= ns || cell[..len].contains(&u) {
+                        continue;
+                    }
+                    let Some(&apex) = delaunay
+                        .simplex(u as usize)
+                        .iter()
+                        .find(|v| !ts.contains(v))
+                    else {
+                        continue;
+                    };
+                    let g = gap(apex);
+                    if g > delta {
+                        continue;
+                    }
+                    if kinds[apex as usize] == ParticleKind::Fluid {
+                        if !dry_of(apex) {
+                            nearest = nearest.min(g);
+                        }
+                        continue;
+                    }
+                    if len < CELL {
+                        cell[len] = u;
+                        len += 1;
+                    }
+                }
+            }
+            if nearest <= delta {
+                1.0 - nearest / delta
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    for (s, &w) in found.iter().enumerate() {
+        if w > 0.0 {
+            out.extend_from_slice(delaunay.simplex(s));
+            weights.push(w);
+        }
+    }
 }
 
 /// Smallest `measure / Rᴰ` (`R` the circumradius) of a kept simplex: flatter
@@ -578,9 +713,12 @@ where
         .up
         .filter(|_| params.drop_dry_bridges)
         .map(|u| Vector::<D>::from_fn(|k, _| u[k]));
-    let dropped = up.is_some_and(|up| {
-        drop_dry_bridges::<D>(points, kinds, spacing, delaunay, &sealed, &up, &mut decided)
-    });
+    let (dropped, normals) = match up {
+        Some(up) => {
+            drop_dry_bridges::<D>(points, kinds, spacing, delaunay, &sealed, &up, &mut decided)
+        }
+        None => (false, Vec::new()),
+    };
     let (sealed, n_sealed) = if dropped && D == 3 {
         sealed_voids::<D>(kinds, delaunay, &decided)
     } else {
@@ -594,6 +732,25 @@ where
     out.kept_measure = 0.0;
     out.sealed = n_sealed;
     out.closures.clear();
+    out.wall_pockets.clear();
+    out.pocket_weights.clear();
+    // 3D only, like the sealed voids: a 2D lattice tank at rest keeps its
+    // ties (measured 1e-14 √(gH) over 5 s without pockets), and counting
+    // the corner squares in 2D moved the dam break's jet at a/14 (front
+    // against the experiment 1.65 % → 2.01 % RMS) for no gain.
+    if D == 3 {
+        wall_pockets::<D>(
+            points,
+            kinds,
+            spacing,
+            delaunay,
+            &decided,
+            alpha,
+            up.as_ref().map(|up| (up, normals.as_slice())),
+            &mut out.wall_pockets,
+            &mut out.pocket_weights,
+        );
+    }
     // Delaunay simplex → mesh simplex (SEALED across a sealed void).
     let mut new_index = vec![NO_NEIGHBOR; ns];
     for (s, &(m, v)) in decided.iter().enumerate() {
