@@ -173,3 +173,84 @@ fn a_block_held_under_water_at_rest_feels_its_buoyancy() {
     );
     assert!(worst <= 0.02, "force off buoyancy by {worst}");
 }
+
+/// Issue 13, acceptance 4: the pressure written for solid particles at a
+/// wetted interface is the adjacent water's, whatever the ratio of the
+/// spacings. A plate (0.4 m × 0.05 m, clamped whole) 1 m under the surface
+/// of 2 m of water; the water's spacing is 0.1 m, the plate's 8 times
+/// finer. After 0.5 s the output pressure (`Simulation::water_pressure`,
+/// the VTU's `pressure`) on every wetted plate particle is within 2 % of
+/// ρ g (H − y).
+#[test]
+fn the_pressure_output_on_a_fine_plate_is_the_waters() {
+    let (hw, hs) = (0.1, 0.0125);
+    let (w, depth, top): (f64, f64, f64) = (1.0, 2.0, 2.4);
+    let hw: f64 = hw;
+    let (lo, hi) = ((0.3, 0.95), (0.7, 1.0));
+    let b = |a: (f64, f64), c: (f64, f64)| Geometry::Box {
+        min: Point::<2>::new(a.0, a.1),
+        max: Point::<2>::new(c.0, c.1),
+    };
+    let mut water = Vec::new();
+    for i in 1..(w / hw).round() as i64 {
+        for j in 1..=(depth / hw).round() as i64 {
+            let (x, y) = (i as f64 * hw, j as f64 * hw);
+            let dx = (lo.0 - x).max(x - hi.0).max(0.0);
+            let dy = (lo.1 - y).max(y - hi.1).max(0.0);
+            if dx.hypot(dy) > 0.99 * hw {
+                water.push(Point::<2>::new(x, y));
+            }
+        }
+    }
+    let scene = Scene::<2>::new("fine_plate")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.5,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", b((-hw, -hw), (w + hw, 0.0)), hw, WallMotion::Fixed)
+        .wall("left", b((-hw, hw), (0.0, top)), hw, WallMotion::Fixed)
+        .wall("right", b((w, hw), (w + hw, top)), hw, WallMotion::Fixed)
+        .solid(
+            "plate",
+            Box::new(Hypoelastic::new(2000.0, 1e7, 0.3).unwrap()),
+            b(lo, hi),
+            hs,
+            Some((Point::<2>::new(0.2, 0.9), Point::<2>::new(0.8, 1.05))),
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Particles(water),
+            hw,
+        );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    while sim.time < 0.5 - 1e-12 {
+        sim.step().unwrap();
+    }
+    let out = sim.water_pressure();
+    let (mut worst, mut worst_stored, mut wetted) = (0.0f64, 0.0f64, 0);
+    for i in sim.body_particles("plate") {
+        if out[i] == 0.0 {
+            continue;
+        }
+        wetted += 1;
+        let exact = 1000.0 * G * (depth - sim.state.x[i].y);
+        worst = worst.max((out[i] / exact - 1.0).abs());
+        worst_stored = worst_stored.max((sim.state.pressure[i] / exact - 1.0).abs());
+    }
+    println!(
+        "fine plate: {wetted} wetted particles; output pressure within {:.3} % of rho g (H - y) (stored nodal pressure: {:.1} %)",
+        100.0 * worst,
+        100.0 * worst_stored
+    );
+    assert!(wetted > 20, "{wetted} wetted plate particles");
+    assert!(
+        worst <= 0.02,
+        "output pressure off by {:.2} %",
+        100.0 * worst
+    );
+}

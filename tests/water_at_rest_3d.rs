@@ -150,3 +150,77 @@ fn three_d_water_at_rest_for_two_seconds_h10() {
 fn three_d_water_at_rest_for_two_seconds_h20() {
     two_seconds(0.025);
 }
+
+/// Issue 13, acceptance 3 (3D): a solid block held fixed under water at
+/// rest feels the buoyancy ρ g V within 2 %. The block (0.2 m × 0.1 m ×
+/// 0.15 m, clamped whole) sits in a tank 0.5 m × 0.35 m with 0.5 m of
+/// water (h = H/10), its top 0.25 m under the surface and water on all its
+/// sides; the water is the lattice less the particles within a spacing of
+/// the block.
+#[test]
+fn a_block_held_under_water_at_rest_feels_its_buoyancy_3d() {
+    use pfem::cases3d::tank3d;
+    let h = 0.05;
+    let (lo, hi) = ([0.15, 0.15, 0.1], [0.35, 0.25, 0.25]);
+    let mut water = Vec::new();
+    for i in 1..=9 {
+        for j in 1..=10 {
+            for k in 1..=6 {
+                let x = [i as f64 * h, j as f64 * h, k as f64 * h];
+                let d2: f64 = (0..3)
+                    .map(|c| (lo[c] - x[c]).max(x[c] - hi[c]).max(0.0).powi(2))
+                    .sum();
+                if d2.sqrt() > 0.99 * h {
+                    water.push(Point::<3>::new(x[0], x[1], x[2]));
+                }
+            }
+        }
+    }
+    let scene = Scene::<3>::new("held_block_3d")
+        .gravity(Vector::<3>::new(0.0, -G, 0.0))
+        .settings(RunSettings {
+            end_time: 0.5,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        });
+    let scene = tank3d(scene, 0.5, 0.35, 0.6, h, true)
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(2000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<3>::from(lo),
+                max: Point::<3>::from(hi),
+            },
+            h,
+            Some((
+                Point::<3>::new(0.1, 0.1, 0.05),
+                Point::<3>::new(0.4, 0.3, 0.3),
+            )),
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Particles(water),
+            h,
+        );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    let volume: f64 = (0..3).map(|c| hi[c] - lo[c]).product();
+    let buoyancy = 1000.0 * G * volume;
+    let mut worst: f64 = 0.0;
+    while sim.time < 0.5 - 1e-12 {
+        sim.step().unwrap();
+        let f = sim.pressure_force_on("block");
+        worst = worst.max((f.y / buoyancy - 1.0).abs() + f.x.hypot(f.z) / buoyancy);
+    }
+    let f = sim.pressure_force_on("block");
+    println!(
+        "held block 3D: water force ({:.3}, {:.3}, {:.3}) N against buoyancy {buoyancy:.3} N; largest deviation {:.3} %",
+        f.x,
+        f.y,
+        f.z,
+        worst * 100.0
+    );
+    assert!(worst <= 0.02, "force off buoyancy by {worst}");
+}

@@ -216,10 +216,14 @@ where
     p
 }
 
-/// Mean spacing of the nodes of a simplex: the local `h` of §8.
+/// Largest spacing of the nodes of a simplex: the local `h` of §8. (The
+/// mean, used before, shrank the reach of the simplices joining a fine
+/// solid to coarser water, so the alpha shape opened holes along the
+/// interface: with a plate 8 times finer than the water, the water next
+/// to it started at 68 m/s² from a hydrostatic rest; issue 13.)
 #[inline]
 pub(crate) fn simplex_spacing(spacing: &[f64], s: &[u32]) -> f64 {
-    s.iter().map(|&v| spacing[v as usize]).sum::<f64>() / s.len() as f64
+    s.iter().map(|&v| spacing[v as usize]).fold(0.0, f64::max)
 }
 
 /// What [`decide`] makes of a Delaunay simplex.
@@ -650,7 +654,8 @@ where
 /// bridging solids and walls without a fluid node are never kept. A
 /// candidate is kept when it is positively oriented, not a sliver
 /// (`measure > MIN_SHAPE_QUALITY · Rᴰ`) and its circumradius
-/// satisfies `R ≤ α·h` (§8), `h` the mean of its nodes' `spacing`.
+/// satisfies `R ≤ α·h` (§8), `h` the largest of its nodes' `spacing` (see
+/// `simplex_spacing`).
 ///
 /// *Sealed voids* (3D). A sliver is never an element (any motion would invert
 /// it), but the hole it leaves is not a gap in the fluid: it holds no

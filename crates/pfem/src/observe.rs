@@ -150,6 +150,7 @@ where
         for (e, h) in sim.solid_history.iter().enumerate() {
             stress[nf + e] = h.stress;
         }
+        let pressure = sim.water_pressure();
         let frame = Frame {
             points: &sim.state.x,
             cells: &cells,
@@ -157,7 +158,7 @@ where
             point_data: vec![
                 Field::vector("velocity", &sim.state.v),
                 Field::vector("acceleration", &sim.state.a),
-                Field::scalar("pressure", &sim.state.pressure),
+                Field::scalar("pressure", &pressure),
                 Field::int("kind", &kind),
                 Field::int("body", &body),
                 Field::int("boundary_tag", &tags),
