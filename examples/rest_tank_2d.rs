@@ -8,9 +8,8 @@
 //! cargo run --release --example rest_tank_2d -- [--spacing H] [--end-time T]
 //! ```
 
-use pfem::cases::{RestTank, G};
+use pfem::cases::{rest_figures, RestTank};
 use pfem::cli::Args;
-use pfem::core::ParticleKind;
 use pfem::prelude::*;
 
 fn main() {
@@ -28,40 +27,21 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         end_time: args.end_time.unwrap_or(2.0),
         ..RestTank::default()
     };
-    let (h, end, depth) = (case.spacing, case.end_time, case.depth);
+    let (end, depth) = (case.end_time, case.depth);
     let scene = case.scene();
     let mut sim = args.simulation(scene, Box::new(Delaunay2::default()))?;
     let v0 = sim.fluid_volume();
-    let c = (G * depth).sqrt();
-    let fluid: Vec<usize> = (0..sim.state.len())
-        .filter(|&i| sim.kind[i] == ParticleKind::Fluid)
-        .collect();
     let report = |sim: &Simulation<2>| {
-        let (mut vmax, mut at, mut v2) = (0.0f64, Point::<2>::zeros(), 0.0);
-        let (mut e2, mut p2) = (0.0, 0.0);
-        for &i in &fluid {
-            let s = sim.state.v[i].norm();
-            v2 += s * s;
-            if s > vmax {
-                vmax = s;
-                at = sim.state.x[i];
-            }
-            let y = sim.state.x[i].y;
-            if y < depth - 1.5 * h {
-                let pe = 1000.0 * G * (depth - y);
-                e2 += (sim.state.pressure[i] - pe).powi(2);
-                p2 += pe * pe;
-            }
-        }
+        let f = rest_figures(sim, depth);
+        let at = sim.state.x[f.fastest];
         println!(
-            "t = {:6.3} s  steps {:5}  max speed {:.2e} sqrt(gH) at ({:.3}, {:.3})  rms {:.2e}  pressure rms err {:.3} %  volume {:+.4} %",
+            "t = {:6.3} s  steps {:5}  max speed {:.2e} sqrt(gH) at {:.3?}  rms {:.2e}  pressure rms err {:.3} %  volume {:+.4} %",
             sim.time,
             sim.steps,
-            vmax / c,
-            at.x,
-            at.y,
-            (v2 / fluid.len() as f64).sqrt() / c,
-            100.0 * (e2 / p2).sqrt(),
+            f.max_speed,
+            at.as_slice(),
+            f.rms_speed,
+            100.0 * f.pressure_rms,
             100.0 * (sim.fluid_volume() / v0 - 1.0)
         );
     };

@@ -15,8 +15,7 @@
 //! h = 0.0125 m with `-- --ignored` (about 2.5 minutes; measured 1.27e-4 √(gH)
 //! largest, 5.3e-6 RMS, pressure 0.027 %).
 
-use pfem::cases::RestTank;
-use pfem::core::ParticleKind;
+use pfem::cases::{rest_figures, RestTank};
 use pfem::prelude::*;
 
 const G: f64 = 9.81;
@@ -40,34 +39,17 @@ fn tank(h: f64, end: f64) -> Figures {
     let mut sim =
         Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
     let v0 = sim.fluid_volume();
-    let fluid: Vec<usize> = (0..sim.state.len())
-        .filter(|&i| sim.kind[i] == ParticleKind::Fluid)
-        .collect();
-    let c = (G * DEPTH).sqrt();
-    let mut max_speed: f64 = 0.0;
-    let mut rms_speed: f64 = 0.0;
+    let (mut max_speed, mut rms_speed) = (0.0f64, 0.0f64);
     while sim.time < end - 1e-12 {
         sim.step().unwrap();
-        let v2: f64 = fluid.iter().map(|&i| sim.state.v[i].norm_squared()).sum();
-        rms_speed = rms_speed.max((v2 / fluid.len() as f64).sqrt() / c);
-        max_speed = fluid
-            .iter()
-            .map(|&i| sim.state.v[i].norm() / c)
-            .fold(max_speed, f64::max);
-    }
-    let (mut e2, mut p2) = (0.0, 0.0);
-    for &i in &fluid {
-        let y = sim.state.x[i].y;
-        if y < DEPTH - 1.5 * h {
-            let exact = 1000.0 * G * (DEPTH - y);
-            e2 += (sim.state.pressure[i] - exact).powi(2);
-            p2 += exact * exact;
-        }
+        let f = rest_figures(&sim, DEPTH);
+        max_speed = max_speed.max(f.max_speed);
+        rms_speed = rms_speed.max(f.rms_speed);
     }
     Figures {
         max_speed,
         rms_speed,
-        pressure_rms: (e2 / p2).sqrt(),
+        pressure_rms: rest_figures(&sim, DEPTH).pressure_rms,
         volume: sim.fluid_volume() / v0 - 1.0,
     }
 }
@@ -103,6 +85,29 @@ fn water_at_rest_in_a_2d_tank_stays_at_rest_fine() {
     check(0.0125);
 }
 
+/// Lattice water (spacing `h`, columns `columns`, rows `1..=rows`) less
+/// the particles within a spacing of the box `lo`–`hi`.
+fn water_around(
+    columns: std::ops::Range<i64>,
+    rows: i64,
+    h: f64,
+    lo: (f64, f64),
+    hi: (f64, f64),
+) -> Vec<Point<2>> {
+    let mut water = Vec::new();
+    for i in columns {
+        for j in 1..=rows {
+            let (x, y) = (i as f64 * h, j as f64 * h);
+            let dx = (lo.0 - x).max(x - hi.0).max(0.0);
+            let dy = (lo.1 - y).max(y - hi.1).max(0.0);
+            if dx.hypot(dy) > 0.99 * h {
+                water.push(Point::<2>::new(x, y));
+            }
+        }
+    }
+    water
+}
+
 /// Issue 13, acceptance 3 (2D): a solid block held fixed under water at
 /// rest feels the buoyancy ρ g V within 2 %. The 0.2 m × 0.1 m block is
 /// clamped whole, its centre 0.3 m under the surface of the open tank; the
@@ -119,17 +124,13 @@ fn a_block_held_under_water_at_rest_feels_its_buoyancy() {
         min: Point::<2>::new(a.0, a.1),
         max: Point::<2>::new(c.0, c.1),
     };
-    let mut water = Vec::new();
-    for i in 0..=(w / h).round() as i64 {
-        for j in 1..=(depth / h).round() as i64 {
-            let (x, y) = (i as f64 * h, j as f64 * h);
-            let dx = (lo.0 - x).max(x - hi.0).max(0.0);
-            let dy = (lo.1 - y).max(y - hi.1).max(0.0);
-            if dx.hypot(dy) > 0.99 * h {
-                water.push(Point::<2>::new(x, y));
-            }
-        }
-    }
+    let water = water_around(
+        0..(w / h).round() as i64 + 1,
+        (depth / h).round() as i64,
+        h,
+        lo,
+        hi,
+    );
     let clamp = Some((Point::<2>::new(0.3, 0.1), Point::<2>::new(0.7, 0.3)));
     let scene = Scene::<2>::new("held_block")
         .gravity(Vector::<2>::new(0.0, -G))
@@ -191,17 +192,13 @@ fn the_pressure_output_on_a_fine_plate_is_the_waters() {
         min: Point::<2>::new(a.0, a.1),
         max: Point::<2>::new(c.0, c.1),
     };
-    let mut water = Vec::new();
-    for i in 1..(w / hw).round() as i64 {
-        for j in 1..=(depth / hw).round() as i64 {
-            let (x, y) = (i as f64 * hw, j as f64 * hw);
-            let dx = (lo.0 - x).max(x - hi.0).max(0.0);
-            let dy = (lo.1 - y).max(y - hi.1).max(0.0);
-            if dx.hypot(dy) > 0.99 * hw {
-                water.push(Point::<2>::new(x, y));
-            }
-        }
-    }
+    let water = water_around(
+        1..(w / hw).round() as i64,
+        (depth / hw).round() as i64,
+        hw,
+        lo,
+        hi,
+    );
     let scene = Scene::<2>::new("fine_plate")
         .gravity(Vector::<2>::new(0.0, -G))
         .settings(RunSettings {

@@ -403,10 +403,7 @@ where
         let dry = (0..nv).filter(|&b| !fluid(simplex[b])).any(|b| {
             fl[..nf].iter().all(|&a| {
                 let f = simplex[a] as usize;
-                let n = normal[f].normalize();
-                let reach = 0.5 * spacing[f];
-                let d = p[b] - p[a];
-                d.dot(up) > reach && d.dot(&n) > reach
+                above_and_outside(&p[b], &p[a], &normal[f], up, spacing[f])
             })
         });
         if dry {
@@ -516,15 +513,13 @@ fn wall_pockets<const D: usize>(
                 return 0.0;
             }
             let p = gather::<D>(points, simplex);
-            let (measure, r2) = measure_and_circumradius2::<D>(&p[..nv]);
+            let (measure, r2, offset) = measure_and_circumcentre::<D>(&p[..nv]);
             let r_d = if D == 2 { r2 } else { r2 * r2.sqrt() };
             let ah = alpha * simplex_spacing(spacing, simplex);
             if !(measure > MIN_SHAPE_QUALITY * r_d && r2 <= ah * ah) {
                 return 0.0;
             }
-            let Some((centre, r)) = pfem_core::circumsphere::<D>(&p[..nv]) else {
-                return 0.0;
-            };
+            let (centre, r) = (p[0] + offset, r2.sqrt());
             let delta = BAND * r;
             let gap = |v: u32| ((points[v as usize] - centre).norm() - r).abs();
             let mut nearest = f64::INFINITY;
@@ -539,12 +534,9 @@ fn wall_pockets<const D: usize>(
                 let Some(n) = normals.get(f).filter(|n| **n != Vector::<D>::zeros()) else {
                     return false;
                 };
-                let n = n.normalize();
-                let reach = 0.5 * spacing[f];
-                p[..nv].iter().any(|w| {
-                    let d = w - points[f];
-                    d.dot(up) > reach && d.dot(&n) > reach
-                })
+                p[..nv]
+                    .iter()
+                    .any(|w| above_and_outside(w, &points[f], n, up, spacing[f]))
             };
             // Walk the cell: simplices across facets whose far vertex is on
             // the sphere.
@@ -603,6 +595,25 @@ fn wall_pockets<const D: usize>(
 /// tetrahedron of a cubic lattice `≈ 0.26`.
 pub const MIN_SHAPE_QUALITY: f64 = 1e-3;
 
+/// The dry-bridge test of one wall or solid node `w` seen from a fluid
+/// node `f` on the free surface (outward normal `n`, not normalised): `w`
+/// lies more than half `f`'s spacing above `f` (along `up`) and outside
+/// the free surface. Shared by [`drop_dry_bridges`] and [`wall_pockets`].
+#[inline]
+fn above_and_outside<const D: usize>(
+    w: &Point<D>,
+    f: &Point<D>,
+    n: &Vector<D>,
+    up: &Vector<D>,
+    spacing_f: f64,
+) -> bool
+where
+    Const<D>: Dim,
+{
+    let (d, reach) = (w - f, 0.5 * spacing_f);
+    d.dot(up) > reach && d.dot(&n.normalize()) > reach
+}
+
 /// Signed measure and squared circumradius of a simplex (`∞` when
 /// degenerate). The circumcentre offset `c` from `p[0]` solves
 /// `2 Eᵀ c = (|e_k|²)_k`, `E` the edge matrix; small fixed-size inverses
@@ -612,21 +623,38 @@ pub(crate) fn measure_and_circumradius2<const D: usize>(p: &[Point<D>]) -> (f64,
 where
     Const<D>: Dim,
 {
+    let (measure, r2, _) = measure_and_circumcentre::<D>(p);
+    (measure, r2)
+}
+
+/// [`measure_and_circumradius2`] with the circumcentre's offset from
+/// `p[0]` (zero when degenerate).
+#[inline]
+fn measure_and_circumcentre<const D: usize>(p: &[Point<D>]) -> (f64, f64, Vector<D>)
+where
+    Const<D>: Dim,
+{
     let e = edge_matrix::<D>(p);
     let det = e.determinant();
     let measure = det * <Const<D> as Dim>::MEASURE_FACTOR;
+    let none = (measure, f64::INFINITY, Vector::<D>::zeros());
     if !(det.is_finite() && det != 0.0) {
-        return (measure, f64::INFINITY);
+        return none;
     }
     let Some(inv) = e.transpose().try_inverse() else {
-        return (measure, f64::INFINITY);
+        return none;
     };
     let mut rhs = Vector::<D>::zeros();
     for k in 0..D {
         rhs[k] = e.column(k).norm_squared();
     }
-    let r2 = (inv * rhs * 0.5).norm_squared();
-    (measure, if r2.is_finite() { r2 } else { f64::INFINITY })
+    let c = inv * rhs * 0.5;
+    let r2 = c.norm_squared();
+    if r2.is_finite() {
+        (measure, r2, c)
+    } else {
+        none
+    }
 }
 
 /// The alpha shape of paper §8 of a Delaunay tessellation, allocating.

@@ -433,6 +433,61 @@ impl RestTank {
     }
 }
 
+/// Figures of water at rest at one instant ([`rest_figures`]): what issue
+/// 13 bounds, shared by the rest-tank examples and tests in 2D and 3D.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RestFigures {
+    /// Largest fluid particle speed, in √(g H).
+    pub max_speed: f64,
+    /// The particle that has it.
+    pub fastest: usize,
+    /// RMS fluid particle speed, in √(g H).
+    pub rms_speed: f64,
+    /// RMS error of the nodal fluid pressure against ρ g (H − y) over the
+    /// fluid particles below the free-surface layer (`y < H − 1.5 h`),
+    /// relative to the RMS of ρ g (H − y) there.
+    pub pressure_rms: f64,
+}
+
+/// [`RestFigures`] of a simulation of water at rest `depth` deep over a
+/// floor at `y = 0` (`y` up, 2D or 3D), gravity [`G`].
+pub fn rest_figures<const D: usize>(sim: &Simulation<D>, depth: f64) -> RestFigures
+where
+    pfem_core::Const<D>: pfem_core::Dim,
+{
+    let c = (G * depth).sqrt();
+    let (mut n, mut v2, mut e2, mut p2) = (0usize, 0.0, 0.0, 0.0);
+    let (mut max_speed, mut fastest) = (0.0f64, 0usize);
+    for i in 0..sim.state.len() {
+        if sim.kind[i] != ParticleKind::Fluid {
+            continue;
+        }
+        n += 1;
+        let s = sim.state.v[i].norm();
+        v2 += s * s;
+        if s > max_speed {
+            (max_speed, fastest) = (s, i);
+        }
+        let y = sim.state.x[i][1];
+        if y < depth - 1.5 * sim.spacing[i] {
+            let rho = sim.materials[sim.material_of[i] as usize].density();
+            let exact = rho * G * (depth - y);
+            e2 += (sim.state.pressure[i] - exact).powi(2);
+            p2 += exact * exact;
+        }
+    }
+    RestFigures {
+        max_speed: max_speed / c,
+        fastest,
+        rms_speed: if n > 0 {
+            (v2 / n as f64).sqrt() / c
+        } else {
+            0.0
+        },
+        pressure_rms: if p2 > 0.0 { (e2 / p2).sqrt() } else { 0.0 },
+    }
+}
+
 /// Water at rest in a tank: a column `height` high and `width` wide.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hydrostatic {
