@@ -74,11 +74,11 @@ struct Recorder {
 
 impl Observer<2> for Recorder {
     fn start(&mut self, sim: &Simulation<2>) -> Result<(), pfem::RunError> {
-        self.data.push((sim.time, (self.f)(sim)));
+        self.data.push((sim.time(), (self.f)(sim)));
         Ok(())
     }
     fn step(&mut self, sim: &Simulation<2>) -> Result<(), pfem::RunError> {
-        self.data.push((sim.time, (self.f)(sim)));
+        self.data.push((sim.time(), (self.f)(sim)));
         Ok(())
     }
 }
@@ -109,7 +109,7 @@ fn record(
     wall: f64,
     status: String,
 ) -> Record {
-    let s = &sim.stats;
+    let s = &sim.stats();
     Record {
         case,
         varied: varied.to_string(),
@@ -117,8 +117,8 @@ fn record(
         error: f64::NAN,
         secondary: f64::NAN,
         wall,
-        steps: sim.steps,
-        rejected: sim.rejected,
+        steps: sim.steps(),
+        rejected: sim.rejected(),
         stages: [s.remesh.1, s.assemble.1, s.solve.1, s.update.1, s.observe.1],
         status,
     }
@@ -232,17 +232,17 @@ fn cantilever(varied: &str, p: Point3) -> Res<Record> {
         params(p.tol, Scheme::BackwardEuler),
     )?;
     let target = Point::<2>::new(l, 0.5 * t);
-    let tip = (0..sim.state.len())
+    let tip = (0..sim.particles().len())
         .min_by(|&a, &b| {
-            (sim.state.x[a] - target)
+            (sim.particles().x()[a] - target)
                 .norm()
-                .total_cmp(&(sim.state.x[b] - target).norm())
+                .total_cmp(&(sim.particles().x()[b] - target).norm())
         })
         .ok_or("empty beam")?;
-    let y0 = sim.state.x[tip].y;
+    let y0 = sim.particles().x()[tip].y;
     let (series, wall, status) = run_recorded(
         &mut sim,
-        Box::new(move |s: &Simulation<2>| s.state.x[tip].y - y0),
+        Box::new(move |s: &Simulation<2>| s.particles().x()[tip].y - y0),
     );
     let deflection = series.last().map_or(f64::NAN, |q| q.1);
     let mut r = record("cantilever", varied, p, &sim, wall, status);

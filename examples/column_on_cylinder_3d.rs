@@ -39,9 +39,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay3::default()))?;
     eprintln!(
         "column_on_cylinder_3d: {} particles ({} in the cylinder, {} solid elements), h = {} m, end time {} s",
-        sim.state.len(),
-        sim.body_particles("cylinder").len(),
-        sim.solid_material.len(),
+        sim.particles().len(),
+        sim.body_particles("cylinder")?.len(),
+        sim.elements().solid_material().len(),
         case.column.spacing,
         case.column.end_time
     );

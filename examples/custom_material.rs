@@ -159,7 +159,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         "Bingham mud column: front {:.4} m -> {:.4} m after {} s",
         front[0].1,
         front.last().map(|f| f.1).unwrap_or(f64::NAN),
-        sim.time
+        sim.time()
     );
     Ok(())
 }

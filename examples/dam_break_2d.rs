@@ -41,11 +41,12 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .clone()
         .unwrap_or_else(|| "out/dam_break_2d".into());
 
-    let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
-    sim.alpha.alpha = args.number("alpha", sim.alpha.alpha)?;
+    let mut scene = case.scene();
+    scene.settings.alpha = args.number("alpha", scene.settings.alpha)?;
+    let mut sim = args.simulation(scene, Box::new(Delaunay2::default()))?;
     eprintln!(
         "dam_break_2d: {} particles, a = {} m, n² = {}, h = {} m, end time {:.3} s",
-        sim.state.len(),
+        sim.particles().len(),
         case.width,
         case.aspect,
         case.spacing,

@@ -36,7 +36,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay2::default()))?;
     eprintln!(
         "dam_break_obstacle_2d: {} particles, end time {} s",
-        sim.state.len(),
+        sim.particles().len(),
         case.end_time
     );
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);

@@ -44,7 +44,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay2::default()))?;
     eprintln!(
         "elastic_gate_2d: {} particles, h = {} m, E = {} Pa, end time {} s",
-        sim.state.len(),
+        sim.particles().len(),
         case.spacing,
         case.young,
         case.end_time

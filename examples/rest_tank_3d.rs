@@ -34,11 +34,11 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let v0 = sim.fluid_volume();
     let report = |sim: &Simulation<3>| {
         let f = rest_figures(sim, depth);
-        let at = sim.state.x[f.fastest];
+        let at = sim.particles().x()[f.fastest];
         println!(
             "t = {:6.3} s  steps {:5}  max speed {:.2e} sqrt(gH) at {:.3?}  rms {:.2e}  pressure rms err {:.3} %  volume {:+.4} %",
-            sim.time,
-            sim.steps,
+            sim.time(),
+            sim.steps(),
             f.max_speed,
             at.as_slice(),
             f.rms_speed,
@@ -48,9 +48,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     };
     report(&sim);
     let mut next = 0.05;
-    while sim.time < end - 1e-12 {
+    while sim.time() < end - 1e-12 {
         sim.step()?;
-        if sim.time >= next - 1e-12 {
+        if sim.time() >= next - 1e-12 {
             report(&sim);
             next += if next < 0.2 { 0.05 } else { 0.25 };
         }

@@ -42,8 +42,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     pfem::cases3d::slip_sides(&mut sim);
     eprintln!(
         "water_column_3d: {} particles ({} fluid), h = {} m, depth {} m, end time {} s",
-        sim.state.len(),
-        sim.kind
+        sim.particles().len(),
+        sim.particles()
+            .kind()
             .iter()
             .filter(|&&k| k == pfem::core::ParticleKind::Fluid)
             .count(),

@@ -50,8 +50,8 @@ fn front_error(f: Fidelity) -> (f64, f64) {
         f.courant(),
         f.picard_tolerance(),
         100.0 * rms,
-        sim.steps,
-        sim.rejected
+        sim.steps(),
+        sim.rejected()
     );
     (rms, wall)
 }

@@ -105,10 +105,10 @@ fn oversized_steps_are_rejected_halved_and_recovered() {
         .expect("scene builds");
     let o = run_sim(&mut sim, 0.15);
     o.report("oversized steps");
-    assert!(sim.rejected > 0, "no step was rejected");
+    assert!(sim.rejected() > 0, "no step was rejected");
     eprintln!(
         "rejected by cause (inverted, Picard): {:?}",
-        sim.rejected_by_cause
+        sim.rejected_by_cause()
     );
     assert!(o.result.is_ok(), "did not recover: {:?}", o.result);
     o.assert_stable(ENERGY_TOL);

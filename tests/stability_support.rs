@@ -57,13 +57,13 @@ pub struct Watch {
 /// Mass per particle (kg per metre of depth): `ρ h²` of its body; zero for
 /// walls.
 fn masses(sim: &Simulation<2>) -> Vec<f64> {
-    (0..sim.state.len())
+    (0..sim.particles().len())
         .map(|i| {
-            if sim.kind[i] == ParticleKind::Wall {
+            if sim.particles().kind()[i] == ParticleKind::Wall {
                 0.0
             } else {
-                let rho = sim.materials[sim.material_of[i] as usize].density();
-                rho * sim.spacing[i] * sim.spacing[i]
+                let rho = sim.materials()[sim.particles().material()[i] as usize].density();
+                rho * sim.particles().spacing()[i] * sim.particles().spacing()[i]
             }
         })
         .collect()
@@ -72,11 +72,12 @@ fn masses(sim: &Simulation<2>) -> Vec<f64> {
 impl Watch {
     /// Kinetic + potential energy of the non-wall particles.
     pub fn energy(&self, sim: &Simulation<2>) -> f64 {
-        let g = sim.gravity.map_or(0.0, |g| -g.y);
-        (0..sim.state.len())
+        let g = sim.gravity().map_or(0.0, |g| -g.y);
+        (0..sim.particles().len())
             .map(|i| {
                 let m = self.mass[i];
-                m * (0.5 * sim.state.v[i].norm_squared() + g * (sim.state.x[i].y - self.y_ref))
+                m * (0.5 * sim.particles().v()[i].norm_squared()
+                    + g * (sim.particles().x()[i].y - self.y_ref))
             })
             .sum()
     }
@@ -85,12 +86,12 @@ impl Watch {
         let e = self.energy(sim);
         if e > self.e_max {
             self.e_max = e;
-            self.at_e_max = (sim.time, sim.steps);
+            self.at_e_max = (sim.time(), sim.steps());
         }
-        for i in 0..sim.state.len() {
-            let v = sim.state.v[i].norm();
+        for i in 0..sim.particles().len() {
+            let v = sim.particles().v()[i].norm();
             if self.mass[i] > 0.0 && v > self.v_max.0 {
-                self.v_max = (v, sim.time);
+                self.v_max = (v, sim.time());
             }
         }
         self.e_end = e;
@@ -101,16 +102,24 @@ impl Watch {
         }
         let bad = inverted_elements(sim);
         if bad > 0 && self.first_inverted.is_none() {
-            self.first_inverted = Some(sim.steps);
+            self.first_inverted = Some(sim.steps());
         }
         self.inverted += bad;
-        let finite = sim.state.x.iter().all(|p| p.iter().all(|v| v.is_finite()))
-            && sim.state.v.iter().all(|p| p.iter().all(|v| v.is_finite()))
-            && sim.state.pressure.iter().all(|p| p.is_finite());
+        let finite = sim
+            .particles()
+            .x()
+            .iter()
+            .all(|p| p.iter().all(|v| v.is_finite()))
+            && sim
+                .particles()
+                .v()
+                .iter()
+                .all(|p| p.iter().all(|v| v.is_finite()))
+            && sim.particles().pressure().iter().all(|p| p.is_finite());
         if !finite || !e.is_finite() {
             self.non_finite += 1;
         }
-        self.steps = sim.steps;
+        self.steps = sim.steps();
     }
 
     /// Relative energy growth over the start: `(e_max − e0) / e0`.
@@ -122,9 +131,9 @@ impl Watch {
 impl Observer<2> for Watch {
     fn start(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
         self.mass = masses(sim);
-        self.y_ref = (0..sim.state.len())
-            .filter(|&i| sim.kind[i] != ParticleKind::Wall)
-            .map(|i| sim.state.x[i].y)
+        self.y_ref = (0..sim.particles().len())
+            .filter(|&i| sim.particles().kind()[i] != ParticleKind::Wall)
+            .map(|i| sim.particles().x()[i].y)
             .fold(f64::INFINITY, f64::min);
         self.e0 = self.energy(sim);
         self.e_max = self.e0;
@@ -143,15 +152,16 @@ impl Observer<2> for Watch {
 pub fn inverted_elements(sim: &Simulation<2>) -> usize {
     let measure = |el: &[u32]| {
         let p: [Point<2>; 3] = [
-            sim.state.x[el[0] as usize],
-            sim.state.x[el[1] as usize],
-            sim.state.x[el[2] as usize],
+            sim.particles().x()[el[0] as usize],
+            sim.particles().x()[el[1] as usize],
+            sim.particles().x()[el[2] as usize],
         ];
         simplex_measure::<2>(&p)
     };
-    sim.fluid_elements
+    sim.elements()
+        .fluid()
         .chunks_exact(3)
-        .chain(sim.solid_elements.chunks_exact(3))
+        .chain(sim.elements().solid().chunks_exact(3))
         .filter(|el| measure(el).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater))
         .count()
 }
@@ -273,10 +283,10 @@ pub fn run_sim(sim: &mut Simulation<2>, end_time: f64) -> Outcome {
     Outcome {
         watch,
         result,
-        time: sim.time,
+        time: sim.time(),
         end_time,
-        steps: sim.steps,
-        rejected: sim.rejected,
+        steps: sim.steps(),
+        rejected: sim.rejected(),
         wall: t0.elapsed().as_secs_f64(),
     }
 }

@@ -34,16 +34,16 @@ fn a_solid_only_scene_never_remeshes_nor_updates_pressure() {
     )
     .unwrap();
     sim.run(&mut []).unwrap();
-    assert!(sim.steps > 0);
-    assert!(!sim.stages.remesh && !sim.stages.pressure && !sim.stages.free_surface);
-    assert!(sim.stages.solid_stress && sim.stages.body_force);
-    assert_eq!(sim.stats.remesh, (0, 0.0), "no time at all in remeshing");
-    assert_eq!(sim.stats.pressure_updates, 0);
-    assert_eq!(sim.stats.stress_updates, sim.steps);
+    assert!(sim.steps() > 0);
+    assert!(!sim.stages().remesh && !sim.stages().pressure && !sim.stages().free_surface);
+    assert!(sim.stages().solid_stress && sim.stages().body_force);
+    assert_eq!(sim.stats().remesh, (0, 0.0), "no time at all in remeshing");
+    assert_eq!(sim.stats().pressure_updates, 0);
+    assert_eq!(sim.stats().stress_updates, sim.steps());
     // The beam sags under its weight.
     let tip = sim
-        .state
-        .x
+        .particles()
+        .x()
         .iter()
         .map(|p| p.y)
         .fold(f64::INFINITY, f64::min);
@@ -73,14 +73,19 @@ fn a_fluid_scene_without_gravity_assembles_no_body_force_and_has_no_solid_stage(
     let mut sim =
         Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
     sim.run(&mut []).unwrap();
-    assert!(sim.stages.remesh && sim.stages.pressure);
-    assert!(!sim.stages.body_force && !sim.stages.solid_stress);
-    assert_eq!(sim.stats.stress_updates, 0);
-    assert_eq!(sim.stats.pressure_updates, sim.steps);
+    assert!(sim.stages().remesh && sim.stages().pressure);
+    assert!(!sim.stages().body_force && !sim.stages().solid_stress);
+    assert_eq!(sim.stats().stress_updates, 0);
+    assert_eq!(sim.stats().pressure_updates, sim.steps());
     // Remeshed once at set-up and once per step after the first.
-    assert_eq!(sim.stats.remesh.0, sim.steps);
+    assert_eq!(sim.stats().remesh.0, sim.steps());
     // A drop in free flight keeps its velocity.
-    let mean = sim.state.v.iter().fold(Vector::<2>::zeros(), |a, v| a + v) / sim.state.len() as f64;
+    let mean = sim
+        .particles()
+        .v()
+        .iter()
+        .fold(Vector::<2>::zeros(), |a, v| a + v)
+        / sim.particles().len() as f64;
     assert!(
         (mean.x - 1.0).abs() < 1e-6 && mean.y.abs() < 1e-6,
         "{mean:?}"
@@ -200,17 +205,17 @@ fn rejected_attempts_are_counted_and_timed() {
     let t0 = std::time::Instant::now();
     sim.run(&mut []).unwrap();
     let wall = t0.elapsed().as_secs_f64();
-    assert!(sim.rejected > 0, "the case should reject some attempts");
-    assert_eq!(sim.stats.rejected.0, sim.rejected);
-    assert!(sim.stats.rejected.1 > 0.0);
+    assert!(sim.rejected() > 0, "the case should reject some attempts");
+    assert_eq!(sim.stats().rejected.0, sim.rejected());
+    assert!(sim.stats().rejected.1 > 0.0);
     let w = out.summary(&sim).wall_time_s;
-    assert_eq!(w["rejected_attempts"], sim.stats.rejected.1);
+    assert_eq!(w["rejected_attempts"], sim.stats().rejected.1);
     let stages: f64 = [
         "remesh",
         "assemble",
         "solve",
         "update",
-        "volume_correction",
+        "hooks",
         "rejected_attempts",
     ]
     .iter()

@@ -5,7 +5,7 @@ use pfem::prelude::*;
 const G: f64 = 9.81;
 
 fn centroid_y(sim: &Simulation<3>, idx: &[usize]) -> f64 {
-    idx.iter().map(|&i| sim.state.x[i].y).sum::<f64>() / idx.len() as f64
+    idx.iter().map(|&i| sim.particles().x()[i].y).sum::<f64>() / idx.len() as f64
 }
 
 /// A 0.1 m water cube with no walls falls freely: its centroid follows
@@ -35,19 +35,19 @@ fn free_fall_of_a_water_block() {
         );
     let mut sim = Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default())
         .expect("3D scene builds");
-    for i in 0..sim.state.len() {
-        sim.state.pressure[i] = 0.0;
-        sim.state.a[i] = Vector::<3>::new(0.0, -G, 0.0);
+    for i in 0..sim.particles().len() {
+        sim.particles_mut().pressure_mut()[i] = 0.0;
+        sim.particles_mut().a_mut()[i] = Vector::<3>::new(0.0, -G, 0.0);
     }
-    let water = sim.body_particles("water");
+    let water = sim.body_particles("water").unwrap();
     let y0 = centroid_y(&sim, &water);
     sim.run(&mut []).expect("runs");
     let fall = y0 - centroid_y(&sim, &water);
-    let exact = 0.5 * G * sim.time * sim.time;
+    let exact = 0.5 * G * sim.time() * sim.time();
     let err = (fall - exact).abs() / exact;
     eprintln!(
         "free fall 3D: {} steps, fall {fall:.6e} vs {exact:.6e} ({:.3}%)",
-        sim.steps,
+        sim.steps(),
         100.0 * err
     );
     assert!(err < 5e-3, "centroid fell {fall} m, free fall {exact} m");
@@ -72,15 +72,23 @@ fn tiny_column_collapse_runs_to_its_end() {
     .expect("3D scene builds");
     let v0 = sim.fluid_volume();
     sim.run(&mut []).expect("runs to the end");
-    assert!(sim.time >= case.end_time - 1e-12);
-    assert!(sim.state.x.iter().all(|p| p.iter().all(|v| v.is_finite())));
-    assert!(sim.state.v.iter().all(|v| v.iter().all(|c| c.is_finite())));
+    assert!(sim.time() >= case.end_time - 1e-12);
+    assert!(sim
+        .particles()
+        .x()
+        .iter()
+        .all(|p| p.iter().all(|v| v.is_finite())));
+    assert!(sim
+        .particles()
+        .v()
+        .iter()
+        .all(|v| v.iter().all(|c| c.is_finite())));
     let front = pfem::cases3d::front_x(&sim);
     let dv = sim.fluid_volume() / v0 - 1.0;
     eprintln!(
         "tiny collapse: {} steps ({} rejected), front {front:.3} m, volume {:+.2}%",
-        sim.steps,
-        sim.rejected,
+        sim.steps(),
+        sim.rejected(),
         100.0 * dv
     );
     assert!(front > case.width + 0.02, "front at {front} m");
@@ -107,9 +115,9 @@ fn clamped_cylinder_in_water_builds_and_steps() {
         StepParams::default(),
     )
     .expect("builds");
-    let cyl = sim.body_particles("cylinder");
-    let mut used = vec![false; sim.state.len()];
-    for &p in &sim.solid_elements {
+    let cyl = sim.body_particles("cylinder").unwrap();
+    let mut used = vec![false; sim.particles().len()];
+    for &p in sim.elements().solid() {
         used[p as usize] = true;
     }
     assert!(
@@ -118,11 +126,15 @@ fn clamped_cylinder_in_water_builds_and_steps() {
     );
     let clamped = cyl
         .iter()
-        .filter(|&&i| sim.constraints.is_fully_fixed(i))
+        .filter(|&&i| sim.particles().constraints().is_fully_fixed(i))
         .count();
     assert_eq!(clamped, 13, "the bottom disk (13 particles at r = 2 h)");
     sim.run(&mut []).expect("runs");
-    assert!(sim.state.x.iter().all(|p| p.iter().all(|v| v.is_finite())));
+    assert!(sim
+        .particles()
+        .x()
+        .iter()
+        .all(|p| p.iter().all(|v| v.is_finite())));
 }
 
 /// A cylinder is a 3D geometry: a 2D scene with one is rejected by a typed
@@ -164,9 +176,9 @@ fn dam_break_2d_vs_slab(end_time: f64, divisions: f64) -> (f64, f64, f64) {
     )
     .unwrap();
     let mut front2 = Vec::new();
-    while s2.time < case.end_time - 1e-12 {
+    while s2.time() < case.end_time - 1e-12 {
         s2.step().unwrap();
-        front2.push((s2.time, pfem::cases::front_x(&s2)));
+        front2.push((s2.time(), pfem::cases::front_x(&s2)));
     }
     let mut s3 = Simulation::new(
         thin_dam_break(&case),
@@ -176,9 +188,9 @@ fn dam_break_2d_vs_slab(end_time: f64, divisions: f64) -> (f64, f64, f64) {
     .unwrap();
     slip_sides(&mut s3);
     let mut front3 = Vec::new();
-    while s3.time < case.end_time - 1e-12 {
+    while s3.time() < case.end_time - 1e-12 {
         s3.step().unwrap();
-        front3.push((s3.time, pfem::cases3d::front_x(&s3)));
+        front3.push((s3.time(), pfem::cases3d::front_x(&s3)));
     }
     let mut worst: f64 = 0.0;
     let mut sq = 0.0;
@@ -193,7 +205,7 @@ fn dam_break_2d_vs_slab(end_time: f64, divisions: f64) -> (f64, f64, f64) {
     let rel = (rel / front3.len() as f64).sqrt();
     eprintln!(
         "dam break a/{divisions}: 2D {} steps, 3D slab {} steps ({} rejected); fronts at the end 2D {:.4} m, 3D {:.4} m; largest difference {:.4} m ({:.1}% of a), RMS {:.4} m ({:.1}% of a)",
-        s2.steps, s3.steps, s3.rejected,
+        s2.steps(), s3.steps(), s3.rejected(),
         front2.last().unwrap().1, front3.last().unwrap().1, worst, 100.0 * worst / case.width, rms, 100.0 * rms / case.width
     );
     eprintln!("relative RMS difference of the fronts: {:.2}%", 100.0 * rel);
@@ -269,19 +281,25 @@ fn sliver_holes_in_a_3d_tank_are_not_free_surface() {
     let sim = rest_tank();
     let mut t = Tessellation::default();
     Delaunay3::default()
-        .tessellate(&sim.state.x, &mut t)
+        .tessellate(sim.particles().x(), &mut t)
         .unwrap();
     let shape = alpha_shape(
-        &sim.state.x,
-        &sim.kind,
-        &sim.spacing,
+        sim.particles().x(),
+        sim.particles().kind(),
+        sim.particles().spacing(),
         &t,
         &AlphaShapeParams::default(),
     )
     .unwrap();
-    let cls = classify(&sim.state.x, &sim.kind, &shape.mesh, None).unwrap();
-    let below_top = (0..sim.state.len())
-        .filter(|&i| cls.tags[i] == NodeTag::FreeSurface && sim.state.x[i].y < 0.19)
+    let cls = classify(
+        sim.particles().x(),
+        sim.particles().kind(),
+        &shape.mesh,
+        None,
+    )
+    .unwrap();
+    let below_top = (0..sim.particles().len())
+        .filter(|&i| cls.tags[i] == NodeTag::FreeSurface && sim.particles().x()[i].y < 0.19)
         .count();
     assert_eq!(
         below_top, 0,

@@ -1,26 +1,41 @@
-//! The volume correction (`Simulation::volume_correction`): geometric, booked
-//! in the ledger, off when asked, refused when out of range.
+//! The volume correction (`pfem::hooks::VolumeCorrection`, installed by
+//! `Options::volume_correction`): geometric, booked in the ledger, off when
+//! asked, refused when out of range.
 //! `cargo test --release --test volume_correction`
 
 use pfem::cases::{DamBreak, G};
+use pfem::hooks::VolumeCorrection;
 use pfem::prelude::*;
-use pfem::RunError;
 
 /// A 2D simulation of `scene` with the default scheme and correction `beta`.
+fn try_build(scene: Scene<2>, beta: f64) -> Result<Simulation<2>, SceneError> {
+    let options = Options {
+        volume_correction: beta,
+        ..Options::default()
+    };
+    Simulation::with_options(
+        scene,
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+        options,
+    )
+}
+
 fn build(scene: Scene<2>, beta: f64) -> Simulation<2> {
-    let mut sim =
-        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
-    sim.volume_correction = beta;
-    sim
+    try_build(scene, beta).unwrap()
 }
 
 /// The coarse dam break (a/12, to t·√(2g/a) = 3) of
 /// `tests/validation_dam_break.rs`.
-fn dam_break(beta: f64) -> Simulation<2> {
+fn dam_break_scene() -> Scene<2> {
     let mut case = DamBreak::default();
     case.spacing = case.width / 12.0;
     case.end_time = 3.0 / (2.0 * G / case.width).sqrt();
-    build(case.scene(), beta)
+    case.scene()
+}
+
+fn dam_break(beta: f64) -> Simulation<2> {
+    build(dam_break_scene(), beta)
 }
 
 /// Issue 5's bound on the coarse dam break: with the correction (the
@@ -35,14 +50,14 @@ fn ledger_balances_and_correction_offsets_remeshing() {
     for beta in [1.0, 0.0] {
         let mut sim = dam_break(beta);
         sim.run(&mut []).unwrap();
-        let v = &sim.volume;
+        let v = &sim.volume();
         let total = sim.fluid_volume() - v.initial;
-        let booked = v.remeshing + v.correction + v.solution;
+        let booked = v.remeshing + v.correction() + v.solution;
         eprintln!(
             "beta {beta}: total {:+.3}%, remeshing {:+.3}%, correction {:+.3}%, solution {:+.3}%",
             100.0 * total / v.initial,
             100.0 * v.remeshing / v.initial,
-            100.0 * v.correction / v.initial,
+            100.0 * v.correction() / v.initial,
             100.0 * v.solution / v.initial
         );
         assert!(
@@ -50,7 +65,8 @@ fn ledger_balances_and_correction_offsets_remeshing() {
             "ledger {booked} vs measured change {total}"
         );
         if beta == 0.0 {
-            assert_eq!(v.correction, 0.0);
+            assert_eq!(v.correction(), 0.0);
+            assert!(v.hooks.is_empty(), "{:?}", v.hooks);
         } else {
             assert!(total.abs() < 0.01 * v.initial, "change {total}");
             assert!(
@@ -59,7 +75,7 @@ fn ledger_balances_and_correction_offsets_remeshing() {
                 v.remeshing
             );
             assert!(
-                v.correction * v.remeshing < 0.0,
+                v.correction() * v.remeshing < 0.0,
                 "correction opposes remeshing"
             );
         }
@@ -81,10 +97,15 @@ fn correction_restores_volume_without_adding_momentum() {
         spacing: 0.025,
         ..Default::default()
     };
-    let mut with = build(case.scene(), 1.0);
+    // The correction's target made 0.3 % larger than the mesh's volume.
+    let mut with = build(case.scene(), 0.0);
     let mut without = build(case.scene(), 0.0);
-    let v0 = with.volume.initial;
-    with.volume.initial = 1.003 * v0;
+    let v0 = with.volume().initial;
+    with.add_hook(Box::new(
+        VolumeCorrection::new(1.0)
+            .unwrap()
+            .with_target_volume(1.003 * v0),
+    ));
     for _ in 0..2 {
         with.step().unwrap();
         without.step().unwrap();
@@ -92,10 +113,10 @@ fn correction_restores_volume_without_adding_momentum() {
     let gained = with.fluid_volume() / v0 - 1.0;
     let drift = without.fluid_volume() / v0 - 1.0;
     let dv = with
-        .state
-        .v
+        .particles()
+        .v()
         .iter()
-        .zip(&without.state.v)
+        .zip(without.particles().v())
         .map(|(a, b)| (a - b).norm())
         .fold(0.0, f64::max);
     let speed = (G * case.height).sqrt();
@@ -106,10 +127,10 @@ fn correction_restores_volume_without_adding_momentum() {
     );
     assert!((gained - 0.003).abs() < 0.0003, "gained {gained}");
     assert!(dv < 1e-2 * speed, "velocity changed by {dv} m/s");
-    for i in 0..with.state.len() {
-        if with.kind[i] == pfem::core::ParticleKind::Wall {
+    for i in 0..with.particles().len() {
+        if with.particles().kind()[i] == ParticleKind::Wall {
             assert_eq!(
-                with.state.x[i],
+                with.particles().x()[i],
                 with.initial_position(i),
                 "wall particle {i} moved"
             );
@@ -117,15 +138,17 @@ fn correction_restores_volume_without_adding_momentum() {
     }
 }
 
-/// Out-of-range settings are typed errors at the first step.
+/// Out-of-range settings are typed errors at construction.
 #[test]
 fn out_of_range_correction_is_refused() {
     for bad in [-0.1, 1.5, f64::NAN] {
-        let mut sim = dam_break(bad);
-        match sim.step() {
-            Err(RunError::InvalidSetting { name, .. }) => assert_eq!(name, "volume_correction"),
+        match try_build(dam_break_scene(), bad) {
+            Err(SceneError::InvalidSetting { setting, .. }) => {
+                assert_eq!(setting, "volume_correction")
+            }
             other => panic!("expected InvalidSetting for {bad}, got {other:?}"),
         }
+        assert!(VolumeCorrection::new(bad).is_err());
     }
 }
 
@@ -147,11 +170,11 @@ fn correction_respects_slip_planes_in_3d() {
     pfem::cases3d::slip_sides(&mut sim);
     sim.run(&mut []).unwrap();
     assert!(
-        sim.volume.correction != 0.0,
+        sim.volume().correction() != 0.0,
         "the correction acted (it is what is being checked)"
     );
-    for i in 0..sim.state.len() {
-        let dz = (sim.state.x[i].z - sim.initial_position(i).z).abs();
+    for i in 0..sim.particles().len() {
+        let dz = (sim.particles().x()[i].z - sim.initial_position(i).z).abs();
         assert!(dz < 1e-12, "particle {i} left its plane by {dz} m");
     }
 }
@@ -171,7 +194,10 @@ fn command_line_sets_the_correction() {
         let sim = args(v)
             .simulation(case.scene(), Box::new(Delaunay2::default()))
             .unwrap();
-        assert_eq!(sim.volume_correction, beta);
+        let installed = sim
+            .hook_names()
+            .contains(&VolumeCorrection::NAME.to_string());
+        assert_eq!(installed, beta > 0.0, "--volume-correction {v}");
     }
     for bad in ["2", "-1", "x"] {
         assert!(args(bad)

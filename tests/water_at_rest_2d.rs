@@ -40,7 +40,7 @@ fn tank(h: f64, end: f64) -> Figures {
         Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
     let v0 = sim.fluid_volume();
     let (mut max_speed, mut rms_speed) = (0.0f64, 0.0f64);
-    while sim.time < end - 1e-12 {
+    while sim.time() < end - 1e-12 {
         sim.step().unwrap();
         let f = rest_figures(&sim, DEPTH);
         max_speed = max_speed.max(f.max_speed);
@@ -160,12 +160,12 @@ fn a_block_held_under_water_at_rest_feels_its_buoyancy() {
         Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
     let buoyancy = 1000.0 * G * (hi.0 - lo.0) * (hi.1 - lo.1);
     let mut worst: f64 = 0.0;
-    while sim.time < 0.5 - 1e-12 {
+    while sim.time() < 0.5 - 1e-12 {
         sim.step().unwrap();
-        let f = sim.pressure_force_on("block");
+        let f = sim.pressure_force_on("block").unwrap();
         worst = worst.max((f.y / buoyancy - 1.0).abs() + (f.x / buoyancy).abs());
     }
-    let f = sim.pressure_force_on("block");
+    let f = sim.pressure_force_on("block").unwrap();
     println!(
         "held block: water force ({:.2}, {:.2}) N/m against buoyancy {buoyancy:.2} N/m; largest deviation {:.3} %",
         f.x,
@@ -225,19 +225,19 @@ fn the_pressure_output_on_a_fine_plate_is_the_waters() {
         );
     let mut sim =
         Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
-    while sim.time < 0.5 - 1e-12 {
+    while sim.time() < 0.5 - 1e-12 {
         sim.step().unwrap();
     }
     let out = sim.water_pressure();
     let (mut worst, mut worst_stored, mut wetted) = (0.0f64, 0.0f64, 0);
-    for i in sim.body_particles("plate") {
+    for i in sim.body_particles("plate").unwrap() {
         if out[i] == 0.0 {
             continue;
         }
         wetted += 1;
-        let exact = 1000.0 * G * (depth - sim.state.x[i].y);
+        let exact = 1000.0 * G * (depth - sim.particles().x()[i].y);
         worst = worst.max((out[i] / exact - 1.0).abs());
-        worst_stored = worst_stored.max((sim.state.pressure[i] / exact - 1.0).abs());
+        worst_stored = worst_stored.max((sim.particles().pressure()[i] / exact - 1.0).abs());
     }
     println!(
         "fine plate: {wetted} wetted particles; output pressure within {:.3} % of rho g (H - y) (stored nodal pressure: {:.1} %)",

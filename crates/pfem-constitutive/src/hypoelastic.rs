@@ -360,6 +360,7 @@ mod tests {
             stress: sigma0,
             stress_zz: szz0,
             pressure: 0.0,
+            ..History::default()
         };
         let steps = 20;
         let r_step = rotation::<D>(FRAC_PI_2 / steps as f64);
@@ -504,6 +505,7 @@ mod tests {
             stress: Tensor::<2>::new(1.0, 2.0, 2.0, 3.0),
             stress_zz: 4.0,
             pressure: 99.0,
+            ..History::default()
         };
         let u = solid.unified(&kin, &h);
         let j = f.determinant();

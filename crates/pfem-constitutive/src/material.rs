@@ -132,6 +132,10 @@ where
     }
 }
 
+/// Most internal variables a material may keep in
+/// [`History::internal`].
+pub const MAX_INTERNAL: usize = 8;
+
 /// History a material carries from step to step: state owned by the solver
 /// (per element for solids, per node for fluid pressure), handed to the
 /// material by reference, and moved with particles through remeshing.
@@ -144,6 +148,11 @@ pub struct History<const D: usize> {
     pub stress_zz: f64,
     /// Pressure `pⁿ` (Pa) of a fluid, positive in compression.
     pub pressure: f64,
+    /// A solid's internal variables at `t_n` (plastic strain, damage,
+    /// viscous strains…), as many as its
+    /// [`Material::internal_variables`] names, in that order; zero at the
+    /// start. The solver keeps them per element, like the stress.
+    pub internal: [f64; MAX_INTERNAL],
 }
 
 impl<const D: usize> Default for History<D>
@@ -155,6 +164,7 @@ where
             stress: Tensor::<D>::zeros(),
             stress_zz: 0.0,
             pressure: 0.0,
+            internal: [0.0; MAX_INTERNAL],
         }
     }
 }
@@ -240,7 +250,37 @@ where
     fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D>;
 
     /// After the step has converged, advance the history from `t_n` to
-    /// `t_{n+1}`: the pressure of a fluid (eqs. 26, 62) or the Cauchy stress
-    /// of a solid (eqs. 39–42, 63).
+    /// `t_{n+1}`: the Cauchy stress of a solid (eqs. 39–42, 63) and its
+    /// internal variables. A fluid's pressure is advanced per node by
+    /// [`Material::update_pressure`].
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>);
+
+    /// Names of the internal variables a solid keeps in
+    /// [`History::internal`] (at most [`MAX_INTERNAL`]), written to the
+    /// output by name; none by default.
+    fn internal_variables(&self) -> &[&str] {
+        &[]
+    }
+
+    /// A fluid's nodal pressure at `t_{n+1}` (eq. 62) from its value `p_n`
+    /// at `t_n`, the node's volumetric strain rate `ε_v` (1/s, the nodal
+    /// average of eq. 19) and the step `Δt` (s). The default calls
+    /// [`Material::update_history`] with isotropic kinematics `D = ε_v/D I`
+    /// (what a fluid written against `update_history` alone expects);
+    /// [`crate::Newtonian`] overrides it with eq. 26.
+    fn update_pressure(&self, p_n: f64, volumetric_rate: f64, dt: f64) -> f64 {
+        let kin = Kinematics {
+            f: Tensor::<D>::identity(),
+            j: 1.0,
+            d: Tensor::<D>::identity() * (volumetric_rate / D as f64),
+            dt,
+            displacement_weight: dt,
+        };
+        let mut h = History {
+            pressure: p_n,
+            ..History::default()
+        };
+        self.update_history(&kin, &mut h);
+        h.pressure
+    }
 }

@@ -156,6 +156,11 @@ where
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>) {
         history.pressure -= kin.dt * self.bulk_modulus * kin.volumetric_rate(); // eq. 26
     }
+
+    /// `pⁿ⁺¹ = pⁿ − Δt K_f ε_v` at a node (eqs. 26, 62).
+    fn update_pressure(&self, p_n: f64, volumetric_rate: f64, dt: f64) -> f64 {
+        p_n - dt * self.bulk_modulus * volumetric_rate // eq. 26
+    }
 }
 
 #[cfg(test)]

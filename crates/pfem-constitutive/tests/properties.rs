@@ -98,6 +98,7 @@ where
         stress: sym::<D>(&c.stress),
         stress_zz: if D == 2 { c.stress_zz } else { 0.0 },
         pressure: c.pressure,
+        ..History::default()
     };
     let u = solid.unified(&kin, &h0);
     prop_assert!(u.mu.is_finite() && u.mu > 0.0);

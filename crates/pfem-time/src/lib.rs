@@ -23,8 +23,8 @@ use pfem_assembly::{
     Assembler, AssemblyError, AssemblyInput, Constraints, DirectSolver, Inertia, LinearSolver,
     NodalRate, SolveError, StepMesh, VolumetricTreatment,
 };
-use pfem_constitutive::{History, Kinematics, Material, MaterialKind};
-use pfem_core::{Const, Dim, Point, Tensor, Vector};
+use pfem_constitutive::{History, Material, MaterialKind};
+use pfem_core::{Const, Dim, Point, Vector};
 
 /// The time scheme.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -789,19 +789,7 @@ where
         for r in &self.rates {
             let p = r.particle as usize;
             let mat = &input.materials[r.material as usize];
-            let kin = Kinematics {
-                f: Tensor::<D>::identity(),
-                j: 1.0,
-                d: Tensor::<D>::identity() * (r.rate / D as f64),
-                dt,
-                displacement_weight: inertia.displacement_weight,
-            };
-            let mut h = History {
-                pressure: state.pressure[p],
-                ..History::default()
-            };
-            mat.update_history(&kin, &mut h);
-            state.pressure[p] = h.pressure;
+            state.pressure[p] = mat.update_pressure(state.pressure[p], r.rate, dt); // eq. 62
             touched[p] = true;
         }
         for p in 0..n {

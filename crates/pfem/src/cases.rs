@@ -136,8 +136,13 @@ impl DamBreak {
 /// elements with the largest measure (flying drops and particles sliding
 /// ahead of it do not count).
 pub fn main_body(s: &Simulation<2>) -> Vec<bool> {
-    let mut m = vec![false; s.state.len()];
-    let Ok(cls) = pfem_geometry::classify(&s.state.x, &s.kind, &s.fluid_mesh, None) else {
+    let mut m = vec![false; s.particles().len()];
+    let Ok(cls) = pfem_geometry::classify(
+        s.particles().x(),
+        s.particles().kind(),
+        s.elements().fluid_mesh(),
+        None,
+    ) else {
         return m;
     };
     let Some(main) = (0..cls.components.len()).max_by(|&a, &b| {
@@ -147,10 +152,16 @@ pub fn main_body(s: &Simulation<2>) -> Vec<bool> {
     }) else {
         return m;
     };
-    for (e, el) in s.fluid_mesh.simplices.chunks_exact(3).enumerate() {
+    for (e, el) in s
+        .elements()
+        .fluid_mesh()
+        .simplices
+        .chunks_exact(3)
+        .enumerate()
+    {
         if cls.component[e] as usize == main {
             for &p in el {
-                if s.kind[p as usize] == ParticleKind::Fluid {
+                if s.particles().kind()[p as usize] == ParticleKind::Fluid {
                     m[p as usize] = true;
                 }
             }
@@ -163,9 +174,9 @@ pub fn main_body(s: &Simulation<2>) -> Vec<bool> {
 /// main body ([`main_body`]).
 pub fn front_x(s: &Simulation<2>) -> f64 {
     let body = main_body(s);
-    (0..s.state.len())
+    (0..s.particles().len())
         .filter(|&i| body[i])
-        .map(|i| s.state.x[i].x)
+        .map(|i| s.particles().x()[i].x)
         .fold(0.0, f64::max)
 }
 
@@ -173,9 +184,9 @@ pub fn front_x(s: &Simulation<2>) -> f64 {
 /// particle within `band` of `x = 0`.
 pub fn height_at_wall(s: &Simulation<2>, band: f64) -> f64 {
     let meshed = main_body(s);
-    (0..s.state.len())
-        .filter(|&i| meshed[i] && s.state.x[i].x <= band)
-        .map(|i| s.state.x[i].y)
+    (0..s.particles().len())
+        .filter(|&i| meshed[i] && s.particles().x()[i].x <= band)
+        .map(|i| s.particles().x()[i].y)
         .fold(0.0, f64::max)
 }
 
@@ -359,13 +370,13 @@ impl ElasticGate {
 /// simulation's first state, found as the gate particles closest to `tip0`
 /// in `y`).
 fn gate_tip(s: &Simulation<2>, tip0: Point<2>) -> Vector<2> {
-    let gate = s.body_particles("gate");
+    let gate = s.body_particles("gate").unwrap_or_default();
     let mut sum = Vector::<2>::zeros();
     let mut n = 0;
     for &i in &gate {
         let x0 = s.initial_position(i);
         if (x0.y - tip0.y).abs() < 1e-9 {
-            sum += s.state.x[i] - x0;
+            sum += s.particles().x()[i] - x0;
             n += 1;
         }
     }
@@ -458,21 +469,21 @@ where
     let c = (G * depth).sqrt();
     let (mut n, mut v2, mut e2, mut p2) = (0usize, 0.0, 0.0, 0.0);
     let (mut max_speed, mut fastest) = (0.0f64, 0usize);
-    for i in 0..sim.state.len() {
-        if sim.kind[i] != ParticleKind::Fluid {
+    for i in 0..sim.particles().len() {
+        if sim.particles().kind()[i] != ParticleKind::Fluid {
             continue;
         }
         n += 1;
-        let s = sim.state.v[i].norm();
+        let s = sim.particles().v()[i].norm();
         v2 += s * s;
         if s > max_speed {
             (max_speed, fastest) = (s, i);
         }
-        let y = sim.state.x[i][1];
-        if y < depth - 1.5 * sim.spacing[i] {
-            let rho = sim.materials[sim.material_of[i] as usize].density();
+        let y = sim.particles().x()[i][1];
+        if y < depth - 1.5 * sim.particles().spacing()[i] {
+            let rho = sim.materials()[sim.particles().material()[i] as usize].density();
             let exact = rho * G * (depth - y);
-            e2 += (sim.state.pressure[i] - exact).powi(2);
+            e2 += (sim.particles().pressure()[i] - exact).powi(2);
             p2 += exact * exact;
         }
     }
@@ -550,9 +561,9 @@ impl Hydrostatic {
         vec![
             Probe::new("bottom_pressure", |s: &Simulation<2>| bottom_pressure(s)),
             Probe::new("max_speed", |s: &Simulation<2>| {
-                (0..s.state.len())
-                    .filter(|&i| s.kind[i] == ParticleKind::Fluid)
-                    .map(|i| s.state.v[i].norm())
+                (0..s.particles().len())
+                    .filter(|&i| s.particles().kind()[i] == ParticleKind::Fluid)
+                    .map(|i| s.particles().v()[i].norm())
                     .fold(0.0, f64::max)
             }),
             Probe::new("volume", |s: &Simulation<2>| s.fluid_volume()),
@@ -563,29 +574,29 @@ impl Hydrostatic {
 /// Mean pressure of the wall particles on the floor's top row (y = 0) that
 /// touch the fluid, excluding the corners.
 pub fn bottom_pressure(s: &Simulation<2>) -> f64 {
-    let mut in_fluid = vec![false; s.state.len()];
-    for &p in &s.fluid_elements {
+    let mut in_fluid = vec![false; s.particles().len()];
+    for &p in s.elements().fluid() {
         in_fluid[p as usize] = true;
     }
     let (mut sum, mut n) = (0.0, 0);
-    let xs: Vec<f64> = (0..s.state.len())
-        .filter(|&i| s.kind[i] == ParticleKind::Fluid)
-        .map(|i| s.state.x[i].x)
+    let xs: Vec<f64> = (0..s.particles().len())
+        .filter(|&i| s.particles().kind()[i] == ParticleKind::Fluid)
+        .map(|i| s.particles().x()[i].x)
         .collect();
     let (xmin, xmax) = xs
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
             (a.min(x), b.max(x))
         });
-    for i in 0..s.state.len() {
-        let x = s.state.x[i];
-        if s.kind[i] == ParticleKind::Wall
+    for i in 0..s.particles().len() {
+        let x = s.particles().x()[i];
+        if s.particles().kind()[i] == ParticleKind::Wall
             && in_fluid[i]
             && x.y.abs() < 1e-9
             && x.x > xmin + 1e-9
             && x.x < xmax - 1e-9
         {
-            sum += s.state.pressure[i];
+            sum += s.particles().pressure()[i];
             n += 1;
         }
     }
@@ -681,6 +692,7 @@ impl DamBreakObstacle {
             Probe::new("ux_top", |s: &Simulation<2>| {
                 let top: Vec<usize> = s
                     .body_particles("obstacle")
+                    .unwrap_or_default()
                     .into_iter()
                     .filter(|&i| (s.initial_position(i).y - OBSTACLE_HEIGHT).abs() < 1e-9)
                     .collect();
@@ -688,12 +700,12 @@ impl DamBreakObstacle {
                     return 0.0;
                 }
                 top.iter()
-                    .map(|&i| s.state.x[i].x - s.initial_position(i).x)
+                    .map(|&i| s.particles().x()[i].x - s.initial_position(i).x)
                     .sum::<f64>()
                     / top.len() as f64
             }),
             Probe::new("force_x", |s: &Simulation<2>| {
-                s.pressure_force_on("obstacle").x
+                s.pressure_force_on("obstacle").map_or(f64::NAN, |f| f.x)
             }),
             Probe::new("volume", |s: &Simulation<2>| s.fluid_volume()),
         ]

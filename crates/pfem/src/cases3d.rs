@@ -27,8 +27,13 @@ pub fn main_body<const D: usize>(s: &Simulation<D>) -> Vec<bool>
 where
     Const<D>: Dim,
 {
-    let mut m = vec![false; s.state.len()];
-    let Ok(cls) = pfem_geometry::classify(&s.state.x, &s.kind, &s.fluid_mesh, None) else {
+    let mut m = vec![false; s.particles().len()];
+    let Ok(cls) = pfem_geometry::classify(
+        s.particles().x(),
+        s.particles().kind(),
+        s.elements().fluid_mesh(),
+        None,
+    ) else {
         return m;
     };
     let Some(main) = (0..cls.components.len()).max_by(|&a, &b| {
@@ -38,10 +43,16 @@ where
     }) else {
         return m;
     };
-    for (e, el) in s.fluid_mesh.simplices.chunks_exact(D + 1).enumerate() {
+    for (e, el) in s
+        .elements()
+        .fluid_mesh()
+        .simplices
+        .chunks_exact(D + 1)
+        .enumerate()
+    {
         if cls.component[e] as usize == main {
             for &p in el {
-                if s.kind[p as usize] == ParticleKind::Fluid {
+                if s.particles().kind()[p as usize] == ParticleKind::Fluid {
                     m[p as usize] = true;
                 }
             }
@@ -57,9 +68,9 @@ where
     Const<D>: Dim,
 {
     let body = main_body(s);
-    (0..s.state.len())
+    (0..s.particles().len())
         .filter(|&i| body[i])
-        .map(|i| s.state.x[i][0])
+        .map(|i| s.particles().x()[i][0])
         .fold(0.0, f64::max)
 }
 
@@ -70,9 +81,9 @@ where
     Const<D>: Dim,
 {
     let body = main_body(s);
-    (0..s.state.len())
-        .filter(|&i| body[i] && s.state.x[i][0] <= band)
-        .map(|i| s.state.x[i][1])
+    (0..s.particles().len())
+        .filter(|&i| body[i] && s.particles().x()[i][0] <= band)
+        .map(|i| s.particles().x()[i][1])
         .fold(0.0, f64::max)
 }
 
@@ -345,10 +356,10 @@ where
 {
     let mut sum = Vector::<D>::zeros();
     let mut n = 0;
-    for i in s.body_particles(body) {
+    for i in s.body_particles(body).unwrap_or_default() {
         let x0 = s.initial_position(i);
         if (x0[1] - y_top).abs() < 1e-9 {
-            sum += s.state.x[i] - x0;
+            sum += s.particles().x()[i] - x0;
             n += 1;
         }
     }
@@ -376,39 +387,39 @@ where
     Const<D>: Dim,
 {
     let nv = D + 1;
-    let n = s.state.len();
-    let Some(id) = s.body_names.iter().position(|b| b == body) else {
+    let n = s.particles().len();
+    let Some(id) = s.body_names().iter().position(|b| b == body) else {
         return Vector::<D>::zeros();
     };
     let mut mass = vec![0.0; n];
     let mut f_int = vec![Vector::<D>::zeros(); n];
     let mut grads = [Vector::<D>::zeros(); MAX_NV];
-    for (e, el) in s.solid_elements.chunks_exact(nv).enumerate() {
-        if s.body[el[0] as usize] != id as u32 {
+    for (e, el) in s.elements().solid().chunks_exact(nv).enumerate() {
+        if s.particles().body()[el[0] as usize] != id as u32 {
             continue;
         }
         let mut p = [Point::<D>::zeros(); MAX_NV];
         for a in 0..nv {
-            p[a] = s.state.x[el[a] as usize];
+            p[a] = s.particles().x()[el[a] as usize];
         }
         let Some(vol) = shape_gradients::<D>(&p[..nv], &mut grads) else {
             continue;
         };
-        let rho = s.materials[s.solid_material[e] as usize].density();
-        let sigma = s.solid_history[e].stress;
+        let rho = s.materials()[s.elements().solid_material()[e] as usize].density();
+        let sigma = s.elements().solid_history()[e].stress;
         for a in 0..nv {
             let i = el[a] as usize;
             mass[i] += rho * vol / nv as f64;
             f_int[i] -= sigma * grads[a] * vol;
         }
     }
-    let g = s.gravity.unwrap_or_else(Vector::<D>::zeros);
+    let g = s.gravity().unwrap_or_else(Vector::<D>::zeros);
     let mut total = Vector::<D>::zeros();
     for i in 0..n {
-        if s.body[i] != id as u32 || s.constraints.is_fully_fixed(i) {
+        if s.particles().body()[i] != id as u32 || s.particles().constraints().is_fully_fixed(i) {
             continue;
         }
-        total += (s.state.a[i] - g) * mass[i] - f_int[i];
+        total += (s.particles().a()[i] - g) * mass[i] - f_int[i];
     }
     total
 }
@@ -445,11 +456,12 @@ pub fn thin_dam_break(case: &DamBreak) -> Scene<3> {
 /// planes of a slab ([`thin_dam_break`]), so the flow stays plane. The
 /// initial accelerations' `z` components are zeroed to match.
 pub fn slip_sides(sim: &mut Simulation<3>) {
-    for i in 0..sim.state.len() {
-        if !sim.constraints.is_fully_fixed(i) {
-            sim.constraints.fix_component(i, 2, 0.0);
-            sim.state.a[i].z = 0.0;
-            sim.state.v[i].z = 0.0;
+    let p = sim.particles_mut();
+    for i in 0..p.len() {
+        if !p.constraints().is_fully_fixed(i) {
+            p.constraints_mut().fix_component(i, 2, 0.0);
+            p.a_mut()[i].z = 0.0;
+            p.v_mut()[i].z = 0.0;
         }
     }
 }

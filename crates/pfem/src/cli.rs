@@ -117,10 +117,9 @@ impl Args {
     where
         pfem_core::Const<D>: pfem_core::Dim,
     {
-        let mut sim = crate::Simulation::new(scene, tessellator, self.step_params()?)?;
-        sim.set_solver(self.solver()?);
+        let mut options = crate::Options::default();
         if let Some(v) = self.options.get("volume-correction") {
-            sim.volume_correction = match v.parse::<f64>() {
+            options.volume_correction = match v.parse::<f64>() {
                 Ok(b) if (0.0..=1.0).contains(&b) => b,
                 _ => {
                     return Err(Box::new(ArgsError(format!(
@@ -129,6 +128,9 @@ impl Args {
                 }
             };
         }
+        let mut sim =
+            crate::Simulation::with_options(scene, tessellator, self.step_params()?, options)?;
+        sim.set_solver(self.solver()?);
         Ok(sim)
     }
 

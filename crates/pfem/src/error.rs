@@ -119,6 +119,20 @@ pub enum RunError {
         /// The allowed range.
         reason: &'static str,
     },
+    /// No body has this name.
+    #[error("no body is named `{name}`")]
+    UnknownBody {
+        /// The name asked for.
+        name: String,
+    },
+    /// A hook failed or was given bad input.
+    #[error("hook `{hook}`: {why}")]
+    Hook {
+        /// The hook.
+        hook: String,
+        /// What is wrong.
+        why: String,
+    },
     /// A particle position became non-finite.
     #[error("particle {particle} has a non-finite position at t = {time} s")]
     NonFinite {

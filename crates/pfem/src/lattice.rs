@@ -7,9 +7,16 @@ fn counts<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> [usize; 3]
 where
     Const<D>: Dim,
 {
+    // A box of zero extent along an axis (a wall one particle thick) has
+    // one node along it, not two at the same place.
     let mut n = [0usize; 3];
     for k in 0..D {
-        n[k] = ((max[k] - min[k]) / h).round().max(1.0) as usize;
+        let extent = max[k] - min[k];
+        n[k] = if extent > 0.0 {
+            (extent / h).round().max(1.0) as usize
+        } else {
+            0
+        };
     }
     n
 }
@@ -30,7 +37,11 @@ where
                 let idx = [i, j, k];
                 let mut p = Point::<D>::zeros();
                 for d in 0..D {
-                    p[d] = min[d] + (max[d] - min[d]) * idx[d] as f64 / n[d] as f64;
+                    p[d] = if n[d] == 0 {
+                        min[d]
+                    } else {
+                        min[d] + (max[d] - min[d]) * idx[d] as f64 / n[d] as f64
+                    };
                 }
                 out.push(p);
             }
@@ -194,23 +205,36 @@ where
         self.map.entry(k).or_default().push(index);
     }
 
-    /// Whether a recorded point lies within `tol` (≤ cell) of `p`.
+    /// Whether a recorded point lies within `tol` of `p`.
     pub fn near(&self, p: &Point<D>, tol: f64, points: &[Point<D>]) -> bool {
+        self.find(p, tol, points).is_some()
+    }
+
+    /// The nearest recorded point within `tol` of `p`, if any. Searches
+    /// every cell `tol` can reach (a tolerance larger than the cell, as a
+    /// coarse body's quarter spacing next to a fine one, reaches further
+    /// than the adjacent cells).
+    pub fn find(&self, p: &Point<D>, tol: f64, points: &[Point<D>]) -> Option<usize> {
         let k = self.key(p);
-        let zr = if D == 3 { -1..=1 } else { 0..=0 };
+        let r = ((tol / self.cell).ceil() as i64).max(1);
+        let zr = if D == 3 { -r..=r } else { 0..=0 };
+        let mut best: Option<(f64, usize)> = None;
         for dz in zr {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
+            for dy in -r..=r {
+                for dx in -r..=r {
                     let kk = [k[0] + dx, k[1] + dy, k[2] + dz];
                     if let Some(v) = self.map.get(&kk) {
-                        if v.iter().any(|&i| (points[i] - p).norm() < tol) {
-                            return true;
+                        for &i in v {
+                            let d = (points[i] - p).norm();
+                            if d < tol && best.is_none_or(|(b, _)| d < b) {
+                                best = Some((d, i));
+                            }
                         }
                     }
                 }
             }
         }
-        false
+        best.map(|(_, i)| i)
     }
 }
 

@@ -23,39 +23,48 @@
 //!     .fluid("water", Box::new(Newtonian::water()), Geometry::Box { min: Point::<2>::new(0.0, 0.0), max: Point::<2>::new(0.2, 0.2) }, h);
 //! let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())?;
 //! sim.run(&mut [])?;
-//! assert!(sim.time >= 0.02 - 1e-12);
+//! assert!(sim.time() >= 0.02 - 1e-12);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 pub mod cases;
 pub mod cases3d;
 pub mod cli;
+pub mod elements;
 pub mod error;
 pub mod fidelity;
+pub mod hooks;
 pub mod lattice;
 pub mod observe;
 pub mod output;
+pub mod particles;
 pub mod scene;
 pub mod scene_file;
 pub mod simulation;
 pub mod solid_mesh;
 
+pub use elements::Elements;
 pub use error::{RunError, SceneError};
+pub use hooks::{Hook, HookContext};
 pub use observe::{Probe, StandardOutput};
+pub use particles::{Particle, Particles};
 pub use pfem_assembly as assembly;
 pub use pfem_constitutive as constitutive;
 pub use pfem_core as core;
 pub use pfem_geometry as geometry;
 pub use pfem_time as time;
-pub use scene::{Body, Geometry, RunSettings, Scene, WallMotion};
-pub use simulation::{Observer, Simulation, StageStats, Stages, VolumeLedger};
+pub use scene::{Body, Clamp, Geometry, RunSettings, Scene, WallMotion};
+pub use simulation::{Observer, Options, Simulation, StageStats, Stages, VolumeLedger};
 
 /// The names most programs need.
 pub mod prelude {
+    pub use crate::hooks::{Hook, HookContext};
     pub use crate::observe::{Probe, StandardOutput};
+    pub use crate::particles::Particles;
     pub use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
-    pub use crate::simulation::{Observer, Simulation};
+    pub use crate::simulation::{Observer, Options, Simulation};
+    pub use crate::{RunError, SceneError};
     pub use pfem_constitutive::{Hypoelastic, Material, MaterialKind, Newtonian};
-    pub use pfem_core::{Point, Vector};
+    pub use pfem_core::{ParticleKind, Point, Vector};
     pub use pfem_geometry::{Delaunay2, Delaunay3, Tessellator};
     pub use pfem_time::{Scheme, StepParams};
 }

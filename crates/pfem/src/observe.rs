@@ -101,20 +101,19 @@ where
         let Some(series) = self.series.as_mut() else {
             return Ok(());
         };
-        let n = sim.state.len();
+        let n = sim.particles().len();
         let nv = D + 1;
-        let mut cells = sim.fluid_elements.clone();
-        cells.extend_from_slice(&sim.solid_elements);
+        let cells = sim.elements().all();
         let n_cells = cells.len() / nv;
         // Boundary tags only when a frame is written.
         let mut tags = vec![0i32; n];
         let mut vertex_cells = Vec::new();
-        if sim.stages.free_surface {
+        if sim.stages().free_surface {
             if let Ok(cls) = classify(
-                &sim.state.x,
-                &sim.kind,
-                &sim.fluid_mesh,
-                Some(&sim.solid_elements),
+                sim.particles().x(),
+                sim.particles().kind(),
+                sim.elements().fluid_mesh(),
+                Some(sim.elements().solid()),
             ) {
                 for (t, c) in tags.iter_mut().zip(&cls.tags) {
                     *t = match c {
@@ -130,7 +129,8 @@ where
             }
         }
         let kind: Vec<i32> = sim
-            .kind
+            .particles()
+            .kind()
             .iter()
             .map(|k| match k {
                 ParticleKind::Fluid => 0,
@@ -138,38 +138,60 @@ where
                 ParticleKind::Wall => 2,
             })
             .collect();
-        let body: Vec<i32> = sim.body.iter().map(|&b| b as i32).collect();
+        let body: Vec<i32> = sim.particles().body().iter().map(|&b| b as i32).collect();
         let material: Vec<i32> = sim
-            .fluid_material
+            .elements()
+            .materials()
             .iter()
-            .chain(&sim.solid_material)
             .map(|&m| m as i32)
             .collect();
         let mut stress = vec![Tensor::<D>::zeros(); n_cells];
-        let nf = sim.fluid_material.len();
-        for (e, h) in sim.solid_history.iter().enumerate() {
-            stress[nf + e] = h.stress;
+        for (e, h) in sim.elements().solid_history().iter().enumerate() {
+            stress[e] = h.stress;
         }
         let pressure = sim.water_pressure();
+        // Internal variables of the solids' materials, one cell field per
+        // name (zero on elements of other materials).
+        let mut internal: Vec<(String, Vec<f64>)> = Vec::new();
+        let solid_mat = sim.elements().solid_material();
+        for (e, h) in sim.elements().solid_history().iter().enumerate() {
+            let Some(m) = sim.materials().get(solid_mat[e] as usize) else {
+                continue;
+            };
+            for (k, name) in m.internal_variables().iter().enumerate() {
+                let col = match internal.iter().position(|(n, _)| n == name) {
+                    Some(c) => c,
+                    None => {
+                        internal.push((name.to_string(), vec![0.0; n_cells]));
+                        internal.len() - 1
+                    }
+                };
+                internal[col].1[e] = h.internal.get(k).copied().unwrap_or(0.0);
+            }
+        }
+        let mut cell_data = vec![
+            Field::int("material", &material),
+            Field::sym_tensor("stress", &stress),
+        ];
+        for (name, values) in &internal {
+            cell_data.push(Field::scalar(name.as_str(), values));
+        }
         let frame = Frame {
-            points: &sim.state.x,
-            cells: &cells,
+            points: sim.particles().x(),
+            cells,
             vertex_cells: &vertex_cells,
             point_data: vec![
-                Field::vector("velocity", &sim.state.v),
-                Field::vector("acceleration", &sim.state.a),
+                Field::vector("velocity", sim.particles().v()),
+                Field::vector("acceleration", sim.particles().a()),
                 Field::scalar("pressure", &pressure),
                 Field::int("kind", &kind),
                 Field::int("body", &body),
                 Field::int("boundary_tag", &tags),
             ],
-            cell_data: vec![
-                Field::int("material", &material),
-                Field::sym_tensor("stress", &stress),
-            ],
-            time: Some(sim.time),
+            cell_data,
+            time: Some(sim.time()),
         };
-        series.write_frame(sim.time, &frame)?;
+        series.write_frame(sim.time(), &frame)?;
         Ok(())
     }
 
@@ -179,11 +201,11 @@ where
         }
         let values: Vec<f64> = self.probes.iter().map(|p| (p.measure)(sim)).collect();
         if let Some(csv) = self.csv.as_mut() {
-            let mut row = vec![sim.time];
+            let mut row = vec![sim.time()];
             row.extend_from_slice(&values);
             csv.row(&row)?;
         }
-        self.history.push((sim.time, values));
+        self.history.push((sim.time(), values));
         Ok(())
     }
 
@@ -211,16 +233,13 @@ where
     /// The run's summary as it stands.
     pub fn summary(&self, sim: &Simulation<D>) -> RunSummary {
         let mut wall = BTreeMap::new();
-        wall.insert("remesh".to_string(), sim.stats.remesh.1);
-        wall.insert("assemble".to_string(), sim.stats.assemble.1);
-        wall.insert("solve".to_string(), sim.stats.solve.1);
-        wall.insert("update".to_string(), sim.stats.update.1);
-        wall.insert(
-            "volume_correction".to_string(),
-            sim.stats.volume_correction.1,
-        );
-        wall.insert("output".to_string(), sim.stats.observe.1);
-        wall.insert("rejected_attempts".to_string(), sim.stats.rejected.1);
+        wall.insert("remesh".to_string(), sim.stats().remesh.1);
+        wall.insert("assemble".to_string(), sim.stats().assemble.1);
+        wall.insert("solve".to_string(), sim.stats().solve.1);
+        wall.insert("update".to_string(), sim.stats().update.1);
+        wall.insert("hooks".to_string(), sim.stats().hooks.1);
+        wall.insert("output".to_string(), sim.stats().observe.1);
+        wall.insert("rejected_attempts".to_string(), sim.stats().rejected.1);
         wall.insert(
             "total".to_string(),
             self.started
@@ -228,31 +247,33 @@ where
                 .unwrap_or(0.0),
         );
         let mut causes = BTreeMap::new();
-        causes.insert("remeshing".to_string(), sim.volume.remeshing);
-        causes.insert("solution".to_string(), sim.volume.solution);
-        causes.insert("correction".to_string(), sim.volume.correction);
+        causes.insert("remeshing".to_string(), sim.volume().remeshing);
+        causes.insert("solution".to_string(), sim.volume().solution);
+        for (name, dv) in &sim.volume().hooks {
+            causes.insert(name.clone(), *dv);
+        }
         RunSummary {
-            scene: sim.name.clone(),
+            scene: sim.name().to_string(),
             dimension: D,
-            particles: sim.state.len(),
-            steps: sim.steps,
-            rejected_steps: sim.rejected,
-            simulated_time: sim.time,
+            particles: sim.particles().len(),
+            steps: sim.steps(),
+            rejected_steps: sim.rejected(),
+            simulated_time: sim.time(),
             wall_time_s: wall,
-            fluid_volume_initial: sim.volume.initial,
+            fluid_volume_initial: sim.volume().initial,
             fluid_volume_final: sim.fluid_volume(),
             volume_change_by_cause: causes,
             extra: {
                 let mut e = self.extra.clone();
                 e.insert(
                     "rejected_inverted_element".into(),
-                    sim.rejected_by_cause.0.into(),
+                    sim.rejected_by_cause().0.into(),
                 );
                 e.insert(
                     "rejected_picard_divergence".into(),
-                    sim.rejected_by_cause.1.into(),
+                    sim.rejected_by_cause().1.into(),
                 );
-                e.insert("picard_iterations".into(), sim.stats.assemble.0.into());
+                e.insert("picard_iterations".into(), sim.stats().assemble.0.into());
                 e
             },
         }
@@ -267,40 +288,40 @@ where
         self.started = Some(Instant::now());
         std::fs::create_dir_all(&self.dir)
             .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
-        if self.vtu && sim.output_interval.is_some() {
-            self.series = Some(VtuSeries::create(&self.dir, &sim.name, Encoding::Base64)?);
+        if self.vtu && sim.output_interval().is_some() {
+            self.series = Some(VtuSeries::create(&self.dir, sim.name(), Encoding::Base64)?);
         }
         if !self.probes.is_empty() {
             let mut cols = vec!["t"];
             cols.extend(self.probes.iter().map(|p| p.name.as_str()));
             self.csv = Some(CsvProbe::create(self.dir.join("probes.csv"), &cols)?);
         }
-        self.progress = Some(Progress::new(sim.end_time, self.quiet));
+        self.progress = Some(Progress::new(sim.end_time(), self.quiet));
         self.write_frame(sim)?;
-        self.next_frame = sim.output_interval.unwrap_or(f64::INFINITY);
+        self.next_frame = sim.output_interval().unwrap_or(f64::INFINITY);
         self.record(sim)?;
         self.next_probe = self.probe_interval.unwrap_or(0.0);
         Ok(())
     }
 
     fn step(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
-        let eps = 1e-9 * sim.end_time;
-        if sim.time + eps >= self.next_frame {
+        let eps = 1e-9 * sim.end_time();
+        if sim.time() + eps >= self.next_frame {
             self.write_frame(sim)?;
-            while self.next_frame <= sim.time + eps {
-                self.next_frame += sim.output_interval.unwrap_or(f64::INFINITY);
+            while self.next_frame <= sim.time() + eps {
+                self.next_frame += sim.output_interval().unwrap_or(f64::INFINITY);
             }
         }
-        if sim.time + eps >= self.next_probe {
+        if sim.time() + eps >= self.next_probe {
             self.record(sim)?;
             if let Some(dt) = self.probe_interval {
-                while self.next_probe <= sim.time + eps {
+                while self.next_probe <= sim.time() + eps {
                     self.next_probe += dt;
                 }
             }
         }
         if let Some(p) = self.progress.as_mut() {
-            p.update(sim.time, sim.dt);
+            p.update(sim.time(), sim.dt());
         }
         Ok(())
     }

@@ -99,6 +99,58 @@ where
     Velocity(Vector<D>),
 }
 
+/// Where a solid is clamped (its velocity held at zero).
+#[derive(Clone)]
+pub enum Clamp<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// The solid's particles inside this box (lower and upper corners, m;
+    /// a tolerance of 10⁻¹² m).
+    Box(Point<D>, Point<D>),
+    /// The solid's particles at whose initial position the predicate holds.
+    Where(std::sync::Arc<dyn Fn(&Point<D>) -> bool + Send + Sync>),
+}
+
+impl<const D: usize> Clamp<D>
+where
+    Const<D>: Dim,
+{
+    /// Whether the particle at `p` is clamped.
+    pub fn holds(&self, p: &Point<D>) -> bool {
+        match self {
+            Clamp::Box(lo, hi) => (0..D).all(|k| p[k] >= lo[k] - 1e-12 && p[k] <= hi[k] + 1e-12),
+            Clamp::Where(f) => f(p),
+        }
+    }
+}
+
+impl<const D: usize> std::fmt::Debug for Clamp<D>
+where
+    Const<D>: Dim,
+{
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Clamp::Box(lo, hi) => write!(f, "Clamp::Box({:?}, {:?})", lo.as_slice(), hi.as_slice()),
+            Clamp::Where(_) => write!(f, "Clamp::Where(..)"),
+        }
+    }
+}
+
+/// A function of a particle's coordinates (m).
+pub type FieldFn<T> = dyn Fn(&[f64]) -> T + Send + Sync;
+
+/// A field over a body's particles at `t = 0`: a function of the
+/// particle's position.
+#[derive(Clone)]
+pub struct InitialField<T>(pub std::sync::Arc<FieldFn<T>>);
+
+impl<T> std::fmt::Debug for InitialField<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "InitialField(..)")
+    }
+}
+
 /// A body of a scene.
 #[derive(Debug)]
 pub struct Body<const D: usize>
@@ -115,12 +167,18 @@ where
     pub geometry: Geometry<D>,
     /// Particle spacing `h` (m).
     pub spacing: f64,
-    /// Initial velocity (m/s).
+    /// Initial velocity (m/s), uniform; see also [`Body::velocity_field`].
     pub velocity: Vector<D>,
+    /// Initial velocity per particle (m/s) from its position (its
+    /// coordinates as a slice), replacing [`Body::velocity`] where set.
+    pub velocity_field: Option<InitialField<Vector<D>>>,
+    /// Initial pressure per particle (Pa) from its position, replacing the
+    /// hydrostatic start of a fluid where set.
+    pub pressure_field: Option<InitialField<f64>>,
     /// Wall motion (walls only).
     pub motion: WallMotion<D>,
-    /// Solids only: particles inside this box are clamped (zero velocity).
-    pub clamp: Option<(Point<D>, Point<D>)>,
+    /// Solids only: where the solid is clamped (any number of clamps).
+    pub clamps: Vec<Clamp<D>>,
 }
 
 /// Run settings of a scene.
@@ -207,13 +265,19 @@ where
             geometry,
             spacing,
             velocity: Vector::<D>::zeros(),
+            velocity_field: None,
+            pressure_field: None,
             motion: WallMotion::Fixed,
-            clamp: None,
+            clamps: Vec::new(),
         });
         self
     }
 
-    /// Adds a solid body, clamped where `clamp` (a box) says.
+    /// Adds a solid body, clamped where `clamp` (a box) says; more clamps
+    /// with [`Scene::clamp_box`] and [`Scene::clamp_where`]. A solid may
+    /// touch a wall: where one of its particles falls within a quarter
+    /// spacing of a wall particle, the wall particle is dropped and the
+    /// solid particle is welded to the wall (it moves with it).
     pub fn solid(
         mut self,
         name: &str,
@@ -229,8 +293,13 @@ where
             geometry,
             spacing,
             velocity: Vector::<D>::zeros(),
+            velocity_field: None,
+            pressure_field: None,
             motion: WallMotion::Fixed,
-            clamp,
+            clamps: clamp
+                .map(|(lo, hi)| Clamp::Box(lo, hi))
+                .into_iter()
+                .collect(),
         });
         self
     }
@@ -250,8 +319,10 @@ where
             geometry,
             spacing,
             velocity: Vector::<D>::zeros(),
+            velocity_field: None,
+            pressure_field: None,
             motion,
-            clamp: None,
+            clamps: Vec::new(),
         });
         self
     }
@@ -260,6 +331,49 @@ where
     pub fn with_velocity(mut self, v: Vector<D>) -> Self {
         if let Some(b) = self.bodies.last_mut() {
             b.velocity = v;
+        }
+        self
+    }
+
+    /// Sets the initial velocity of each particle of the last body added
+    /// from its position: `f(x)` with `x` the particle's coordinates (m).
+    /// The initial accelerations are computed from it.
+    pub fn with_velocity_field(
+        mut self,
+        f: impl Fn(&[f64]) -> Vector<D> + Send + Sync + 'static,
+    ) -> Self {
+        if let Some(b) = self.bodies.last_mut() {
+            b.velocity_field = Some(InitialField(std::sync::Arc::new(f)));
+        }
+        self
+    }
+
+    /// Sets the initial pressure (Pa) of each particle of the last body
+    /// added (a fluid) from its position, instead of the hydrostatic start.
+    pub fn with_pressure_field(
+        mut self,
+        f: impl Fn(&[f64]) -> f64 + Send + Sync + 'static,
+    ) -> Self {
+        if let Some(b) = self.bodies.last_mut() {
+            b.pressure_field = Some(InitialField(std::sync::Arc::new(f)));
+        }
+        self
+    }
+
+    /// Clamps the particles of the last body added (a solid) inside the box
+    /// `[min, max]`, besides its other clamps.
+    pub fn clamp_box(mut self, min: Point<D>, max: Point<D>) -> Self {
+        if let Some(b) = self.bodies.last_mut() {
+            b.clamps.push(Clamp::Box(min, max));
+        }
+        self
+    }
+
+    /// Clamps the particles of the last body added (a solid) whose initial
+    /// position satisfies `f`, besides its other clamps.
+    pub fn clamp_where(mut self, f: impl Fn(&Point<D>) -> bool + Send + Sync + 'static) -> Self {
+        if let Some(b) = self.bodies.last_mut() {
+            b.clamps.push(Clamp::Where(std::sync::Arc::new(f)));
         }
         self
     }
@@ -385,7 +499,11 @@ where
             if b.kind == ParticleKind::Solid {
                 // Boxes keep a structured mesh; any other geometry is meshed
                 // by `solid_mesh` (Delaunay of its particles + alpha shape).
-                let supported = b.clamp.is_some() || self.gravity.is_none();
+                let touches_wall = self.bodies.iter().any(|w| {
+                    w.kind == ParticleKind::Wall
+                        && boxes_touch(&b.geometry, &w.geometry, b.spacing.min(w.spacing))
+                });
+                let supported = !b.clamps.is_empty() || touches_wall || self.gravity.is_none();
                 let floating = self.bodies.iter().any(|o| o.kind == ParticleKind::Fluid);
                 if !supported && !floating {
                     return Err(SceneError::Unsupported {
@@ -412,6 +530,39 @@ where
                 }
             }
         }
+        // Clamps and fields on bodies of the wrong kind.
+        for b in &self.bodies {
+            if !b.clamps.is_empty() && b.kind != ParticleKind::Solid {
+                return Err(SceneError::InvalidGeometry {
+                    body: b.name.clone(),
+                    why: "only a solid can be clamped".into(),
+                });
+            }
+            if b.pressure_field.is_some() && b.kind != ParticleKind::Fluid {
+                return Err(SceneError::InvalidGeometry {
+                    body: b.name.clone(),
+                    why: "only a fluid has an initial pressure field".into(),
+                });
+            }
+        }
+        let mut names: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
+        names.sort_unstable();
+        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+            return Err(SceneError::InvalidGeometry {
+                body: w[0].to_string(),
+                why: "two bodies have this name".into(),
+            });
+        }
         Ok(())
     }
+}
+
+/// Whether the bounding boxes of two geometries touch (within `tol`).
+fn boxes_touch<const D: usize>(a: &Geometry<D>, b: &Geometry<D>, tol: f64) -> bool
+where
+    Const<D>: Dim,
+{
+    let (a0, a1) = a.bounds();
+    let (b0, b1) = b.bounds();
+    (0..D).all(|k| a0[k] <= b1[k] + tol && b0[k] <= a1[k] + tol)
 }

@@ -630,9 +630,9 @@ impl SceneFile {
         Ok(match p.get_ref() {
             ProbeSpec::Volume => vec![Probe::new("volume", |s: &Simulation<D>| s.fluid_volume())],
             ProbeSpec::MaxSpeed => vec![Probe::new("max_speed", |s: &Simulation<D>| {
-                (0..s.state.len())
-                    .filter(|&i| s.kind[i] == ParticleKind::Fluid)
-                    .map(|i| s.state.v[i].norm())
+                (0..s.particles().len())
+                    .filter(|&i| s.particles().kind()[i] == ParticleKind::Fluid)
+                    .map(|i| s.particles().v()[i].norm())
                     .fold(0.0, f64::max)
             })],
             ProbeSpec::BodyDisplacement {
@@ -662,7 +662,7 @@ impl SceneFile {
                                     return f64::NAN;
                                 }
                                 idx.iter()
-                                    .map(|&i| s.state.x[i][k] - s.initial_position(i)[k])
+                                    .map(|&i| s.particles().x()[i][k] - s.initial_position(i)[k])
                                     .sum::<f64>()
                                     / idx.len() as f64
                             },
@@ -784,7 +784,7 @@ fn followed<const D: usize>(
 where
     Const<D>: Dim,
 {
-    let all = s.body_particles(body);
+    let all = s.body_particles(body).unwrap_or_default();
     let dist = |i: usize| (s.initial_position(i) - point).norm();
     if let Some(r) = radius {
         let near: Vec<usize> = all.iter().copied().filter(|&i| dist(i) <= r).collect();

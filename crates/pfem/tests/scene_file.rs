@@ -31,19 +31,32 @@ fn same_as_case(file: &str, case: Scene<2>, probes: &[&str]) {
     assert_eq!(names, probes, "{file}: probes");
     let a = simulation(scene);
     let b = simulation(case);
-    assert_eq!(a.state.len(), b.state.len(), "{file}: particle count");
-    assert_eq!(a.kind, b.kind, "{file}: kinds");
-    assert_eq!(a.body_names, b.body_names, "{file}: bodies");
-    assert_eq!(a.body, b.body, "{file}: body of each particle");
-    for (i, (p, q)) in a.state.x.iter().zip(&b.state.x).enumerate() {
+    assert_eq!(
+        a.particles().len(),
+        b.particles().len(),
+        "{file}: particle count"
+    );
+    assert_eq!(a.particles().kind(), b.particles().kind(), "{file}: kinds");
+    assert_eq!(a.body_names(), b.body_names(), "{file}: bodies");
+    assert_eq!(
+        a.particles().body(),
+        b.particles().body(),
+        "{file}: body of each particle"
+    );
+    for (i, (p, q)) in a.particles().x().iter().zip(b.particles().x()).enumerate() {
         assert!(
             (p - q).norm() <= 1e-12,
             "{file}: particle {i} at {p} vs {q}"
         );
     }
-    assert_eq!(a.solid_elements, b.solid_elements, "{file}: solid mesh");
     assert_eq!(
-        a.constraints, b.constraints,
+        a.elements().solid(),
+        b.elements().solid(),
+        "{file}: solid mesh"
+    );
+    assert_eq!(
+        a.particles().constraints(),
+        b.particles().constraints(),
         "{file}: walls and clamped particles"
     );
 }
@@ -162,7 +175,7 @@ fn the_puddle_is_valid_and_runs() {
         true,
     );
     sim.run(&mut [&mut out]).unwrap();
-    assert!(sim.time >= 0.01 - 1e-12);
+    assert!(sim.time() >= 0.01 - 1e-12);
     assert!(out.probe_series("volume").iter().all(|v| v.1 > 0.0));
 }
 

@@ -154,9 +154,9 @@ where
         .map_err(|e| e.to_string())?;
     eprintln!(
         "{name}: {D}D, {} particles, h_min = {} m, end time {} s -> {}",
-        sim.state.len(),
+        sim.particles().len(),
         sim.h_min(),
-        sim.end_time,
+        sim.end_time(),
         out.display()
     );
     let mut output = StandardOutput::new(&out, !args.no_vtu, probes, args.quiet);

@@ -8,7 +8,7 @@
 //! | a series of frames | [`VtuSeries`], [`PvdWriter`] | `.pvd` + one `.vtu` per frame |
 //! | probes (front position, …) | [`CsvProbe`] | `.csv`, one row per sample |
 //! | end-of-run figures | [`RunSummary`] | `summary.json` |
-//! | simulation vs experiment | [`plot_series_png`] | `.png` |
+//! | simulation vs experiment | `plot_series_png` (feature `plots`, on by default) | `.png` |
 //! | measured reference data | [`reference`](mod@reference), [`load_reference_csv`] | `data/validation/*.csv` |
 //! | terminal progress | [`Progress`] | stderr |
 //!
@@ -51,6 +51,7 @@ mod atomic;
 mod base64;
 mod csv;
 mod error;
+#[cfg(feature = "plots")]
 mod plot;
 mod progress;
 mod pvd;
@@ -61,6 +62,7 @@ mod vtu;
 pub use atomic::write_atomic;
 pub use csv::{load_reference_csv, parse_reference_csv, CsvProbe, ParseError};
 pub use error::OutputError;
+#[cfg(feature = "plots")]
 pub use plot::{plot_series_png, PlotSeries, PlotSpec, SeriesStyle};
 pub use progress::Progress;
 pub use pvd::{PvdWriter, VtuSeries};

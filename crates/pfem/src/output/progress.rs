@@ -3,7 +3,45 @@
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
+#[cfg(feature = "progress")]
 use indicatif::{ProgressBar, ProgressStyle};
+
+/// Without the `progress` feature (indicatif), a plain line redrawn in
+/// place with a carriage return.
+#[cfg(not(feature = "progress"))]
+#[derive(Debug)]
+struct ProgressBar;
+
+#[cfg(not(feature = "progress"))]
+impl ProgressBar {
+    fn set_position(&self, _: u64) {}
+    fn set_message(&self, msg: String) {
+        use std::io::Write;
+        let mut e = std::io::stderr();
+        let _ = write!(e, "\r{msg}    ");
+        let _ = e.flush();
+    }
+    fn println(&self, line: &str) {
+        eprintln!("\r{line}");
+    }
+    fn finish_with_message(&self, msg: String) {
+        eprintln!("\r{msg}    ");
+    }
+}
+
+#[cfg(feature = "progress")]
+fn new_bar() -> ProgressBar {
+    let style =
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30.cyan/blue}] {msg}  ETA {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> ");
+    ProgressBar::new(TICKS).with_style(style)
+}
+
+#[cfg(not(feature = "progress"))]
+fn new_bar() -> ProgressBar {
+    ProgressBar
+}
 
 /// Bar resolution: positions per run.
 const TICKS: u64 = 10_000;
@@ -42,14 +80,7 @@ impl Progress {
     /// (s); disabled when `quiet` or when stderr is not a terminal.
     pub fn new(end_time: f64, quiet: bool) -> Self {
         let enabled = !quiet && std::io::stderr().is_terminal();
-        let bar = enabled.then(|| {
-            let style = ProgressStyle::with_template(
-                "{elapsed_precise} [{bar:30.cyan/blue}] {msg}  ETA {eta}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> ");
-            ProgressBar::new(TICKS).with_style(style)
-        });
+        let bar = enabled.then(new_bar);
         Self {
             bar,
             end_time,

@@ -1,0 +1,230 @@
+//! The element set of a step: the solids' own meshes (fixed for the run)
+//! and the fluid mesh the alpha shape cut this step, in one connectivity
+//! array with one material and one history per element.
+
+use pfem_assembly::StepMesh;
+use pfem_constitutive::History;
+use pfem_core::{simplex_measure, Const, Dim, Point};
+use pfem_geometry::{AlphaShape, Tessellation};
+
+/// Elements of a simulation, `D + 1` particle indices each: the solid range
+/// first (each solid's own mesh, built once, carrying its stress history
+/// from step to step), then the fluid range (rebuilt by every remeshing,
+/// with a fresh history: a fluid's history is its nodal pressure, held by
+/// the particles). The step hands the whole array to the integrator as one
+/// [`StepMesh`]; nothing is copied back.
+///
+/// The alpha shape of the step is kept whole ([`Elements::shape`]): the
+/// fluid mesh with its adjacency (free-surface facets), the closures of
+/// sealed voids and the wall pockets.
+#[derive(Debug, Clone, Default)]
+pub struct Elements<const D: usize>
+where
+    Const<D>: Dim,
+{
+    conn: Vec<u32>,
+    material: Vec<u16>,
+    history: Vec<History<D>>,
+    n_solid: usize,
+    shape: AlphaShape,
+    close_sealed_voids: bool,
+    count_wall_pockets: bool,
+}
+
+impl<const D: usize> Elements<D>
+where
+    Const<D>: Dim,
+{
+    /// The solid elements (`conn`, flat) with one material each, and the
+    /// options for the fluid range.
+    pub(crate) fn new(
+        solid: Vec<u32>,
+        solid_material: Vec<u16>,
+        close_sealed_voids: bool,
+        count_wall_pockets: bool,
+    ) -> Self {
+        let n_solid = solid_material.len();
+        Self {
+            conn: solid,
+            material: solid_material,
+            history: vec![History::default(); n_solid],
+            n_solid,
+            shape: AlphaShape::default(),
+            close_sealed_voids,
+            count_wall_pockets,
+        }
+    }
+
+    /// Replaces the fluid range with the kept simplices of `shape`, the
+    /// material of each from `material_of(simplex)`.
+    pub(crate) fn set_fluid(&mut self, shape: AlphaShape, material_of: impl Fn(&[u32]) -> u16) {
+        let nv = D + 1;
+        self.conn.truncate(self.n_solid * nv);
+        self.material.truncate(self.n_solid);
+        self.history.truncate(self.n_solid);
+        self.conn.extend_from_slice(&shape.mesh.simplices);
+        for el in shape.mesh.simplices.chunks_exact(nv) {
+            self.material.push(material_of(el));
+        }
+        self.history.resize(self.material.len(), History::default());
+        self.shape = shape;
+    }
+
+    /// Takes the alpha shape out to be refilled (its buffers reused).
+    pub(crate) fn take_shape(&mut self) -> AlphaShape {
+        std::mem::take(&mut self.shape)
+    }
+
+    /// The whole step mesh for the integrator, and the histories it
+    /// advances.
+    pub(crate) fn step_mesh(&mut self) -> (StepMesh<'_>, &mut [History<D>]) {
+        let closures: &[u32] = if self.close_sealed_voids {
+            &self.shape.closures
+        } else {
+            &[]
+        };
+        (
+            StepMesh {
+                elements: &self.conn,
+                element_material: &self.material,
+                closures,
+            },
+            &mut self.history,
+        )
+    }
+
+    /// Every element, solid range first (flat).
+    pub fn all(&self) -> &[u32] {
+        &self.conn
+    }
+
+    /// Material of every element.
+    pub fn materials(&self) -> &[u16] {
+        &self.material
+    }
+
+    /// History of every element (solids: Cauchy stress at `t_n`).
+    pub fn history(&self) -> &[History<D>] {
+        &self.history
+    }
+
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.material.len()
+    }
+
+    /// Whether there is no element.
+    pub fn is_empty(&self) -> bool {
+        self.material.is_empty()
+    }
+
+    /// Number of solid elements.
+    pub fn n_solid(&self) -> usize {
+        self.n_solid
+    }
+
+    /// Number of fluid elements.
+    pub fn n_fluid(&self) -> usize {
+        self.material.len() - self.n_solid
+    }
+
+    /// The solid elements (flat).
+    pub fn solid(&self) -> &[u32] {
+        &self.conn[..self.n_solid * (D + 1)]
+    }
+
+    /// Material of each solid element.
+    pub fn solid_material(&self) -> &[u16] {
+        &self.material[..self.n_solid]
+    }
+
+    /// Stress history of each solid element.
+    pub fn solid_history(&self) -> &[History<D>] {
+        &self.history[..self.n_solid]
+    }
+
+    /// The fluid elements of the current step (flat).
+    pub fn fluid(&self) -> &[u32] {
+        &self.conn[self.n_solid * (D + 1)..]
+    }
+
+    /// Material of each fluid element.
+    pub fn fluid_material(&self) -> &[u16] {
+        &self.material[self.n_solid..]
+    }
+
+    /// The fluid mesh with adjacency ([`AlphaShape::mesh`]): the same
+    /// simplices as [`Elements::fluid`].
+    pub fn fluid_mesh(&self) -> &Tessellation {
+        &self.shape.mesh
+    }
+
+    /// The alpha shape of the current step.
+    pub fn shape(&self) -> &AlphaShape {
+        &self.shape
+    }
+
+    /// Closures of the sealed voids of the fluid mesh (3D; deviation 8 of
+    /// `ARCHITECTURE.md`), `D + 1` particle indices each; empty when
+    /// [`crate::Options::close_sealed_voids`] is off.
+    pub fn closures(&self) -> &[u32] {
+        if self.close_sealed_voids {
+            &self.shape.closures
+        } else {
+            &[]
+        }
+    }
+
+    /// Wall pockets of the current step (3D; deviation 9), counted in the
+    /// fluid volume with [`Elements::pocket_weights`]; empty when
+    /// [`crate::Options::count_wall_pockets`] is off.
+    pub fn wall_pockets(&self) -> &[u32] {
+        if self.count_wall_pockets {
+            &self.shape.wall_pockets
+        } else {
+            &[]
+        }
+    }
+
+    /// Weight of each wall pocket.
+    pub fn pocket_weights(&self) -> &[f64] {
+        if self.count_wall_pockets {
+            &self.shape.pocket_weights
+        } else {
+            &[]
+        }
+    }
+
+    /// Fluid volume at positions `x`: the measure of the fluid elements and
+    /// of the weighted wall pockets (m³; m² per metre of depth in 2D).
+    pub fn fluid_volume(&self, x: &[Point<D>]) -> f64 {
+        let nv = D + 1;
+        let measure = |el: &[u32]| {
+            let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+            for (a, &i) in el.iter().enumerate() {
+                p[a] = x[i as usize];
+            }
+            simplex_measure::<D>(&p[..nv])
+        };
+        let elements: f64 = self.fluid().chunks_exact(nv).map(measure).sum();
+        let pockets: f64 = self
+            .wall_pockets()
+            .chunks_exact(nv)
+            .zip(self.pocket_weights())
+            .map(|(el, w)| w * measure(el))
+            .sum();
+        elements + pockets
+    }
+
+    /// Drops the fluid range after particles were removed or inserted (it
+    /// indexes the old cloud); the next remeshing rebuilds it. Solid
+    /// particles keep their indices under [`crate::Particles::remap`], so
+    /// the solid range stays valid.
+    pub(crate) fn clear_fluid(&mut self) {
+        let nv = D + 1;
+        self.conn.truncate(self.n_solid * nv);
+        self.material.truncate(self.n_solid);
+        self.history.truncate(self.n_solid);
+        self.shape = AlphaShape::default();
+    }
+}

@@ -1,0 +1,537 @@
+//! Hooks and scenes that change during a run (issue 15): a paddle
+//! wave-maker, an inflow, a plate clamped at both ends, an obstacle standing
+//! on a floor, per-particle initial fields, a hook that stops the run.
+//! `cargo test --release --test hooks`
+
+use pfem::core::ParticleKind;
+use pfem::hooks::{BodyForceRamp, FnHook, Inflow, PrescribedMotion, Sinusoidal, StopWhen};
+use pfem::prelude::*;
+
+const G: f64 = 9.81;
+
+fn sim2(scene: Scene<2>, params: StepParams) -> Simulation<2> {
+    Simulation::new(scene, Box::new(Delaunay2::default()), params).expect("scene builds")
+}
+
+fn boxed(x0: f64, y0: f64, x1: f64, y1: f64) -> Geometry<2> {
+    Geometry::Box {
+        min: Point::<2>::new(x0, y0),
+        max: Point::<2>::new(x1, y1),
+    }
+}
+
+/// Elevation of the free surface near `x`: the highest fluid particle
+/// within half a spacing of it.
+fn elevation(sim: &Simulation<2>, x: f64, h: f64) -> f64 {
+    let p = sim.particles();
+    (0..p.len())
+        .filter(|&i| p.kind()[i] == ParticleKind::Fluid && (p.x()[i].x - x).abs() <= 0.5 * h)
+        .map(|i| p.x()[i].y)
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// Frequency (Hz) of the sinusoid that best fits `series` (mean removed),
+/// scanned from `f_lo` to `f_hi`.
+fn dominant_frequency(series: &[(f64, f64)], f_lo: f64, f_hi: f64) -> f64 {
+    let mean = series.iter().map(|s| s.1).sum::<f64>() / series.len() as f64;
+    let mut best = (0.0, f_lo);
+    let n = 2000;
+    for k in 0..=n {
+        let f = f_lo + (f_hi - f_lo) * k as f64 / n as f64;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let (mut c, mut s) = (0.0, 0.0);
+        for &(t, y) in series {
+            c += (y - mean) * (w * t).cos();
+            s += (y - mean) * (w * t).sin();
+        }
+        let power = c * c + s * s;
+        if power > best.0 {
+            best = (power, f);
+        }
+    }
+    best.1
+}
+
+/// A piston wave-maker: the tank's left wall moves as `A sin(2π t/T)`
+/// (ramped over one period). The surface next to the paddle rises and falls
+/// at the paddle's period (the fitted frequency within 3 % of 1/T), and the
+/// paddle's particles are exactly on the law's path at the end.
+#[test]
+fn a_paddle_wave_maker_makes_waves_of_its_period() {
+    let h = 0.025;
+    let (length, depth) = (1.5, 0.2);
+    let (amplitude, period) = (0.01, 0.8);
+    let scene = Scene::<2>::new("paddle")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 4.0 * period,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            boxed(-h, -2.0 * h, length + h, -h),
+            h,
+            WallMotion::Fixed,
+        )
+        .wall("paddle", boxed(-h, 0.0, -h, 0.4), h, WallMotion::Fixed)
+        .wall(
+            "end",
+            boxed(length + h, 0.0, length + h, 0.4),
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, 0.0, length, depth),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    let law = Sinusoidal {
+        amplitude: Vector::<2>::new(amplitude, 0.0),
+        period,
+        ramp: period,
+    };
+    sim.add_hook(Box::new(PrescribedMotion::new("paddle", Box::new(law))));
+    let probe_x = 0.1;
+    let mut series = Vec::new();
+    while sim.time() < sim.end_time() - 1e-12 {
+        sim.step().unwrap();
+        if sim.time() > 1.5 * period {
+            series.push((sim.time(), elevation(&sim, probe_x, h)));
+        }
+    }
+    let f = dominant_frequency(&series, 0.5 / period, 2.0 / period);
+    let range = series.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max)
+        - series.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
+    println!(
+        "paddle: fitted period {:.4} s (paddle {period} s), surface range {:.2} mm at x = {probe_x} m, {} steps",
+        1.0 / f,
+        1e3 * range,
+        sim.steps()
+    );
+    assert!(
+        (f * period - 1.0).abs() < 0.03,
+        "fitted period {} s",
+        1.0 / f
+    );
+    assert!(
+        range > 0.5 * amplitude,
+        "the surface barely moved: {range} m"
+    );
+    let paddle = sim.body_particles("paddle").unwrap();
+    let t = sim.time();
+    for i in paddle {
+        let want = sim.initial_position(i).x + law.position_offset(t);
+        assert!(
+            (sim.particles().x()[i].x - want).abs() < 1e-12,
+            "paddle particle {i} off its path"
+        );
+    }
+}
+
+/// Offset of a sinusoidal law at `t` (x component).
+trait Offset {
+    fn position_offset(&self, t: f64) -> f64;
+}
+
+impl Offset for Sinusoidal<2> {
+    fn position_offset(&self, t: f64) -> f64 {
+        use pfem::hooks::MotionLaw;
+        self.position(&Point::<2>::zeros(), t).x
+    }
+}
+
+/// An inflow through a pipe into a tank: the fluid volume grows at the
+/// prescribed rate `|v| × the pipe's clear height`, within 2 % (fitted
+/// slope over the run after the first 0.2 s).
+#[test]
+fn an_inflow_fills_a_tank_at_the_prescribed_rate() {
+    let h = 0.02;
+    let pipe = 0.1; // clear height between floor and ceiling particles
+    let speed = 0.5;
+    let scene = Scene::<2>::new("inflow")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 1.0,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.4, -h, 1.0, 0.0), h, WallMotion::Fixed)
+        .wall("end", boxed(1.0, h, 1.0 + h, 0.6), h, WallMotion::Fixed)
+        .wall(
+            "ceiling",
+            boxed(-0.4, pipe, 0.0, pipe + h),
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(-0.3, h, 0.98, pipe - h),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    let inflow = Inflow::new(
+        "water",
+        Point::<2>::new(-0.3, h),
+        Point::<2>::new(-0.3, pipe - h),
+        Vector::<2>::new(speed, 0.0),
+        h,
+        2.0 * h,
+    )
+    .unwrap();
+    sim.add_hook(Box::new(inflow));
+    let mut series = Vec::new();
+    while sim.time() < sim.end_time() - 1e-12 {
+        sim.step().unwrap();
+        if sim.time() >= 0.2 {
+            series.push((sim.time(), sim.fluid_volume()));
+        }
+    }
+    // Least-squares slope.
+    let n = series.len() as f64;
+    let (mt, mv) = series
+        .iter()
+        .fold((0.0, 0.0), |(a, b), s| (a + s.0 / n, b + s.1 / n));
+    let (num, den) = series.iter().fold((0.0, 0.0), |(a, b), s| {
+        (a + (s.0 - mt) * (s.1 - mv), b + (s.0 - mt).powi(2))
+    });
+    let rate = num / den;
+    let want = speed * pipe;
+    let v = sim.volume();
+    println!(
+        "inflow: fitted rate {rate:.5} m²/s against {want:.5} ({:+.2} %), {} particles at the end, ledger: inflow {:+.4} m², remeshing {:+.4}, solution {:+.4}",
+        100.0 * (rate / want - 1.0),
+        sim.particles().len(),
+        v.by(Inflow::<2>::NAME),
+        v.remeshing,
+        v.solution
+    );
+    assert!((rate / want - 1.0).abs() < 0.02, "rate {rate} m²/s");
+    assert!(
+        (sim.fluid_volume() - v.accounted()).abs() < 1e-12 * v.initial.max(1.0),
+        "the ledger does not close"
+    );
+}
+
+/// A plate clamped at both ends (two clamps on one solid) sags under its
+/// weight like a clamped–clamped beam: ends held exactly, symmetric, and
+/// the mid-span deflection converging to Timoshenko's
+/// `q L⁴/(384 E'I) + q L²/(8 κ G A)` (plane strain `E' = E/(1 − ν²)`,
+/// `κ = 5/6`; the shear part is 1.3 %), quasi-static by backward Euler with
+/// large steps. The load is small (deflection 3 % of the thickness): at a
+/// tenth of the thickness a clamped beam's membrane stretching already
+/// stiffens it by several per cent (measured: g = 2 m/s² stalls at −4 %).
+/// Linear triangles are stiff in bending (the cantilever of
+/// `docs/accuracy-cost.md` is 12.6 % short at t/4 and 4.2 % at t/8): here
+/// the error must fall with an observed order ≥ 0.9 over t/4, t/8, t/16 and
+/// end within 5 %.
+#[test]
+fn a_plate_clamped_at_both_ends_sags_like_a_clamped_beam() {
+    let (l, t, e, nu, rho, g): (f64, f64, f64, f64, f64, f64) =
+        (0.7, 0.02, 5.6e6, 0.4, 1000.0, 0.2);
+    let q = rho * g * t;
+    let ei = e / (1.0 - nu * nu) * t.powi(3) / 12.0;
+    let kga = 5.0 / 6.0 * e / (2.0 * (1.0 + nu)) * t;
+    let theory = -q * l.powi(4) / (384.0 * ei) - q * l * l / (8.0 * kga);
+    let mut errors = Vec::new();
+    for cells in [4.0, 8.0, 16.0] {
+        let h = t / cells;
+        let scene = Scene::<2>::new("plate")
+            .gravity(Vector::<2>::new(0.0, -g))
+            .settings(RunSettings {
+                end_time: 40.0,
+                max_dt: 5.0,
+                output_interval: None,
+                ..Default::default()
+            })
+            .solid(
+                "plate",
+                Box::new(Hypoelastic::new(rho, e, nu).unwrap()),
+                boxed(0.0, 0.0, l, t),
+                h,
+                Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(1e-9, 1.0))),
+            )
+            .clamp_box(
+                Point::<2>::new(l - 1e-9, -1.0),
+                Point::<2>::new(l + 1.0, 1.0),
+            );
+        let params = StepParams {
+            scheme: Scheme::BackwardEuler,
+            ..StepParams::default()
+        };
+        let mut sim = sim2(scene, params);
+        sim.run(&mut []).unwrap();
+        let p = sim.particles();
+        let sag_at = |x: f64| {
+            let ids: Vec<usize> = (0..p.len())
+                .filter(|&i| (sim.initial_position(i).x - x).abs() < 1e-9)
+                .collect();
+            ids.iter()
+                .map(|&i| p.x()[i].y - sim.initial_position(i).y)
+                .sum::<f64>()
+                / ids.len() as f64
+        };
+        let mid = sag_at(0.5 * l);
+        let ends = sag_at(0.0).abs().max(sag_at(l).abs());
+        let (left, right) = (sag_at(0.25 * l), sag_at(0.75 * l));
+        println!(
+            "clamped-clamped plate, h = t/{cells}: mid-span {:.4} mm, beam theory {:.4} mm ({:+.2} %), quarter points {:.4} / {:.4} mm",
+            1e3 * mid,
+            1e3 * theory,
+            100.0 * (mid / theory - 1.0),
+            1e3 * left,
+            1e3 * right
+        );
+        assert_eq!(ends, 0.0, "a clamped end moved");
+        assert!((left - right).abs() < 1e-3 * left.abs(), "not symmetric");
+        errors.push((mid / theory - 1.0).abs());
+    }
+    let order = (errors[0] / errors[2]).log2() / 2.0;
+    println!("observed order {order:.2}");
+    assert!(order >= 0.9, "order {order}, errors {errors:?}");
+    assert!(errors[2] < 0.05, "mid-span error {} at t/16", errors[2]);
+}
+
+/// An obstacle standing on a floor: set-up accepts a solid whose bottom row
+/// falls on the floor's particles (before: "lies within a quarter spacing of
+/// another particle"), welds it there (the floor's coinciding particles are
+/// dropped, the solid's held), and the obstacle stands: under its weight its
+/// top settles by the static compression of a column under its weight
+/// (within 5 %) and nothing moves sideways by more than 1 % of that.
+#[test]
+fn an_obstacle_standing_on_a_floor_is_welded_to_it() {
+    let h = 0.01;
+    let (w, height, e, rho) = (0.04, 0.08, 1.0e6, 1000.0);
+    let scene = Scene::<2>::new("standing")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 20.0,
+            max_dt: 2.0,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.1, 0.0), h, WallMotion::Fixed)
+        .solid(
+            "obstacle",
+            Box::new(Hypoelastic::new(rho, e, 0.0).unwrap()),
+            boxed(0.0, 0.0, w, height),
+            h,
+            None,
+        );
+    let params = StepParams {
+        scheme: Scheme::BackwardEuler,
+        ..StepParams::default()
+    };
+    let mut sim = sim2(scene, params);
+    let obstacle = sim.body_particles("obstacle").unwrap();
+    let floor = sim.body_particles("floor").unwrap();
+    let bottom: Vec<usize> = obstacle
+        .iter()
+        .copied()
+        .filter(|&i| sim.initial_position(i).y.abs() < 1e-12)
+        .collect();
+    assert_eq!(bottom.len(), 5);
+    // 21 × 2 floor particles less the 5 under the obstacle.
+    assert_eq!(floor.len(), 21 * 2 - 5);
+    assert!(bottom
+        .iter()
+        .all(|&i| sim.particles().constraints().is_fully_fixed(i)));
+    sim.run(&mut []).unwrap();
+    let top: Vec<usize> = obstacle
+        .iter()
+        .copied()
+        .filter(|&i| (sim.initial_position(i).y - height).abs() < 1e-12)
+        .collect();
+    let settle = top
+        .iter()
+        .map(|&i| sim.particles().x()[i].y - height)
+        .sum::<f64>()
+        / top.len() as f64;
+    // A column under its own weight, ν = 0 (no lateral coupling):
+    // δ = ρ g H² / (2E).
+    let theory = -rho * G * height * height / (2.0 * e);
+    let sideways = obstacle
+        .iter()
+        .map(|&i| (sim.particles().x()[i].x - sim.initial_position(i).x).abs())
+        .fold(0.0, f64::max);
+    println!(
+        "standing obstacle: top settles {:.4e} m, column theory {:.4e} m, sideways {:.1e} m",
+        settle, theory, sideways
+    );
+    assert!((settle / theory - 1.0).abs() < 0.05, "settled {settle} m");
+    assert!(
+        sideways < 1e-2 * theory.abs(),
+        "moved sideways {sideways} m"
+    );
+}
+
+/// Per-particle initial fields: a drop of water spinning as a rigid body
+/// (`v = ω × r`, no gravity) starts with exactly that velocity, and its
+/// angular momentum holds within 1 % over 0.1 s; a pressure field enters the
+/// initial acceleration (a square of water at uniform pressure `p₀` pushes
+/// its surface outward from the first instant, its centre does not move).
+#[test]
+fn initial_velocity_and_pressure_fields_start_the_run() {
+    let h = 0.01;
+    let omega = 2.0;
+    let scene = Scene::<2>::new("spin")
+        .settings(RunSettings {
+            end_time: 0.1,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .fluid(
+            "drop",
+            Box::new(Newtonian::water()),
+            Geometry::Ball {
+                center: Point::<2>::new(0.0, 0.0),
+                radius: 0.05,
+            },
+            h,
+        )
+        .with_velocity_field(move |x| Vector::<2>::new(-omega * x[1], omega * x[0]));
+    let mut sim = sim2(scene, StepParams::default());
+    let p = sim.particles();
+    for i in 0..p.len() {
+        let x = p.x()[i];
+        assert_eq!(p.v()[i], Vector::<2>::new(-omega * x.y, omega * x.x));
+    }
+    let momentum = |s: &Simulation<2>| {
+        let p = s.particles();
+        (0..p.len())
+            .map(|i| p.x()[i].x * p.v()[i].y - p.x()[i].y * p.v()[i].x)
+            .sum::<f64>()
+    };
+    let l0 = momentum(&sim);
+    sim.run(&mut []).unwrap();
+    let l1 = momentum(&sim);
+    println!("spinning drop: angular momentum {l0:.5e} -> {l1:.5e}");
+    assert!(
+        (l1 / l0 - 1.0).abs() < 0.01,
+        "angular momentum {l0} -> {l1}"
+    );
+
+    let p0 = 1000.0;
+    let scene = Scene::<2>::new("pressurised")
+        .settings(RunSettings {
+            end_time: 0.01,
+            max_dt: 1e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .fluid(
+            "square",
+            Box::new(Newtonian::water()),
+            boxed(-0.05, -0.05, 0.05, 0.05),
+            h,
+        )
+        .with_pressure_field(move |_| p0);
+    let sim = sim2(scene, StepParams::default());
+    let p = sim.particles();
+    let (mut outward, mut centre) = (0, f64::INFINITY);
+    for i in 0..p.len() {
+        let x = p.x()[i];
+        assert_eq!(p.pressure()[i], p0);
+        if x.x.abs().max(x.y.abs()) > 0.05 - 1e-9 {
+            outward += usize::from(p.a()[i].dot(&x) > 0.0);
+        }
+        if x.norm() < 1e-9 {
+            centre = p.a()[i].norm();
+        }
+    }
+    println!("pressurised square: {outward} surface particles pushed outward, centre |a| = {centre:.2e} m/s²");
+    assert_eq!(outward, 40, "every surface particle is pushed outward");
+    assert!(centre < 1e-9, "the centre accelerates at {centre} m/s²");
+}
+
+/// A hook stops the run (`HookContext::stop`): `run` returns `Ok`, the
+/// reason is kept, and no step runs after it. A body-force ramp and a
+/// closure hook see the time they are given.
+#[test]
+fn a_hook_stops_the_run_and_a_ramp_loads_gradually() {
+    let h = 0.05;
+    let scene = Scene::<2>::new("ramp")
+        .settings(RunSettings {
+            end_time: 1.0,
+            max_dt: 1e-2,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, 0.5, 0.1, 0.6),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    sim.add_hook(Box::new(BodyForceRamp {
+        target: Vector::<2>::new(0.0, -G),
+        duration: 0.2,
+    }));
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let record = seen.clone();
+    sim.add_hook(Box::new(FnHook::new("record gravity").before_solve(
+        move |ctx: &mut HookContext<'_, 2>| {
+            let g = ctx.gravity().map_or(0.0, |g| g.y);
+            record.lock().unwrap().push((ctx.time() + ctx.dt(), g));
+            Ok(())
+        },
+    )));
+    sim.add_hook(Box::new(StopWhen::new("half way", |t, _| t >= 0.3)));
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.stopped(), Some("half way"));
+    assert!(
+        sim.time() >= 0.3 && sim.time() < 0.3 + 1e-2 + 1e-12,
+        "stopped at {}",
+        sim.time()
+    );
+    for &(t, g) in seen.lock().unwrap().iter() {
+        let want = -G * (t / 0.2).min(1.0);
+        assert!((g - want).abs() < 1e-12, "gravity {g} at {t}");
+    }
+    assert!(sim.stages().body_force);
+    let steps = sim.steps();
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.steps(), steps, "a stopped run stays stopped");
+}
+
+/// Unknown body names are typed errors, not zeros.
+#[test]
+fn unknown_body_names_are_errors() {
+    let h = 0.05;
+    let scene = Scene::<2>::new("names")
+        .settings(RunSettings {
+            end_time: 0.01,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, 0.0, 0.1, 0.1),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    assert!(matches!(
+        sim.pressure_force_on("watr"),
+        Err(RunError::UnknownBody { .. })
+    ));
+    assert!(sim.body_particles("flor").is_err());
+    sim.add_hook(Box::new(PrescribedMotion::new(
+        "no such wall",
+        Box::new(Sinusoidal {
+            amplitude: Vector::<2>::new(0.01, 0.0),
+            period: 1.0,
+            ramp: 0.0,
+        }),
+    )));
+    assert!(matches!(sim.step(), Err(RunError::UnknownBody { .. })));
+}
