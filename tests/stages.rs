@@ -223,3 +223,80 @@ fn rejected_attempts_are_counted_and_timed() {
     .sum();
     assert!(stages <= wall, "stages {stages} s > wall {wall} s");
 }
+
+/// Measured by work done, not by flags: a solid-only scene builds its
+/// sparsity pattern and symbolic analysis once (its mesh never changes) and
+/// factorises once per Picard solve; every assembly covers exactly its
+/// elements. A fluid scene remeshes and builds a pattern every step.
+#[test]
+fn work_done_follows_the_scene() {
+    let mut sim = Simulation::new(
+        solid_only(),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    sim.run(&mut []).unwrap();
+    let w = sim.work();
+    let n_el = sim.elements().len() as u64;
+    println!("solid only: {w:?}, {} steps, {n_el} elements", sim.steps());
+    assert_eq!(w.remeshes, 0);
+    assert_eq!(w.patterns_built, 1, "the pattern is kept from step to step");
+    assert_eq!(w.symbolic_analyses, 1, "so is the symbolic analysis");
+    assert_eq!(w.factorizations, sim.stats().solve.0);
+    // Assemblies: the initial acceleration's one and one per iterate.
+    assert_eq!(w.elements_assembled, n_el * (sim.stats().assemble.0 + 1));
+
+    let h = 0.05;
+    let scene = Scene::<2>::new("puddle")
+        .gravity(Vector::<2>::new(0.0, -9.81))
+        .settings(RunSettings {
+            end_time: 0.05,
+            max_dt: 1e-2,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.1, -h),
+                max: Point::<2>::new(0.3, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.2, 0.2),
+            },
+            h,
+        );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    let dir = std::env::temp_dir().join(format!("pfem-test-no-output-{}", std::process::id()));
+    let mut out = StandardOutput::new(&dir, false, vec![], true);
+    sim.run(&mut [&mut out]).unwrap();
+    let w = sim.work();
+    println!("fluid: {w:?}, {} steps", sim.steps());
+    // The initial mesh, then one per step after the first.
+    assert_eq!(w.remeshes, sim.steps());
+    assert!(w.patterns_built >= sim.steps());
+    // No frames and no probes asked for: none formatted, none written.
+    assert!(out.history.is_empty());
+    let vtu = std::fs::read_dir(&dir)
+        .map(|d| {
+            d.flatten()
+                .filter(|e| {
+                    e.path()
+                        .extension()
+                        .is_some_and(|x| x == "vtu" || x == "csv")
+                })
+                .count()
+        })
+        .unwrap_or(0);
+    assert_eq!(vtu, 0);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -177,6 +177,10 @@ where
     elem_vol: Vec<bool>,
     pattern: BlockPattern,
     generation: u64,
+    /// The mesh of the last `prepare` (elements, materials, closures,
+    /// particle count), to keep the pattern when it has not changed.
+    last_mesh: (Vec<u32>, Vec<u16>, Vec<u32>, usize),
+    work: AssemblerWork,
     /// NV² block positions per element, row node a, column node b.
     elem_blocks: Vec<u32>,
     /// Nodal patches: for each system node a in a fluid element, the
@@ -211,6 +215,18 @@ where
     local: Vec<f64>,
 }
 
+/// Work an [`Assembler`] has done.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct AssemblerWork {
+    /// Calls of [`Assembler::prepare`].
+    pub prepares: u64,
+    /// Sparsity patterns built (a prepare on an unchanged mesh keeps the
+    /// last one).
+    pub patterns_built: u64,
+    /// Elements assembled, summed over [`Assembler::assemble`] calls.
+    pub elements_assembled: u64,
+}
+
 /// Figures of one assembly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AssemblyInfo {
@@ -232,8 +248,51 @@ where
         }
     }
 
-    /// Builds the pattern and index maps for the mesh of a step.
+    /// The work done so far.
+    pub fn work(&self) -> AssemblerWork {
+        self.work
+    }
+
+    /// Builds the pattern and index maps for the mesh of a step; keeps them
+    /// (and the pattern's [`Assembler::generation`], so a direct solver
+    /// keeps its symbolic analysis) when the mesh is the one of the last
+    /// call, as in a scene without a fluid, which never remeshes.
     pub fn prepare(
+        &mut self,
+        n_particles: usize,
+        mesh: StepMesh<'_>,
+        materials: &[Box<dyn Material<D>>],
+    ) -> Result<(), AssemblyError> {
+        self.work.prepares += 1;
+        let (ref le, ref lm, ref lc, ln) = self.last_mesh;
+        if self.work.patterns_built > 0
+            && ln == n_particles
+            && le.as_slice() == mesh.elements
+            && lm.as_slice() == mesh.element_material
+            && lc.as_slice() == mesh.closures
+            && mesh
+                .element_material
+                .iter()
+                .all(|&m| (m as usize) < materials.len())
+        {
+            return Ok(());
+        }
+        // Forget the last mesh first: a failed build must not be reused.
+        self.last_mesh.3 = usize::MAX;
+        self.prepare_new(n_particles, mesh, materials)?;
+        self.work.patterns_built += 1;
+        let last = &mut self.last_mesh;
+        last.0.clear();
+        last.0.extend_from_slice(mesh.elements);
+        last.1.clear();
+        last.1.extend_from_slice(mesh.element_material);
+        last.2.clear();
+        last.2.extend_from_slice(mesh.closures);
+        last.3 = n_particles;
+        Ok(())
+    }
+
+    fn prepare_new(
         &mut self,
         n_particles: usize,
         mesh: StepMesh<'_>,
@@ -442,6 +501,7 @@ where
                 what: "assembly input does not match the prepared mesh",
             });
         }
+        self.work.elements_assembled += ne as u64;
         // 1. Element states and unified triples, in parallel.
         let elem_sys = &self.elem_sys;
         let particle_of = &self.particle_of;

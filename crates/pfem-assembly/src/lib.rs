@@ -13,12 +13,13 @@ pub mod pattern;
 pub mod solver;
 
 pub use assembler::{
-    Assembler, AssemblyInfo, AssemblyInput, Constraints, Inertia, NodalRate, StepMesh,
+    Assembler, AssemblerWork, AssemblyInfo, AssemblyInput, Constraints, Inertia, NodalRate,
+    StepMesh,
 };
 pub use error::{AssemblyError, SolveError};
 pub use faer::Par;
 pub use kernels::VolumetricTreatment;
 pub use solver::{
-    ConjugateGradient, DirectSolver, LinearSolver, SolveReport, SparseCholesky, SparseLu,
-    DEFAULT_PARALLELISM,
+    ConjugateGradient, DirectSolver, LinearSolver, SolveReport, SolverWork, SparseCholesky,
+    SparseLu, DEFAULT_PARALLELISM,
 };

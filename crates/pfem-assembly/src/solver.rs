@@ -27,6 +27,30 @@ pub struct SolveReport {
     pub iterations: usize,
 }
 
+/// Work a solver has done: what the cost of a run is made of.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SolverWork {
+    /// Symbolic analyses (orderings, elimination trees): one per new
+    /// sparsity pattern for a direct solver.
+    pub symbolic_analyses: u64,
+    /// Numeric factorisations (direct) or preconditioner set-ups
+    /// (iterative).
+    pub factorizations: u64,
+    /// Solves with a kept factorisation ([`LinearSolver::resolve`]).
+    pub resolves: u64,
+}
+
+impl std::ops::Add for SolverWork {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Self {
+            symbolic_analyses: self.symbolic_analyses + o.symbolic_analyses,
+            factorizations: self.factorizations + o.factorizations,
+            resolves: self.resolves + o.resolves,
+        }
+    }
+}
+
 /// A linear solver for the monolithic system. Object safe: the time
 /// integrator holds a `Box<dyn LinearSolver>`.
 pub trait LinearSolver: Send + Sync + std::fmt::Debug {
@@ -52,6 +76,11 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
     /// caller then calls `solve`.
     fn resolve(&mut self, _b: &[f64], _x: &mut [f64]) -> Option<Result<(), SolveError>> {
         None
+    }
+
+    /// The work done so far (zeros for a solver that does not count).
+    fn work(&self) -> SolverWork {
+        SolverWork::default()
     }
 }
 
@@ -310,6 +339,7 @@ struct Direct<K: Kind> {
     factored: bool,
     ws: Workspace,
     refine: RefineBuffers,
+    work: SolverWork,
 }
 
 impl<K: Kind> Direct<K> {
@@ -322,6 +352,7 @@ impl<K: Kind> Direct<K> {
             factored: false,
             ws: Workspace::default(),
             refine: RefineBuffers::default(),
+            work: SolverWork::default(),
         }
     }
 
@@ -350,12 +381,14 @@ impl<K: Kind> Direct<K> {
             if K::FRESH_NUMERIC_PER_PATTERN {
                 self.numeric = K::Numeric::default();
             }
+            self.work.symbolic_analyses += 1;
             self.symbolic = Some((generation, K::analyse(a).map_err(fail)?));
         }
         let Some((_, sym)) = &self.symbolic else {
             return Err(fail("no symbolic analysis".into()));
         };
         let (par, ws, num) = (self.par, &mut self.ws, &mut self.numeric);
+        self.work.factorizations += 1;
         K::factorise(sym, num, a, par, ws).map_err(|e| fail(format!("{e}{}", K::HINT)))?;
         x.copy_from_slice(b);
         let mut err = None;
@@ -379,6 +412,7 @@ impl<K: Kind> Direct<K> {
             return None;
         }
         let (_, sym) = self.symbolic.as_ref()?;
+        self.work.resolves += 1;
         let (par, ws, num, name) = (self.par, &mut self.ws, &self.numeric, self.name);
         Some(resolve_with(b, x, |r| {
             K::apply(sym, num, r, par, ws).map_err(|detail| SolveError::Factorization {
@@ -453,6 +487,10 @@ impl LinearSolver for SparseLu {
     fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
         self.0.resolve(b, x)
     }
+
+    fn work(&self) -> SolverWork {
+        self.0.work
+    }
 }
 
 /// Sparse Cholesky (faer, supernodal/simplicial `LLᵀ`) for symmetric
@@ -491,6 +529,10 @@ impl LinearSolver for SparseCholesky {
 
     fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
         self.0.resolve(b, x)
+    }
+
+    fn work(&self) -> SolverWork {
+        self.0.work
     }
 }
 
@@ -694,6 +736,10 @@ impl LinearSolver for DirectSolver {
         } else {
             self.cholesky.resolve(b, x)
         }
+    }
+
+    fn work(&self) -> SolverWork {
+        self.cholesky.0.work + self.lu.0.work
     }
 }
 

@@ -434,6 +434,11 @@ where
         &self.assembler
     }
 
+    /// The linear solver's work so far ([`LinearSolver::work`]).
+    pub fn solver_work(&self) -> pfem_assembly::SolverWork {
+        self.solver.work()
+    }
+
     /// Sets the accelerations consistent with the state at `t₀`:
     /// `M A⁰ = F + f_int(σ⁰, V⁰)` with the lumped mass, so that Newmark's
     /// first step (eq. 48) starts from the right acceleration instead of

@@ -53,7 +53,7 @@ pub use pfem_core as core;
 pub use pfem_geometry as geometry;
 pub use pfem_time as time;
 pub use scene::{Body, Clamp, Geometry, RunSettings, Scene, WallMotion};
-pub use simulation::{Observer, Options, Simulation, StageStats, Stages, VolumeLedger};
+pub use simulation::{Observer, Options, Simulation, StageStats, Stages, VolumeLedger, Work};
 
 /// The names most programs need.
 pub mod prelude {

@@ -148,6 +148,22 @@ impl VolumeLedger {
     }
 }
 
+/// The work a run has done ([`Simulation::work`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Work {
+    /// Delaunay tessellations + alpha shapes (the initial one included).
+    pub remeshes: u64,
+    /// Sparsity patterns built by the assembler (once per step when the
+    /// mesh changes; once per run when it does not).
+    pub patterns_built: u64,
+    /// Elements assembled, summed over Picard iterations.
+    pub elements_assembled: u64,
+    /// Symbolic analyses of the linear solver.
+    pub symbolic_analyses: u64,
+    /// Numeric factorisations of the linear solver.
+    pub factorizations: u64,
+}
+
 /// Driver options chosen at construction ([`Simulation::with_options`]):
 /// the deviations from the paper that can be switched, and the hooks the
 /// driver installs itself.
@@ -880,6 +896,21 @@ where
             o.finish(self)?;
         }
         Ok(())
+    }
+
+    /// The work done so far: remeshes, sparsity patterns built, elements
+    /// assembled, symbolic analyses and factorisations. What a scene pays
+    /// for, counted rather than timed.
+    pub fn work(&self) -> Work {
+        let a = self.stepper.integrator.assembler().work();
+        let s = self.stepper.integrator.solver_work();
+        Work {
+            remeshes: self.stats.remesh.0,
+            patterns_built: a.patterns_built,
+            elements_assembled: a.elements_assembled,
+            symbolic_analyses: s.symbolic_analyses,
+            factorizations: s.factorizations,
+        }
     }
 
     /// Why a hook stopped the run, if one did.
