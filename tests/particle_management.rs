@@ -36,17 +36,15 @@ fn run(management: Option<(ParticleManagementParams, u64)>) -> (Run, Simulation<
     let mut case = DamBreak::default();
     case.spacing = case.width / 12.0;
     case.end_time = 6.0 / (2.0 * G / case.width).sqrt();
-    let options = Options {
-        particle_management: management,
-        ..Options::default()
-    };
-    let mut sim = Simulation::with_options(
+    let mut sim = Simulation::new(
         case.scene(),
         Box::new(Delaunay2::default()),
         StepParams::default(),
-        options,
     )
     .unwrap();
+    if let Some((params, every)) = management {
+        sim.add_hook(Box::new(ParticleManagement::new(params, every)));
+    }
     let (mut worst, mut mean_sum, mut n) = (f64::INFINITY, 0.0, 0);
     let mut ledger_gap: f64 = 0.0;
     while sim.time() < sim.end_time() - 1e-12 {

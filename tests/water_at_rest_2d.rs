@@ -113,7 +113,7 @@ fn water_around(
 /// clamped whole, its centre 0.3 m under the surface of the open tank; the
 /// water around it is the lattice less the particles within a spacing of
 /// the block. Measured: 196.20 N/m against 196.20 N/m (0.00 %) over 0.5 s;
-/// before `Simulation::pressure_force_on` added the weight of the fluid
+/// before `Loads::pressure_force_on` added the weight of the fluid
 /// mass lumped on the block's nodes it read 274.88 N/m (+40 %).
 #[test]
 fn a_block_held_under_water_at_rest_feels_its_buoyancy() {
@@ -179,7 +179,7 @@ fn a_block_held_under_water_at_rest_feels_its_buoyancy() {
 /// wetted interface is the adjacent water's, whatever the ratio of the
 /// spacings. A plate (0.4 m × 0.05 m, clamped whole) 1 m under the surface
 /// of 2 m of water; the water's spacing is 0.1 m, the plate's 8 times
-/// finer. After 0.5 s the output pressure (`Simulation::water_pressure`,
+/// finer. After 0.5 s the output pressure (`Loads::water_pressure`,
 /// the VTU's `pressure`) on every wetted plate particle is within 2 % of
 /// ρ g (H − y).
 #[test]

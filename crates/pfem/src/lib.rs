@@ -26,31 +26,36 @@
 //! assert!(sim.time() >= 0.02 - 1e-12);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-pub mod cases;
-pub mod cases3d;
 pub mod cli;
-pub mod elements;
-pub mod error;
-pub mod fidelity;
-pub mod hooks;
-pub mod lattice;
-pub mod observe;
-pub mod output;
-pub mod particles;
-pub mod scene;
 pub mod scene_file;
-pub mod simulation;
-pub mod solid_mesh;
+
+pub use pfem_cases::{cases, cases3d, fidelity};
+pub use pfem_driver::{elements, error, particles, simulation};
+
+/// Hooks: the seam ([`Hook`], [`HookContext`]) and the driver's own
+/// (`pfem_driver::hooks`), and the scene hooks of `pfem-hooks` (wall motion
+/// laws, load ramps, inflows, particle management).
+pub mod hooks {
+    pub use pfem_driver::hooks::*;
+    pub use pfem_hooks::*;
+}
+pub use pfem_io::{observe, output};
+pub use pfem_scene::{lattice, scene, solid_mesh};
 
 pub use elements::Elements;
-pub use error::{RunError, SceneError};
+pub use error::RunError;
 pub use hooks::{Hook, HookContext};
 pub use observe::{Probe, StandardOutput};
 pub use particles::{Particle, Particles};
 pub use pfem_assembly as assembly;
+pub use pfem_cases as validation;
 pub use pfem_constitutive as constitutive;
 pub use pfem_core as core;
+pub use pfem_driver as driver;
 pub use pfem_geometry as geometry;
+pub use pfem_io as io;
+pub use pfem_io::Loads;
+pub use pfem_scene::SceneError;
 pub use pfem_time as time;
 pub use scene::{Body, Clamp, Geometry, RunSettings, Scene, WallMotion};
 pub use simulation::{Observer, Options, Simulation, StageStats, Stages, VolumeLedger, Work};
@@ -66,5 +71,6 @@ pub mod prelude {
     pub use pfem_constitutive::{Hypoelastic, Material, MaterialKind, Newtonian};
     pub use pfem_core::{ParticleKind, Point, Vector};
     pub use pfem_geometry::{Delaunay2, Delaunay3, Tessellator};
+    pub use pfem_io::Loads;
     pub use pfem_time::{Scheme, StepParams};
 }

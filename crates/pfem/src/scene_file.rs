@@ -70,7 +70,7 @@
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
-//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `clamp` (solids: `{ min, max }`, m) |
+//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson }` (kg/m³, Pa, –) |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }` or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
@@ -183,6 +183,10 @@ pub struct BodySpec {
     /// Solids: particles in this box are clamped (zero velocity).
     #[serde(default)]
     pub clamp: Option<BoxSpec>,
+    /// Solids: more clamps, `clamps = [{ min = …, max = … }, …]` (a plate
+    /// held at both ends).
+    #[serde(default)]
+    pub clamps: Vec<BoxSpec>,
 }
 
 /// A material table: `newtonian = { … }` or `hypoelastic = { … }`.
@@ -510,7 +514,7 @@ impl SceneFile {
                 }
             }
             if b.kind != BodyKind::Solid {
-                if let Some(c) = &b.clamp {
+                if let Some(c) = b.clamp.as_ref().or(b.clamps.first()) {
                     return Err(self.error(
                         c.min.span(),
                         format!("{} is for solids only", what("clamp")),
@@ -537,7 +541,14 @@ impl SceneFile {
                         )),
                         None => None,
                     };
-                    scene.solid(&b.name, m, geometry, spacing, clamp)
+                    let mut s = scene.solid(&b.name, m, geometry, spacing, clamp);
+                    for c in &b.clamps {
+                        s = s.clamp_box(
+                            Point::from(self.vector::<D>(&c.min, &what("clamps.min"))?),
+                            Point::from(self.vector::<D>(&c.max, &what("clamps.max"))?),
+                        );
+                    }
+                    s
                 }
             };
             if let Some(v) = &b.velocity {

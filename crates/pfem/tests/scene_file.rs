@@ -403,3 +403,39 @@ fn the_binary_checks_runs_and_fails_cleanly() {
         );
     }
 }
+
+/// A solid may carry several clamps (`clamp` and `clamps`): a plate held at
+/// both ends has both end columns fixed and nothing else.
+#[test]
+fn a_plate_clamped_at_both_ends_in_a_file() {
+    let text = r#"name = "plate"
+dimension = 2
+spacing = 0.005
+
+[run]
+end_time = 0.01
+max_dt = 5e-3
+
+[[body]]
+name = "plate"
+kind = "solid"
+material.hypoelastic = { density = 1000.0, young = 5.6e6, poisson = 0.4 }
+geometry.box = { min = [0.0, 0.0], max = [0.1, 0.01] }
+clamps = [
+    { min = [-1.0, -1.0], max = [0.0, 1.0] },
+    { min = [0.1, -1.0], max = [1.0, 1.0] },
+]
+"#;
+    let LoadedScene::Two(scene, _) = build(text).unwrap() else {
+        panic!("2D")
+    };
+    let sim = simulation(scene);
+    let p = sim.particles();
+    let fixed: Vec<usize> = (0..p.len())
+        .filter(|&i| p.constraints().is_fully_fixed(i))
+        .collect();
+    assert_eq!(fixed.len(), 2 * 3, "two end columns of three particles");
+    assert!(fixed
+        .iter()
+        .all(|&i| p.x()[i].x.abs() < 1e-12 || (p.x()[i].x - 0.1).abs() < 1e-12));
+}

@@ -1,0 +1,434 @@
+//! Hooks: code that may change a simulation at defined points of a step.
+//!
+//! A [`Hook`] is called with a narrow mutable [`HookContext`] at three
+//! points of every step (see `ARCHITECTURE.md`, "One time step"):
+//!
+//! 1. [`Hook::after_remesh`]: the step's mesh is made, `Δt` is not chosen.
+//!    Move particles, change pressures, remove or insert particles (the
+//!    driver remeshes again at once when a hook changes the particle set).
+//! 2. [`Hook::before_solve`]: `Δt` is chosen ([`HookContext::dt`]). Set the
+//!    boundary conditions and body force for `[t, t + Δt]`.
+//! 3. [`Hook::after_step`]: the step is accepted. Correct positions, record,
+//!    ask the run to stop ([`HookContext::stop`]).
+//!
+//! What a hook does to the fluid volume is measured by the driver and
+//! booked in the [`VolumeLedger`](crate::VolumeLedger) under the hook's
+//! [`Hook::name`]. Hooks run in the order they were added; the driver's own
+//! options ([`crate::Options`]) add theirs first.
+//!
+//! Here: the driver's own [`VolumeCorrection`] and
+//! [`FreeSurfacePressureZero`], and [`StopWhen`] and [`FnHook`] (a hook from
+//! closures). Wall motion laws, load ramps, inflows and particle management
+//! are in the `pfem-hooks` crate (`pfem::hooks` re-exports both).
+//!
+//! ```
+//! use pfem_constitutive::Newtonian;
+//! use pfem_core::{Point, Vector};
+//! use pfem_driver::hooks::{Hook, HookContext};
+//! use pfem_driver::{RunError, Simulation};
+//! use pfem_geometry::Delaunay2;
+//! use pfem_scene::{Geometry, RunSettings, Scene, WallMotion};
+//! use pfem_time::StepParams;
+//!
+//! /// Stops the run when the water's fastest particle exceeds 1 m/s.
+//! struct SpeedLimit;
+//! impl Hook<2> for SpeedLimit {
+//!     fn name(&self) -> &str { "speed limit" }
+//!     fn after_step(&mut self, ctx: &mut HookContext<'_, 2>) -> Result<(), RunError> {
+//!         if ctx.particles().v().iter().any(|v| v.norm() > 1.0) {
+//!             ctx.stop("a particle exceeded 1 m/s");
+//!         }
+//!         Ok(())
+//!     }
+//! }
+//! # let h = 0.05;
+//! # let scene = Scene::<2>::new("drop")
+//! #     .gravity(Vector::<2>::new(0.0, -9.81))
+//! #     .settings(RunSettings { end_time: 1.0, max_dt: 5e-3, output_interval: None, ..Default::default() })
+//! #     .wall("floor", Geometry::Box { min: Point::<2>::new(-0.1, -h), max: Point::<2>::new(0.3, 0.0) }, h, WallMotion::Fixed)
+//! #     .fluid("water", Box::new(Newtonian::water()), Geometry::Box { min: Point::<2>::new(0.0, 0.3), max: Point::<2>::new(0.1, 0.4) }, h);
+//! let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())?;
+//! sim.add_hook(Box::new(SpeedLimit));
+//! sim.run(&mut [])?;
+//! assert!(sim.stopped().is_some());
+//! assert!(sim.time() < 0.2); // free fall reaches 1 m/s at 0.10 s
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod volume;
+
+pub use volume::{FreeSurfacePressureZero, VolumeCorrection};
+
+use pfem_constitutive::Material;
+use pfem_core::{Const, Dim, ParticleKind, Vector};
+use pfem_geometry::{AlphaShapeParams, ParticleManagementParams, Tessellation, Tessellator};
+
+use crate::elements::Elements;
+use crate::particles::{Particle, Particles};
+use crate::RunError;
+
+/// Code called at defined points of every step with a narrow mutable view
+/// of the simulation. Object safe; every method but [`Hook::name`] does
+/// nothing by default; `()` is the hook that does nothing.
+pub trait Hook<const D: usize>: Send
+where
+    Const<D>: Dim,
+{
+    /// Name, for the volume ledger and messages.
+    fn name(&self) -> &str;
+
+    /// Whether the fluid volume this hook's changes add or remove is fluid
+    /// entering or leaving the domain (an inflow, an outflow), which the
+    /// volume correction must keep, rather than an error it must undo
+    /// (particle management, moved walls). Default false. The driver books
+    /// such changes in [`crate::VolumeLedger::sources`] too.
+    fn sources_fluid(&self) -> bool {
+        false
+    }
+
+    /// Once, before the first step (the initial mesh and state are there).
+    fn start(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        Ok(())
+    }
+
+    /// After remeshing, before `Δt` is chosen.
+    fn after_remesh(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        Ok(())
+    }
+
+    /// Before the solve, with `Δt` chosen.
+    fn before_solve(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        Ok(())
+    }
+
+    /// After an accepted step.
+    fn after_step(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        Ok(())
+    }
+}
+
+impl<const D: usize> Hook<D> for ()
+where
+    Const<D>: Dim,
+{
+    fn name(&self) -> &str {
+        "nothing"
+    }
+}
+
+/// What a hook may see and change. Built by the driver for each call.
+pub struct HookContext<'a, const D: usize>
+where
+    Const<D>: Dim,
+{
+    pub(crate) time: f64,
+    pub(crate) dt: f64,
+    pub(crate) steps: u64,
+    pub(crate) particles: &'a mut Particles<D>,
+    pub(crate) elements: &'a Elements<D>,
+    pub(crate) materials: &'a [Box<dyn Material<D>>],
+    pub(crate) body_names: &'a [String],
+    pub(crate) gravity: &'a mut Option<Vector<D>>,
+    pub(crate) stop: &'a mut Option<String>,
+    pub(crate) tessellator: &'a mut dyn Tessellator<D>,
+    pub(crate) delaunay: &'a Tessellation,
+    pub(crate) alpha: &'a AlphaShapeParams,
+    pub(crate) initial_volume: f64,
+    pub(crate) sources: f64,
+    pub(crate) moved: bool,
+    pub(crate) remesh: bool,
+}
+
+impl<const D: usize> std::fmt::Debug for HookContext<'_, D>
+where
+    Const<D>: Dim,
+{
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HookContext")
+            .field("time", &self.time)
+            .field("dt", &self.dt)
+            .field("particles", &self.particles.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a, const D: usize> HookContext<'a, D>
+where
+    Const<D>: Dim,
+{
+    /// Simulated time (s): `t_n` before the solve, `t_{n+1}` after the
+    /// step.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The step size (s): the one about to be tried in
+    /// [`Hook::before_solve`] (a rejected attempt halves it), the one taken
+    /// in [`Hook::after_step`], the last one taken otherwise.
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// Accepted steps so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The particles.
+    pub fn particles(&self) -> &Particles<D> {
+        self.particles
+    }
+
+    /// The particles, to change (positions, velocities, pressures,
+    /// constraints). The driver measures the fluid volume after the call.
+    pub fn particles_mut(&mut self) -> &mut Particles<D> {
+        self.moved = true;
+        self.particles
+    }
+
+    /// The elements of the step (the mesh of the current step: after a
+    /// hook changes the particle set it is remade before the next hook).
+    pub fn elements(&self) -> &Elements<D> {
+        self.elements
+    }
+
+    /// The materials.
+    pub fn materials(&self) -> &[Box<dyn Material<D>>] {
+        self.materials
+    }
+
+    /// Index of body `name`.
+    pub fn body(&self, name: &str) -> Result<u32, RunError> {
+        self.body_names
+            .iter()
+            .position(|b| b == name)
+            .map(|i| i as u32)
+            .ok_or_else(|| RunError::UnknownBody {
+                name: name.to_string(),
+            })
+    }
+
+    /// Body names, by index.
+    pub fn body_names(&self) -> &[String] {
+        self.body_names
+    }
+
+    /// Body force per unit mass (m/s²).
+    pub fn gravity(&self) -> Option<Vector<D>> {
+        *self.gravity
+    }
+
+    /// Sets the body force per unit mass (m/s²) from now on.
+    pub fn set_gravity(&mut self, g: Option<Vector<D>>) {
+        *self.gravity = g;
+    }
+
+    /// Asks the run to stop after this step, for `reason`:
+    /// [`crate::Simulation::run`] returns `Ok` and
+    /// [`crate::Simulation::stopped`] gives the reason.
+    pub fn stop(&mut self, reason: impl Into<String>) {
+        *self.stop = Some(reason.into());
+    }
+
+    /// Fluid volume of the current mesh at the current positions (m³; m²
+    /// per metre in 2D), wall pockets included.
+    pub fn fluid_volume(&self) -> f64 {
+        self.elements.fluid_volume(self.particles.x())
+    }
+
+    /// Fluid volume at the start of the run.
+    pub fn initial_fluid_volume(&self) -> f64 {
+        self.initial_volume
+    }
+
+    /// The fluid volume the run should have now: the initial volume plus
+    /// what sources (inflows, outflows: [`Hook::sources_fluid`]) added.
+    pub fn intended_fluid_volume(&self) -> f64 {
+        self.initial_volume + self.sources
+    }
+
+    /// Appends a fluid particle (acceleration zero, no constraint); the mesh
+    /// is remade before the next hook runs. Returns its index.
+    pub fn insert_fluid(&mut self, p: Particle<D>) -> Result<usize, RunError> {
+        if p.kind != ParticleKind::Fluid {
+            return Err(RunError::Hook {
+                hook: "insert_fluid".into(),
+                why: "only fluid particles may be inserted".into(),
+            });
+        }
+        if self.materials.get(p.material as usize).is_none()
+            || (p.body as usize) >= self.body_names.len()
+        {
+            return Err(RunError::Hook {
+                hook: "insert_fluid".into(),
+                why: format!("no material {} or body {}", p.material, p.body),
+            });
+        }
+        if !(p.spacing > 0.0 && p.spacing.is_finite())
+            || p.x.iter().chain(p.v.iter()).any(|c| !c.is_finite())
+        {
+            return Err(RunError::Hook {
+                hook: "insert_fluid".into(),
+                why: "non-finite position or velocity, or non-positive spacing".into(),
+            });
+        }
+        self.remesh = true;
+        self.moved = true;
+        Ok(self.particles.push(p))
+    }
+
+    /// Removes crowding fluid particles and inserts particles into oversized
+    /// fluid elements ([`pfem_geometry::manage_particles`] on the current
+    /// Delaunay tessellation and alpha shape), carrying every per-particle
+    /// array ([`Particles::remap`]). Returns `(removed, inserted)`.
+    pub fn manage_particles(
+        &mut self,
+        params: &ParticleManagementParams,
+    ) -> Result<(usize, usize), RunError> {
+        let upd = pfem_geometry::manage_particles(
+            self.tessellator,
+            self.particles.x(),
+            self.particles.kind(),
+            self.particles.spacing(),
+            self.delaunay,
+            self.elements.shape(),
+            self.alpha,
+            params,
+        )
+        .map_err(RunError::Geometry)?;
+        if upd.removed == 0 && upd.inserted == 0 {
+            return Ok((0, 0));
+        }
+        self.particles.remap(&upd.map).map_err(|e| RunError::Hook {
+            hook: "manage_particles".into(),
+            why: e.to_string(),
+        })?;
+        self.remesh = true;
+        self.moved = true;
+        Ok((upd.removed, upd.inserted))
+    }
+}
+
+/// Stops the run when a condition on the particles holds.
+pub struct StopWhen<const D: usize>
+where
+    Const<D>: Dim,
+{
+    reason: String,
+    #[allow(clippy::type_complexity)]
+    when: Box<dyn FnMut(f64, &Particles<D>) -> bool + Send>,
+}
+
+impl<const D: usize> StopWhen<D>
+where
+    Const<D>: Dim,
+{
+    /// Stops after the first accepted step at which `when(t, particles)`
+    /// holds, giving `reason`.
+    pub fn new(
+        reason: impl Into<String>,
+        when: impl FnMut(f64, &Particles<D>) -> bool + Send + 'static,
+    ) -> Self {
+        Self {
+            reason: reason.into(),
+            when: Box::new(when),
+        }
+    }
+}
+
+impl<const D: usize> Hook<D> for StopWhen<D>
+where
+    Const<D>: Dim,
+{
+    fn name(&self) -> &str {
+        "stop when"
+    }
+    fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        if (self.when)(ctx.time(), ctx.particles()) {
+            ctx.stop(self.reason.clone());
+        }
+        Ok(())
+    }
+}
+
+/// A closure run at one point of every step.
+type StepFn<const D: usize> =
+    Box<dyn FnMut(&mut HookContext<'_, D>) -> Result<(), RunError> + Send>;
+
+/// A hook from closures, one per point of the step (each optional).
+pub struct FnHook<const D: usize>
+where
+    Const<D>: Dim,
+{
+    name: String,
+    after_remesh: Option<StepFn<D>>,
+    before_solve: Option<StepFn<D>>,
+    after_step: Option<StepFn<D>>,
+}
+
+impl<const D: usize> FnHook<D>
+where
+    Const<D>: Dim,
+{
+    /// A hook named `name` that does nothing yet.
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            after_remesh: None,
+            before_solve: None,
+            after_step: None,
+        }
+    }
+    /// Runs `f` after remeshing.
+    pub fn after_remesh(
+        mut self,
+        f: impl FnMut(&mut HookContext<'_, D>) -> Result<(), RunError> + Send + 'static,
+    ) -> Self {
+        self.after_remesh = Some(Box::new(f));
+        self
+    }
+    /// Runs `f` before the solve.
+    pub fn before_solve(
+        mut self,
+        f: impl FnMut(&mut HookContext<'_, D>) -> Result<(), RunError> + Send + 'static,
+    ) -> Self {
+        self.before_solve = Some(Box::new(f));
+        self
+    }
+    /// Runs `f` after each accepted step.
+    pub fn after_step(
+        mut self,
+        f: impl FnMut(&mut HookContext<'_, D>) -> Result<(), RunError> + Send + 'static,
+    ) -> Self {
+        self.after_step = Some(Box::new(f));
+        self
+    }
+}
+
+impl<const D: usize> Hook<D> for FnHook<D>
+where
+    Const<D>: Dim,
+{
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn after_remesh(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        self.after_remesh.as_mut().map_or(Ok(()), |f| f(ctx))
+    }
+    fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        self.before_solve.as_mut().map_or(Ok(()), |f| f(ctx))
+    }
+    fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        self.after_step.as_mut().map_or(Ok(()), |f| f(ctx))
+    }
+}
+
+/// Particles of body `id`.
+pub fn body_particles<const D: usize>(particles: &Particles<D>, id: u32) -> Vec<usize>
+where
+    Const<D>: Dim,
+{
+    (0..particles.len())
+        .filter(|&i| particles.body()[i] == id)
+        .collect()
+}

@@ -1,0 +1,276 @@
+//! The particle set: every per-particle array of a simulation in one place,
+//! with one way to change their number ([`Particles::remap`]).
+
+use pfem_assembly::Constraints;
+use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
+use pfem_geometry::{Origin, ParticleMap};
+use pfem_time::ParticleState;
+
+pub use pfem_scene::{Particle, NO_MATERIAL};
+
+/// Every per-particle array of a simulation: state (positions, velocities,
+/// accelerations, pressure), kind, body, spacing, material, initial
+/// position and velocity constraints, all of one length.
+///
+/// Order: the constructor places walls first, then solids, then fluids, and
+/// particles come and go only among fluids ([`Particles::remap`] refuses
+/// anything else), so a wall or solid particle keeps its index for the
+/// whole run and a probe may hold it; fluid indices change when particles
+/// are removed or inserted ([`Particles::generation`] counts the changes).
+#[derive(Debug, Clone, Default)]
+pub struct Particles<const D: usize>
+where
+    Const<D>: Dim,
+{
+    state: ParticleState<D>,
+    kind: Vec<ParticleKind>,
+    body: Vec<u32>,
+    spacing: Vec<f64>,
+    material: Vec<u16>,
+    x0: Vec<Point<D>>,
+    constraints: Constraints<D>,
+    generation: u64,
+}
+
+/// Why [`Particles::remap`] refused a map.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RemapError {
+    /// The map was made for another number of particles.
+    #[error("the particle map is for {map} particles, the set has {set}")]
+    Length {
+        /// Particles the map expects.
+        map: usize,
+        /// Particles in the set.
+        set: usize,
+    },
+    /// The map removes or moves a wall or solid particle.
+    #[error(
+        "particle {0} is a wall or solid particle: only fluid particles may be removed or inserted"
+    )]
+    NotFluid(usize),
+}
+
+impl<const D: usize> Particles<D>
+where
+    Const<D>: Dim,
+{
+    /// An empty set.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The particle set of a built scene ([`pfem_scene::Scene::build`]),
+    /// with its prescribed velocities as constraints.
+    pub fn from_cloud(cloud: pfem_scene::Cloud<D>) -> Self {
+        let mut p = Self::new();
+        for i in 0..cloud.len() {
+            p.push(Particle {
+                x: cloud.x[i],
+                v: cloud.v[i],
+                pressure: cloud.pressure[i],
+                kind: cloud.kind[i],
+                body: cloud.body[i],
+                spacing: cloud.spacing[i],
+                material: cloud.material[i],
+            });
+        }
+        for (i, f) in cloud.fixed.iter().enumerate() {
+            if let Some(v) = f {
+                p.constraints.fix(i, *v);
+            }
+        }
+        p.generation = 0;
+        p
+    }
+
+    /// Appends a particle, free of constraints, at rest acceleration zero;
+    /// its initial position is `p.x`. Returns its index.
+    pub fn push(&mut self, p: Particle<D>) -> usize {
+        self.state.x.push(p.x);
+        self.state.v.push(p.v);
+        self.state.a.push(Vector::<D>::zeros());
+        self.state.pressure.push(p.pressure);
+        self.kind.push(p.kind);
+        self.body.push(p.body);
+        self.spacing.push(p.spacing);
+        self.material.push(p.material);
+        self.x0.push(p.x);
+        self.constraints.mask.push(0);
+        self.constraints.velocity.push(Vector::<D>::zeros());
+        self.generation += 1;
+        self.state.x.len() - 1
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.state.x.len()
+    }
+
+    /// Whether the set is empty.
+    pub fn is_empty(&self) -> bool {
+        self.state.x.is_empty()
+    }
+
+    /// Positions (m).
+    pub fn x(&self) -> &[Point<D>] {
+        &self.state.x
+    }
+
+    /// Velocities (m/s).
+    pub fn v(&self) -> &[Vector<D>] {
+        &self.state.v
+    }
+
+    /// Accelerations (m/s²).
+    pub fn a(&self) -> &[Vector<D>] {
+        &self.state.a
+    }
+
+    /// Nodal pressure the method stores (Pa, eq. 62); see
+    /// `pfem_io::Loads::water_pressure` for the water's pressure on
+    /// interfaces.
+    pub fn pressure(&self) -> &[f64] {
+        &self.state.pressure
+    }
+
+    /// Kind of each particle.
+    pub fn kind(&self) -> &[ParticleKind] {
+        &self.kind
+    }
+
+    /// Body index of each particle.
+    pub fn body(&self) -> &[u32] {
+        &self.body
+    }
+
+    /// Spacing of each particle (m).
+    pub fn spacing(&self) -> &[f64] {
+        &self.spacing
+    }
+
+    /// Material index of each particle ([`NO_MATERIAL`] for walls).
+    pub fn material(&self) -> &[u16] {
+        &self.material
+    }
+
+    /// Position of each particle when it entered the simulation (m).
+    pub fn initial_positions(&self) -> &[Point<D>] {
+        &self.x0
+    }
+
+    /// Velocity constraints (walls, clamps, slip planes, prescribed motion).
+    pub fn constraints(&self) -> &Constraints<D> {
+        &self.constraints
+    }
+
+    /// The state the time integrator advances.
+    pub fn state(&self) -> &ParticleState<D> {
+        &self.state
+    }
+
+    /// How many times particles were added or removed.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Mutable positions (m): moving a particle by hand takes effect at the
+    /// next remeshing.
+    pub fn x_mut(&mut self) -> &mut [Point<D>] {
+        &mut self.state.x
+    }
+
+    /// Mutable velocities (m/s).
+    pub fn v_mut(&mut self) -> &mut [Vector<D>] {
+        &mut self.state.v
+    }
+
+    /// Mutable accelerations (m/s²).
+    pub fn a_mut(&mut self) -> &mut [Vector<D>] {
+        &mut self.state.a
+    }
+
+    /// Mutable pressures (Pa).
+    pub fn pressure_mut(&mut self) -> &mut [f64] {
+        &mut self.state.pressure
+    }
+
+    /// Mutable constraints.
+    pub fn constraints_mut(&mut self) -> &mut Constraints<D> {
+        &mut self.constraints
+    }
+
+    /// Mutable state and constraints together (the integrator reads both).
+    pub(crate) fn state_and_constraints(&mut self) -> (&mut ParticleState<D>, &Constraints<D>) {
+        (&mut self.state, &self.constraints)
+    }
+
+    /// Mutable state.
+    pub(crate) fn state_mut(&mut self) -> &mut ParticleState<D> {
+        &mut self.state
+    }
+
+    /// Carries every array to a new cloud described by `map`
+    /// ([`pfem_geometry::manage_particles`]): kept particles keep their
+    /// values, inserted ones get the barycentric interpolation of their
+    /// parents' position, velocity, acceleration and pressure, their
+    /// parents' mean spacing, the first fluid parent's body and material,
+    /// no constraint, and their own position as initial position. Only
+    /// fluid particles may be removed or inserted, and kept particles must
+    /// keep their order (so wall and solid indices do not move).
+    pub fn remap(&mut self, map: &ParticleMap) -> Result<(), RemapError> {
+        let n = self.len();
+        if map.old_to_new.len() != n {
+            return Err(RemapError::Length {
+                map: map.old_to_new.len(),
+                set: n,
+            });
+        }
+        for (i, &k) in self.kind.iter().enumerate() {
+            if k != ParticleKind::Fluid && map.old_to_new[i] as usize != i {
+                return Err(RemapError::NotFluid(i));
+            }
+        }
+        let fluid_parent = |nodes: &[u32]| {
+            nodes
+                .iter()
+                .copied()
+                .find(|&q| self.kind[q as usize] == ParticleKind::Fluid)
+                .unwrap_or(nodes[0]) as usize
+        };
+        let x = map.apply_with(&self.state.x, |nodes, w| {
+            let mut acc = Point::<D>::zeros();
+            for (&q, &wq) in nodes.iter().zip(w) {
+                acc += self.state.x[q as usize] * wq;
+            }
+            acc
+        });
+        let v = map.apply(&self.state.v);
+        let a = map.apply(&self.state.a);
+        let pressure = map.apply(&self.state.pressure);
+        let spacing = map.apply(&self.spacing);
+        let kind = map.apply_with(&self.kind, |_, _| ParticleKind::Fluid);
+        let body = map.apply_with(&self.body, |nodes, _| self.body[fluid_parent(nodes)]);
+        let material = map.apply_with(&self.material, |nodes, _| {
+            self.material[fluid_parent(nodes)]
+        });
+        let mask = map.apply_with(&self.constraints.mask, |_, _| 0);
+        let cv = map.apply_with(&self.constraints.velocity, |_, _| Vector::<D>::zeros());
+        let mut x0 = Vec::with_capacity(map.len());
+        for (j, o) in map.origin.iter().enumerate() {
+            x0.push(match o {
+                Origin::Kept(i) => self.x0[*i as usize],
+                Origin::Inserted { .. } => x[j],
+            });
+        }
+        self.state = ParticleState { x, v, a, pressure };
+        self.kind = kind;
+        self.body = body;
+        self.material = material;
+        self.spacing = spacing;
+        self.x0 = x0;
+        self.constraints = Constraints { mask, velocity: cv };
+        self.generation += 1;
+        Ok(())
+    }
+}

@@ -1,0 +1,23 @@
+//! Hooks for scenes that change while they run, written against the
+//! driver's public [`Hook`](pfem_driver::Hook) seam (as a user's own hooks
+//! are):
+//!
+//! - [`PrescribedMotion`] moves a wall along a [`MotionLaw`]
+//!   ([`Sinusoidal`]: a piston wave-maker's stroke, ramped;
+//!   [`PiecewiseLinear`]: a table);
+//! - [`BodyForceRamp`]: a load ramp on the body force;
+//! - [`SlipPlanes`]: symmetry planes normal to an axis;
+//! - [`Inflow`]: fluid entering through a face at a prescribed velocity;
+//! - [`ParticleManagement`]: removal of crowding fluid particles and
+//!   insertion into oversized elements, every few steps.
+//!
+//! The driver's own hooks (the volume correction, `p = 0` on the free
+//! surface, `StopWhen`, `FnHook`) are in `pfem_driver::hooks`.
+
+mod motion;
+mod particles;
+
+pub use motion::{
+    BodyForceRamp, MotionLaw, PiecewiseLinear, PrescribedMotion, Sinusoidal, SlipPlanes,
+};
+pub use particles::{Inflow, ParticleManagement};

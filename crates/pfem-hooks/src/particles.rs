@@ -1,0 +1,268 @@
+//! Hooks that add and remove particles.
+
+use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
+use pfem_geometry::ParticleManagementParams;
+
+use pfem_driver::hooks::{Hook, HookContext};
+use pfem_driver::particles::Particle;
+use pfem_driver::RunError;
+
+/// Particle management: every `every` steps, after remeshing, removes fluid
+/// particles closer than a fraction of the spacing to another and inserts
+/// particles into fluid elements that grew too large
+/// ([`HookContext::manage_particles`]). The mesh is remade at once when
+/// anything changed; the volume change is booked in the ledger under
+/// [`ParticleManagement::NAME`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParticleManagement {
+    /// Removal and insertion thresholds.
+    pub params: ParticleManagementParams,
+    /// Steps between two passes (≥ 1).
+    pub every: u64,
+    /// Particles removed so far.
+    pub removed: usize,
+    /// Particles inserted so far.
+    pub inserted: usize,
+}
+
+impl ParticleManagement {
+    /// Its name in the volume ledger.
+    pub const NAME: &'static str = "particle management";
+
+    /// Management with `params`, every `every` steps.
+    pub fn new(params: ParticleManagementParams, every: u64) -> Self {
+        Self {
+            params,
+            every: every.max(1),
+            removed: 0,
+            inserted: 0,
+        }
+    }
+}
+
+impl<const D: usize> Hook<D> for ParticleManagement
+where
+    Const<D>: Dim,
+{
+    fn name(&self) -> &str {
+        Self::NAME
+    }
+
+    fn start(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        self.params.validate().map_err(RunError::Geometry)
+    }
+
+    fn after_remesh(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        if ctx.steps() == 0 || ctx.steps() % self.every != 0 {
+            return Ok(());
+        }
+        let (r, i) = ctx.manage_particles(&self.params)?;
+        self.removed += r;
+        self.inserted += i;
+        Ok(())
+    }
+}
+
+/// An inflow: fluid enters through a plane face at a prescribed velocity.
+///
+/// The face is the box `face` of zero thickness along the inflow direction
+/// `velocity` (an axis direction), filled with a lattice of spacing `h`.
+/// Each time the fluid has advanced by `h` through the face (`∫|v| dt`), a
+/// new layer of particles is inserted on it (offset downstream by the
+/// advance beyond `h`), so the inflow rate is `|v| × area` on average.
+/// Fluid particles within `zone` metres downstream of the face move at the
+/// prescribed velocity (they are the piston that pushes the fluid in) and
+/// are released beyond. Insertions are booked in the ledger under
+/// [`Inflow::NAME`] (they enter the fluid volume at the next remeshing).
+#[derive(Debug, Clone)]
+pub struct Inflow<const D: usize>
+where
+    Const<D>: Dim,
+{
+    body: String,
+    face_min: Point<D>,
+    face_max: Point<D>,
+    velocity: Vector<D>,
+    spacing: f64,
+    zone: f64,
+    axis: usize,
+    advanced: f64,
+    /// Particles inserted so far.
+    pub inserted: usize,
+    layer: Vec<Point<D>>,
+    material: u16,
+    body_id: u32,
+}
+
+impl<const D: usize> Inflow<D>
+where
+    Const<D>: Dim,
+{
+    /// Its name in the volume ledger.
+    pub const NAME: &'static str = "inflow";
+
+    /// Fluid of body `body` (its material) enters through the face box
+    /// `[face_min, face_max]` (equal coordinates along the axis of
+    /// `velocity`) at `velocity`, as particles of spacing `h`; `zone` is the
+    /// depth (m) downstream of the face where particles are driven (at
+    /// least `2h` is advised).
+    pub fn new(
+        body: impl Into<String>,
+        face_min: Point<D>,
+        face_max: Point<D>,
+        velocity: Vector<D>,
+        spacing: f64,
+        zone: f64,
+    ) -> Result<Self, RunError> {
+        let bad = |why: String| RunError::Hook {
+            hook: Self::NAME.into(),
+            why,
+        };
+        let axis = (0..D)
+            .find(|&k| velocity[k] != 0.0)
+            .ok_or_else(|| bad("the inflow velocity is zero".into()))?;
+        if (0..D).any(|k| k != axis && velocity[k] != 0.0) {
+            return Err(bad(
+                "the inflow velocity must be along a coordinate axis".into()
+            ));
+        }
+        if face_min[axis] != face_max[axis] {
+            return Err(bad(
+                "the face must have zero thickness along the inflow".into()
+            ));
+        }
+        if !(spacing > 0.0 && spacing.is_finite() && zone >= spacing && zone.is_finite()) {
+            return Err(bad(format!(
+                "spacing {spacing} must be positive and the zone {zone} at least one spacing"
+            )));
+        }
+        if (0..D).any(|k| k != axis && face_max[k] - face_min[k] < 0.0) {
+            return Err(bad("face max below min".into()));
+        }
+        let mut lo = face_min;
+        let mut hi = face_max;
+        lo[axis] = 0.0;
+        hi[axis] = 0.0;
+        let layer = pfem_scene::lattice::box_points::<D>(&lo, &hi, spacing);
+        Ok(Self {
+            body: body.into(),
+            face_min,
+            face_max,
+            velocity,
+            spacing,
+            zone,
+            axis,
+            advanced: 0.0,
+            inserted: 0,
+            layer,
+            material: 0,
+            body_id: 0,
+        })
+    }
+
+    /// Distance downstream of the face (m).
+    fn depth(&self, x: &Point<D>) -> f64 {
+        let s = self.velocity[self.axis].signum();
+        (x[self.axis] - self.face_min[self.axis]) * s
+    }
+
+    fn in_face(&self, x: &Point<D>) -> bool {
+        let tol = 1e-9 * self.spacing;
+        (0..D).all(|k| {
+            k == self.axis || (x[k] >= self.face_min[k] - tol && x[k] <= self.face_max[k] + tol)
+        })
+    }
+}
+
+impl<const D: usize> Hook<D> for Inflow<D>
+where
+    Const<D>: Dim,
+{
+    fn name(&self) -> &str {
+        Self::NAME
+    }
+
+    fn sources_fluid(&self) -> bool {
+        true
+    }
+
+    fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        let id = ctx.body(&self.body)?;
+        let p = ctx.particles();
+        let Some(i) = (0..p.len()).find(|&i| p.body()[i] == id) else {
+            return Err(RunError::Hook {
+                hook: Self::NAME.into(),
+                why: format!("body `{}` has no particle", self.body),
+            });
+        };
+        if p.kind()[i] != ParticleKind::Fluid {
+            return Err(RunError::Hook {
+                hook: Self::NAME.into(),
+                why: format!("body `{}` is not a fluid", self.body),
+            });
+        }
+        self.body_id = id;
+        self.material = p.material()[i];
+        Ok(())
+    }
+
+    fn after_remesh(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        if ctx.steps() == 0 {
+            return Ok(());
+        }
+        while self.advanced >= self.spacing {
+            self.advanced -= self.spacing;
+            let off = self.advanced * self.velocity[self.axis].signum();
+            for q in self.layer.clone() {
+                let mut x = q;
+                x[self.axis] = self.face_min[self.axis] + off;
+                ctx.insert_fluid(Particle {
+                    x,
+                    v: self.velocity,
+                    pressure: 0.0,
+                    kind: ParticleKind::Fluid,
+                    body: self.body_id,
+                    spacing: self.spacing,
+                    material: self.material,
+                })?;
+                self.inserted += 1;
+            }
+        }
+        Ok(())
+    }
+
+    fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        let v = self.velocity;
+        let zone = self.zone;
+        let mut drive = Vec::new();
+        let mut release = Vec::new();
+        {
+            let p = ctx.particles();
+            for i in 0..p.len() {
+                if p.kind()[i] != ParticleKind::Fluid || p.body()[i] != self.body_id {
+                    continue;
+                }
+                let d = self.depth(&p.x()[i]);
+                if d >= -1e-9 * self.spacing && d < zone && self.in_face(&p.x()[i]) {
+                    drive.push(i);
+                } else if p.constraints().mask[i] != 0 {
+                    release.push(i);
+                }
+            }
+        }
+        let p = ctx.particles_mut();
+        for i in drive {
+            p.constraints_mut().fix(i, v);
+            p.v_mut()[i] = v;
+        }
+        for i in release {
+            p.constraints_mut().mask[i] = 0;
+        }
+        Ok(())
+    }
+
+    fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        self.advanced += self.velocity.norm() * ctx.dt();
+        Ok(())
+    }
+}

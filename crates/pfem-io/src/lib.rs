@@ -1,0 +1,23 @@
+//! Outputs of pfem: what a run leaves on disk and shows on the terminal.
+//!
+//! - [`output`]: writers (VTU/PVD for ParaView, CSV probes, `summary.json`,
+//!   PNG plots with the `plots` feature), embedded reference data, the
+//!   progress display (a bar with the `progress` feature);
+//! - [`observe`]: [`StandardOutput`], the observer that writes them during
+//!   a run, and [`Probe`], a named measurement.
+
+pub mod loads;
+pub mod observe;
+pub mod output;
+
+pub use loads::Loads;
+pub use observe::{Probe, StandardOutput};
+
+impl From<output::OutputError> for pfem_driver::RunError {
+    fn from(e: output::OutputError) -> Self {
+        pfem_driver::RunError::Output(Box::new(e))
+    }
+}
+
+// The driver's modules under the paths the output code uses.
+pub(crate) use pfem_driver::{simulation, RunError};

@@ -1,0 +1,337 @@
+//! The standard outputs of a run as an [`Observer`]: VTU frames and their
+//! `.pvd` series, a CSV of probes, `summary.json`, and a progress bar. Each
+//! is computed only when asked for.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use pfem_core::{Const, Dim, ParticleKind, Tensor};
+use pfem_geometry::{classify, NodeTag};
+
+use crate::loads::Loads;
+use crate::output::{
+    write_summary, CsvProbe, Encoding, Field, Frame, Progress, RunSummary, VtuSeries,
+};
+use crate::simulation::{Observer, Simulation};
+use crate::RunError;
+
+/// A named scalar measured on the simulation (front position, tip
+/// displacement, force…).
+pub struct Probe<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Column name in `probes.csv`.
+    pub name: String,
+    /// The measurement.
+    #[allow(clippy::type_complexity)]
+    pub measure: Box<dyn Fn(&Simulation<D>) -> f64>,
+}
+
+impl<const D: usize> Probe<D>
+where
+    Const<D>: Dim,
+{
+    /// A probe from a name and a closure.
+    pub fn new(name: &str, measure: impl Fn(&Simulation<D>) -> f64 + 'static) -> Self {
+        Self {
+            name: name.into(),
+            measure: Box::new(measure),
+        }
+    }
+}
+
+/// Writes what a run leaves on disk into one directory: `NAME.pvd` with
+/// `NAME_*.vtu` frames (if `vtu`), `probes.csv` (if there are probes) and
+/// `summary.json`, and shows progress unless `quiet`.
+pub struct StandardOutput<const D: usize>
+where
+    Const<D>: Dim,
+{
+    dir: PathBuf,
+    vtu: bool,
+    probes: Vec<Probe<D>>,
+    /// Interval between probe rows (s); every step when `None`.
+    pub probe_interval: Option<f64>,
+    series: Option<VtuSeries>,
+    csv: Option<CsvProbe>,
+    next_frame: f64,
+    next_probe: f64,
+    progress: Option<Progress>,
+    quiet: bool,
+    started: Option<Instant>,
+    /// Rows of probes recorded so far: `(t, values)`.
+    pub history: Vec<(f64, Vec<f64>)>,
+    /// Extra figures written into `summary.json`.
+    pub extra: BTreeMap<String, serde_json::Value>,
+}
+
+impl<const D: usize> StandardOutput<D>
+where
+    Const<D>: Dim,
+{
+    /// Outputs into `dir`; VTU frames when `vtu` is set.
+    pub fn new(dir: impl Into<PathBuf>, vtu: bool, probes: Vec<Probe<D>>, quiet: bool) -> Self {
+        Self {
+            dir: dir.into(),
+            vtu,
+            probes,
+            probe_interval: None,
+            series: None,
+            csv: None,
+            next_frame: 0.0,
+            next_probe: 0.0,
+            progress: None,
+            quiet,
+            started: None,
+            history: Vec::new(),
+            extra: BTreeMap::new(),
+        }
+    }
+
+    /// Values of one probe over the run, `(t, value)`.
+    pub fn probe_series(&self, name: &str) -> Vec<(f64, f64)> {
+        match self.probes.iter().position(|p| p.name == name) {
+            Some(i) => self.history.iter().map(|(t, v)| (*t, v[i])).collect(),
+            None => Vec::new(),
+        }
+    }
+
+    fn write_frame(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        let Some(series) = self.series.as_mut() else {
+            return Ok(());
+        };
+        let n = sim.particles().len();
+        let nv = D + 1;
+        let cells = sim.elements().all();
+        let n_cells = cells.len() / nv;
+        // Boundary tags only when a frame is written.
+        let mut tags = vec![0i32; n];
+        let mut vertex_cells = Vec::new();
+        if sim.stages().free_surface {
+            if let Ok(cls) = classify(
+                sim.particles().x(),
+                sim.particles().kind(),
+                sim.elements().fluid_mesh(),
+                Some(sim.elements().solid()),
+            ) {
+                for (t, c) in tags.iter_mut().zip(&cls.tags) {
+                    *t = match c {
+                        NodeTag::Interior => 0,
+                        NodeTag::FreeSurface => 1,
+                        NodeTag::Wall => 2,
+                        NodeTag::Interface => 3,
+                        NodeTag::Isolated => 4,
+                        _ => 5,
+                    };
+                }
+                vertex_cells = cls.isolated.clone();
+            }
+        }
+        let kind: Vec<i32> = sim
+            .particles()
+            .kind()
+            .iter()
+            .map(|k| match k {
+                ParticleKind::Fluid => 0,
+                ParticleKind::Solid => 1,
+                ParticleKind::Wall => 2,
+            })
+            .collect();
+        let body: Vec<i32> = sim.particles().body().iter().map(|&b| b as i32).collect();
+        let material: Vec<i32> = sim
+            .elements()
+            .materials()
+            .iter()
+            .map(|&m| m as i32)
+            .collect();
+        let mut stress = vec![Tensor::<D>::zeros(); n_cells];
+        for (e, h) in sim.elements().solid_history().iter().enumerate() {
+            stress[e] = h.stress;
+        }
+        let pressure = sim.water_pressure();
+        // Internal variables of the solids' materials, one cell field per
+        // name (zero on elements of other materials).
+        let mut internal: Vec<(String, Vec<f64>)> = Vec::new();
+        let solid_mat = sim.elements().solid_material();
+        for (e, h) in sim.elements().solid_history().iter().enumerate() {
+            let Some(m) = sim.materials().get(solid_mat[e] as usize) else {
+                continue;
+            };
+            for (k, name) in m.internal_variables().iter().enumerate() {
+                let col = match internal.iter().position(|(n, _)| n == name) {
+                    Some(c) => c,
+                    None => {
+                        internal.push((name.to_string(), vec![0.0; n_cells]));
+                        internal.len() - 1
+                    }
+                };
+                internal[col].1[e] = h.internal.get(k).copied().unwrap_or(0.0);
+            }
+        }
+        let mut cell_data = vec![
+            Field::int("material", &material),
+            Field::sym_tensor("stress", &stress),
+        ];
+        for (name, values) in &internal {
+            cell_data.push(Field::scalar(name.as_str(), values));
+        }
+        let frame = Frame {
+            points: sim.particles().x(),
+            cells,
+            vertex_cells: &vertex_cells,
+            point_data: vec![
+                Field::vector("velocity", sim.particles().v()),
+                Field::vector("acceleration", sim.particles().a()),
+                Field::scalar("pressure", &pressure),
+                Field::int("kind", &kind),
+                Field::int("body", &body),
+                Field::int("boundary_tag", &tags),
+            ],
+            cell_data,
+            time: Some(sim.time()),
+        };
+        series.write_frame(sim.time(), &frame)?;
+        Ok(())
+    }
+
+    fn record(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        if self.probes.is_empty() {
+            return Ok(());
+        }
+        let values: Vec<f64> = self.probes.iter().map(|p| (p.measure)(sim)).collect();
+        if let Some(csv) = self.csv.as_mut() {
+            let mut row = vec![sim.time()];
+            row.extend_from_slice(&values);
+            csv.row(&row)?;
+        }
+        self.history.push((sim.time(), values));
+        Ok(())
+    }
+
+    /// Ends a run for a command-line program: writes `summary.json` (with
+    /// the `extra` entries added since [`Observer::finish`] wrote it),
+    /// prints one line of steps, simulated time, fluid volume and wall
+    /// time and the output directory on stdout, and returns the summary.
+    pub fn report(&self, sim: &Simulation<D>) -> Result<RunSummary, RunError> {
+        let summary = self.summary(sim);
+        write_summary(self.dir.join("summary.json"), &summary)?;
+        println!(
+            "{} steps ({} rejected), simulated {:.4} s, fluid volume {:.6e} -> {:.6e} ({:+.3}%), wall time {:.1} s",
+            summary.steps,
+            summary.rejected_steps,
+            summary.simulated_time,
+            summary.fluid_volume_initial,
+            summary.fluid_volume_final,
+            100.0 * summary.relative_volume_change(),
+            summary.wall_time_s.get("total").copied().unwrap_or(0.0)
+        );
+        println!("wrote {}", self.dir.display());
+        Ok(summary)
+    }
+
+    /// The run's summary as it stands.
+    pub fn summary(&self, sim: &Simulation<D>) -> RunSummary {
+        let mut wall = BTreeMap::new();
+        wall.insert("remesh".to_string(), sim.stats().remesh.1);
+        wall.insert("assemble".to_string(), sim.stats().assemble.1);
+        wall.insert("solve".to_string(), sim.stats().solve.1);
+        wall.insert("update".to_string(), sim.stats().update.1);
+        wall.insert("hooks".to_string(), sim.stats().hooks.1);
+        wall.insert("output".to_string(), sim.stats().observe.1);
+        wall.insert("rejected_attempts".to_string(), sim.stats().rejected.1);
+        wall.insert(
+            "total".to_string(),
+            self.started
+                .map(|s| s.elapsed().as_secs_f64())
+                .unwrap_or(0.0),
+        );
+        let mut causes = BTreeMap::new();
+        causes.insert("remeshing".to_string(), sim.volume().remeshing);
+        causes.insert("solution".to_string(), sim.volume().solution);
+        for (name, dv) in &sim.volume().hooks {
+            causes.insert(name.clone(), *dv);
+        }
+        RunSummary {
+            scene: sim.name().to_string(),
+            dimension: D,
+            particles: sim.particles().len(),
+            steps: sim.steps(),
+            rejected_steps: sim.rejected(),
+            simulated_time: sim.time(),
+            wall_time_s: wall,
+            fluid_volume_initial: sim.volume().initial,
+            fluid_volume_final: sim.fluid_volume(),
+            volume_change_by_cause: causes,
+            extra: {
+                let mut e = self.extra.clone();
+                e.insert(
+                    "rejected_inverted_element".into(),
+                    sim.rejected_by_cause().0.into(),
+                );
+                e.insert(
+                    "rejected_picard_divergence".into(),
+                    sim.rejected_by_cause().1.into(),
+                );
+                e.insert("picard_iterations".into(), sim.stats().assemble.0.into());
+                e
+            },
+        }
+    }
+}
+
+impl<const D: usize> Observer<D> for StandardOutput<D>
+where
+    Const<D>: Dim,
+{
+    fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        self.started = Some(Instant::now());
+        std::fs::create_dir_all(&self.dir)
+            .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
+        if self.vtu && sim.output_interval().is_some() {
+            self.series = Some(VtuSeries::create(&self.dir, sim.name(), Encoding::Base64)?);
+        }
+        if !self.probes.is_empty() {
+            let mut cols = vec!["t"];
+            cols.extend(self.probes.iter().map(|p| p.name.as_str()));
+            self.csv = Some(CsvProbe::create(self.dir.join("probes.csv"), &cols)?);
+        }
+        self.progress = Some(Progress::new(sim.end_time(), self.quiet));
+        self.write_frame(sim)?;
+        self.next_frame = sim.output_interval().unwrap_or(f64::INFINITY);
+        self.record(sim)?;
+        self.next_probe = self.probe_interval.unwrap_or(0.0);
+        Ok(())
+    }
+
+    fn step(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        let eps = 1e-9 * sim.end_time();
+        if sim.time() + eps >= self.next_frame {
+            self.write_frame(sim)?;
+            while self.next_frame <= sim.time() + eps {
+                self.next_frame += sim.output_interval().unwrap_or(f64::INFINITY);
+            }
+        }
+        if sim.time() + eps >= self.next_probe {
+            self.record(sim)?;
+            if let Some(dt) = self.probe_interval {
+                while self.next_probe <= sim.time() + eps {
+                    self.next_probe += dt;
+                }
+            }
+        }
+        if let Some(p) = self.progress.as_mut() {
+            p.update(sim.time(), sim.dt());
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        if let Some(p) = self.progress.as_mut() {
+            p.finish();
+        }
+        write_summary(self.dir.join("summary.json"), &self.summary(sim))?;
+        Ok(())
+    }
+}

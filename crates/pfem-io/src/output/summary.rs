@@ -1,0 +1,75 @@
+//! The end-of-run summary, `summary.json`.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::{write_atomic, OutputError};
+
+/// Figures that describe one run, written as `summary.json` by
+/// [`write_summary`]. Maps are ordered by key so that two runs diff cleanly.
+///
+/// ```
+/// use pfem_io::output::RunSummary;
+///
+/// let mut s = RunSummary { scene: "dam_break_2d".into(), particles: 1200, ..Default::default() };
+/// s.wall_time_s.insert("remesh".into(), 1.5);
+/// s.volume_change_by_cause.insert("alpha_shape".into(), -2.0e-6);
+/// s.extra.insert("front_rmse".into(), 0.04.into());
+/// let json = serde_json::to_value(&s).unwrap();
+/// assert_eq!(json["wall_time_s"]["remesh"], 1.5);
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// Scene name.
+    pub scene: String,
+    /// Spatial dimension (2 or 3).
+    pub dimension: usize,
+    /// Number of particles at the start.
+    pub particles: usize,
+    /// Accepted time steps.
+    pub steps: u64,
+    /// Time steps rejected and retried (non-convergence, inverted
+    /// elements…).
+    pub rejected_steps: u64,
+    /// Simulated time reached (s).
+    pub simulated_time: f64,
+    /// Wall-clock time per stage (stage name → s), e.g. `"remesh"`,
+    /// `"assembly"`, `"solve"`, `"output"`, `"total"`.
+    pub wall_time_s: BTreeMap<String, f64>,
+    /// Fluid volume at the start (m³; m² per metre of depth in 2D).
+    pub fluid_volume_initial: f64,
+    /// Fluid volume at the end (same unit).
+    pub fluid_volume_final: f64,
+    /// Volume gained (+) or lost (−) by cause (cause → m³), e.g.
+    /// `"alpha_shape"`, `"particle_removal"`, `"incompressibility"`.
+    pub volume_change_by_cause: BTreeMap<String, f64>,
+    /// Any further figures (errors against references, fitted time shifts,
+    /// solver statistics…).
+    pub extra: BTreeMap<String, serde_json::Value>,
+}
+
+impl RunSummary {
+    /// Relative change of the fluid volume, `(final − initial) / initial`;
+    /// NaN when the initial volume is zero.
+    pub fn relative_volume_change(&self) -> f64 {
+        if self.fluid_volume_initial == 0.0 {
+            f64::NAN
+        } else {
+            (self.fluid_volume_final - self.fluid_volume_initial) / self.fluid_volume_initial
+        }
+    }
+}
+
+/// Writes `summary` to `path` as pretty-printed JSON, atomically. Non-finite
+/// numbers (NaN, ±∞), which JSON cannot express, are written as `null`.
+pub fn write_summary(path: impl AsRef<Path>, summary: &RunSummary) -> Result<(), OutputError> {
+    let path = path.as_ref();
+    let mut bytes = serde_json::to_vec_pretty(summary).map_err(|source| OutputError::Json {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    bytes.push(b'\n');
+    write_atomic(path, &bytes)
+}

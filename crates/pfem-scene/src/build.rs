@@ -1,0 +1,383 @@
+//! From a scene to its initial particles: lattices filled body by body,
+//! near-coincident particles merged or refused, solids meshed, clamps and
+//! welds, initial velocity and pressure fields. The driver turns the
+//! result into its particle set.
+
+use pfem_constitutive::Material;
+use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
+use pfem_geometry::Tessellator;
+
+use crate::lattice;
+use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
+use crate::SceneError;
+
+/// Material index of a particle without a material (walls).
+pub const NO_MATERIAL: u16 = u16::MAX;
+
+/// One particle's data.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Particle<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Position (m).
+    pub x: Point<D>,
+    /// Velocity (m/s).
+    pub v: Vector<D>,
+    /// Pressure (Pa).
+    pub pressure: f64,
+    /// Fluid, solid or wall.
+    pub kind: ParticleKind,
+    /// Body index.
+    pub body: u32,
+    /// Spacing (m).
+    pub spacing: f64,
+    /// Material index ([`NO_MATERIAL`] for walls).
+    pub material: u16,
+}
+
+/// The initial particles of a scene, structure of arrays.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Cloud<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Positions (m).
+    pub x: Vec<Point<D>>,
+    /// Velocities (m/s).
+    pub v: Vec<Vector<D>>,
+    /// Pressures (Pa).
+    pub pressure: Vec<f64>,
+    /// Kinds.
+    pub kind: Vec<ParticleKind>,
+    /// Body indices (the scene's order).
+    pub body: Vec<u32>,
+    /// Spacings (m).
+    pub spacing: Vec<f64>,
+    /// Material indices ([`NO_MATERIAL`] for walls).
+    pub material: Vec<u16>,
+    /// Prescribed velocity of walls, clamped and welded particles.
+    pub fixed: Vec<Option<Vector<D>>>,
+}
+
+impl<const D: usize> Cloud<D>
+where
+    Const<D>: Dim,
+{
+    fn push(&mut self, p: Particle<D>) -> usize {
+        self.x.push(p.x);
+        self.v.push(p.v);
+        self.pressure.push(p.pressure);
+        self.kind.push(p.kind);
+        self.body.push(p.body);
+        self.spacing.push(p.spacing);
+        self.material.push(p.material);
+        self.fixed.push(None);
+        self.x.len() - 1
+    }
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+    /// Whether there is none.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+    fn x(&self) -> &[Point<D>] {
+        &self.x
+    }
+    fn kind(&self) -> &[ParticleKind] {
+        &self.kind
+    }
+    fn body(&self) -> &[u32] {
+        &self.body
+    }
+    fn spacing(&self) -> &[f64] {
+        &self.spacing
+    }
+    fn material(&self) -> &[u16] {
+        &self.material
+    }
+}
+
+/// A scene made into particles, ready for the driver.
+#[derive(Debug)]
+pub struct Built<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Scene name.
+    pub name: String,
+    /// The particles: solids first, then walls, then fluids.
+    pub particles: Cloud<D>,
+    /// The materials, by index.
+    pub materials: Vec<Box<dyn Material<D>>>,
+    /// Body names, in the scene's order (the particles' body indices).
+    pub body_names: Vec<String>,
+    /// Solid elements (each solid's own mesh), `D + 1` particle indices
+    /// each.
+    pub solid_elements: Vec<u32>,
+    /// Material of each solid element.
+    pub solid_material: Vec<u16>,
+    /// Body force per unit mass (m/s²).
+    pub gravity: Option<Vector<D>>,
+    /// Run settings.
+    pub settings: RunSettings,
+}
+
+impl<const D: usize> Scene<D>
+where
+    Const<D>: Dim,
+{
+    /// Validates the scene and makes its particles: lattices filled body by
+    /// body (solids, then walls, then fluids: a wall or fluid particle
+    /// within a quarter spacing of an earlier body's particle is dropped,
+    /// and a wall particle on a solid particle welds the solid there; a
+    /// solid particle on another solid's is an error); solid meshes (boxes
+    /// structured, other shapes by `tessellator` and the alpha shape);
+    /// clamps; initial velocity fields; hydrostatic pressure in fluids
+    /// under gravity, or the bodies' pressure fields.
+    pub fn build(self, tessellator: &mut dyn Tessellator<D>) -> Result<Built<D>, SceneError> {
+        self.validate()?;
+        let scene = self;
+        let Scene {
+            name,
+            bodies,
+            gravity,
+            settings,
+        } = scene;
+        let mut particles = Cloud::<D>::default();
+        let mut materials: Vec<Box<dyn Material<D>>> = Vec::new();
+        let mut body_names = vec![String::new(); bodies.len()];
+        let mut solid_elements = Vec::new();
+        let mut solid_material = Vec::new();
+        // (particle, prescribed velocity): walls, clamps, welds.
+        let mut fixed: Vec<(usize, Vector<D>)> = Vec::new();
+        // Solids first, then walls, then fluids: a wall or fluid particle
+        // that falls on an earlier body's particle is dropped (a wall's on a
+        // solid's welds the solid there), and fluid particles come last so
+        // that particles come and go among them only (see [`Particles`]).
+        let mut order: Vec<usize> = (0..bodies.len()).collect();
+        order.sort_by_key(|&i| match bodies[i].kind {
+            ParticleKind::Solid => 0,
+            ParticleKind::Wall => 1,
+            ParticleKind::Fluid => 2,
+        });
+        let mut bodies: Vec<Option<crate::scene::Body<D>>> = bodies.into_iter().map(Some).collect();
+        let cell = bodies
+            .iter()
+            .flatten()
+            .map(|b| b.spacing)
+            .fold(f64::INFINITY, f64::min);
+        let mut grid = lattice::HashGrid::<D>::new(cell);
+        let mut pressure_fields = Vec::new();
+        // Body ids follow the scene's order.
+        for bi in order {
+            let b = bodies[bi].take().expect("each body once");
+            let id = bi as u32;
+            body_names[bi] = b.name.clone();
+            let pts = match &b.geometry {
+                Geometry::Box { min, max } => lattice::box_points::<D>(min, max, b.spacing),
+                Geometry::Ball { center, radius } => {
+                    lattice::ball_points::<D>(center, *radius, b.spacing)
+                }
+                Geometry::Cylinder {
+                    base,
+                    axis,
+                    radius,
+                    height,
+                } => lattice::cylinder_points::<D>(base, *axis, *radius, *height, b.spacing),
+                Geometry::Particles(p) => p.clone(),
+            };
+            let mat = match b.material {
+                Some(m) => {
+                    materials.push(m);
+                    (materials.len() - 1) as u16
+                }
+                None => NO_MATERIAL,
+            };
+            let wall_velocity = match b.motion {
+                WallMotion::Velocity(w) => w,
+                WallMotion::Fixed => Vector::<D>::zeros(),
+            };
+            let tol = 0.25 * b.spacing;
+            let mut local_index = vec![u32::MAX; pts.len()];
+            let mut welded = 0usize;
+            let first = particles.len();
+            for (li, p) in pts.iter().enumerate() {
+                if let Some(j) = grid.find(p, tol, particles.x()) {
+                    match (b.kind, particles.kind()[j]) {
+                        // A solid keeps every particle (its own mesh uses
+                        // them all): one that falls on another solid's
+                        // particle is an error, not a merge.
+                        (ParticleKind::Solid, _) => {
+                            return Err(SceneError::InvalidGeometry {
+                                body: b.name.clone(),
+                                why: format!(
+                                    "particle at {:?} lies within a quarter spacing ({tol:e} m) of a particle of body `{}`",
+                                    p.as_slice(),
+                                    body_names[particles.body()[j] as usize]
+                                ),
+                            });
+                        }
+                        // A wall particle on a solid particle: the solid is
+                        // welded to the wall there.
+                        (ParticleKind::Wall, ParticleKind::Solid) => {
+                            fixed.push((j, wall_velocity));
+                            welded += 1;
+                            continue;
+                        }
+                        _ => continue,
+                    }
+                }
+                let v = match (b.kind, &b.velocity_field) {
+                    (ParticleKind::Wall, _) => wall_velocity,
+                    (_, Some(f)) => (f.0)(p.as_slice()),
+                    _ => b.velocity,
+                };
+                if v.iter().any(|c| !c.is_finite()) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: format!("non-finite initial velocity at {:?}", p.as_slice()),
+                    });
+                }
+                let i = particles.push(Particle {
+                    x: *p,
+                    v,
+                    pressure: 0.0,
+                    kind: b.kind,
+                    body: id,
+                    spacing: b.spacing,
+                    material: mat,
+                });
+                local_index[li] = i as u32;
+                grid.insert(p, i);
+                if b.kind == ParticleKind::Wall {
+                    fixed.push((i, wall_velocity));
+                } else if b.clamps.iter().any(|c| c.holds(p)) {
+                    fixed.push((i, Vector::<D>::zeros()));
+                }
+            }
+            if let Some(f) = b.pressure_field.clone() {
+                pressure_fields.push((first..particles.len(), f));
+            }
+            if b.kind == ParticleKind::Solid {
+                // Boxes: structured mesh; any other geometry: Delaunay of
+                // its own particles trimmed by the alpha shape.
+                let conn = match &b.geometry {
+                    Geometry::Box { min, max } => lattice::box_simplices::<D>(min, max, b.spacing),
+                    _ => {
+                        let params = crate::solid_mesh::SolidMeshParams {
+                            alpha: settings.alpha,
+                            ..Default::default()
+                        };
+                        crate::solid_mesh::solid_mesh::<D>(&pts, b.spacing, tessellator, &params)
+                            .map_err(|e| SceneError::InvalidGeometry {
+                                body: b.name.clone(),
+                                why: e.to_string(),
+                            })?
+                            .simplices
+                    }
+                };
+                for &q in &conn {
+                    solid_elements.push(local_index[q as usize]);
+                }
+                solid_material.extend(std::iter::repeat_n(mat, conn.len() / (D + 1)));
+            } else if b.kind == ParticleKind::Wall && welded > 0 {
+                // Nothing more: the welds are in `fixed`.
+            }
+        }
+        if particles.is_empty() {
+            return Err(SceneError::Empty);
+        }
+        let n = particles.len();
+        for (i, vel) in fixed {
+            particles.fixed[i] = Some(vel);
+        }
+        // A solid under gravity needs a clamp, a weld or a fluid to rest in.
+        let has_fluid = particles.kind().contains(&ParticleKind::Fluid);
+        if gravity.is_some_and(|g| g.norm() > 0.0) && !has_fluid {
+            for (bi, name) in body_names.iter().enumerate() {
+                let ids: Vec<usize> = (0..n)
+                    .filter(|&i| {
+                        particles.body()[i] == bi as u32
+                            && particles.kind()[i] == ParticleKind::Solid
+                    })
+                    .collect();
+                if !ids.is_empty() && !ids.iter().any(|&i| particles.fixed[i].is_some()) {
+                    return Err(SceneError::Unsupported { body: name.clone() });
+                }
+            }
+        }
+        // Hydrostatic initial pressure in fluids at rest under gravity:
+        // p = ρ g·(x_top − x) with x_top the body's highest particle along g.
+        if let Some(g) = gravity {
+            let gn = g.norm();
+            if gn > 0.0 {
+                let dir = g / gn;
+                let kind = particles.kind().to_vec();
+                let body = particles.body().to_vec();
+                let spacing = particles.spacing().to_vec();
+                let material_of = particles.material().to_vec();
+                let x = particles.x().to_vec();
+                let pressure = &mut particles.pressure;
+                for (bi, _) in body_names.iter().enumerate() {
+                    let idx: Vec<usize> = (0..n)
+                        .filter(|&i| body[i] == bi as u32 && kind[i] == ParticleKind::Fluid)
+                        .collect();
+                    if idx.is_empty() {
+                        continue;
+                    }
+                    let top = idx
+                        .iter()
+                        .map(|&i| x[i].dot(&dir))
+                        .fold(f64::INFINITY, f64::min);
+                    let rho = materials[material_of[idx[0]] as usize].density();
+                    for &i in &idx {
+                        pressure[i] = rho * gn * (x[i].dot(&dir) - top);
+                    }
+                    // Wall and solid particles bounding the fluid carry the
+                    // same hydrostatic nodal pressure (eq. 62 puts pressure
+                    // on every node of a fluid element).
+                    let (lo, hi) = idx.iter().fold(
+                        (
+                            Point::<D>::repeat(f64::INFINITY),
+                            Point::<D>::repeat(f64::NEG_INFINITY),
+                        ),
+                        |(lo, hi), &i| (lo.inf(&x[i]), hi.sup(&x[i])),
+                    );
+                    let h = spacing[idx[0]] * 1.01;
+                    for i in 0..n {
+                        let inside = (0..D).all(|k| x[i][k] >= lo[k] - h && x[i][k] <= hi[k] + h);
+                        if kind[i] != ParticleKind::Fluid && inside {
+                            pressure[i] = (rho * gn * (x[i].dot(&dir) - top)).max(0.0);
+                        }
+                    }
+                }
+            }
+        }
+        // Initial pressure fields replace the hydrostatic start.
+        for (range, f) in pressure_fields {
+            for i in range {
+                let p = (f.0)(particles.x()[i].as_slice());
+                if !p.is_finite() {
+                    return Err(SceneError::InvalidSetting {
+                        setting: "pressure field",
+                        value: p,
+                    });
+                }
+                particles.pressure[i] = p;
+            }
+        }
+        Ok(Built {
+            name,
+            particles,
+            materials,
+            body_names,
+            solid_elements,
+            solid_material,
+            gravity,
+            settings,
+        })
+    }
+}

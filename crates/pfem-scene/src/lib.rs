@@ -1,0 +1,23 @@
+//! Scenes for pfem: what a simulation is made of, validated before any
+//! step runs.
+//!
+//! - [`scene`]: [`Scene`] (bodies, gravity, run settings) and its builder;
+//!   [`Body`], [`Geometry`], [`Clamp`], [`WallMotion`], initial fields;
+//! - [`lattice`]: particles filling boxes, balls and cylinders, the
+//!   structured mesh of a box, a hash grid for near-coincident particles;
+//! - [`solid_mesh`]: the own mesh of a non-box solid (Delaunay of its
+//!   particles trimmed by the alpha shape);
+//! - [`SceneError`]: what an impossible scene is.
+//!
+//! The driver (`pfem-driver`) turns a scene into a running simulation.
+//! Units are SI: m, s, kg, Pa.
+
+pub mod build;
+pub mod error;
+pub mod lattice;
+pub mod scene;
+pub mod solid_mesh;
+
+pub use build::{Built, Cloud, Particle, NO_MATERIAL};
+pub use error::SceneError;
+pub use scene::{Body, Clamp, FieldFn, Geometry, InitialField, RunSettings, Scene, WallMotion};
