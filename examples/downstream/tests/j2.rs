@@ -137,3 +137,46 @@ fn a_rigid_rotation_only_rotates_the_stress() {
         ["equivalent_plastic_strain"]
     );
 }
+
+/// In a simulation: a cantilever loaded past yield deflects more than the
+/// elastic one, only elements near the clamp yield, and the monitor hook
+/// saw the plastic strain grow.
+#[test]
+fn a_cantilever_past_yield_deflects_more_than_an_elastic_one() {
+    use pfem::prelude::*;
+    use pfem_downstream_example::{cantilever, PlasticityMonitor};
+    let (e, nu, rho) = (5.6e6, 0.4, 1000.0);
+    let (elastic, _) = cantilever(Box::new(Hypoelastic::new(rho, e, nu).unwrap()), None).unwrap();
+    let monitor = PlasticityMonitor::new(0.5);
+    let record = monitor.record();
+    let j2 = J2Plastic::new(rho, e, nu, 2.5e4, 1.0e6).unwrap();
+    let (plastic, sim) = cantilever(Box::new(j2), Some(monitor)).unwrap();
+    let r = record.lock().unwrap();
+    println!(
+        "tip: elastic {:.3} mm, J2 {:.3} mm; {} of {} elements yielded, largest plastic strain {:.3e}",
+        1e3 * elastic,
+        1e3 * plastic,
+        r.yielded,
+        sim.elements().n_solid(),
+        r.largest
+    );
+    assert!(
+        plastic < elastic,
+        "plastic tip {plastic} vs elastic {elastic}"
+    );
+    assert!(r.yielded > 0 && r.yielded < sim.elements().n_solid() / 2);
+    assert!(r.largest > 0.0 && r.history.windows(2).all(|w| w[1].1 >= w[0].1 - 1e-15));
+    // Only near the clamp: every yielded element within a third of the span.
+    let x = sim.particles().x();
+    for (el, h) in sim
+        .elements()
+        .solid()
+        .chunks_exact(3)
+        .zip(sim.elements().solid_history())
+    {
+        if h.internal[PLASTIC_STRAIN] > 0.0 {
+            let cx = el.iter().map(|&i| x[i as usize].x).sum::<f64>() / 3.0;
+            assert!(cx < 0.35 / 3.0, "yielded at x = {cx}");
+        }
+    }
+}
