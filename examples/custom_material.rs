@@ -152,7 +152,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         Probe::new("front_x", front_x),
         Probe::new("volume", |s: &Simulation<2>| s.fluid_volume()),
     ];
-    let mut output = StandardOutput::new(&out, !args.no_vtu, probes, args.quiet);
+    let mut output =
+        StandardOutput::new(&out, !args.no_vtu, probes, args.quiet).overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
     let front = output.probe_series("front_x");
     println!(

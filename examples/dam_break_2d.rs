@@ -52,7 +52,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         case.spacing,
         case.end_time
     );
-    let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
+    let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
+        .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
 
     // Compare with Martin & Moyce.

@@ -39,7 +39,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         sim.particles().len(),
         case.end_time
     );
-    let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
+    let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
+        .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
     let ux = output.probe_series("ux_top");
     let fx = output.probe_series("force_x");

@@ -27,7 +27,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .clone()
         .unwrap_or_else(|| "out/hydrostatic_2d".into());
     let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
-    let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
+    let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
+        .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
     let p = output.probe_series("bottom_pressure");
     let vmax = output

@@ -57,7 +57,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         Some("cg") => sim.set_solver(Box::new(pfem::assembly::ConjugateGradient::default())),
         Some(other) => return Err(format!("unknown --solver {other} (direct, cg)").into()),
     }
-    let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet);
+    let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
+        .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
     // Surge front at the paper's snapshot times.
     let front = output.probe_series("front_x");

@@ -32,7 +32,8 @@ fn front_error(f: Fidelity) -> (f64, f64) {
         false,
         case.probes(),
         true,
-    );
+    )
+    .overwrite(true);
     let t0 = std::time::Instant::now();
     sim.run(&mut [&mut out]).expect("run completes");
     let wall = t0.elapsed().as_secs_f64();

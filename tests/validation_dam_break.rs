@@ -28,7 +28,8 @@ fn surge_front_follows_martin_and_moyce_at_coarse_resolution() {
         false,
         case.probes(),
         true,
-    );
+    )
+    .overwrite(true);
     sim.run(&mut [&mut out]).unwrap();
     let front: Vec<(f64, f64)> = out
         .probe_series("front_x")

@@ -39,7 +39,8 @@ fn run() -> ((f64, f64), (f64, f64)) {
         false,
         case.probes(),
         true,
-    );
+    )
+    .overwrite(true);
     sim.run(&mut [&mut out]).unwrap();
     let sim_peak = peak(&out.probe_series("ux_tip"));
     let exp_peak = peak(&parse_reference_csv(reference::ANTOCI_2007_GATE_UX).unwrap());

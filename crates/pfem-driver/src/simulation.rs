@@ -181,6 +181,11 @@ pub struct Options {
     /// Count the wall pockets in the fluid volume (deviation 9). Default
     /// true.
     pub count_wall_pockets: bool,
+    /// Memory budget (bytes): a scene whose estimate
+    /// ([`pfem_scene::Scene::estimate`]) is above it is refused before a
+    /// particle is placed. Default [`pfem_scene::default_memory_budget`]
+    /// (80 % of the machine's memory).
+    pub memory_budget: f64,
 }
 
 impl Default for Options {
@@ -190,6 +195,7 @@ impl Default for Options {
             free_surface_pressure_zero: false,
             close_sealed_voids: true,
             count_wall_pockets: true,
+            memory_budget: pfem_scene::default_memory_budget(),
         }
     }
 }
@@ -284,6 +290,7 @@ where
                 value: options.volume_correction,
             });
         }
+        scene.validate_within(options.memory_budget)?;
         let built = scene.build(tessellator.as_mut())?;
         let pfem_scene::Built {
             name,
@@ -294,6 +301,7 @@ where
             solid_material,
             gravity,
             settings,
+            merges: _,
         } = built;
         let particles = Particles::from_cloud(cloud);
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);

@@ -60,6 +60,7 @@ where
     next_probe: f64,
     progress: Option<Progress>,
     quiet: bool,
+    overwrite: bool,
     started: Option<Instant>,
     /// Rows of probes recorded so far: `(t, values)`.
     pub history: Vec<(f64, Vec<f64>)>,
@@ -84,10 +85,54 @@ where
             next_probe: 0.0,
             progress: None,
             quiet,
+            overwrite: false,
             started: None,
             history: Vec::new(),
             extra: BTreeMap::new(),
         }
+    }
+
+    /// Whether a non-empty output directory is accepted: its previous run's
+    /// files (`*.vtu`, `*.pvd`, `probes.csv`, `summary.json`) are removed
+    /// first, other files are left alone. Without it (the default) a
+    /// non-empty directory is refused at the start of the run
+    /// ([`crate::output::OutputError::NotEmpty`]): frames of an old run must
+    /// not sit beside the new ones.
+    pub fn overwrite(mut self, yes: bool) -> Self {
+        self.overwrite = yes;
+        self
+    }
+
+    /// Checks the output directory: refuses a non-empty one, or clears the
+    /// previous run's files from it when overwriting.
+    fn prepare_dir(&self) -> Result<(), crate::output::OutputError> {
+        use crate::output::OutputError;
+        let Ok(entries) = std::fs::read_dir(&self.dir) else {
+            return Ok(()); // does not exist yet
+        };
+        let names: Vec<std::ffi::OsString> = entries.flatten().map(|e| e.file_name()).collect();
+        if names.is_empty() {
+            return Ok(());
+        }
+        if !self.overwrite {
+            return Err(OutputError::NotEmpty {
+                dir: self.dir.clone(),
+                entries: names.len(),
+                example: names[0].to_string_lossy().into_owned(),
+            });
+        }
+        for n in names {
+            let s = n.to_string_lossy();
+            let ours = s.ends_with(".vtu")
+                || s.ends_with(".pvd")
+                || s == "probes.csv"
+                || s == "summary.json";
+            if ours {
+                let p = self.dir.join(&n);
+                std::fs::remove_file(&p).map_err(|e| OutputError::io(&p, e))?;
+            }
+        }
+        Ok(())
     }
 
     /// Values of one probe over the run, `(t, value)`.
@@ -287,6 +332,7 @@ where
 {
     fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
         self.started = Some(Instant::now());
+        self.prepare_dir()?;
         std::fs::create_dir_all(&self.dir)
             .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
         if self.vtu && sim.output_interval().is_some() {
@@ -309,16 +355,12 @@ where
         let eps = 1e-9 * sim.end_time();
         if sim.time() + eps >= self.next_frame {
             self.write_frame(sim)?;
-            while self.next_frame <= sim.time() + eps {
-                self.next_frame += sim.output_interval().unwrap_or(f64::INFINITY);
-            }
+            self.next_frame = next_after(sim.time() + eps, sim.output_interval());
         }
         if sim.time() + eps >= self.next_probe {
             self.record(sim)?;
-            if let Some(dt) = self.probe_interval {
-                while self.next_probe <= sim.time() + eps {
-                    self.next_probe += dt;
-                }
+            if self.probe_interval.is_some() {
+                self.next_probe = next_after(sim.time() + eps, self.probe_interval);
             }
         }
         if let Some(p) = self.progress.as_mut() {
@@ -333,5 +375,23 @@ where
         }
         write_summary(self.dir.join("summary.json"), &self.summary(sim))?;
         Ok(())
+    }
+}
+
+/// The first multiple of `interval` after `t` (infinite without an
+/// interval). Computed, not stepped: an interval too small to move a sum
+/// (5e-324) cannot hang the scheduler.
+fn next_after(t: f64, interval: Option<f64>) -> f64 {
+    match interval {
+        Some(dt) if dt > 0.0 && dt.is_finite() => {
+            let next = ((t / dt).floor() + 1.0) * dt;
+            if next > t {
+                next
+            } else {
+                // Below the resolution of t: every step is a frame.
+                t + t.abs() * f64::EPSILON + f64::MIN_POSITIVE
+            }
+        }
+        _ => f64::INFINITY,
     }
 }

@@ -123,6 +123,23 @@ where
     pub gravity: Option<Vector<D>>,
     /// Run settings.
     pub settings: RunSettings,
+    /// Particles of a body that fell within a quarter spacing of an earlier
+    /// body's particle: dropped (a fluid on a wall, two walls) or welded (a
+    /// wall's on a solid's). Reported by `pfem check`.
+    pub merges: Vec<Merge>,
+}
+
+/// What [`Scene::build`] did to one body's particles that fell on another
+/// body's.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Merge {
+    /// The body.
+    pub body: String,
+    /// Its particles dropped because another body's particle is there.
+    pub dropped: usize,
+    /// Its wall particles dropped because a solid particle is there (the
+    /// solid is welded to the wall at those points).
+    pub welded: usize,
 }
 
 impl<const D: usize> Scene<D>
@@ -170,6 +187,7 @@ where
             .map(|b| b.spacing)
             .fold(f64::INFINITY, f64::min);
         let mut grid = lattice::HashGrid::<D>::new(cell);
+        let mut merges: Vec<Merge> = Vec::new();
         let mut pressure_fields = Vec::new();
         // Body ids follow the scene's order.
         for bi in order {
@@ -203,6 +221,7 @@ where
             let tol = 0.25 * b.spacing;
             let mut local_index = vec![u32::MAX; pts.len()];
             let mut welded = 0usize;
+            let mut dropped = 0usize;
             let first = particles.len();
             for (li, p) in pts.iter().enumerate() {
                 if let Some(j) = grid.find(p, tol, particles.x()) {
@@ -227,7 +246,10 @@ where
                             welded += 1;
                             continue;
                         }
-                        _ => continue,
+                        _ => {
+                            dropped += 1;
+                            continue;
+                        }
                     }
                 }
                 let v = match (b.kind, &b.velocity_field) {
@@ -283,8 +305,13 @@ where
                     solid_elements.push(local_index[q as usize]);
                 }
                 solid_material.extend(std::iter::repeat_n(mat, conn.len() / (D + 1)));
-            } else if b.kind == ParticleKind::Wall && welded > 0 {
-                // Nothing more: the welds are in `fixed`.
+            }
+            if dropped > 0 || welded > 0 {
+                merges.push(Merge {
+                    body: b.name.clone(),
+                    dropped,
+                    welded,
+                });
             }
         }
         if particles.is_empty() {
@@ -378,6 +405,7 @@ where
             solid_material,
             gravity,
             settings,
+            merges,
         })
     }
 }

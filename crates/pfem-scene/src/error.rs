@@ -75,6 +75,34 @@ pub enum SceneError {
         /// Body name.
         body: String,
     },
+    /// A scene name that cannot name files.
+    #[error("scene name `{name}`: {why}")]
+    InvalidName {
+        /// The name.
+        name: String,
+        /// What is wrong with it.
+        why: &'static str,
+    },
+    /// Settings that cannot finish: too many steps or frames.
+    #[error("{what}: about {count:.3e}, more than the {limit:.0e} allowed")]
+    CannotFinish {
+        /// What would run away (steps, frames).
+        what: String,
+        /// How many it would take.
+        count: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// The scene would need more memory than the budget.
+    #[error("the scene has about {particles:.3e} particles and would need about {bytes:.2e} bytes, over the memory budget of {budget:.2e} bytes (coarsen the spacing, or raise the budget)")]
+    TooLarge {
+        /// Estimated particles.
+        particles: f64,
+        /// Estimated bytes.
+        bytes: f64,
+        /// The budget (bytes).
+        budget: f64,
+    },
     /// The initial mesh could not be made.
     #[error("the initial mesh could not be made: {why}")]
     Mesh {

@@ -18,6 +18,9 @@ pub mod lattice;
 pub mod scene;
 pub mod solid_mesh;
 
-pub use build::{Built, Cloud, Particle, NO_MATERIAL};
+pub use build::{Built, Cloud, Merge, Particle, NO_MATERIAL};
 pub use error::SceneError;
-pub use scene::{Body, Clamp, FieldFn, Geometry, InitialField, RunSettings, Scene, WallMotion};
+pub use scene::{
+    default_memory_budget, Body, Clamp, Estimate, FieldFn, Geometry, InitialField, RunSettings,
+    Scene, WallMotion,
+};

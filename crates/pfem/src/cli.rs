@@ -18,6 +18,9 @@ pub struct Args {
     pub quiet: bool,
     /// No VTU frames (`--no-vtu`).
     pub no_vtu: bool,
+    /// Clear the previous run's files from a non-empty output directory
+    /// (`--overwrite`); without it such a directory is refused.
+    pub overwrite: bool,
     /// Other `--name value` options.
     pub options: BTreeMap<String, String>,
     /// Positional arguments.
@@ -30,9 +33,37 @@ pub struct Args {
 pub struct ArgsError(pub String);
 
 impl Args {
-    /// Parses `std::env::args()` (skipping the program name).
+    /// Parses `std::env::args()` (skipping the program name), for the
+    /// bundled examples: `-h`/`--help` prints the common options and
+    /// `--version` the version, and both exit the process; `--threads N`
+    /// sizes the worker pool (before any parallel work).
     pub fn from_env() -> Result<Self, ArgsError> {
-        Self::parse(std::env::args().skip(1))
+        let args: Vec<String> = std::env::args().skip(1).collect();
+        if args.iter().any(|a| a == "-h" || a == "--help") {
+            println!("{USAGE}");
+            std::process::exit(0);
+        }
+        if args.iter().any(|a| a == "--version" || a == "-V") {
+            println!("pfem {}", env!("CARGO_PKG_VERSION"));
+            std::process::exit(0);
+        }
+        let parsed = Self::parse(args)?;
+        parsed.apply_threads()?;
+        Ok(parsed)
+    }
+
+    /// Sizes rayon's global pool from `--threads N` (no-op without it).
+    pub fn apply_threads(&self) -> Result<(), ArgsError> {
+        if let Some(v) = self.options.get("threads") {
+            let n: usize = v.parse().ok().filter(|&n| n > 0).ok_or_else(|| {
+                ArgsError(format!("--threads must be a positive integer, got `{v}`"))
+            })?;
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build_global()
+                .map_err(|e| ArgsError(format!("--threads {n}: {e}")))?;
+        }
+        Ok(())
     }
 
     /// Parses the given arguments.
@@ -43,6 +74,7 @@ impl Args {
             match a.as_str() {
                 "--quiet" | "-q" => out.quiet = true,
                 "--no-vtu" => out.no_vtu = true,
+                "--overwrite" => out.overwrite = true,
                 s if s.starts_with("--") => {
                     let name = s.trim_start_matches("--").to_string();
                     let value = it
@@ -128,21 +160,63 @@ impl Args {
                 }
             };
         }
+        options.memory_budget = self.memory_budget()?;
         let mut sim =
             crate::Simulation::with_options(scene, tessellator, self.step_params()?, options)?;
         sim.set_solver(self.solver()?);
+        if let Some(v) = self.options.get("max-wall-time") {
+            let limit = parse_positive("max-wall-time", v)?;
+            sim.add_hook(Box::new(crate::hooks::WallClockLimit::new(limit)));
+        }
         Ok(sim)
+    }
+
+    /// The memory budget (bytes): `--memory-budget GB`, or 80 % of the
+    /// machine's memory.
+    pub fn memory_budget(&self) -> Result<f64, ArgsError> {
+        match self.options.get("memory-budget") {
+            Some(v) => Ok(parse_positive("memory-budget", v)? * 1e9),
+            None => Ok(pfem_scene::default_memory_budget()),
+        }
+    }
+
+    /// Parses every common option as a run would (`--scheme`,
+    /// `--picard-tol`, `--solver`, `--volume-correction`,
+    /// `--memory-budget`, `--max-wall-time`, `--threads`), without running.
+    pub fn validate_options(&self) -> Result<(), ArgsError> {
+        self.step_params()?;
+        self.solver()?;
+        self.memory_budget()?;
+        if let Some(v) = self.options.get("volume-correction") {
+            match v.parse::<f64>() {
+                Ok(b) if (0.0..=1.0).contains(&b) => {}
+                _ => {
+                    return Err(ArgsError(format!(
+                        "--volume-correction must be a number in [0, 1], got `{v}`"
+                    )))
+                }
+            }
+        }
+        if let Some(v) = self.options.get("max-wall-time") {
+            parse_positive("max-wall-time", v)?;
+        }
+        if let Some(v) = self.options.get("threads") {
+            if v.parse::<usize>().ok().filter(|&n| n > 0).is_none() {
+                return Err(ArgsError(format!(
+                    "--threads must be a positive integer, got `{v}`"
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// Fails on options not in `known` (besides the common `scheme`,
     /// `picard-tol`, `solver` and `volume-correction`).
     pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ArgsError> {
         for k in self.options.keys() {
-            if !known.contains(&k.as_str())
-                && !["scheme", "picard-tol", "solver", "volume-correction"].contains(&k.as_str())
-            {
+            if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --scheme --picard-tol --solver --volume-correction{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --solver --volume-correction --memory-budget --max-wall-time --threads{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -150,6 +224,38 @@ impl Args {
         Ok(())
     }
 }
+
+/// Value options every program accepts besides `--out`, `--spacing` and
+/// `--end-time`.
+const COMMON: [&str; 7] = [
+    "scheme",
+    "picard-tol",
+    "solver",
+    "volume-correction",
+    "memory-budget",
+    "max-wall-time",
+    "threads",
+];
+
+/// The common options, for `--help`.
+pub const USAGE: &str = "\
+Options common to the bundled examples and `pfem run`:
+  --out DIR             output directory
+  --overwrite           clear the previous run's files from DIR (a non-empty DIR is refused without it)
+  --spacing H           particle spacing (m)
+  --end-time T          simulated time (s)
+  --quiet, -q           no progress bar
+  --no-vtu              no VTU frames
+  --scheme S            bossak (default), newmark or euler
+  --picard-tol X        Picard tolerance (default 1e-6)
+  --solver S            direct (default), lu, cholesky or cg
+  --volume-correction B fraction of the volume error restored per step, in [0, 1] (default 1)
+  --memory-budget GB    refuse scenes estimated above this (default: 80 % of the machine's memory)
+  --max-wall-time S     stop the run after S seconds of wall time (outputs are kept)
+  --threads N           worker threads (default: one per core)
+  --version             print the version
+  --help, -h            this help
+Each example has its own options too (see its source's header).";
 
 fn parse_positive(name: &str, v: &str) -> Result<f64, ArgsError> {
     match v.parse::<f64>() {

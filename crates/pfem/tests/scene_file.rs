@@ -173,7 +173,8 @@ fn the_puddle_is_valid_and_runs() {
         false,
         probes,
         true,
-    );
+    )
+    .overwrite(true);
     sim.run(&mut [&mut out]).unwrap();
     assert!(sim.time() >= 0.01 - 1e-12);
     assert!(out.probe_series("volume").iter().all(|v| v.1 > 0.0));

@@ -351,6 +351,50 @@ where
     }
 }
 
+/// Stops the run once it has taken `limit` seconds of wall time (from its
+/// first step), keeping what was written: a wall-clock limit.
+#[derive(Debug, Clone, Copy)]
+pub struct WallClockLimit {
+    limit: f64,
+    started: Option<std::time::Instant>,
+}
+
+impl WallClockLimit {
+    /// A limit of `seconds` of wall time.
+    pub fn new(seconds: f64) -> Self {
+        Self {
+            limit: seconds,
+            started: None,
+        }
+    }
+}
+
+impl<const D: usize> Hook<D> for WallClockLimit
+where
+    Const<D>: Dim,
+{
+    fn name(&self) -> &str {
+        "wall-clock limit"
+    }
+    fn start(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        self.started = Some(std::time::Instant::now());
+        Ok(())
+    }
+    fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        if self
+            .started
+            .is_some_and(|t| t.elapsed().as_secs_f64() >= self.limit)
+        {
+            ctx.stop(format!(
+                "wall-clock limit of {} s reached at t = {} s",
+                self.limit,
+                ctx.time()
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// A closure run at one point of every step.
 type StepFn<const D: usize> =
     Box<dyn FnMut(&mut HookContext<'_, D>) -> Result<(), RunError> + Send>;

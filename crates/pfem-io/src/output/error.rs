@@ -10,6 +10,17 @@ use super::vtu::FrameError;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum OutputError {
+    /// The output directory holds files already (a previous run's?), and
+    /// overwriting was not asked for.
+    #[error("output directory {dir} is not empty ({entries} entries, e.g. `{example}`): pass --overwrite (StandardOutput::overwrite) to replace a previous run's files, or choose another directory")]
+    NotEmpty {
+        /// The directory.
+        dir: PathBuf,
+        /// How many entries it holds.
+        entries: usize,
+        /// One of them.
+        example: String,
+    },
     /// The operating system refused a read, write, rename or directory
     /// creation.
     #[error("I/O error on {path}: {source}")]

@@ -38,6 +38,8 @@ Options:
   --end-time T    simulated time (s), overriding the file
   --quiet, -q     no progress bar
   --no-vtu        no VTU frames (probes.csv and summary.json are still written)
+  --overwrite     replace a previous run's files in a non-empty DIR (refused
+                  without it)
   --scheme S      bossak (default, α_B = -0.3), newmark (the paper's
                   undamped trapezoidal rule) or euler (backward Euler)
   --picard-tol X  Picard tolerance (default 1e-6)
@@ -45,6 +47,12 @@ Options:
   --volume-correction B
                   fraction of the fluid-volume error restored per step,
                   in [0, 1] (default 1; 0 = off, as in the paper)
+  --memory-budget GB
+                  refuse scenes estimated above GB (default 80 % of memory)
+  --max-wall-time S
+                  stop the run after S seconds of wall time, keeping outputs
+  --threads N     worker threads (default one per core)
+  --version, -V   the version
   --help, -h      this help
 
 Scene files: see examples/scenes/*.toml and the pfem::scene_file docs.
@@ -77,6 +85,10 @@ fn run(args: Vec<String>) -> Result<(), String> {
         print!("{HELP}");
         return Ok(());
     }
+    if args.iter().any(|a| a == "--version" || a == "-V") {
+        println!("pfem {}", env!("CARGO_PKG_VERSION"));
+        return Ok(());
+    }
     let command = args[0].as_str();
     let parsed = Args::parse(args[1..].iter().cloned()).map_err(|e| e.to_string())?;
     parsed.reject_unknown(&[]).map_err(|e| e.to_string())?;
@@ -100,23 +112,22 @@ fn run(args: Vec<String>) -> Result<(), String> {
             if parsed.out.is_some() || parsed.no_vtu {
                 return Err("`pfem check` writes nothing: --out and --no-vtu do not apply".into());
             }
+            // The run options are checked as `run` would.
+            parsed.validate_options().map_err(|e| e.to_string())?;
             let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
                 .map_err(|e| e.to_string())?;
-            let (name, d, bodies, probes, t) = match &loaded {
+            match loaded {
                 LoadedScene::Two(s, p) => {
-                    (&s.name, 2, s.bodies.len(), p.len(), s.settings.end_time)
+                    check(&file, s, p.len(), &mut Delaunay2::default(), &parsed)
                 }
                 LoadedScene::Three(s, p) => {
-                    (&s.name, 3, s.bodies.len(), p.len(), s.settings.end_time)
+                    check(&file, s, p.len(), &mut Delaunay3::default(), &parsed)
                 }
-            };
-            println!(
-                "{}: valid {d}D scene `{name}`: {bodies} bodies, {probes} probe columns, end time {t} s",
-                file.display()
-            );
-            Ok(())
+            }
         }
         "run" => {
+            parsed.validate_options().map_err(|e| e.to_string())?;
+            parsed.apply_threads().map_err(|e| e.to_string())?;
             let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
                 .map_err(|e| e.to_string())?;
             match loaded {
@@ -132,6 +143,57 @@ fn run(args: Vec<String>) -> Result<(), String> {
             "unknown command `{other}` (run, check; see pfem --help)"
         )),
     }
+}
+
+/// Validates `scene` within the memory budget, builds its particles and
+/// reports what a run would hold: particle counts (estimated and placed),
+/// memory, steps, and every particle merged or welded.
+fn check<const D: usize>(
+    file: &Path,
+    scene: Scene<D>,
+    probes: usize,
+    tessellator: &mut dyn Tessellator<D>,
+    args: &Args,
+) -> Result<(), String>
+where
+    Const<D>: Dim,
+{
+    let budget = args.memory_budget().map_err(|e| e.to_string())?;
+    let estimate = scene.validate_within(budget).map_err(|e| e.to_string())?;
+    let (name, bodies, t, dt) = (
+        scene.name.clone(),
+        scene.bodies.len(),
+        scene.settings.end_time,
+        scene.settings.max_dt,
+    );
+    let built = scene.build(tessellator).map_err(|e| e.to_string())?;
+    println!(
+        "{}: valid {D}D scene `{name}`: {bodies} bodies, {probes} probe columns, end time {t} s",
+        file.display()
+    );
+    println!(
+        "  {} particles placed (estimated {:.0}), memory about {:.1} MB of a {:.1} GB budget, at least {:.0} steps (end time / max_dt)",
+        built.particles.len(),
+        estimate.particles,
+        estimate.bytes / 1e6,
+        budget / 1e9,
+        (t / dt).ceil()
+    );
+    for m in &built.merges {
+        if m.dropped > 0 {
+            println!(
+                "  warning: body `{}`: {} particles dropped (within a quarter spacing of an earlier body's particle)",
+                m.body, m.dropped
+            );
+        }
+        if m.welded > 0 {
+            println!(
+                "  body `{}`: {} wall particles replaced by a solid's, which is welded there",
+                m.body, m.welded
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Runs `scene` with the standard outputs into `--out` (default `out/NAME`).
@@ -159,7 +221,8 @@ where
         sim.end_time(),
         out.display()
     );
-    let mut output = StandardOutput::new(&out, !args.no_vtu, probes, args.quiet);
+    let mut output =
+        StandardOutput::new(&out, !args.no_vtu, probes, args.quiet).overwrite(args.overwrite);
     sim.run(&mut [&mut output]).map_err(|e| e.to_string())?;
     output.report(&sim).map_err(|e| e.to_string())?;
     Ok(())

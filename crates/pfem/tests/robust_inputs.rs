@@ -1,0 +1,234 @@
+//! Hostile inputs (issue 17): names that would write outside their folder,
+//! settings that cannot finish, scenes too large for the memory, a second
+//! run into a used folder, and what `pfem check` reports.
+//! `cargo test --release -p pfem --test robust_inputs`
+
+use std::process::Command;
+
+use pfem::prelude::*;
+
+fn puddle(name: &str) -> Scene<2> {
+    let h = 0.05;
+    Scene::<2>::new(name)
+        .gravity(Vector::<2>::new(0.0, -9.81))
+        .settings(RunSettings {
+            end_time: 0.02,
+            max_dt: 5e-3,
+            output_interval: Some(0.01),
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.1, -h),
+                max: Point::<2>::new(0.3, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.2, 0.2),
+            },
+            h,
+        )
+}
+
+fn build(scene: Scene<2>) -> Result<Simulation<2>, SceneError> {
+    Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
+}
+
+/// Scene names become file names: a path, a parent reference or a hidden
+/// name is refused before anything is written.
+#[test]
+fn names_that_would_leave_their_folder_are_refused() {
+    for bad in [
+        "../../../x",
+        "/tmp/x",
+        "a/b",
+        "a\\b",
+        ".hidden",
+        "",
+        "a\u{7}b",
+    ] {
+        match build(puddle(bad)) {
+            Err(SceneError::InvalidName { .. }) => {}
+            other => panic!("name {bad:?}: expected InvalidName, got {other:?}"),
+        }
+    }
+    assert!(build(puddle("dam break 2D (run 3)")).is_ok());
+}
+
+/// Settings that cannot finish are typed errors, not endless runs: an output
+/// interval of 5e-324 s, a largest step of 1e-308 s, an initial speed of
+/// 10⁶ m/s at a 5 cm spacing.
+#[test]
+fn settings_that_cannot_finish_are_refused() {
+    let mut s = puddle("frames");
+    s.settings.output_interval = Some(5e-324);
+    assert!(matches!(build(s), Err(SceneError::CannotFinish { .. })));
+    let mut s = puddle("steps");
+    s.settings.max_dt = 1e-308;
+    assert!(matches!(build(s), Err(SceneError::CannotFinish { .. })));
+    let s = puddle("fast").with_velocity(Vector::<2>::new(1e6, 0.0));
+    // 0.02 s × 1e6 m/s / (0.5 × 0.05 m) = 8e5 steps: allowed; a longer run
+    // is not.
+    assert!(build(s).is_ok());
+    let mut s = puddle("fast").with_velocity(Vector::<2>::new(1e6, 0.0));
+    s.settings.end_time = 10.0;
+    match build(s) {
+        Err(SceneError::CannotFinish { count, .. }) => assert!(count > 1e8),
+        other => panic!("expected CannotFinish, got {other:?}"),
+    }
+}
+
+/// A 1 m box at a spacing of 10⁻⁶ m (10¹² particles) is refused from its
+/// estimate, before a particle is placed; a budget below a small scene's
+/// estimate refuses it too.
+#[test]
+fn scenes_above_the_memory_budget_are_refused_before_allocating() {
+    let mut s = puddle("huge");
+    for b in &mut s.bodies {
+        b.spacing = 1e-6;
+    }
+    match build(s) {
+        Err(SceneError::TooLarge { particles, .. }) => assert!(particles > 1e10),
+        other => panic!("expected TooLarge, got {other:?}"),
+    }
+    let e = puddle("small").estimate();
+    // floor 9 × 2, water 5 × 5.
+    assert_eq!(e.particles, 18.0 + 25.0);
+    let options = Options {
+        memory_budget: 0.5 * e.bytes,
+        ..Options::default()
+    };
+    assert!(matches!(
+        Simulation::with_options(
+            puddle("small"),
+            Box::new(Delaunay2::default()),
+            StepParams::default(),
+            options
+        ),
+        Err(SceneError::TooLarge { .. })
+    ));
+}
+
+/// Two bodies with one name are refused (probes and forces address bodies
+/// by name).
+#[test]
+fn duplicate_body_names_are_refused() {
+    let h = 0.05;
+    let s = puddle("dup").wall(
+        "floor",
+        Geometry::Box {
+            min: Point::<2>::new(0.4, 0.0),
+            max: Point::<2>::new(0.5, 0.1),
+        },
+        h,
+        WallMotion::Fixed,
+    );
+    assert!(matches!(build(s), Err(SceneError::InvalidGeometry { .. })));
+}
+
+fn files(dir: &std::path::Path, ext: &str) -> usize {
+    std::fs::read_dir(dir)
+        .map(|d| {
+            d.flatten()
+                .filter(|e| e.path().extension().is_some_and(|x| x == ext))
+                .count()
+        })
+        .unwrap_or(0)
+}
+
+/// A second run into a used folder is refused; with `overwrite` the old
+/// run's frames are cleared first (no stale frames beside the new ones) and
+/// a user's own file is left alone.
+#[test]
+fn a_used_output_folder_is_refused_unless_overwritten() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-reuse-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    let mut long = puddle("reuse");
+    long.settings.end_time = 0.05;
+    let mut sim = build(long).unwrap();
+    let mut out = StandardOutput::new(&dir, true, vec![], true);
+    sim.run(&mut [&mut out]).unwrap();
+    let first = files(&dir, "vtu");
+    assert!(first >= 5, "{first} frames");
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+
+    let mut sim = build(puddle("reuse")).unwrap();
+    let mut out = StandardOutput::new(&dir, true, vec![], true);
+    let err = sim.run(&mut [&mut out]).expect_err("a used folder");
+    assert!(err.to_string().contains("not empty"), "{err}");
+    assert_eq!(files(&dir, "vtu"), first, "nothing written or removed");
+
+    let mut sim = build(puddle("reuse")).unwrap();
+    let mut out = StandardOutput::new(&dir, true, vec![], true).overwrite(true);
+    sim.run(&mut [&mut out]).unwrap();
+    assert_eq!(files(&dir, "vtu"), 3, "frames at 0, 0.01, 0.02 s only");
+    assert!(dir.join("notes.txt").is_file());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `pfem check` reports the particle count, memory, steps and merged
+/// particles, and refuses bad run options as `run` would.
+#[test]
+fn check_reports_size_and_merges_and_validates_options() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-check-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("overlap.toml");
+    // The water's bottom row falls on the floor's top row: dropped.
+    std::fs::write(
+        &file,
+        r#"name = "overlap"
+dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.05
+
+[run]
+end_time = 0.1
+max_dt = 5e-3
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = { min = [-0.1, -0.05], max = [0.3, 0.0] }
+
+[[body]]
+name = "water"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
+"#,
+    )
+    .unwrap();
+    let bin = env!("CARGO_BIN_EXE_pfem");
+    let ok = Command::new(bin)
+        .args(["check", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&ok.stdout);
+    println!("{text}");
+    assert!(ok.status.success(), "{text}");
+    assert!(text.contains("particles placed"), "{text}");
+    assert!(text.contains("MB"), "{text}");
+    assert!(text.contains("body `water`: 5 particles dropped"), "{text}");
+    let bad = Command::new(bin)
+        .args(["check", file.to_str().unwrap(), "--volume-correction", "7"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--volume-correction"));
+    let huge = Command::new(bin)
+        .args(["check", file.to_str().unwrap(), "--spacing", "1e-6"])
+        .output()
+        .unwrap();
+    assert!(!huge.status.success());
+    assert!(String::from_utf8_lossy(&huge.stderr).contains("memory budget"));
+    let version = Command::new(bin).arg("--version").output().unwrap();
+    assert!(String::from_utf8_lossy(&version.stdout).starts_with("pfem "));
+    std::fs::remove_dir_all(&dir).ok();
+}
