@@ -61,6 +61,11 @@ fn a_paddle_wave_maker_makes_waves_of_its_period() {
     let h = 0.025;
     let (length, depth) = (1.5, 0.2);
     let (amplitude, period) = (0.01, 0.8);
+    let law = Sinusoidal {
+        amplitude: Vector::<2>::new(amplitude, 0.0),
+        period,
+        ramp: period,
+    };
     let scene = Scene::<2>::new("paddle")
         .gravity(Vector::<2>::new(0.0, -G))
         .settings(RunSettings {
@@ -75,7 +80,12 @@ fn a_paddle_wave_maker_makes_waves_of_its_period() {
             h,
             WallMotion::Fixed,
         )
-        .wall("paddle", boxed(-h, 0.0, -h, 0.4), h, WallMotion::Fixed)
+        .wall(
+            "paddle",
+            boxed(-h, 0.0, -h, 0.4),
+            h,
+            WallMotion::Law(std::sync::Arc::new(law)),
+        )
         .wall(
             "end",
             boxed(length + h, 0.0, length + h, 0.4),
@@ -89,12 +99,7 @@ fn a_paddle_wave_maker_makes_waves_of_its_period() {
             h,
         );
     let mut sim = sim2(scene, StepParams::default());
-    let law = Sinusoidal {
-        amplitude: Vector::<2>::new(amplitude, 0.0),
-        period,
-        ramp: period,
-    };
-    sim.add_hook(Box::new(PrescribedMotion::new("paddle", Box::new(law))));
+    assert!(sim.hook_names().contains(&"prescribed motion".to_string()));
     let probe_x = 0.1;
     let mut series = Vec::new();
     while sim.time() < sim.end_time() - 1e-12 {
@@ -527,7 +532,7 @@ fn unknown_body_names_are_errors() {
     assert!(sim.body_particles("flor").is_err());
     sim.add_hook(Box::new(PrescribedMotion::new(
         "no such wall",
-        Box::new(Sinusoidal {
+        std::sync::Arc::new(Sinusoidal {
             amplitude: Vector::<2>::new(0.01, 0.0),
             period: 1.0,
             ramp: 0.0,

@@ -302,6 +302,7 @@ where
             gravity,
             settings,
             merges: _,
+            laws,
         } = built;
         let particles = Particles::from_cloud(cloud);
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);
@@ -332,6 +333,9 @@ where
         }
         if has_fluid && options.free_surface_pressure_zero {
             hooks.push(Box::new(FreeSurfacePressureZero));
+        }
+        for (body, law) in laws {
+            hooks.push(Box::new(crate::hooks::PrescribedMotion::new(body, law)));
         }
         let mut sim = Self {
             name,

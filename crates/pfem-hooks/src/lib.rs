@@ -2,9 +2,6 @@
 //! driver's public [`Hook`](pfem_driver::Hook) seam (as a user's own hooks
 //! are):
 //!
-//! - [`PrescribedMotion`] moves a wall along a [`MotionLaw`]
-//!   ([`Sinusoidal`]: a piston wave-maker's stroke, ramped;
-//!   [`PiecewiseLinear`]: a table);
 //! - [`BodyForceRamp`]: a load ramp on the body force;
 //! - [`SlipPlanes`]: symmetry planes normal to an axis;
 //! - [`Inflow`]: fluid entering through a face at a prescribed velocity;
@@ -12,12 +9,12 @@
 //!   insertion into oversized elements, every few steps.
 //!
 //! The driver's own hooks (the volume correction, `p = 0` on the free
-//! surface, `StopWhen`, `FnHook`) are in `pfem_driver::hooks`.
+//! surface, `PrescribedMotion` for walls with a motion law, `StopWhen`,
+//! `WallClockLimit`, `FnHook`) are in `pfem_driver::hooks`; the motion laws
+//! themselves (`Sinusoidal`, `PiecewiseLinear`) in `pfem_scene::motion`.
 
 mod motion;
 mod particles;
 
-pub use motion::{
-    BodyForceRamp, MotionLaw, PiecewiseLinear, PrescribedMotion, Sinusoidal, SlipPlanes,
-};
+pub use motion::{BodyForceRamp, SlipPlanes};
 pub use particles::{Inflow, ParticleManagement};

@@ -15,12 +15,62 @@ where
     fn pressure_force_on(&self, name: &str) -> Result<Vector<D>, RunError>;
     /// See the implementation for [`Simulation`].
     fn water_pressure(&self) -> Vec<f64>;
+    /// See the implementation for [`Simulation`].
+    fn fluid_at(&self, at: &Point<D>) -> Option<(f64, Vector<D>)>;
 }
 
 impl<const D: usize> Loads<D> for Simulation<D>
 where
     Const<D>: Dim,
 {
+    /// The fluid's pressure (Pa) and velocity (m/s) at the fixed point
+    /// `at`: linear interpolation of the nodal values in the fluid element
+    /// that holds it (eq. 62's nodal pressure, the particles' velocities);
+    /// `None` where no fluid element does (a dry point, or outside the
+    /// fluid). A point probe.
+    fn fluid_at(&self, at: &Point<D>) -> Option<(f64, Vector<D>)> {
+        let nv = D + 1;
+        let x = self.particles().x();
+        let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+        let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
+        for el in self.elements().fluid().chunks_exact(nv) {
+            for a in 0..nv {
+                p[a] = x[el[a] as usize];
+            }
+            // Quick reject on the bounding box.
+            if (0..D).any(|k| {
+                let (lo, hi) = p[..nv]
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| {
+                        (l.min(q[k]), h.max(q[k]))
+                    });
+                at[k] < lo || at[k] > hi
+            }) {
+                continue;
+            }
+            if pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]).is_none() {
+                continue;
+            }
+            // Barycentric weights: W_a(at) = 1/(D+1) + grad W_a · (at − centroid).
+            let c = p[..nv].iter().fold(Point::<D>::zeros(), |acc, q| acc + q) / nv as f64;
+            let w: Vec<f64> = (0..nv)
+                .map(|a| 1.0 / nv as f64 + g[a].dot(&(at - c)))
+                .collect();
+            if w.iter().all(|&wa| wa >= -1e-12) {
+                let pressure = self.particles().pressure();
+                let v = self.particles().v();
+                let mut pp = 0.0;
+                let mut vv = Vector::<D>::zeros();
+                for a in 0..nv {
+                    pp += w[a] * pressure[el[a] as usize];
+                    vv += v[el[a] as usize] * w[a];
+                }
+                return Some((pp, vv));
+            }
+        }
+        None
+    }
+
     /// Pressure force the fluid exerts on body `name` (N, per metre of depth
     /// in 2D), or [`RunError::UnknownBody`]: at each of the body's particles
     /// `i`, the nodal pressure force `Gᵀ p` of eq. 58,

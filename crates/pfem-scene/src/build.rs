@@ -127,6 +127,9 @@ where
     /// body's particle: dropped (a fluid on a wall, two walls) or welded (a
     /// wall's on a solid's). Reported by `pfem check`.
     pub merges: Vec<Merge>,
+    /// Walls moving along a law of time, by name.
+    #[allow(clippy::type_complexity)]
+    pub laws: Vec<(String, std::sync::Arc<dyn crate::motion::MotionLaw<D>>)>,
 }
 
 /// What [`Scene::build`] did to one body's particles that fell on another
@@ -188,6 +191,7 @@ where
             .fold(f64::INFINITY, f64::min);
         let mut grid = lattice::HashGrid::<D>::new(cell);
         let mut merges: Vec<Merge> = Vec::new();
+        let mut laws = Vec::new();
         let mut pressure_fields = Vec::new();
         // Body ids follow the scene's order.
         for bi in order {
@@ -214,9 +218,13 @@ where
                 }
                 None => NO_MATERIAL,
             };
-            let wall_velocity = match b.motion {
-                WallMotion::Velocity(w) => w,
+            if let (ParticleKind::Wall, WallMotion::Law(law)) = (b.kind, &b.motion) {
+                laws.push((b.name.clone(), law.clone()));
+            }
+            let wall_velocity = match &b.motion {
+                WallMotion::Velocity(w) => *w,
                 WallMotion::Fixed => Vector::<D>::zeros(),
+                WallMotion::Law(_) => Vector::<D>::zeros(),
             };
             let tol = 0.25 * b.spacing;
             let mut local_index = vec![u32::MAX; pts.len()];
@@ -406,6 +414,7 @@ where
             gravity,
             settings,
             merges,
+            laws,
         })
     }
 }

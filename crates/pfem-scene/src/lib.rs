@@ -15,6 +15,7 @@
 pub mod build;
 pub mod error;
 pub mod lattice;
+pub mod motion;
 pub mod scene;
 pub mod solid_mesh;
 

@@ -88,7 +88,7 @@ where
 }
 
 /// Prescribed motion of a wall.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone)]
 pub enum WallMotion<const D: usize>
 where
     Const<D>: Dim,
@@ -97,6 +97,11 @@ where
     Fixed,
     /// Moving at a constant velocity (m/s).
     Velocity(Vector<D>),
+    /// Moving rigidly along a law of time ([`crate::motion::Sinusoidal`]: a
+    /// wave-maker; [`crate::motion::PiecewiseLinear`]: a table). The driver
+    /// follows it with a `PrescribedMotion` hook: velocity prescribed for
+    /// each step, positions set to the law's after it.
+    Law(std::sync::Arc<dyn crate::motion::MotionLaw<D>>),
 }
 
 /// Where a solid is clamped (its velocity held at zero).
@@ -665,7 +670,7 @@ where
         let v_max = self
             .bodies
             .iter()
-            .map(|b| match b.motion {
+            .map(|b| match &b.motion {
                 WallMotion::Velocity(w) if b.kind == ParticleKind::Wall => w.norm(),
                 _ => b.velocity.norm(),
             })

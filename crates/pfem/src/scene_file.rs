@@ -70,7 +70,7 @@
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
-//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes) |
+//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` or `table = [[t, dx, dy], …]`), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson }` (kg/m³, Pa, –) |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }` or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
@@ -93,6 +93,7 @@ use crate::observe::Probe;
 use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
 use crate::simulation::Simulation;
 use crate::SceneError;
+use pfem_io::Loads;
 
 /// A list of coordinates (`[x, y]` or `[x, y, z]`) with its place in the
 /// file, so that a wrong length can name its line.
@@ -180,6 +181,12 @@ pub struct BodySpec {
     /// Prescribed velocity (m/s) of a wall; fixed when omitted.
     #[serde(default)]
     pub wall_velocity: Option<Coords>,
+    /// A wall's motion law in time (instead of `wall_velocity`):
+    /// `motion.sinusoidal = { amplitude = [ax, ay], period = T, ramp = R }`
+    /// (m, s, s; `ramp` optional) or `motion.table = [[t, dx, dy], …]`
+    /// (s, m; from `t = 0` with zero displacement, linear in between).
+    #[serde(default)]
+    pub motion: Option<Spanned<MotionSpec>>,
     /// Solids: particles in this box are clamped (zero velocity).
     #[serde(default)]
     pub clamp: Option<BoxSpec>,
@@ -240,6 +247,24 @@ pub enum GeometrySpec {
     Particles(Vec<Coords>),
 }
 
+/// A wall's motion law in a scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum MotionSpec {
+    /// `d(t) = A sin(2π t/T)`, its amplitude ramped from 0 over `ramp`.
+    Sinusoidal {
+        /// Amplitude vector (m).
+        amplitude: Coords,
+        /// Period (s).
+        period: f64,
+        /// Ramp duration (s), 0 by default.
+        #[serde(default)]
+        ramp: f64,
+    },
+    /// Rows `[t, dx, dy(, dz)]` (s, m), linear in between.
+    Table(Vec<Vec<f64>>),
+}
+
 /// A probe: a column of `probes.csv`, sampled after every step. Written as
 /// a name (`"volume"`) or, with parameters, as a one-key table
 /// (`{ body_displacement = { body = "gate", point = [0.1025, 0.0025] } }`).
@@ -275,6 +300,26 @@ pub enum ProbeSpec {
         #[serde(default)]
         name: Option<String>,
     },
+    /// `force`: the pressure force of the fluid on `body` (N; N per metre
+    /// in 2D), `pfem_io::Loads::pressure_force_on`; columns `fx_NAME`,
+    /// `fy_NAME` (and `fz_NAME`), `NAME` defaulting to the body.
+    Force {
+        /// The body.
+        body: String,
+        /// Column suffix; default the body's name.
+        #[serde(default)]
+        name: Option<String>,
+    },
+    /// `point`: the fluid's pressure (Pa) and velocity (m/s) at a fixed
+    /// point, interpolated in the fluid element holding it (NaN where no
+    /// fluid element does: a dry point); columns `p_NAME`, `vx_NAME`,
+    /// `vy_NAME` (and `vz_NAME`).
+    Point {
+        /// The point (m).
+        at: Coords,
+        /// Column suffix.
+        name: String,
+    },
 }
 
 impl ProbeSpec {
@@ -286,6 +331,8 @@ impl ProbeSpec {
             ProbeSpec::HeightAtWall => "height_at_wall",
             ProbeSpec::BottomPressure => "bottom_pressure",
             ProbeSpec::BodyDisplacement { .. } => "body_displacement",
+            ProbeSpec::Force { .. } => "force",
+            ProbeSpec::Point { .. } => "point",
         }
     }
 }
@@ -495,6 +542,11 @@ impl SceneFile {
                 }
             };
             if b.kind != BodyKind::Wall {
+                if let Some(m) = &b.motion {
+                    return Err(
+                        self.error(m.span(), format!("{} is for walls only", what("motion")))
+                    );
+                }
                 if let Some(w) = &b.wall_velocity {
                     return Err(self.error(
                         w.span(),
@@ -524,11 +576,24 @@ impl SceneFile {
             scene = match (b.kind, material) {
                 // (A fluid or solid without material returned above.)
                 (BodyKind::Wall, _) | (_, None) => {
-                    let motion = match &b.wall_velocity {
-                        Some(w) => {
+                    let motion = match (&b.wall_velocity, &b.motion) {
+                        (Some(_), Some(m)) => {
+                            return Err(self.error(
+                                m.span(),
+                                format!(
+                                    "{} and {} exclude each other",
+                                    what("wall_velocity"),
+                                    what("motion")
+                                ),
+                            ))
+                        }
+                        (Some(w), None) => {
                             WallMotion::Velocity(self.vector::<D>(w, &what("wall_velocity"))?)
                         }
-                        None => WallMotion::Fixed,
+                        (None, Some(m)) => {
+                            WallMotion::Law(self.motion_law::<D>(m, &what("motion"))?)
+                        }
+                        (None, None) => WallMotion::Fixed,
                     };
                     scene.wall(&b.name, geometry, spacing, motion)
                 }
@@ -681,6 +746,37 @@ impl SceneFile {
                     })
                     .collect()
             }
+            ProbeSpec::Force { body, name } => {
+                if !self.bodies.iter().any(|b| &b.get_ref().name == body) {
+                    return Err(self.error(p.span(), format!("probe `force`: no body `{body}`")));
+                }
+                let suffix = name.clone().unwrap_or_else(|| body.clone());
+                (0..D)
+                    .map(|k| {
+                        let body = body.clone();
+                        Probe::new(
+                            &format!("f{}_{suffix}", ["x", "y", "z"][k]),
+                            move |s: &Simulation<D>| {
+                                s.pressure_force_on(&body).map_or(f64::NAN, |f| f[k])
+                            },
+                        )
+                    })
+                    .collect()
+            }
+            ProbeSpec::Point { at, name } => {
+                let at = Point::from(self.vector::<D>(at, "point.at")?);
+                let mut v = vec![Probe::new(
+                    &format!("p_{name}"),
+                    move |s: &Simulation<D>| s.fluid_at(&at).map_or(f64::NAN, |(p, _)| p),
+                )];
+                v.extend((0..D).map(|k| {
+                    Probe::new(
+                        &format!("v{}_{name}", ["x", "y", "z"][k]),
+                        move |s: &Simulation<D>| s.fluid_at(&at).map_or(f64::NAN, |(_, u)| u[k]),
+                    )
+                }));
+                v
+            }
             // The 2D-only probes are handled by the callers.
             _ => Vec::new(),
         })
@@ -755,6 +851,54 @@ impl SceneFile {
                 .map(|h| Box::new(h) as Box<dyn Material<D>>),
         };
         made.map_err(|e| self.error(m.span(), format!("body `{body}`: material: {e}")))
+    }
+
+    fn motion_law<const D: usize>(
+        &self,
+        m: &Spanned<MotionSpec>,
+        what: &str,
+    ) -> Result<std::sync::Arc<dyn pfem_scene::motion::MotionLaw<D>>, SceneError>
+    where
+        Const<D>: Dim,
+    {
+        use pfem_scene::motion::{PiecewiseLinear, Sinusoidal};
+        Ok(match m.get_ref() {
+            MotionSpec::Sinusoidal {
+                amplitude,
+                period,
+                ramp,
+            } => {
+                if !(*period > 0.0 && period.is_finite() && *ramp >= 0.0 && ramp.is_finite()) {
+                    return Err(self.error(
+                        m.span(),
+                        format!(
+                            "{what}: period must be positive and ramp non-negative, both finite"
+                        ),
+                    ));
+                }
+                std::sync::Arc::new(Sinusoidal {
+                    amplitude: self.vector::<D>(amplitude, &format!("{what}.amplitude"))?,
+                    period: *period,
+                    ramp: *ramp,
+                })
+            }
+            MotionSpec::Table(rows) => {
+                let mut table = Vec::with_capacity(rows.len());
+                for r in rows {
+                    if r.len() != D + 1 {
+                        return Err(self.error(
+                            m.span(),
+                            format!("{what}: each row is [t, d1..d{D}], got {} numbers", r.len()),
+                        ));
+                    }
+                    table.push((r[0], Vector::<D>::from_fn(|k, _| r[k + 1])));
+                }
+                std::sync::Arc::new(
+                    PiecewiseLinear::new(table)
+                        .map_err(|e| self.error(m.span(), format!("{what}: {e}")))?,
+                )
+            }
+        })
     }
 
     fn vector<const D: usize>(&self, c: &Coords, what: &str) -> Result<Vector<D>, SceneError>

@@ -232,3 +232,73 @@ geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
     assert!(String::from_utf8_lossy(&version.stdout).starts_with("pfem "));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The bundled wave-paddle scene runs end to end through `pfem run`: the
+/// paddle follows its sinusoidal law, and the force and point probes
+/// appear in `probes.csv` with finite values.
+#[test]
+fn a_paddle_with_a_motion_law_runs_from_a_scene_file() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-paddle-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/scenes/wave_paddle_2d.toml");
+    let run = Command::new(env!("CARGO_BIN_EXE_pfem"))
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--end-time",
+            "0.2",
+            "--quiet",
+            "--no-vtu",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("probes.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for col in [
+        "fx_paddle",
+        "fy_paddle",
+        "p_gauge",
+        "vx_gauge",
+        "vy_gauge",
+        "volume",
+    ] {
+        assert!(header.contains(&col), "{col} missing in {header:?}");
+    }
+    let last: Vec<f64> = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let col = |name: &str| last[header.iter().position(|h| *h == name).unwrap()];
+    println!(
+        "t = {} s: fx_paddle {} N/m, p_gauge {} Pa",
+        col("t"),
+        col("fx_paddle"),
+        col("p_gauge")
+    );
+    assert!(last.iter().all(|v| v.is_finite()), "{last:?}");
+    // The water pushes the paddle back (−x) with about its hydrostatic
+    // force, ρ g H²/2 = 196 N/m.
+    assert!(
+        (-col("fx_paddle") / 196.2 - 1.0).abs() < 0.3,
+        "fx {}",
+        col("fx_paddle")
+    );
+    // 0.1 m deep: about ρ g 0.1 = 981 Pa.
+    assert!(
+        (col("p_gauge") / 981.0 - 1.0).abs() < 0.2,
+        "p {}",
+        col("p_gauge")
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -55,8 +55,11 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod motion;
 mod volume;
 
+pub use motion::PrescribedMotion;
+pub use pfem_scene::motion::{MotionLaw, PiecewiseLinear, Sinusoidal};
 pub use volume::{FreeSurfacePressureZero, VolumeCorrection};
 
 use pfem_constitutive::Material;

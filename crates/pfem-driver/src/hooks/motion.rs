@@ -1,0 +1,91 @@
+//! A wall moving along a motion law.
+
+use pfem_core::{Const, Dim, ParticleKind};
+use pfem_scene::motion::MotionLaw;
+
+use super::{body_particles, Hook, HookContext};
+use crate::RunError;
+
+/// Moves the particles of a wall along a [`MotionLaw`]: before each solve
+/// their velocity is prescribed as the law's at the end of the step, and
+/// after each step their positions are set to the law's (the time scheme
+/// integrates the velocity to `O(Δt³)` per step; the reset keeps the wall
+/// on its path however long the run). Velocities stay smooth, which
+/// prescribing positions alone would not give with the trapezoidal rule.
+#[derive(Debug)]
+pub struct PrescribedMotion<const D: usize>
+where
+    Const<D>: Dim,
+{
+    body: String,
+    law: std::sync::Arc<dyn MotionLaw<D>>,
+    particles: Vec<usize>,
+}
+
+impl<const D: usize> PrescribedMotion<D>
+where
+    Const<D>: Dim,
+{
+    /// Moves wall `body` along `law`.
+    pub fn new(body: impl Into<String>, law: std::sync::Arc<dyn MotionLaw<D>>) -> Self {
+        Self {
+            body: body.into(),
+            law,
+            particles: Vec::new(),
+        }
+    }
+}
+
+impl<const D: usize> Hook<D> for PrescribedMotion<D>
+where
+    Const<D>: Dim,
+{
+    fn name(&self) -> &str {
+        "prescribed motion"
+    }
+
+    fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        let id = ctx.body(&self.body)?;
+        self.particles = body_particles(ctx.particles(), id);
+        if self
+            .particles
+            .iter()
+            .any(|&i| ctx.particles().kind()[i] != ParticleKind::Wall)
+        {
+            return Err(RunError::Hook {
+                hook: "prescribed motion".into(),
+                why: format!("body `{}` is not a wall", self.body),
+            });
+        }
+        let t = ctx.time();
+        let p = ctx.particles_mut();
+        for &i in &self.particles {
+            let x0 = p.initial_positions()[i];
+            let v = self.law.velocity(&x0, t);
+            p.v_mut()[i] = v;
+            p.constraints_mut().fix(i, v);
+        }
+        Ok(())
+    }
+
+    fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        let t1 = ctx.time() + ctx.dt();
+        let p = ctx.particles_mut();
+        for &i in &self.particles {
+            let x0 = p.initial_positions()[i];
+            let v = self.law.velocity(&x0, t1);
+            p.constraints_mut().fix(i, v);
+        }
+        Ok(())
+    }
+
+    fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        let t = ctx.time();
+        let p = ctx.particles_mut();
+        for &i in &self.particles {
+            let x0 = p.initial_positions()[i];
+            p.x_mut()[i] = self.law.position(&x0, t);
+        }
+        Ok(())
+    }
+}
