@@ -15,6 +15,22 @@ pub enum SceneError {
         /// Its value.
         value: f64,
     },
+    /// A setting outside its sensible range.
+    #[error("setting `{setting}` = {value} is outside {range}")]
+    OutOfRange {
+        /// The setting.
+        setting: &'static str,
+        /// Its value.
+        value: f64,
+        /// The range, with why.
+        range: &'static str,
+    },
+    /// A setting that must be finite is not (NaN or infinite).
+    #[error("setting `{setting}` must be finite")]
+    NonFinite {
+        /// The setting.
+        setting: &'static str,
+    },
     /// A particle spacing is not a positive finite number.
     #[error("body `{body}`: particle spacing must be a positive finite number, got {spacing}")]
     InvalidSpacing {

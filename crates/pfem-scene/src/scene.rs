@@ -487,6 +487,13 @@ where
                 });
             }
         }
+        if !(ALPHA_RANGE.0..=ALPHA_RANGE.1).contains(&s.alpha) {
+            return Err(SceneError::OutOfRange {
+                setting: "alpha",
+                value: s.alpha,
+                range: "[0.5, 10] (the alpha shape keeps simplices of circumradius up to alpha times the spacing; 1.2 to 1.5 is usual)",
+            });
+        }
         if let Some(dt) = s.output_interval {
             if !(dt > 0.0 && dt.is_finite()) {
                 return Err(SceneError::InvalidSetting {
@@ -497,10 +504,7 @@ where
         }
         if let Some(g) = self.gravity {
             if g.iter().any(|v| !v.is_finite()) {
-                return Err(SceneError::InvalidSetting {
-                    setting: "gravity",
-                    value: f64::NAN,
-                });
+                return Err(SceneError::NonFinite { setting: "gravity" });
             }
         }
         if self.bodies.is_empty() {
@@ -519,6 +523,14 @@ where
                     body: b.name.clone(),
                     why: "non-finite or empty geometry".into(),
                 });
+            }
+            if let Geometry::Box { min, max } = &b.geometry {
+                if (0..D).any(|k| max[k] < min[k]) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: "box max below min".into(),
+                    });
+                }
             }
             let extent = (hi - lo).max();
             if let Geometry::Ball { radius, .. } = b.geometry {
@@ -564,6 +576,18 @@ where
                     return Err(SceneError::InvalidGeometry {
                         body: b.name.clone(),
                         why: "box max below min".into(),
+                    });
+                }
+            }
+            if let Some(m) = &b.material {
+                let (rho, c) = (m.density(), m.wave_speed());
+                if !(rho > 0.0 && rho.is_finite() && c > 0.0 && c.is_finite()) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: format!(
+                            "material `{}` has density {rho} kg/m³ and wave speed {c} m/s; both must be positive and finite",
+                            m.name()
+                        ),
                     });
                 }
             }
@@ -701,6 +725,9 @@ where
 /// limit of its initial velocities): 10⁸, days of computing for the
 /// smallest scene.
 pub const MAX_STEPS: f64 = 1e8;
+
+/// Accepted range of the alpha-shape parameter.
+pub const ALPHA_RANGE: (f64, f64) = (0.5, 10.0);
 
 /// Most output frames a scene may ask for (`end_time / output_interval`).
 pub const MAX_FRAMES: f64 = 1e6;

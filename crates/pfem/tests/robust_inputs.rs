@@ -302,3 +302,67 @@ fn a_paddle_with_a_motion_law_runs_from_a_scene_file() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Messages that say what is wrong: a NaN gravity is "not finite" (it was
+/// "must be a positive finite number"), an inverted box is "max below min"
+/// (it was "spacing larger than the body (−0.2 m)"); an alpha of 10⁻⁹ or
+/// 10⁹ is refused; a custom material with a negative density is refused.
+#[test]
+fn bad_settings_are_refused_with_the_right_message() {
+    let s = puddle("g").gravity(Vector::<2>::new(f64::NAN, -9.81));
+    match build(s) {
+        Err(e @ SceneError::NonFinite { .. }) => assert!(e.to_string().contains("finite")),
+        other => panic!("{other:?}"),
+    }
+    let mut s = puddle("inverted");
+    s.bodies[1].geometry = Geometry::Box {
+        min: Point::<2>::new(0.2, 0.0),
+        max: Point::<2>::new(0.0, 0.2),
+    };
+    match build(s) {
+        Err(e) => assert!(e.to_string().contains("max below min"), "{e}"),
+        Ok(_) => panic!("an inverted box"),
+    }
+    for alpha in [1e-9, 1e9] {
+        let mut s = puddle("alpha");
+        s.settings.alpha = alpha;
+        assert!(matches!(build(s), Err(SceneError::OutOfRange { .. })));
+    }
+
+    #[derive(Debug)]
+    struct Negative(Newtonian);
+    impl Material<2> for Negative {
+        fn name(&self) -> &str {
+            "negative"
+        }
+        fn kind(&self) -> MaterialKind {
+            MaterialKind::Fluid
+        }
+        fn density(&self) -> f64 {
+            -1000.0
+        }
+        fn wave_speed(&self) -> f64 {
+            <Newtonian as Material<2>>::wave_speed(&self.0)
+        }
+        fn unified(
+            &self,
+            kin: &pfem::constitutive::Kinematics<2>,
+            h: &pfem::constitutive::History<2>,
+        ) -> pfem::constitutive::Unified<2> {
+            self.0.unified(kin, h)
+        }
+        fn update_history(
+            &self,
+            kin: &pfem::constitutive::Kinematics<2>,
+            h: &mut pfem::constitutive::History<2>,
+        ) {
+            self.0.update_history(kin, h)
+        }
+    }
+    let mut s = puddle("negative");
+    s.bodies[1].material = Some(Box::new(Negative(Newtonian::water())));
+    match build(s) {
+        Err(e) => assert!(e.to_string().contains("density"), "{e}"),
+        Ok(_) => panic!("a negative density"),
+    }
+}
