@@ -108,7 +108,7 @@ where
 {
     /// Scene name.
     pub name: String,
-    /// The particles: solids first, then walls, then fluids.
+    /// The particles: walls first, then solids, then fluids.
     pub particles: Cloud<D>,
     /// The materials, by index.
     pub materials: Vec<Box<dyn Material<D>>>,
@@ -125,7 +125,7 @@ where
     pub settings: RunSettings,
     /// Particles of a body that fell within a quarter spacing of an earlier
     /// body's particle: dropped (a fluid on a wall, two walls) or welded (a
-    /// wall's on a solid's). Reported by `pfem check`.
+    /// solid's on a wall's, which it replaces). Reported by `pfem check`.
     pub merges: Vec<Merge>,
     /// Walls moving along a law of time, by name.
     #[allow(clippy::type_complexity)]
@@ -140,8 +140,8 @@ pub struct Merge {
     pub body: String,
     /// Its particles dropped because another body's particle is there.
     pub dropped: usize,
-    /// Its wall particles dropped because a solid particle is there (the
-    /// solid is welded to the wall at those points).
+    /// Its particles (a solid's) that fell on a wall's particle and replaced
+    /// it: the solid is welded to the wall at those points.
     pub welded: usize,
 }
 
@@ -150,10 +150,10 @@ where
     Const<D>: Dim,
 {
     /// Validates the scene and makes its particles: lattices filled body by
-    /// body (solids, then walls, then fluids: a wall or fluid particle
-    /// within a quarter spacing of an earlier body's particle is dropped,
-    /// and a wall particle on a solid particle welds the solid there; a
-    /// solid particle on another solid's is an error); solid meshes (boxes
+    /// body (walls, then solids, then fluids: a wall or fluid particle
+    /// within a quarter spacing of an earlier body's particle is dropped;
+    /// a solid particle on a wall's replaces it and is welded there (moves
+    /// with the wall); a solid particle on another solid's is an error); solid meshes (boxes
     /// structured, other shapes by `tessellator` and the alpha shape);
     /// clamps; initial velocity fields; hydrostatic pressure in fluids
     /// under gravity, or the bodies' pressure fields.
@@ -173,16 +173,19 @@ where
         let mut solid_material = Vec::new();
         // (particle, prescribed velocity): walls, clamps, welds.
         let mut fixed: Vec<(usize, Vector<D>)> = Vec::new();
-        // Solids first, then walls, then fluids: a wall or fluid particle
-        // that falls on an earlier body's particle is dropped (a wall's on a
-        // solid's welds the solid there), and fluid particles come last so
-        // that particles come and go among them only (see [`Particles`]).
+        // Walls first, then solids, then fluids: a wall or fluid particle
+        // that falls on an earlier body's particle is dropped, a solid
+        // particle that falls on a wall's replaces it and is welded there,
+        // and fluid particles come last so that particles come and go among
+        // them only (the driver's `Particles`).
         let mut order: Vec<usize> = (0..bodies.len()).collect();
         order.sort_by_key(|&i| match bodies[i].kind {
-            ParticleKind::Solid => 0,
-            ParticleKind::Wall => 1,
+            ParticleKind::Wall => 0,
+            ParticleKind::Solid => 1,
             ParticleKind::Fluid => 2,
         });
+        // Wall particles replaced by a solid's (removed after placement).
+        let mut replaced: Vec<usize> = Vec::new();
         let mut bodies: Vec<Option<crate::scene::Body<D>>> = bodies.into_iter().map(Some).collect();
         let cell = bodies
             .iter()
@@ -232,8 +235,16 @@ where
             let mut dropped = 0usize;
             let first = particles.len();
             for (li, p) in pts.iter().enumerate() {
+                let mut weld: Option<Vector<D>> = None;
                 if let Some(j) = grid.find(p, tol, particles.x()) {
                     match (b.kind, particles.kind()[j]) {
+                        // A solid particle on a wall's replaces it and is
+                        // welded to the wall: it moves with the wall.
+                        (ParticleKind::Solid, ParticleKind::Wall) if !replaced.contains(&j) => {
+                            replaced.push(j);
+                            weld = Some(particles.v[j]);
+                            welded += 1;
+                        }
                         // A solid keeps every particle (its own mesh uses
                         // them all): one that falls on another solid's
                         // particle is an error, not a merge.
@@ -246,13 +257,6 @@ where
                                     body_names[particles.body()[j] as usize]
                                 ),
                             });
-                        }
-                        // A wall particle on a solid particle: the solid is
-                        // welded to the wall there.
-                        (ParticleKind::Wall, ParticleKind::Solid) => {
-                            fixed.push((j, wall_velocity));
-                            welded += 1;
-                            continue;
                         }
                         _ => {
                             dropped += 1;
@@ -284,6 +288,8 @@ where
                 grid.insert(p, i);
                 if b.kind == ParticleKind::Wall {
                     fixed.push((i, wall_velocity));
+                } else if let Some(w) = weld {
+                    fixed.push((i, w));
                 } else if b.clamps.iter().any(|c| c.holds(p)) {
                     fixed.push((i, Vector::<D>::zeros()));
                 }
@@ -320,6 +326,48 @@ where
                     dropped,
                     welded,
                 });
+            }
+        }
+        // Remove the wall particles that solids replaced, renumbering the
+        // solid elements, the constraints and the fluids' ranges (all
+        // replaced particles are walls, placed before every solid and fluid).
+        if !replaced.is_empty() {
+            replaced.sort_unstable();
+            let n = particles.len();
+            let mut new_index = vec![u32::MAX; n];
+            let mut next = 0u32;
+            let mut r = replaced.iter().peekable();
+            for (i, slot) in new_index.iter_mut().enumerate() {
+                if r.peek() == Some(&&i) {
+                    r.next();
+                    continue;
+                }
+                *slot = next;
+                next += 1;
+            }
+            let keep = |i: &usize| new_index[*i] != u32::MAX;
+            let c = std::mem::take(&mut particles);
+            for i in (0..n).filter(keep) {
+                particles.push(Particle {
+                    x: c.x[i],
+                    v: c.v[i],
+                    pressure: c.pressure[i],
+                    kind: c.kind[i],
+                    body: c.body[i],
+                    spacing: c.spacing[i],
+                    material: c.material[i],
+                });
+            }
+            for q in &mut solid_elements {
+                *q = new_index[*q as usize];
+            }
+            fixed.retain(|(i, _)| keep(i));
+            for (i, _) in &mut fixed {
+                *i = new_index[*i] as usize;
+            }
+            let shift = replaced.len();
+            for (range, _) in &mut pressure_fields {
+                *range = range.start - shift..range.end - shift;
             }
         }
         if particles.is_empty() {
