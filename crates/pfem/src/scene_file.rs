@@ -70,7 +70,7 @@
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
-//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` or `table = [[t, dx, dy], …]`), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes) |
+//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` or `table = [[t, dx, dy], …]`), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson }` (kg/m³, Pa, –) |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }` or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
@@ -181,6 +181,17 @@ pub struct BodySpec {
     /// Prescribed velocity (m/s) of a wall; fixed when omitted.
     #[serde(default)]
     pub wall_velocity: Option<Coords>,
+    /// Initial velocity per particle of a fluid or solid, as sample points:
+    /// `velocity_field = { points = [[x, y], …], values = [[vx, vy], …] }`
+    /// (m, m/s); each particle takes the value of the nearest point.
+    #[serde(default)]
+    pub velocity_field: Option<Spanned<FieldSpec>>,
+    /// Initial pressure per particle of a fluid, as sample points:
+    /// `pressure_field = { points = [[x, y], …], values = [p, …] }` (m, Pa);
+    /// each particle takes the value of the nearest point (instead of the
+    /// hydrostatic start).
+    #[serde(default)]
+    pub pressure_field: Option<Spanned<FieldSpec>>,
     /// A wall's motion law in time (instead of `wall_velocity`):
     /// `motion.sinusoidal = { amplitude = [ax, ay], period = T, ramp = R }`
     /// (m, s, s; `ramp` optional) or `motion.table = [[t, dx, dy], …]`
@@ -245,6 +256,27 @@ pub enum GeometrySpec {
     },
     /// The particles themselves (m).
     Particles(Vec<Coords>),
+}
+
+/// Sampled values of an initial field: each particle takes the value of the
+/// nearest sample point.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldSpec {
+    /// Sample points (m).
+    pub points: Vec<Vec<f64>>,
+    /// One value per point: a number (pressure) or a vector (velocity).
+    pub values: Vec<FieldValue>,
+}
+
+/// A sample value: a scalar or a vector.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum FieldValue {
+    /// A number.
+    Scalar(f64),
+    /// A vector.
+    Vector(Vec<f64>),
 }
 
 /// A wall's motion law in a scene file.
@@ -619,6 +651,29 @@ impl SceneFile {
             if let Some(v) = &b.velocity {
                 scene = scene.with_velocity(self.vector::<D>(v, &what("velocity"))?);
             }
+            if let Some(f) = &b.velocity_field {
+                if b.kind == BodyKind::Wall {
+                    return Err(self.error(
+                        f.span(),
+                        format!("{} is for fluids and solids", what("velocity_field")),
+                    ));
+                }
+                let (pts, vals) = self.samples::<D>(f, D, &what("velocity_field"))?;
+                scene = scene.with_velocity_field(move |x| {
+                    let v = &vals[nearest(&pts, x)];
+                    Vector::<D>::from_fn(|k, _| v[k])
+                });
+            }
+            if let Some(f) = &b.pressure_field {
+                if b.kind != BodyKind::Fluid {
+                    return Err(self.error(
+                        f.span(),
+                        format!("{} is for fluids", what("pressure_field")),
+                    ));
+                }
+                let (pts, vals) = self.samples::<D>(f, 1, &what("pressure_field"))?;
+                scene = scene.with_pressure_field(move |x| vals[nearest(&pts, x)][0]);
+            }
         }
         scene.validate()?;
         Ok(scene)
@@ -853,6 +908,45 @@ impl SceneFile {
         made.map_err(|e| self.error(m.span(), format!("body `{body}`: material: {e}")))
     }
 
+    /// The sample points and values of a field, each value of `width`
+    /// numbers, checked finite and matched in count.
+    #[allow(clippy::type_complexity)]
+    fn samples<const D: usize>(
+        &self,
+        f: &Spanned<FieldSpec>,
+        width: usize,
+        what: &str,
+    ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), SceneError> {
+        let spec = f.get_ref();
+        let bad = |why: String| self.error(f.span(), format!("{what}: {why}"));
+        if spec.points.is_empty() || spec.points.len() != spec.values.len() {
+            return Err(bad(format!(
+                "{} points and {} values (one value per point, at least one)",
+                spec.points.len(),
+                spec.values.len()
+            )));
+        }
+        let mut vals = Vec::with_capacity(spec.values.len());
+        for (p, v) in spec.points.iter().zip(&spec.values) {
+            let v = match v {
+                FieldValue::Scalar(s) => vec![*s],
+                FieldValue::Vector(v) => v.clone(),
+            };
+            if p.len() != D || v.len() != width {
+                return Err(bad(format!(
+                    "points need {D} coordinates and values {width} number(s), got {} and {}",
+                    p.len(),
+                    v.len()
+                )));
+            }
+            if p.iter().chain(&v).any(|c| !c.is_finite()) {
+                return Err(bad("non-finite number".into()));
+            }
+            vals.push(v);
+        }
+        Ok((spec.points.clone(), vals))
+    }
+
     fn motion_law<const D: usize>(
         &self,
         m: &Spanned<MotionSpec>,
@@ -979,4 +1073,12 @@ fn key_before(text: &str, offset: usize) -> Option<&str> {
 /// Length in bytes of the character at byte `i` of `s`.
 fn c_len(s: &str, i: usize) -> usize {
     s[i..].chars().next().map_or(1, char::len_utf8)
+}
+
+/// Index of the sample point nearest `x`.
+fn nearest(points: &[Vec<f64>], x: &[f64]) -> usize {
+    let d2 = |p: &Vec<f64>| p.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum::<f64>();
+    (0..points.len())
+        .min_by(|&a, &b| d2(&points[a]).total_cmp(&d2(&points[b])))
+        .unwrap_or(0)
 }

@@ -440,3 +440,35 @@ clamps = [
         .iter()
         .all(|&i| p.x()[i].x.abs() < 1e-12 || (p.x()[i].x - 0.1).abs() < 1e-12));
 }
+
+/// Per-particle initial fields from sample points: each particle takes the
+/// nearest sample's velocity and pressure.
+#[test]
+fn initial_fields_from_sample_points() {
+    let water = format!(
+        "{WATER}\nvelocity_field = {{ points = [[0.0, 0.0], [0.21, 0.0]], values = [[1.0, 0.0], [0.0, -1.0]] }}\npressure_field = {{ points = [[0.0, 0.0], [0.21, 0.0]], values = [10.0, 20.0] }}"
+    );
+    let text = puddle("", "end_time = 0.01", &water);
+    let LoadedScene::Two(scene, _) = build(&text).unwrap() else {
+        panic!("2D")
+    };
+    let sim = simulation(scene);
+    let p = sim.particles();
+    let water = sim.body_particles("water").unwrap();
+    assert!(!water.is_empty());
+    for i in water {
+        let x = p.x()[i];
+        let near_origin = x.x < 0.105;
+        let (v, pr) = if near_origin {
+            (Vector::<2>::new(1.0, 0.0), 10.0)
+        } else {
+            (Vector::<2>::new(0.0, -1.0), 20.0)
+        };
+        assert_eq!(p.v()[i], v, "particle {i} at {x}");
+        assert_eq!(p.pressure()[i], pr, "particle {i} at {x}");
+    }
+    // One value per point, or a typed error naming the line.
+    let bad = format!("{WATER}\npressure_field = {{ points = [[0.0, 0.0]], values = [1.0, 2.0] }}");
+    let why = file_error(&puddle("", "end_time = 0.01", &bad));
+    assert!(why.contains("pressure_field"), "{why}");
+}
