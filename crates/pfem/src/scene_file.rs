@@ -679,6 +679,27 @@ impl SceneFile {
         Ok(scene)
     }
 
+    /// Where in the file a validation error belongs: `line L, column C` of
+    /// the body it names, or `None` (the file's own errors carry their line
+    /// already; typed errors stay typed, and `pfem` prints this beside
+    /// them).
+    pub fn locate(&self, e: &SceneError) -> Option<String> {
+        let body = match e {
+            SceneError::InvalidSpacing { body, .. }
+            | SceneError::SpacingLargerThanBody { body, .. }
+            | SceneError::InvalidGeometry { body, .. }
+            | SceneError::InvalidMaterial { body, .. }
+            | SceneError::MissingMaterial { body }
+            | SceneError::MaterialKindMismatch { body }
+            | SceneError::Unsupported { body } => Some(body.clone()),
+            SceneError::Overlap { second, .. } => Some(second.clone()),
+            _ => None,
+        };
+        let spec = body.and_then(|b| self.bodies.iter().rev().find(|s| s.get_ref().name == b))?;
+        let (line, col) = line_col(&self.source, spec.span().start);
+        Some(format!("line {line}, column {col}"))
+    }
+
     /// The probes of a 2D file.
     ///
     /// # Errors

@@ -366,3 +366,44 @@ fn bad_settings_are_refused_with_the_right_message() {
         Ok(_) => panic!("a negative density"),
     }
 }
+
+/// A validation error of a scene file names the line of the body it is
+/// about (`pfem check`), while the library's error stays typed.
+#[test]
+fn validation_errors_name_their_body_line() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-line-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("coarse.toml");
+    let text = r#"name = "coarse"
+dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.05
+
+[run]
+end_time = 0.1
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = { min = [-0.1, -0.05], max = [0.3, 0.0] }
+
+[[body]]
+name = "water"
+kind = "fluid"
+spacing = 0.5
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.0, 0.05], max = [0.2, 0.2] }
+"#;
+    std::fs::write(&file, text).unwrap();
+    let typed = pfem::scene_file::SceneFile::load(&file, None, None).unwrap_err();
+    assert!(matches!(typed, SceneError::SpacingLargerThanBody { .. }));
+    let out = Command::new(env!("CARGO_BIN_EXE_pfem"))
+        .args(["check", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    println!("{err}");
+    assert!(!out.status.success());
+    assert!(err.contains("line 14"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -77,6 +77,18 @@ fn main() -> ExitCode {
     }
 }
 
+/// An error of loading `file`, with the line of the body it names when the
+/// error came from validating the scene.
+fn located(file: &Path, e: pfem::SceneError) -> String {
+    if matches!(e, pfem::SceneError::File { .. }) {
+        return e.to_string();
+    }
+    match SceneFile::read(file).ok().and_then(|f| f.locate(&e)) {
+        Some(at) => format!("scene file {}: {at}: {e}", file.display()),
+        None => e.to_string(),
+    }
+}
+
 fn run(args: Vec<String>) -> Result<(), String> {
     if args.is_empty() {
         return Err(format!("no command given\n\n{HELP}"));
@@ -115,7 +127,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
             // The run options are checked as `run` would.
             parsed.validate_options().map_err(|e| e.to_string())?;
             let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
-                .map_err(|e| e.to_string())?;
+                .map_err(|e| located(&file, e))?;
             match loaded {
                 LoadedScene::Two(s, p) => {
                     check(&file, s, p.len(), &mut Delaunay2::default(), &parsed)
@@ -129,7 +141,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
             parsed.validate_options().map_err(|e| e.to_string())?;
             parsed.apply_threads().map_err(|e| e.to_string())?;
             let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
-                .map_err(|e| e.to_string())?;
+                .map_err(|e| located(&file, e))?;
             match loaded {
                 LoadedScene::Two(scene, probes) => {
                     simulate(scene, probes, Box::new(Delaunay2::default()), &parsed)
