@@ -137,38 +137,7 @@ impl DamBreak {
 /// elements with the largest measure (flying drops and particles sliding
 /// ahead of it do not count).
 pub fn main_body(s: &Simulation<2>) -> Vec<bool> {
-    let mut m = vec![false; s.particles().len()];
-    let Ok(cls) = pfem_geometry::classify(
-        s.particles().x(),
-        s.particles().kind(),
-        s.elements().fluid_mesh(),
-        None,
-    ) else {
-        return m;
-    };
-    let Some(main) = (0..cls.components.len()).max_by(|&a, &b| {
-        cls.components[a]
-            .measure
-            .total_cmp(&cls.components[b].measure)
-    }) else {
-        return m;
-    };
-    for (e, el) in s
-        .elements()
-        .fluid_mesh()
-        .simplices
-        .chunks_exact(3)
-        .enumerate()
-    {
-        if cls.component[e] as usize == main {
-            for &p in el {
-                if s.particles().kind()[p as usize] == ParticleKind::Fluid {
-                    m[p as usize] = true;
-                }
-            }
-        }
-    }
-    m
+    crate::cases3d::main_body(s)
 }
 
 /// Leading edge of the fluid: the largest `x` of a fluid particle of the

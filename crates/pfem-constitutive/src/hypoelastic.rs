@@ -213,18 +213,7 @@ where
         let mu = self.mu * w_over_j; // eq. 37
         let kappa = (self.lambda + 2.0 / 3.0 * self.mu) * w_over_j; // eq. 41
         let (sigma, sigma_zz) = self.stress_after(kin, history);
-        let ev = kin.volumetric_rate();
-        let linear = Tensor::<D>::identity() * (kappa * ev) + kin.deviatoric_rate() * (2.0 * mu);
-        Unified {
-            mu,
-            kappa,
-            sigma_hat: sigma - linear,
-            sigma_hat_zz: if D == 2 {
-                sigma_zz - (kappa * ev + 2.0 * mu * kin.deviatoric_rate_zz())
-            } else {
-                0.0
-            },
-        }
+        Unified::returning(mu, kappa, sigma, sigma_zz, kin)
     }
 
     /// `σⁿ⁺¹ = F σⁿ Fᵀ / J + (λ_h tr Δε I + 2 μ_h Δε) / J` (eqs. 36–39, 63,

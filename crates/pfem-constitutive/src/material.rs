@@ -190,6 +190,33 @@ impl<const D: usize> Unified<D>
 where
     Const<D>: Dim,
 {
+    /// The triple of a solid whose stress at the iterate is `(σ, σ_zz)`,
+    /// computed from the displacement, with effective coefficients `μ` and
+    /// `𝒦`: `σ̂ = σ − (𝒦 ε_v I + 2 μ D')`, so that eq. 43 returns `σ`
+    /// exactly at this iterate while the system sees the stiffness `(μ, 𝒦)`.
+    /// What [`crate::Hypoelastic`] does, and any material whose stress
+    /// follows the step's displacement (plasticity, damage).
+    pub fn returning(
+        mu: f64,
+        kappa: f64,
+        sigma: Tensor<D>,
+        sigma_zz: f64,
+        kin: &Kinematics<D>,
+    ) -> Self {
+        let ev = kin.volumetric_rate();
+        let linear = Tensor::<D>::identity() * (kappa * ev) + kin.deviatoric_rate() * (2.0 * mu);
+        Unified {
+            mu,
+            kappa,
+            sigma_hat: sigma - linear,
+            sigma_hat_zz: if D == 2 {
+                sigma_zz - (kappa * ev + 2.0 * mu * kin.deviatoric_rate_zz())
+            } else {
+                0.0
+            },
+        }
+    }
+
     /// Cauchy stress of eq. 43, `σ = σ̂ + 𝒦 ε_v I + 2 μ D'`, in-plane part.
     pub fn cauchy_stress(&self, kin: &Kinematics<D>) -> Tensor<D> {
         self.sigma_hat

@@ -63,25 +63,28 @@ where
     /// The particle set of a built scene ([`pfem_scene::Scene::build`]),
     /// with its prescribed velocities as constraints.
     pub fn from_cloud(cloud: pfem_scene::Cloud<D>) -> Self {
-        let mut p = Self::new();
-        for i in 0..cloud.len() {
-            p.push(Particle {
-                x: cloud.x[i],
-                v: cloud.v[i],
-                pressure: cloud.pressure[i],
-                kind: cloud.kind[i],
-                body: cloud.body[i],
-                spacing: cloud.spacing[i],
-                material: cloud.material[i],
-            });
-        }
+        let n = cloud.len();
+        let mut constraints = Constraints::free(n);
         for (i, f) in cloud.fixed.iter().enumerate() {
             if let Some(v) = f {
-                p.constraints.fix(i, *v);
+                constraints.fix(i, *v);
             }
         }
-        p.generation = 0;
-        p
+        Self {
+            x0: cloud.x.clone(),
+            state: ParticleState {
+                x: cloud.x,
+                v: cloud.v,
+                a: vec![Vector::<D>::zeros(); n],
+                pressure: cloud.pressure,
+            },
+            kind: cloud.kind,
+            body: cloud.body,
+            spacing: cloud.spacing,
+            material: cloud.material,
+            constraints,
+            generation: 0,
+        }
     }
 
     /// Appends a particle, free of constraints, at rest acceleration zero;

@@ -186,6 +186,7 @@ where
         });
         // Wall particles replaced by a solid's (removed after placement).
         let mut replaced: Vec<usize> = Vec::new();
+        let mut is_replaced = std::collections::HashSet::new();
         let mut bodies: Vec<Option<crate::scene::Body<D>>> = bodies.into_iter().map(Some).collect();
         let cell = bodies
             .iter()
@@ -240,7 +241,7 @@ where
                     match (b.kind, particles.kind()[j]) {
                         // A solid particle on a wall's replaces it and is
                         // welded to the wall: it moves with the wall.
-                        (ParticleKind::Solid, ParticleKind::Wall) if !replaced.contains(&j) => {
+                        (ParticleKind::Solid, ParticleKind::Wall) if is_replaced.insert(j) => {
                             replaced.push(j);
                             weld = Some(particles.v[j]);
                             welded += 1;

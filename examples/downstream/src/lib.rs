@@ -177,18 +177,7 @@ where
         let mu = g * w_over_j;
         let kappa = (self.elastic.lame_lambda() + 2.0 / 3.0 * g) * w_over_j;
         let (sigma, sigma_zz, _) = self.stress_after(kin, history);
-        let ev = kin.volumetric_rate();
-        let linear = Tensor::<D>::identity() * (kappa * ev) + kin.deviatoric_rate() * (2.0 * mu);
-        Unified {
-            mu,
-            kappa,
-            sigma_hat: sigma - linear,
-            sigma_hat_zz: if D == 2 {
-                sigma_zz - (kappa * ev + 2.0 * mu * kin.deviatoric_rate_zz())
-            } else {
-                0.0
-            },
-        }
+        Unified::returning(mu, kappa, sigma, sigma_zz, kin)
     }
 
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>) {
