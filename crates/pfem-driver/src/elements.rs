@@ -7,6 +7,8 @@ use pfem_constitutive::History;
 use pfem_core::{simplex_measure, Const, Dim, Point};
 use pfem_geometry::{AlphaShape, Tessellation};
 
+use crate::checkpoint::{fingerprint, CheckpointError, Decoder, Encoder};
+
 /// Elements of a simulation, `D + 1` particle indices each: the solid range
 /// first (each solid's own mesh, built once, carrying its stress history
 /// from step to step), then the fluid range (rebuilt by every remeshing,
@@ -226,5 +228,60 @@ where
         self.material.truncate(self.n_solid);
         self.history.truncate(self.n_solid);
         self.shape = AlphaShape::default();
+    }
+
+    /// Writes the solid range (connectivity fingerprint, materials, and
+    /// each element's history) into a checkpoint section.
+    pub(crate) fn encode_solid(&self, e: &mut Encoder) {
+        e.u64(self.n_solid as u64);
+        let conn: Vec<u8> = self.solid().iter().flat_map(|v| v.to_le_bytes()).collect();
+        e.u64(fingerprint(&conn));
+        for h in self.solid_history() {
+            for v in h.stress.iter() {
+                e.f64(*v);
+            }
+            e.f64(h.stress_zz);
+            e.f64(h.pressure);
+            for v in h.internal {
+                e.f64(v);
+            }
+        }
+    }
+
+    /// Reads what [`Elements::encode_solid`] wrote into the solid range,
+    /// which must be the same mesh.
+    pub(crate) fn decode_solid(&mut self, d: &mut Decoder<'_>) -> Result<(), CheckpointError> {
+        let n = d.len(0)?;
+        if n != self.n_solid {
+            return Err(CheckpointError::Mismatch {
+                what: "the number of solid elements",
+                checkpoint: n.to_string(),
+                simulation: self.n_solid.to_string(),
+            });
+        }
+        let conn: Vec<u8> = self.solid().iter().flat_map(|v| v.to_le_bytes()).collect();
+        let f = d.u64()?;
+        if f != fingerprint(&conn) {
+            return Err(CheckpointError::Mismatch {
+                what: "the solid mesh (fingerprint)",
+                checkpoint: format!("{f:016x}"),
+                simulation: format!("{:016x}", fingerprint(&conn)),
+            });
+        }
+        let mut history = Vec::with_capacity(n);
+        for _ in 0..n {
+            let mut h = History::<D>::default();
+            for v in h.stress.iter_mut() {
+                *v = d.f64()?;
+            }
+            h.stress_zz = d.f64()?;
+            h.pressure = d.f64()?;
+            for v in h.internal.iter_mut() {
+                *v = d.f64()?;
+            }
+            history.push(h);
+        }
+        self.history[..n].copy_from_slice(&history);
+        Ok(())
     }
 }

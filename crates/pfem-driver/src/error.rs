@@ -42,6 +42,9 @@ pub enum RunError {
         /// What is wrong.
         why: String,
     },
+    /// A checkpoint could not be read or does not fit this simulation.
+    #[error(transparent)]
+    Checkpoint(#[from] crate::checkpoint::CheckpointError),
     /// A particle position became non-finite.
     #[error("particle {particle} has a non-finite position at t = {time} s")]
     NonFinite {

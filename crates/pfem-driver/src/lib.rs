@@ -8,12 +8,14 @@
 //! repository's `ARCHITECTURE.md`. Most programs use the facade crate
 //! `pfem` and its prelude instead of this crate directly.
 
+pub mod checkpoint;
 pub mod elements;
 pub mod error;
 pub mod hooks;
 pub mod particles;
 pub mod simulation;
 
+pub use checkpoint::{Checkpoint, CheckpointError};
 pub use elements::Elements;
 pub use error::RunError;
 pub use hooks::{Hook, HookContext};

@@ -6,6 +6,8 @@ use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 use pfem_geometry::{Origin, ParticleMap};
 use pfem_time::ParticleState;
 
+use crate::checkpoint::{CheckpointError, Decoder, Encoder};
+
 pub use pfem_scene::{Particle, NO_MATERIAL};
 
 /// Every per-particle array of a simulation: state (positions, velocities,
@@ -275,5 +277,92 @@ where
         self.constraints = Constraints { mask, velocity: cv };
         self.generation += 1;
         Ok(())
+    }
+}
+
+impl<const D: usize> Particles<D>
+where
+    Const<D>: Dim,
+{
+    /// Writes every array into a checkpoint section.
+    pub(crate) fn encode(&self, e: &mut Encoder) {
+        let n = self.len();
+        e.u64(n as u64);
+        e.u64(self.generation);
+        for i in 0..n {
+            for k in 0..D {
+                e.f64(self.state.x[i][k]);
+            }
+            for k in 0..D {
+                e.f64(self.state.v[i][k]);
+            }
+            for k in 0..D {
+                e.f64(self.state.a[i][k]);
+            }
+            e.f64(self.state.pressure[i]);
+            e.u64(match self.kind[i] {
+                ParticleKind::Fluid => 0,
+                ParticleKind::Solid => 1,
+                ParticleKind::Wall => 2,
+            });
+            e.u64(self.body[i] as u64);
+            e.f64(self.spacing[i]);
+            e.u64(self.material[i] as u64);
+            for k in 0..D {
+                e.f64(self.x0[i][k]);
+            }
+            e.u64(self.constraints.mask[i] as u64);
+            for k in 0..D {
+                e.f64(self.constraints.velocity[i][k]);
+            }
+        }
+    }
+
+    /// Reads what [`Particles::encode`] wrote.
+    pub(crate) fn decode(d: &mut Decoder<'_>) -> Result<Self, CheckpointError> {
+        let per = 8 * (5 * D + 6);
+        let n = d.len(per)?;
+        let generation = d.u64()?;
+        let mut p = Self {
+            generation,
+            ..Self::default()
+        };
+        let vec = |d: &mut Decoder<'_>| -> Result<Vector<D>, CheckpointError> {
+            let mut v = Vector::<D>::zeros();
+            for k in 0..D {
+                v[k] = d.f64()?;
+            }
+            Ok(v)
+        };
+        let small = |v: u64, max: u64, what: &str| {
+            if v <= max {
+                Ok(v)
+            } else {
+                Err(CheckpointError::Corrupt(format!("{what} {v} out of range")))
+            }
+        };
+        for _ in 0..n {
+            p.state.x.push(Point::from(vec(d)?));
+            p.state.v.push(vec(d)?);
+            p.state.a.push(vec(d)?);
+            p.state.pressure.push(d.f64()?);
+            p.kind.push(match d.u64()? {
+                0 => ParticleKind::Fluid,
+                1 => ParticleKind::Solid,
+                2 => ParticleKind::Wall,
+                k => return Err(CheckpointError::Corrupt(format!("particle kind {k}"))),
+            });
+            p.body
+                .push(small(d.u64()?, u32::MAX as u64, "body")? as u32);
+            p.spacing.push(d.f64()?);
+            p.material
+                .push(small(d.u64()?, u16::MAX as u64, "material")? as u16);
+            p.x0.push(Point::from(vec(d)?));
+            p.constraints
+                .mask
+                .push(small(d.u64()?, (1 << D) - 1, "constraint mask")? as u8);
+            p.constraints.velocity.push(vec(d)?);
+        }
+        Ok(p)
     }
 }

@@ -8,6 +8,7 @@ use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 use pfem_geometry::{alpha_shape_into, AlphaShapeParams, Tessellation, Tessellator};
 use pfem_time::{CourantController, Integrator, StepInput, StepParams};
 
+use crate::checkpoint::{Checkpoint, CheckpointError, Decoder, Encoder, SIMULATION, TIMINGS};
 use crate::elements::Elements;
 use crate::hooks::{FreeSurfacePressureZero, Hook, HookContext, VolumeCorrection};
 use crate::particles::{Particles, NO_MATERIAL};
@@ -844,5 +845,246 @@ where
         self.materials
             .iter()
             .any(|m| m.kind() == MaterialKind::Solid)
+    }
+}
+
+impl<const D: usize> Simulation<D>
+where
+    Const<D>: Dim,
+{
+    /// The run's state as a checkpoint ([`crate::checkpoint`]): sections
+    /// [`SIMULATION`] (particles, solid histories, clock, volume ledger,
+    /// body force, hook states) and [`TIMINGS`]. Add an observer's own
+    /// sections, encode and write it; [`Simulation::restore`] continues a
+    /// simulation built from the same scene and options from it, bit for
+    /// bit.
+    pub fn checkpoint(&self) -> Checkpoint {
+        let mut e = Encoder::new();
+        e.u64(D as u64);
+        e.str(&self.name);
+        e.u64(self.body_names.len() as u64);
+        for b in &self.body_names {
+            e.str(b);
+        }
+        e.u64(self.materials.len() as u64);
+        let c = &self.clock;
+        e.f64(c.time);
+        e.f64(c.dt);
+        e.u64(c.steps);
+        e.u64(c.rejected);
+        e.u64(c.rejected_by_cause.0);
+        e.u64(c.rejected_by_cause.1);
+        self.particles.encode(&mut e);
+        self.elements.encode_solid(&mut e);
+        let v = &self.volume;
+        e.f64(v.initial);
+        e.f64(v.remeshing);
+        e.f64(v.solution);
+        e.f64(v.sources);
+        e.u64(v.hooks.len() as u64);
+        for (n, dv) in &v.hooks {
+            e.str(n);
+            e.f64(*dv);
+        }
+        e.f64(self.volume_now);
+        e.bool(self.gravity.is_some());
+        let g = self.gravity.unwrap_or_else(Vector::<D>::zeros);
+        for k in 0..D {
+            e.f64(g[k]);
+        }
+        e.u64(self.hooks.len() as u64);
+        for h in &self.hooks {
+            let mut he = Encoder::new();
+            h.save_state(&mut he);
+            e.str(h.name());
+            e.bytes(&he.finish());
+        }
+        let mut t = Encoder::new();
+        let s = &self.stats;
+        for (n, sec) in [
+            s.remesh,
+            s.free_surface,
+            s.assemble,
+            s.solve,
+            s.update,
+            s.observe,
+            s.hooks,
+            s.rejected,
+        ] {
+            t.u64(n);
+            t.f64(sec);
+        }
+        t.u64(s.pressure_updates);
+        t.u64(s.stress_updates);
+        let mut ck = Checkpoint::default();
+        ck.set(SIMULATION, e.finish());
+        ck.set(TIMINGS, t.finish());
+        ck
+    }
+
+    /// Continues from `checkpoint` ([`Simulation::checkpoint`]): this
+    /// simulation must be built from the same scene with the same options
+    /// (the dimension, scene and body names, materials and solid meshes
+    /// are checked; [`crate::checkpoint::CheckpointError::Mismatch`]
+    /// otherwise). The hooks' [`Hook::start`] runs first on the initial
+    /// state, then each hook's saved state is read back by name (a hook
+    /// added since, with no saved state, starts fresh). The fluid mesh is
+    /// remade from the restored positions; a stop asked for before the
+    /// checkpoint is not carried over. The end time stays this
+    /// simulation's, so a finished run may be continued further.
+    pub fn restore(&mut self, checkpoint: &Checkpoint) -> Result<(), RunError> {
+        let mut d = Decoder::new(checkpoint.require(SIMULATION)?);
+        let mismatch = |what, checkpoint: String, simulation: String| {
+            RunError::Checkpoint(CheckpointError::Mismatch {
+                what,
+                checkpoint,
+                simulation,
+            })
+        };
+        let dim = d.u64()?;
+        if dim != D as u64 {
+            return Err(mismatch("the dimension", dim.to_string(), D.to_string()));
+        }
+        let name = d.str()?;
+        if name != self.name {
+            return Err(mismatch("the scene name", name.into(), self.name.clone()));
+        }
+        let nb = d.len(8)?;
+        let bodies = (0..nb)
+            .map(|_| d.str().map(str::to_string))
+            .collect::<Result<Vec<_>, _>>()?;
+        if bodies != self.body_names {
+            return Err(mismatch(
+                "the body names",
+                bodies.join(", "),
+                self.body_names.join(", "),
+            ));
+        }
+        let nm = d.len(0)?;
+        if nm != self.materials.len() {
+            return Err(mismatch(
+                "the number of materials",
+                nm.to_string(),
+                self.materials.len().to_string(),
+            ));
+        }
+        let clock = Clock {
+            time: d.f64()?,
+            dt: d.f64()?,
+            steps: d.u64()?,
+            rejected: d.u64()?,
+            rejected_by_cause: (d.u64()?, d.u64()?),
+        };
+        let particles = Particles::<D>::decode(&mut d)?;
+        // Walls and solids keep their indices for the whole run.
+        let fixed = |p: &Particles<D>| {
+            p.kind()
+                .iter()
+                .zip(p.body())
+                .filter(|(k, _)| **k != ParticleKind::Fluid)
+                .map(|(k, b)| (*k, *b))
+                .collect::<Vec<_>>()
+        };
+        if fixed(&particles) != fixed(&self.particles) {
+            return Err(mismatch(
+                "the wall and solid particles (count)",
+                fixed(&particles).len().to_string(),
+                fixed(&self.particles).len().to_string(),
+            ));
+        }
+        if particles
+            .material()
+            .iter()
+            .any(|&m| m != crate::particles::NO_MATERIAL && m as usize >= self.materials.len())
+            || particles.body().iter().any(|&b| b as usize >= nb)
+        {
+            return Err(CheckpointError::Corrupt(
+                "a particle's material or body is out of range".into(),
+            )
+            .into());
+        }
+        // Hooks see the scene's initial state at their start, as in the
+        // uninterrupted run; their saved state is read after.
+        if !self.started {
+            self.started = true;
+            self.run_hooks(HookPoint::Start)?;
+        }
+        self.elements.decode_solid(&mut d)?;
+        let mut volume = VolumeLedger {
+            initial: d.f64()?,
+            remeshing: d.f64()?,
+            solution: d.f64()?,
+            sources: d.f64()?,
+            hooks: Vec::new(),
+        };
+        for _ in 0..d.len(16)? {
+            let n = d.str()?.to_string();
+            volume.hooks.push((n, d.f64()?));
+        }
+        let volume_now = d.f64()?;
+        let has_gravity = d.bool()?;
+        let mut g = Vector::<D>::zeros();
+        for k in 0..D {
+            g[k] = d.f64()?;
+        }
+        let nh = d.len(16)?;
+        let mut saved = Vec::with_capacity(nh);
+        for _ in 0..nh {
+            saved.push((d.str()?, d.bytes()?));
+        }
+        d.end()?;
+        // The k-th hook of a name takes the k-th saved state of that name.
+        let mut used = vec![false; self.hooks.len()];
+        for (name, bytes) in saved {
+            let slot = self
+                .hooks
+                .iter()
+                .enumerate()
+                .position(|(i, h)| !used[i] && h.name() == name);
+            match slot {
+                Some(i) => {
+                    used[i] = true;
+                    let mut hd = Decoder::new(bytes);
+                    self.hooks[i].restore_state(&mut hd)?;
+                    hd.end()?;
+                }
+                None if bytes.is_empty() => {}
+                None => {
+                    return Err(mismatch(
+                        "the hooks",
+                        format!("a state for hook `{name}`"),
+                        format!("no hook `{name}`"),
+                    ))
+                }
+            }
+        }
+        self.particles = particles;
+        self.clock = clock;
+        self.volume = volume;
+        self.volume_now = volume_now;
+        self.gravity = has_gravity.then_some(g);
+        self.stages.body_force = self.gravity.is_some_and(|g| g.norm() > 0.0);
+        self.stop = None;
+        self.elements.clear_fluid();
+        self.remesh()?;
+        if let Some(t) = checkpoint.section(TIMINGS) {
+            let mut d = Decoder::new(t);
+            let mut pair = || -> Result<(u64, f64), CheckpointError> { Ok((d.u64()?, d.f64()?)) };
+            let s = StageStats {
+                remesh: pair()?,
+                free_surface: pair()?,
+                assemble: pair()?,
+                solve: pair()?,
+                update: pair()?,
+                observe: pair()?,
+                hooks: pair()?,
+                rejected: pair()?,
+                pressure_updates: d.u64()?,
+                stress_updates: d.u64()?,
+            };
+            d.end()?;
+            self.stats = s;
+        }
+        Ok(())
     }
 }

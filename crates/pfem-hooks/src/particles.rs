@@ -3,6 +3,7 @@
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 use pfem_geometry::ParticleManagementParams;
 
+use pfem_driver::checkpoint::{CheckpointError, Decoder, Encoder};
 use pfem_driver::hooks::{Hook, HookContext};
 use pfem_driver::particles::Particle;
 use pfem_driver::RunError;
@@ -59,6 +60,17 @@ where
         let (r, i) = ctx.manage_particles(&self.params)?;
         self.removed += r;
         self.inserted += i;
+        Ok(())
+    }
+
+    fn save_state(&self, out: &mut Encoder) {
+        out.u64(self.removed as u64);
+        out.u64(self.inserted as u64);
+    }
+
+    fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
+        self.removed = from.len(0)?;
+        self.inserted = from.len(0)?;
         Ok(())
     }
 }
@@ -263,6 +275,17 @@ where
 
     fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         self.advanced += self.velocity.norm() * ctx.dt();
+        Ok(())
+    }
+
+    fn save_state(&self, out: &mut Encoder) {
+        out.f64(self.advanced);
+        out.u64(self.inserted as u64);
+    }
+
+    fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
+        self.advanced = from.f64()?;
+        self.inserted = from.len(0)?;
         Ok(())
     }
 }

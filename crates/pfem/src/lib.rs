@@ -30,7 +30,7 @@ pub mod cli;
 pub mod scene_file;
 
 pub use pfem_cases::{cases, cases3d, fidelity};
-pub use pfem_driver::{elements, error, particles, simulation};
+pub use pfem_driver::{checkpoint, elements, error, particles, simulation};
 
 /// Hooks: the seam ([`Hook`], [`HookContext`]) and the driver's own
 /// (`pfem_driver::hooks`), and the scene hooks of `pfem-hooks` (wall motion

@@ -66,6 +66,7 @@ use pfem_constitutive::Material;
 use pfem_core::{Const, Dim, ParticleKind, Vector};
 use pfem_geometry::{AlphaShapeParams, ParticleManagementParams, Tessellation, Tessellator};
 
+use crate::checkpoint::{CheckpointError, Decoder, Encoder};
 use crate::elements::Elements;
 use crate::particles::{Particle, Particles};
 use crate::RunError;
@@ -106,6 +107,20 @@ where
 
     /// After an accepted step.
     fn after_step(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        Ok(())
+    }
+
+    /// Writes the hook's own state into a checkpoint
+    /// ([`crate::checkpoint`]): what it accumulated since [`Hook::start`]
+    /// that the particles do not hold (counters, a position within a
+    /// period, a target). Default: nothing. A hook that keeps such state
+    /// and does not save it makes a restarted run differ from an
+    /// uninterrupted one.
+    fn save_state(&self, _out: &mut Encoder) {}
+
+    /// Reads back what [`Hook::save_state`] wrote. On a restored run
+    /// [`Hook::start`] has run first, on the scene's initial state.
+    fn restore_state(&mut self, _from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
         Ok(())
     }
 }

@@ -4,6 +4,7 @@ use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, Vector};
 use pfem_geometry::{classify, NodeTag, NO_NEIGHBOR};
 
 use super::{Hook, HookContext};
+use crate::checkpoint::{CheckpointError, Decoder, Encoder};
 use crate::RunError;
 
 /// The volume correction (deviation 5 of `ARCHITECTURE.md`): after each
@@ -111,6 +112,18 @@ where
         // The target: the fluid's intended volume plus its elastic
         // compression at the start.
         self.compression0 = Some(fluid_compression(ctx));
+        Ok(())
+    }
+
+    fn save_state(&self, out: &mut Encoder) {
+        out.bool(self.compression0.is_some());
+        out.f64(self.compression0.unwrap_or(0.0));
+    }
+
+    fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
+        let some = from.bool()?;
+        let c = from.f64()?;
+        self.compression0 = some.then_some(c);
         Ok(())
     }
 

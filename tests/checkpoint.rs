@@ -1,0 +1,211 @@
+//! Checkpoint and restart in the library (issue 17): a run stopped at a
+//! step, written to bytes, read back into a simulation built afresh from
+//! the same scene and continued, ends bit for bit where the uninterrupted
+//! run ends — 2D dam break, elastic gate (solid stress history), 3D column,
+//! and a dam break whose particles come and go (particle management and an
+//! inflow: hook states). A checkpoint of another scene, a damaged one, and
+//! one of another format are refused with typed errors.
+//! `cargo test --release --test checkpoint`
+//!
+//! The kill-and-restart test of the `pfem` binary (SIGKILL at random
+//! points) is `crates/pfem/tests/restart.rs`.
+
+use pfem::cases::{DamBreak, ElasticGate};
+use pfem::checkpoint::{Checkpoint, CheckpointError, SIMULATION};
+use pfem::geometry::{ParticleManagementParams, Tessellator};
+use pfem::hooks::{Inflow, ParticleManagement};
+use pfem::prelude::*;
+
+/// Builds a simulation with its hooks.
+type Build<const D: usize> = fn() -> Simulation<D>;
+
+fn sim2(scene: Scene<2>) -> Simulation<2> {
+    Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap()
+}
+
+fn dam_break() -> Simulation<2> {
+    sim2(
+        DamBreak {
+            spacing: 0.05715 / 8.0,
+            end_time: 0.06,
+            ..Default::default()
+        }
+        .scene(),
+    )
+}
+
+fn gate() -> Simulation<2> {
+    sim2(
+        ElasticGate {
+            end_time: 0.012,
+            ..Default::default()
+        }
+        .scene()
+        .unwrap(),
+    )
+}
+
+/// Particles come and go: particle management every 2 steps, and an
+/// inflow into the dam break's reservoir from the left wall.
+fn coming_and_going() -> Simulation<2> {
+    let case = DamBreak {
+        spacing: 0.05715 / 8.0,
+        end_time: 0.06,
+        ..Default::default()
+    };
+    let h = case.spacing;
+    let mut sim = sim2(case.scene());
+    sim.add_hook(Box::new(ParticleManagement::new(
+        ParticleManagementParams::default(),
+        2,
+    )));
+    sim.add_hook(Box::new(
+        Inflow::new(
+            "water",
+            Point::<2>::new(h, 0.5 * (case.width * case.aspect)),
+            Point::<2>::new(h, 0.9 * (case.width * case.aspect)),
+            Vector::<2>::new(0.5, 0.0),
+            h,
+            2.0 * h,
+        )
+        .unwrap(),
+    ));
+    sim
+}
+
+fn column3d() -> Simulation<3> {
+    use pfem::cases3d::WaterColumn3d;
+    let case = WaterColumn3d {
+        spacing: 0.146 / 4.0,
+        depth: 3.0 * 0.146 / 4.0,
+        end_time: 0.04,
+        ..Default::default()
+    };
+    Simulation::new(
+        case.scene(),
+        Box::new(Delaunay3::default()) as Box<dyn Tessellator<3>>,
+        StepParams::default(),
+    )
+    .unwrap()
+}
+
+/// Runs `build()` to its end; runs it again to step `at`, checkpoints
+/// through bytes, restores into a fresh `build()` and runs to the end.
+/// Returns (uninterrupted, restarted).
+fn both<const D: usize>(build: Build<D>, at: u64) -> (Simulation<D>, Simulation<D>)
+where
+    pfem::core::Const<D>: pfem::core::Dim,
+{
+    let mut whole = build();
+    whole.run(&mut []).unwrap();
+    let mut first = build();
+    while first.steps() < at {
+        first.step().unwrap();
+    }
+    let bytes = first.checkpoint().encode();
+    drop(first);
+    let mut second = build();
+    second
+        .restore(&Checkpoint::decode(&bytes).unwrap())
+        .unwrap();
+    assert_eq!(second.steps(), at);
+    second.run(&mut []).unwrap();
+    (whole, second)
+}
+
+fn assert_same<const D: usize>(name: &str, a: &Simulation<D>, b: &Simulation<D>)
+where
+    pfem::core::Const<D>: pfem::core::Dim,
+{
+    println!(
+        "{name}: {} steps, {} particles, t = {}",
+        a.steps(),
+        a.particles().len(),
+        a.time()
+    );
+    assert_eq!(a.steps(), b.steps(), "{name}: steps");
+    assert_eq!(a.time().to_bits(), b.time().to_bits(), "{name}: time");
+    assert_eq!(a.particles().len(), b.particles().len(), "{name}: count");
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for i in 0..a.particles().len() {
+        assert_eq!(
+            bits(a.particles().x()[i].as_slice()),
+            bits(b.particles().x()[i].as_slice()),
+            "{name}: position {i}"
+        );
+        assert_eq!(
+            bits(a.particles().v()[i].as_slice()),
+            bits(b.particles().v()[i].as_slice()),
+            "{name}: velocity {i}"
+        );
+    }
+    // The whole saved state (particles, stress histories, ledger, hooks)
+    // is the same to the byte.
+    assert!(
+        a.checkpoint().section(SIMULATION) == b.checkpoint().section(SIMULATION),
+        "{name}: the simulation sections differ"
+    );
+}
+
+#[test]
+fn a_restarted_2d_dam_break_ends_bit_for_bit_where_the_whole_run_ends() {
+    let (a, b) = both(dam_break, 7);
+    assert_same("dam break", &a, &b);
+}
+
+#[test]
+fn a_restarted_elastic_gate_ends_bit_for_bit_where_the_whole_run_ends() {
+    let (a, b) = both(gate, 5);
+    assert!(a.elements().n_solid() > 0);
+    assert_same("elastic gate", &a, &b);
+}
+
+#[test]
+fn particles_that_come_and_go_and_hook_states_survive_a_restart() {
+    let (a, b) = both(coming_and_going, 9);
+    // The set changed during the run, after the checkpoint too.
+    assert!(a.particles().generation() > 0);
+    assert_same("particle management + inflow", &a, &b);
+}
+
+#[test]
+fn a_restarted_3d_column_ends_bit_for_bit_where_the_whole_run_ends() {
+    let (a, b) = both(column3d, 4);
+    assert_same("3D column", &a, &b);
+}
+
+#[test]
+fn foreign_damaged_and_future_checkpoints_are_refused() {
+    let mut sim = dam_break();
+    sim.step().unwrap();
+    let bytes = sim.checkpoint().encode();
+    // Another scene.
+    let mut other = gate();
+    let err = other
+        .restore(&Checkpoint::decode(&bytes).unwrap())
+        .unwrap_err();
+    assert!(
+        matches!(err, RunError::Checkpoint(CheckpointError::Mismatch { .. })),
+        "{err}"
+    );
+    println!("another scene: {err}");
+    // A flipped bit in the middle.
+    let mut bad = bytes.clone();
+    let mid = bad.len() / 2;
+    bad[mid] ^= 1;
+    assert_eq!(Checkpoint::decode(&bad), Err(CheckpointError::Checksum));
+    // A cut file.
+    assert!(Checkpoint::decode(&bytes[..bytes.len() - 100]).is_err());
+    // A later format.
+    let mut future = bytes.clone();
+    future[8] = 99;
+    assert!(matches!(
+        Checkpoint::decode(&future),
+        Err(CheckpointError::Version { found: 99, .. })
+    ));
+    // A 3D checkpoint into a 2D simulation.
+    let mut s3 = column3d();
+    s3.step().unwrap();
+    let err = sim.restore(&s3.checkpoint()).unwrap_err();
+    assert!(err.to_string().contains("dimension"), "{err}");
+}
