@@ -15,6 +15,7 @@ use crate::output::{
 };
 use crate::simulation::{Observer, Simulation};
 use crate::RunError;
+use pfem_driver::checkpoint::{Checkpoint, CheckpointError, Decoder, Encoder};
 
 /// A named scalar measured on the simulation (front position, tip
 /// displacement, force…).
@@ -66,6 +67,37 @@ where
     pub history: Vec<(f64, Vec<f64>)>,
     /// Extra figures written into `summary.json`.
     pub extra: BTreeMap<String, serde_json::Value>,
+    checkpoint_every: Option<f64>,
+    next_checkpoint: f64,
+    checkpoints: u64,
+    resume: Option<Resumed>,
+    restarted_at: Option<f64>,
+}
+
+/// The output state read from a checkpoint, applied at the start of the
+/// resumed run.
+#[derive(Debug, Clone)]
+struct Resumed {
+    next_frame: f64,
+    next_probe: f64,
+    next_checkpoint: f64,
+    frames: Vec<(f64, String)>,
+    history: Vec<(f64, Vec<f64>)>,
+}
+
+/// The output layer's section of a checkpoint.
+pub const OUTPUT_SECTION: &str = "output";
+
+/// The file name of the checkpoint [`StandardOutput`] writes in its
+/// directory.
+pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
+
+/// Reads a checkpoint file ([`pfem_driver::checkpoint`]).
+pub fn read_checkpoint(path: impl AsRef<std::path::Path>) -> Result<Checkpoint, RunError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path)
+        .map_err(|e| RunError::Output(Box::new(crate::output::OutputError::io(path, e))))?;
+    Ok(Checkpoint::decode(&bytes)?)
 }
 
 impl<const D: usize> StandardOutput<D>
@@ -89,12 +121,117 @@ where
             started: None,
             history: Vec::new(),
             extra: BTreeMap::new(),
+            checkpoint_every: None,
+            next_checkpoint: f64::INFINITY,
+            checkpoints: 0,
+            resume: None,
+            restarted_at: None,
         }
+    }
+
+    /// Writes a checkpoint (`DIR/checkpoint.bin`, [`CHECKPOINT_FILE`])
+    /// every `interval` seconds of simulated time and at the end of the run,
+    /// atomically (a kill while writing leaves the previous one whole).
+    /// Whatever this is set to, a run that stops before its end time (a
+    /// hook's stop, Ctrl-C, a wall-clock limit) writes one when it stops.
+    pub fn checkpoint_every(mut self, interval: Option<f64>) -> Self {
+        self.checkpoint_every = interval.filter(|t| *t > 0.0 && t.is_finite());
+        self
+    }
+
+    /// Continues the outputs of the run that wrote `checkpoint` (restored
+    /// into the simulation with [`Simulation::restore`]): the frames it
+    /// listed stay (later ones, written after the checkpoint, are removed
+    /// and written again), `probes.csv` is rewritten with the rows up to the
+    /// checkpoint, and the frame, probe and checkpoint schedules go on. The
+    /// directory should be the one the run wrote into; a non-empty one is
+    /// accepted.
+    pub fn resume(&mut self, checkpoint: &Checkpoint) -> Result<(), RunError> {
+        let mut d = Decoder::new(checkpoint.require(OUTPUT_SECTION)?);
+        let next_frame = d.f64()?;
+        let next_probe = d.f64()?;
+        let next_checkpoint = d.f64()?;
+        let n = d.len(16)?;
+        let mut frames = Vec::with_capacity(n);
+        for _ in 0..n {
+            let t = d.f64()?;
+            let f = d.str()?;
+            if f.contains(['/', '\\']) || f.starts_with('.') {
+                return Err(CheckpointError::Corrupt(format!("frame file name `{f}`")).into());
+            }
+            frames.push((t, f.to_string()));
+        }
+        let columns = d.len(0)?;
+        if columns != self.probes.len() {
+            return Err(CheckpointError::Mismatch {
+                what: "the number of probes",
+                checkpoint: columns.to_string(),
+                simulation: self.probes.len().to_string(),
+            }
+            .into());
+        }
+        let rows = d.len(16)?;
+        let mut history = Vec::with_capacity(rows);
+        for _ in 0..rows {
+            let t = d.f64()?;
+            let v = d.f64s()?;
+            if v.len() != columns {
+                return Err(CheckpointError::Corrupt("a probe row's length".into()).into());
+            }
+            history.push((t, v));
+        }
+        d.end()?;
+        self.resume = Some(Resumed {
+            next_frame,
+            next_probe,
+            next_checkpoint,
+            frames,
+            history,
+        });
+        Ok(())
+    }
+
+    /// Where the checkpoint is written.
+    pub fn checkpoint_path(&self) -> PathBuf {
+        self.dir.join(CHECKPOINT_FILE)
+    }
+
+    /// The output layer's section of a checkpoint: schedules, frames
+    /// listed, probe rows.
+    fn encode_state(&self) -> Vec<u8> {
+        let mut e = Encoder::new();
+        e.f64(self.next_frame);
+        e.f64(self.next_probe);
+        e.f64(self.next_checkpoint);
+        let frames = self.series.as_ref().map(|s| s.entries()).unwrap_or(&[]);
+        e.u64(frames.len() as u64);
+        for (t, f) in frames {
+            e.f64(*t);
+            e.str(f);
+        }
+        e.u64(self.probes.len() as u64);
+        e.u64(self.history.len() as u64);
+        for (t, v) in &self.history {
+            e.f64(*t);
+            e.f64s(v);
+        }
+        e.finish()
+    }
+
+    /// Writes the simulation's and the outputs' state to
+    /// [`StandardOutput::checkpoint_path`], atomically.
+    pub fn write_checkpoint(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        let mut ck = sim.checkpoint();
+        ck.set(OUTPUT_SECTION, self.encode_state());
+        crate::output::write_atomic(self.checkpoint_path(), &ck.encode())?;
+        self.checkpoints += 1;
+        Ok(())
     }
 
     /// Whether a non-empty output directory is accepted: its previous run's
     /// files (`*.vtu`, `*.pvd`, `probes.csv`, `summary.json`) are removed
-    /// first, other files are left alone. Without it (the default) a
+    /// first (and a checkpoint, and the temporaries of a killed run's atomic
+    /// writes), other files are left alone. Without it (the default) a
     /// non-empty directory is refused at the start of the run
     /// ([`crate::output::OutputError::NotEmpty`]): frames of an old run must
     /// not sit beside the new ones.
@@ -126,7 +263,10 @@ where
             let ours = s.ends_with(".vtu")
                 || s.ends_with(".pvd")
                 || s == "probes.csv"
-                || s == "summary.json";
+                || s == "summary.json"
+                || s == CHECKPOINT_FILE
+                // An atomic write's temporary, left by a killed run.
+                || crate::output::is_atomic_temporary(&s);
             if ours {
                 let p = self.dir.join(&n);
                 std::fs::remove_file(&p).map_err(|e| OutputError::io(&p, e))?;
@@ -320,9 +460,71 @@ where
                     sim.rejected_by_cause().1.into(),
                 );
                 e.insert("picard_iterations".into(), sim.stats().assemble.0.into());
+                let status = match sim.stopped() {
+                    None if sim.time() >= sim.end_time() - 1e-12 => "finished",
+                    None => "running",
+                    Some(pfem_driver::hooks::Interrupt::REASON) => "interrupted",
+                    Some(_) => "stopped",
+                };
+                e.insert("status".into(), status.into());
+                if let Some(r) = sim.stopped() {
+                    e.insert("stop_reason".into(), r.into());
+                }
+                if let Some(t) = self.restarted_at {
+                    e.insert("restarted_at_time".into(), t.into());
+                }
+                if self.checkpoints > 0 {
+                    e.insert(
+                        "checkpoint".into(),
+                        self.checkpoint_path().to_string_lossy().into_owned().into(),
+                    );
+                }
                 e
             },
         }
+    }
+}
+
+impl<const D: usize> StandardOutput<D>
+where
+    Const<D>: Dim,
+{
+    /// The start of a resumed run: the directory is kept, the series and
+    /// probe file continue the checkpoint's, no initial frame or row.
+    fn start_resumed(&mut self, sim: &Simulation<D>, r: Resumed) -> Result<(), RunError> {
+        std::fs::create_dir_all(&self.dir)
+            .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
+        crate::output::remove_atomic_temporaries(&self.dir)?;
+        if self.vtu && sim.output_interval().is_some() {
+            self.series = Some(VtuSeries::resume(
+                &self.dir,
+                sim.name(),
+                Encoding::Base64,
+                r.frames,
+            )?);
+        }
+        if !self.probes.is_empty() {
+            let mut cols = vec!["t"];
+            cols.extend(self.probes.iter().map(|p| p.name.as_str()));
+            let mut csv = CsvProbe::create(self.dir.join("probes.csv"), &cols)?;
+            for (t, v) in &r.history {
+                let mut row = vec![*t];
+                row.extend_from_slice(v);
+                csv.row(&row)?;
+            }
+            self.csv = Some(csv);
+        }
+        self.history = r.history;
+        self.next_frame = r.next_frame;
+        self.next_probe = r.next_probe;
+        self.next_checkpoint = if self.checkpoint_every.is_some() {
+            r.next_checkpoint
+        } else {
+            f64::INFINITY
+        };
+        self.restarted_at = Some(sim.time());
+        self.progress = Some(Progress::new(sim.end_time(), self.quiet));
+        Ok(())
     }
 }
 
@@ -332,6 +534,9 @@ where
 {
     fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
         self.started = Some(Instant::now());
+        if let Some(r) = self.resume.take() {
+            return self.start_resumed(sim, r);
+        }
         self.prepare_dir()?;
         std::fs::create_dir_all(&self.dir)
             .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
@@ -348,6 +553,7 @@ where
         self.next_frame = sim.output_interval().unwrap_or(f64::INFINITY);
         self.record(sim)?;
         self.next_probe = self.probe_interval.unwrap_or(0.0);
+        self.next_checkpoint = self.checkpoint_every.unwrap_or(f64::INFINITY);
         Ok(())
     }
 
@@ -363,6 +569,10 @@ where
                 self.next_probe = next_after(sim.time() + eps, self.probe_interval);
             }
         }
+        if sim.time() + eps >= self.next_checkpoint {
+            self.next_checkpoint = next_after(sim.time() + eps, self.checkpoint_every);
+            self.write_checkpoint(sim)?;
+        }
         if let Some(p) = self.progress.as_mut() {
             p.update(sim.time(), sim.dt());
         }
@@ -372,6 +582,9 @@ where
     fn finish(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
         if let Some(p) = self.progress.as_mut() {
             p.finish();
+        }
+        if self.checkpoint_every.is_some() || sim.stopped().is_some() {
+            self.write_checkpoint(sim)?;
         }
         write_summary(self.dir.join("summary.json"), &self.summary(sim))?;
         Ok(())

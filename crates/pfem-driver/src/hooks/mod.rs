@@ -369,6 +369,40 @@ where
     }
 }
 
+/// Stops the run after the current step once a shared flag is set: the way
+/// a signal handler (Ctrl-C) or another thread asks a run to end cleanly,
+/// with its outputs and a final checkpoint written. The stop reason is
+/// [`Interrupt::REASON`].
+#[derive(Debug, Clone, Default)]
+pub struct Interrupt {
+    flag: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Interrupt {
+    /// The reason [`crate::Simulation::stopped`] gives.
+    pub const REASON: &'static str = "interrupted";
+
+    /// Watches `flag`.
+    pub fn new(flag: std::sync::Arc<std::sync::atomic::AtomicBool>) -> Self {
+        Self { flag }
+    }
+}
+
+impl<const D: usize> Hook<D> for Interrupt
+where
+    Const<D>: Dim,
+{
+    fn name(&self) -> &str {
+        "interrupt"
+    }
+    fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        if self.flag.load(std::sync::atomic::Ordering::SeqCst) {
+            ctx.stop(Self::REASON);
+        }
+        Ok(())
+    }
+}
+
 /// Stops the run once it has taken `limit` seconds of wall time (from its
 /// first step), keeping what was written: a wall-clock limit.
 #[derive(Debug, Clone, Copy)]

@@ -9,6 +9,26 @@ use super::OutputError;
 /// Distinguishes temporary files of concurrent writers in one process.
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
+/// Whether `file_name` is the temporary of a [`write_atomic`]
+/// (`.NAME.tmp-PID-N`), which a process killed while writing leaves behind.
+pub fn is_atomic_temporary(file_name: &str) -> bool {
+    file_name.starts_with('.') && file_name.contains(".tmp-")
+}
+
+/// Removes the temporaries of killed [`write_atomic`]s from `dir`.
+pub fn remove_atomic_temporaries(dir: &Path) -> Result<(), OutputError> {
+    let Ok(list) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for e in list.flatten() {
+        if is_atomic_temporary(&e.file_name().to_string_lossy()) {
+            let p = e.path();
+            std::fs::remove_file(&p).map_err(|err| OutputError::io(&p, err))?;
+        }
+    }
+    Ok(())
+}
+
 /// Writes `bytes` to `path` as a whole: first to a temporary file in the same
 /// directory (`.NAME.tmp-PID-N`), synced to disk, then renamed over `path`.
 ///

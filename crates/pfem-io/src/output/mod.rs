@@ -59,7 +59,7 @@ pub mod reference;
 mod summary;
 mod vtu;
 
-pub use atomic::write_atomic;
+pub use atomic::{is_atomic_temporary, remove_atomic_temporaries, write_atomic};
 pub use csv::{load_reference_csv, parse_reference_csv, CsvProbe, ParseError};
 pub use error::OutputError;
 #[cfg(feature = "plots")]

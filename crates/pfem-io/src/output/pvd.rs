@@ -32,6 +32,20 @@ impl PvdWriter {
         Ok(writer)
     }
 
+    /// Continues a collection at `path` with the `(time, file)` pairs of an
+    /// earlier run (a restart), rewriting it with them at once.
+    pub fn resume(
+        path: impl Into<PathBuf>,
+        entries: Vec<(f64, String)>,
+    ) -> Result<Self, OutputError> {
+        let writer = Self {
+            path: path.into(),
+            entries,
+        };
+        writer.rewrite()?;
+        Ok(writer)
+    }
+
     /// Adds the dataset `file` at simulated time `time` (s) and rewrites the
     /// collection. `file` is stored as given: make it relative to the
     /// `.pvd`'s directory so that the output folder can be moved.
@@ -101,6 +115,50 @@ impl VtuSeries {
             encoding,
             pvd,
         })
+    }
+
+    /// Continues the series of an earlier run (a restart) whose collection
+    /// listed `entries`: the collection is rewritten with them, and frames
+    /// `NAME_*.vtu` numbered from `entries.len()` on (written by the earlier
+    /// run after the state it restarts from) are removed, since this run
+    /// writes them again.
+    pub fn resume(
+        dir: impl Into<PathBuf>,
+        name: &str,
+        encoding: Encoding,
+        entries: Vec<(f64, String)>,
+    ) -> Result<Self, OutputError> {
+        let dir = dir.into();
+        std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
+        let kept = entries.len();
+        if let Ok(list) = std::fs::read_dir(&dir) {
+            let prefix = format!("{name}_");
+            for e in list.flatten() {
+                let f = e.file_name();
+                let f = f.to_string_lossy();
+                let index = f
+                    .strip_prefix(&prefix)
+                    .and_then(|r| r.strip_suffix(".vtu"))
+                    .filter(|r| r.len() == 6)
+                    .and_then(|r| r.parse::<usize>().ok());
+                if index.is_some_and(|i| i >= kept) {
+                    let p = e.path();
+                    std::fs::remove_file(&p).map_err(|e| OutputError::io(&p, e))?;
+                }
+            }
+        }
+        let pvd = PvdWriter::resume(dir.join(format!("{name}.pvd")), entries)?;
+        Ok(Self {
+            dir,
+            name: name.to_owned(),
+            encoding,
+            pvd,
+        })
+    }
+
+    /// The `(time, file)` pairs written so far.
+    pub fn entries(&self) -> &[(f64, String)] {
+        self.pvd.entries()
     }
 
     /// Writes `frame` as the next `.vtu` file, with `TimeValue = time` (s),

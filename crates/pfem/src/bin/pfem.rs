@@ -2,16 +2,24 @@
 //!
 //! ```text
 //! pfem run FILE [--out DIR] [--spacing H] [--end-time T] [--quiet] [--no-vtu]
+//!          [--checkpoint-every T] [--restart CHECKPOINT]
 //! pfem check FILE [--spacing H] [--end-time T]
 //! pfem --help
 //! ```
 //!
 //! `run` writes the same outputs as the bundled examples into `DIR`
 //! (default `out/NAME`): `NAME.pvd` + `NAME_*.vtu` frames, `probes.csv` and
-//! `summary.json`. Errors print a message and exit with status 1.
+//! `summary.json`, and `checkpoint.bin` when asked or interrupted. Errors
+//! print a message and exit with status 1; a run interrupted by Ctrl-C (or
+//! SIGTERM) writes its outputs and a final checkpoint and exits with status
+//! 130.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+#[cfg(feature = "signals")]
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
 
 use pfem::cli::Args;
 use pfem::core::{Const, Dim};
@@ -24,12 +32,16 @@ pfem: Particle Finite Element Method for fluid-structure interaction
 
 Usage:
   pfem run FILE [--out DIR] [--spacing H] [--end-time T] [--quiet] [--no-vtu]
+           [--checkpoint-every T] [--restart CHECKPOINT]
   pfem check FILE [--spacing H] [--end-time T]
   pfem --help
 
 Commands:
   run     run the scene file FILE (TOML) and write into DIR (default out/NAME):
           NAME.pvd + NAME_*.vtu frames, probes.csv and summary.json
+          (and checkpoint.bin, see --checkpoint-every); Ctrl-C stops after
+          the current step, writes the outputs, a checkpoint and a
+          summary marked interrupted, and exits with status 130
   check   read FILE and validate its scene; runs no step, writes nothing
 
 Options:
@@ -40,6 +52,14 @@ Options:
   --no-vtu        no VTU frames (probes.csv and summary.json are still written)
   --overwrite     replace a previous run's files in a non-empty DIR (refused
                   without it)
+  --checkpoint-every T
+                  write DIR/checkpoint.bin every T seconds of simulated time
+                  and at the end (atomically; the last one is kept)
+  --restart CHECKPOINT
+                  continue the run that wrote CHECKPOINT (same FILE and
+                  options; DIR its output folder): the result is the
+                  uninterrupted run's, bit for bit. With a later
+                  --end-time, a finished run goes on
   --scheme S      bossak (default, α_B = -0.3), newmark (the paper's
                   undamped trapezoidal rule) or euler (backward Euler)
   --picard-tol X  Picard tolerance (default 1e-6)
@@ -66,6 +86,7 @@ fn main() -> ExitCode {
     let result = std::panic::catch_unwind(|| run(args));
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) if e == INTERRUPTED => ExitCode::from(130),
         Ok(Err(e)) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
@@ -103,7 +124,15 @@ fn run(args: Vec<String>) -> Result<(), String> {
     }
     let command = args[0].as_str();
     let parsed = Args::parse(args[1..].iter().cloned()).map_err(|e| e.to_string())?;
-    parsed.reject_unknown(&[]).map_err(|e| e.to_string())?;
+    parsed
+        .reject_unknown(&["checkpoint-every", "restart"])
+        .map_err(|e| e.to_string())?;
+    let checkpoint_every = parsed
+        .options
+        .get("checkpoint-every")
+        .map(|_| parsed.number("checkpoint-every", 1.0))
+        .transpose()
+        .map_err(|e| e.to_string())?;
     let file = match parsed.positional.as_slice() {
         [f] => PathBuf::from(f),
         [] => {
@@ -121,8 +150,12 @@ fn run(args: Vec<String>) -> Result<(), String> {
     };
     match command {
         "check" => {
-            if parsed.out.is_some() || parsed.no_vtu {
-                return Err("`pfem check` writes nothing: --out and --no-vtu do not apply".into());
+            if parsed.out.is_some()
+                || parsed.no_vtu
+                || checkpoint_every.is_some()
+                || parsed.options.contains_key("restart")
+            {
+                return Err("`pfem check` writes nothing: --out, --no-vtu, --checkpoint-every and --restart do not apply".into());
             }
             // The run options are checked as `run` would.
             parsed.validate_options().map_err(|e| e.to_string())?;
@@ -143,12 +176,20 @@ fn run(args: Vec<String>) -> Result<(), String> {
             let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
                 .map_err(|e| located(&file, e))?;
             match loaded {
-                LoadedScene::Two(scene, probes) => {
-                    simulate(scene, probes, Box::new(Delaunay2::default()), &parsed)
-                }
-                LoadedScene::Three(scene, probes) => {
-                    simulate(scene, probes, Box::new(Delaunay3::default()), &parsed)
-                }
+                LoadedScene::Two(scene, probes) => simulate(
+                    scene,
+                    probes,
+                    Box::new(Delaunay2::default()),
+                    &parsed,
+                    checkpoint_every,
+                ),
+                LoadedScene::Three(scene, probes) => simulate(
+                    scene,
+                    probes,
+                    Box::new(Delaunay3::default()),
+                    &parsed,
+                    checkpoint_every,
+                ),
             }
         }
         other => Err(format!(
@@ -208,12 +249,14 @@ where
     Ok(())
 }
 
-/// Runs `scene` with the standard outputs into `--out` (default `out/NAME`).
+/// Runs `scene` with the standard outputs into `--out` (default `out/NAME`),
+/// from the start or from `--restart`'s checkpoint.
 fn simulate<const D: usize>(
     scene: Scene<D>,
     probes: Vec<Probe<D>>,
     tessellator: Box<dyn Tessellator<D>>,
     args: &Args,
+    checkpoint_every: Option<f64>,
 ) -> Result<(), String>
 where
     Const<D>: Dim,
@@ -223,19 +266,70 @@ where
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
     let name = scene.name.clone();
+    let restart = match args.options.get("restart") {
+        Some(f) => {
+            Some(pfem::observe::read_checkpoint(f).map_err(|e| format!("--restart {f}: {e}"))?)
+        }
+        None => None,
+    };
     let mut sim = args
         .simulation(scene, tessellator)
         .map_err(|e| e.to_string())?;
+    let interrupted = Arc::new(AtomicBool::new(false));
+    install_interrupt(&interrupted)?;
+    sim.add_hook(Box::new(pfem::hooks::Interrupt::new(interrupted.clone())));
+    let mut output = StandardOutput::new(&out, !args.no_vtu, probes, args.quiet)
+        .overwrite(args.overwrite)
+        .checkpoint_every(checkpoint_every);
+    if let Some(ck) = &restart {
+        sim.restore(ck).map_err(|e| format!("--restart: {e}"))?;
+        output.resume(ck).map_err(|e| format!("--restart: {e}"))?;
+    }
     eprintln!(
-        "{name}: {D}D, {} particles, h_min = {} m, end time {} s -> {}",
+        "{name}: {D}D, {} particles, h_min = {} m, end time {} s{} -> {}",
         sim.particles().len(),
         sim.h_min(),
         sim.end_time(),
+        if restart.is_some() {
+            format!(", restarted at t = {} s (step {})", sim.time(), sim.steps())
+        } else {
+            String::new()
+        },
         out.display()
     );
-    let mut output =
-        StandardOutput::new(&out, !args.no_vtu, probes, args.quiet).overwrite(args.overwrite);
     sim.run(&mut [&mut output]).map_err(|e| e.to_string())?;
     output.report(&sim).map_err(|e| e.to_string())?;
+    if sim.stopped() == Some(pfem::hooks::Interrupt::REASON) {
+        eprintln!(
+            "interrupted at t = {} s; continue with: --restart {}",
+            sim.time(),
+            output.checkpoint_path().display()
+        );
+        return Err(INTERRUPTED.into());
+    }
+    Ok(())
+}
+
+/// The error text of an interrupted run (exit status 130).
+const INTERRUPTED: &str = "interrupted";
+
+/// Ctrl-C and SIGTERM set `flag`: the run stops after the current step and
+/// writes its outputs and a checkpoint. A second signal ends the process at
+/// once.
+#[cfg(feature = "signals")]
+fn install_interrupt(flag: &Arc<AtomicBool>) -> Result<(), String> {
+    let f = flag.clone();
+    ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupt: stopping after this step (again to quit at once)");
+    })
+    .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))
+}
+
+/// Without the `signals` feature Ctrl-C ends the process as usual.
+#[cfg(not(feature = "signals"))]
+fn install_interrupt(_flag: &Arc<AtomicBool>) -> Result<(), String> {
     Ok(())
 }

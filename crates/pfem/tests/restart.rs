@@ -1,0 +1,233 @@
+//! Runs that survive (issue 17): `pfem run --checkpoint-every` killed with
+//! SIGKILL at random points and continued with `--restart` ends with the
+//! same outputs, byte for byte, as the uninterrupted run — every VTU frame,
+//! the `.pvd`, `probes.csv`, and the simulation section of the final
+//! checkpoint (the 2D dam break and the elastic gate). Ctrl-C (SIGINT)
+//! stops a run with status 130, a final checkpoint and a summary marked
+//! interrupted.
+//!
+//! The kill times are drawn from a seed printed by the test (set
+//! `PFEM_KILL_SEED` to replay one).
+//! `cargo test --release -p pfem --test restart -- --nocapture`
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use pfem::checkpoint::SIMULATION;
+use pfem::observe::read_checkpoint;
+
+const PFEM: &str = env!("CARGO_BIN_EXE_pfem");
+
+fn scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../examples/scenes/{name}.toml"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pfem-restart-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// A small deterministic generator for the kill times.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn run_args(file: &Path, out: &Path, end: &str, every: &str) -> Vec<String> {
+    vec![
+        "run".into(),
+        file.display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+        "--end-time".into(),
+        end.into(),
+        "--checkpoint-every".into(),
+        every.into(),
+        "--quiet".into(),
+        "--threads".into(),
+        "1".into(),
+    ]
+}
+
+/// Every output file of `dir` but the summary (wall times) and the
+/// checkpoint (timers), by name.
+fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "summary.json" && n != "checkpoint.bin")
+        .map(|n| {
+            let b = std::fs::read(dir.join(&n)).unwrap();
+            (n, b)
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// Runs `name` whole, then again killed `kills` times at random wall times
+/// within the whole run's duration and continued from its last checkpoint
+/// each time; compares the outputs.
+fn kill_and_restart(name: &str, end: &str, every: &str, kills: usize, rng: &mut Lcg) {
+    let file = scene(name);
+    let whole = tmp(&format!("{name}-whole"));
+    let t0 = Instant::now();
+    let st = Command::new(PFEM)
+        .args(run_args(&file, &whole, end, every))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .unwrap();
+    assert!(st.success(), "{name}: the uninterrupted run failed");
+    let duration = t0.elapsed().as_secs_f64();
+
+    let cut = tmp(&format!("{name}-killed"));
+    let mut restarts = 0;
+    let mut kills_done = 0;
+    loop {
+        let ck = cut.join("checkpoint.bin");
+        let mut args = run_args(&file, &cut, end, every);
+        if ck.exists() {
+            args.push("--restart".into());
+            args.push(ck.display().to_string());
+            restarts += 1;
+        } else {
+            // Killed before its first checkpoint: start again.
+            args.push("--overwrite".into());
+        }
+        let mut child = Command::new(PFEM)
+            .args(&args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        if kills_done == kills {
+            let st = child.wait().unwrap();
+            assert!(st.success(), "{name}: the last restart failed");
+            break;
+        }
+        let at = (0.1 + 0.3 * rng.next()) * duration;
+        let deadline = Instant::now() + Duration::from_secs_f64(at);
+        let mut finished = false;
+        while Instant::now() < deadline {
+            if child.try_wait().unwrap().is_some() {
+                finished = true;
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        if finished {
+            break;
+        }
+        child.kill().unwrap(); // SIGKILL
+        child.wait().unwrap();
+        kills_done += 1;
+        let t = read_checkpoint(&ck)
+            .ok()
+            .and_then(|_| Some(std::fs::metadata(&ck).ok()?.len()));
+        println!(
+            "{name}: killed after {at:.2} s of {duration:.2} s; checkpoint {}",
+            match t {
+                Some(b) => format!("of {b} bytes is whole"),
+                None => "absent".into(),
+            }
+        );
+    }
+    println!("{name}: {kills_done} kills, {restarts} restarts");
+    assert!(restarts >= 1, "{name}: no kill came after a checkpoint");
+    let (a, b) = (outputs(&whole), outputs(&cut));
+    assert_eq!(
+        a.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        b.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        "{name}: not the same files"
+    );
+    for ((n, x), (_, y)) in a.iter().zip(&b) {
+        assert!(x == y, "{name}: {n} differs from the uninterrupted run's");
+    }
+    let sa = read_checkpoint(whole.join("checkpoint.bin")).unwrap();
+    let sb = read_checkpoint(cut.join("checkpoint.bin")).unwrap();
+    assert!(
+        sa.section(SIMULATION) == sb.section(SIMULATION),
+        "{name}: final states differ"
+    );
+    println!("{name}: {} files and the final state identical", a.len());
+    let _ = std::fs::remove_dir_all(&whole);
+    let _ = std::fs::remove_dir_all(&cut);
+}
+
+fn seed() -> u64 {
+    std::env::var("PFEM_KILL_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .unwrap()
+                .as_nanos() as u64
+        })
+}
+
+#[test]
+fn a_dam_break_killed_at_random_points_restarts_to_the_same_result() {
+    let s = seed();
+    println!("PFEM_KILL_SEED={s}");
+    kill_and_restart("dam_break_2d", "0.12", "0.005", 3, &mut Lcg(s));
+}
+
+#[test]
+fn an_elastic_gate_killed_at_random_points_restarts_to_the_same_result() {
+    let s = seed();
+    println!("PFEM_KILL_SEED={s}");
+    kill_and_restart("elastic_gate_2d", "0.04", "0.004", 3, &mut Lcg(s ^ 0x5eed));
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_writes_a_checkpoint_and_an_interrupted_summary() {
+    let out = tmp("sigint");
+    let file = scene("dam_break_2d");
+    let mut child = Command::new(PFEM)
+        .args([
+            "run",
+            &file.display().to_string(),
+            "--out",
+            &out.display().to_string(),
+            "--end-time",
+            "1.0",
+            "--quiet",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait for the first frame, then SIGINT.
+    let t0 = Instant::now();
+    while !out.join("dam_break_2d.pvd").exists() && t0.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    let st = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let st = child.wait().unwrap();
+    assert_eq!(st.code(), Some(130), "exit status of an interrupted run");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["extra"]["status"], "interrupted");
+    let t = summary["simulated_time"].as_f64().unwrap();
+    assert!(t > 0.0 && t < 1.0, "stopped at {t} s");
+    let ck = read_checkpoint(out.join("checkpoint.bin")).unwrap();
+    assert!(ck.section(SIMULATION).is_some());
+    let _ = std::fs::remove_dir_all(&out);
+}
