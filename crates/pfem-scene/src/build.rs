@@ -214,6 +214,7 @@ where
                     height,
                 } => lattice::cylinder_points::<D>(base, *axis, *radius, *height, b.spacing),
                 Geometry::Particles(p) => p.clone(),
+                Geometry::Surface(surface) => surface.fill(b.spacing),
             };
             let mat = match b.material {
                 Some(m) => {

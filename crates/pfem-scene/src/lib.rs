@@ -7,6 +7,8 @@
 //!   structured mesh of a box, a hash grid for near-coincident particles;
 //! - [`solid_mesh`]: the own mesh of a non-box solid (Delaunay of its
 //!   particles trimmed by the alpha shape);
+//! - [`surface`]: bodies bounded by a polygon (2D) or a closed triangle
+//!   surface read from STL (3D), filled with particles;
 //! - [`SceneError`]: what an impossible scene is.
 //!
 //! The driver (`pfem-driver`) turns a scene into a running simulation.
@@ -18,6 +20,7 @@ pub mod lattice;
 pub mod motion;
 pub mod scene;
 pub mod solid_mesh;
+pub mod surface;
 
 pub use build::{Built, Cloud, Merge, Particle, NO_MATERIAL};
 pub use error::SceneError;

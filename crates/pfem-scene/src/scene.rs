@@ -46,6 +46,54 @@ where
     },
     /// The user's own particles (m).
     Particles(Vec<Point<D>>),
+    /// The lattice nodes inside a closed boundary: a polygon in 2D
+    /// ([`Geometry::polygon`]) or a closed triangle surface in 3D
+    /// ([`Geometry::stl`]); see [`crate::surface`].
+    Surface(crate::surface::ClosedSurface<D>),
+}
+
+impl Geometry<2> {
+    /// The inside of the closed polygon through `points` (m), in order
+    /// (either orientation; the last point is joined to the first).
+    ///
+    /// ```
+    /// use pfem_core::Point;
+    /// use pfem_scene::Geometry;
+    /// let wedge = Geometry::polygon(vec![
+    ///     Point::<2>::new(0.0, 0.0),
+    ///     Point::<2>::new(0.2, 0.0),
+    ///     Point::<2>::new(0.2, 0.05),
+    /// ]);
+    /// let (lo, hi) = wedge.bounds();
+    /// assert_eq!(hi[0] - lo[0], 0.2);
+    /// ```
+    pub fn polygon(points: Vec<Point<2>>) -> Self {
+        Geometry::Surface(crate::surface::ClosedSurface::polygon(points))
+    }
+}
+
+impl Geometry<3> {
+    /// The inside of the closed triangle surface of an STL file (ASCII or
+    /// binary), its coordinates times `scale` (0.001 for millimetres) plus
+    /// `offset` (m). The surface is checked when the scene is validated.
+    pub fn stl(
+        path: impl AsRef<std::path::Path>,
+        scale: f64,
+        offset: [f64; 3],
+    ) -> Result<Self, crate::SceneError> {
+        if !(scale.is_finite() && scale > 0.0) || offset.iter().any(|v| !v.is_finite()) {
+            return Err(crate::SceneError::InvalidGeometry {
+                body: String::new(),
+                why: format!("STL scale {scale} must be positive and the offset finite"),
+            });
+        }
+        crate::surface::ClosedSurface::read_stl(path.as_ref(), scale, offset)
+            .map(Geometry::Surface)
+            .map_err(|why| crate::SceneError::InvalidGeometry {
+                body: String::new(),
+                why,
+            })
+    }
 }
 
 impl<const D: usize> Geometry<D>
@@ -83,6 +131,7 @@ where
                 }
                 (lo, hi)
             }
+            Geometry::Surface(s) => s.bounds(),
         }
     }
 }
@@ -439,6 +488,12 @@ where
                     std::f64::consts::PI * r * r * (height / h + 1.0)
                 }
                 Geometry::Particles(p) => p.len() as f64,
+                // The enclosed measure over a lattice cell, plus a layer.
+                Geometry::Surface(s) => {
+                    let (lo, hi) = s.bounds();
+                    let cells: f64 = (0..D).map(|k| (hi[k] - lo[k]) / h + 1.0).product();
+                    cells.min(s.enclosed_measure() / h.powi(D as i32) * 1.5 + 8.0)
+                }
             };
         }
         let per_particle = if D == 2 {
@@ -563,6 +618,12 @@ where
                         why: why.into(),
                     });
                 }
+            }
+            if let Geometry::Surface(surface) = &b.geometry {
+                surface.check().map_err(|why| SceneError::InvalidGeometry {
+                    body: b.name.clone(),
+                    why,
+                })?;
             }
             if !matches!(b.geometry, Geometry::Particles(_)) && b.spacing > extent + 1e-12 {
                 return Err(SceneError::SpacingLargerThanBody {

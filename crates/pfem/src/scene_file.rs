@@ -72,7 +72,7 @@
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` or `table = [[t, dx, dy], …]`), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson }` (kg/m³, Pa, –) |
-//! | `geometry` | `box = { min, max }`, `ball = { center, radius }` or `particles = [[x, y], …]` (m) |
+//! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
 //!
 //! A malformed file (syntax, unknown key, wrong type, wrong number of
@@ -241,7 +241,8 @@ pub struct BoxSpec {
     pub max: Coords,
 }
 
-/// A geometry table: `box = { … }`, `ball = { … }` or `particles = [ … ]`.
+/// A geometry table: `box = { … }`, `ball = { … }`, `cylinder = { … }`,
+/// `polygon = [ … ]`, `stl = { … }` or `particles = [ … ]`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum GeometrySpec {
@@ -256,6 +257,41 @@ pub enum GeometrySpec {
     },
     /// The particles themselves (m).
     Particles(Vec<Coords>),
+    /// A right circular cylinder (3D): `{ base, axis, radius, height }`.
+    Cylinder {
+        /// Centre of the bottom disk (m).
+        base: Coords,
+        /// Coordinate axis (0, 1 or 2).
+        axis: usize,
+        /// Radius (m).
+        radius: f64,
+        /// Height (m).
+        height: f64,
+    },
+    /// The inside of a closed polygon (2D): `[[x, y], …]` (m), in order.
+    Polygon(Vec<Coords>),
+    /// The inside of the closed triangle surface of an STL file (3D).
+    Stl(StlSpec),
+}
+
+/// An STL file `{ file = "part.stl", scale = 0.001, offset = [x, y, z] }`:
+/// `file` relative to the scene file's folder; coordinates times `scale`
+/// (default 1; 0.001 for millimetres) plus `offset` (m, default 0).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StlSpec {
+    /// The file, relative to the scene file's folder.
+    pub file: String,
+    /// Scale from the file's unit to metres.
+    #[serde(default = "one")]
+    pub scale: f64,
+    /// Offset added after scaling (m).
+    #[serde(default)]
+    pub offset: Option<Coords>,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// Sampled values of an initial field: each particle takes the value of the
@@ -891,6 +927,72 @@ impl SceneFile {
                 center: Point::from(self.vector::<D>(center, &what("ball.center"))?),
                 radius: *radius,
             },
+            GeometrySpec::Cylinder {
+                base,
+                axis,
+                radius,
+                height,
+            } => Geometry::Cylinder {
+                base: Point::from(self.vector::<D>(base, &what("cylinder.base"))?),
+                axis: *axis,
+                radius: *radius,
+                height: *height,
+            },
+            GeometrySpec::Polygon(ps) => {
+                if D != 2 {
+                    return Err(self.error(
+                        g.span(),
+                        format!("{} is 2D (use `stl` in 3D)", what("polygon")),
+                    ));
+                }
+                let mut vertices = Vec::with_capacity(ps.len());
+                for p in ps {
+                    vertices.push(Point::from(self.vector::<D>(p, &what("polygon"))?));
+                }
+                let n = vertices.len() as u32;
+                Geometry::Surface(pfem_scene::surface::ClosedSurface {
+                    vertices,
+                    facets: (0..n).flat_map(|i| [i, (i + 1) % n.max(1)]).collect(),
+                })
+            }
+            GeometrySpec::Stl(stl) => {
+                if D != 3 {
+                    return Err(self.error(
+                        g.span(),
+                        format!("{} is 3D (use `polygon` in 2D)", what("stl")),
+                    ));
+                }
+                let offset = match &stl.offset {
+                    Some(o) => {
+                        let v = self.vector::<3>(o, &what("stl.offset"))?;
+                        [v[0], v[1], v[2]]
+                    }
+                    None => [0.0; 3],
+                };
+                if !(stl.scale.is_finite() && stl.scale > 0.0) {
+                    return Err(self.error(
+                        g.span(),
+                        format!("{} must be positive, got {}", what("stl.scale"), stl.scale),
+                    ));
+                }
+                let file = Path::new(&self.path)
+                    .parent()
+                    .unwrap_or(Path::new(""))
+                    .join(&stl.file);
+                let surface =
+                    pfem_scene::surface::ClosedSurface::<3>::read_stl(&file, stl.scale, offset)
+                        .map_err(|why| self.error(g.span(), format!("{}: {why}", what("stl"))))?;
+                // One code path for every dimension: the 3D surface as a
+                // D-dimensional one (D is 3 here).
+                Geometry::Surface(pfem_scene::surface::ClosedSurface {
+                    vertices: surface
+                        .vertices
+                        .iter()
+                        .map(|v| Point::<D>::from_column_slice(v.as_slice()))
+                        .collect(),
+                    facets: surface.facets,
+                })
+            }
             GeometrySpec::Particles(ps) => {
                 if ps.is_empty() {
                     return Err(self.error(g.span(), format!("{} is empty", what("particles"))));

@@ -1,0 +1,186 @@
+//! Geometry users have (issue 17): a body from an STL file (the shipped
+//! `examples/scenes/wedge.stl`) in a TOML scene run end to end with force
+//! and point probes; a polygon body in 2D; and the ways such input can be
+//! wrong (an open surface, a missing file, a polygon in 3D), each a typed
+//! error naming its line.
+//! `cargo test --release -p pfem --test geometry_inputs -- --nocapture`
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use pfem::prelude::*;
+use pfem::scene_file::{LoadedScene, SceneFile};
+
+const PFEM: &str = env!("CARGO_BIN_EXE_pfem");
+
+fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes")
+}
+
+#[test]
+fn the_stl_wedge_scene_runs_end_to_end_with_force_and_point_probes() {
+    let out = std::env::temp_dir().join(format!("pfem-wedge-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = Command::new(PFEM)
+        .args([
+            "run",
+            &scenes().join("wedge_3d.toml").display().to_string(),
+            "--out",
+            &out.display().to_string(),
+            "--spacing",
+            "0.025",
+            "--end-time",
+            "0.25",
+            "--no-vtu",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("probes.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(
+        header,
+        [
+            "t", "fx_wedge", "fy_wedge", "fz_wedge", "p_gauge", "vx_gauge", "vy_gauge", "vz_gauge",
+            "volume"
+        ]
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let last = rows.last().unwrap();
+    assert!((last[0] - 0.25).abs() < 1e-9, "ends at {}", last[0]);
+    // The water reaches the wedge and pushes it downstream.
+    let peak = rows.iter().map(|r| r[1]).fold(f64::NEG_INFINITY, f64::max);
+    println!(
+        "{} rows, peak horizontal force on the wedge {peak:.2} N",
+        rows.len()
+    );
+    assert!(peak > 1.0, "peak force {peak} N");
+    assert!(rows
+        .iter()
+        .all(|r| r[1..4].iter().chain([&r[8]]).all(|v| v.is_finite())));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn the_stl_wedge_is_filled_with_particles_at_the_bodys_spacing() {
+    let LoadedScene::Three(scene, _) =
+        SceneFile::load(scenes().join("wedge_3d.toml"), None, None).unwrap()
+    else {
+        panic!("a 3D scene")
+    };
+    let built = scene.build(&mut Delaunay3::default()).unwrap();
+    let wedge = built.body_names.iter().position(|b| b == "wedge").unwrap() as u32;
+    let pts: Vec<_> = (0..built.particles.len())
+        .filter(|&i| built.particles.body[i] == wedge)
+        .map(|i| built.particles.x[i])
+        .collect();
+    // Triangle (0.35, 0.02)–(0.5, 0.02)–(0.5, 0.1) in x–y, z in [0.02, 0.08],
+    // on the lattice anchored at (0.35, 0.02, 0.02) with h = 0.02: in each
+    // of 4 z-layers, the nodes (i, j) with 0 <= i <= 7, j <= 8 i / 15.
+    let per_layer: usize = (0..=7).map(|i| (8 * i) / 15 + 1).sum();
+    assert_eq!(pts.len(), 4 * per_layer);
+    for p in &pts {
+        assert!(p[1] <= 0.02 + (p[0] - 0.35) * 0.08 / 0.15 + 1e-9, "{p:?}");
+        assert!(p[0] <= 0.5 + 1e-9 && p[2] >= 0.02 - 1e-9 && p[2] <= 0.08 + 1e-9);
+    }
+}
+
+const POLYGON_2D: &str = r#"
+name = "polygon"
+dimension = 2
+spacing = 0.01
+[run]
+end_time = 0.01
+max_dt = 1e-3
+[[body]]
+name = "ramp"
+kind = "wall"
+geometry.polygon = [[0.0, 0.0], [0.2, 0.0], [0.2, 0.1]]
+[[body]]
+name = "water"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e6 }
+geometry.polygon = [[0.3, 0.0], [0.5, 0.0], [0.5, 0.1], [0.4, 0.2], [0.3, 0.1]]
+"#;
+
+#[test]
+fn polygon_bodies_fill_their_inside() {
+    let LoadedScene::Two(scene, _) = SceneFile::parse(POLYGON_2D, "polygon.toml")
+        .unwrap()
+        .build()
+        .unwrap()
+    else {
+        panic!("a 2D scene")
+    };
+    let built = scene.build(&mut Delaunay2::default()).unwrap();
+    let count = |name: &str| {
+        let b = built.body_names.iter().position(|n| n == name).unwrap() as u32;
+        built.particles.body.iter().filter(|&&x| x == b).count()
+    };
+    // Ramp: nodes (i, j), 0 <= i <= 20, j <= i / 2.
+    assert_eq!(count("ramp"), (0..=20).map(|i| i / 2 + 1).sum::<usize>());
+    // House: 21 x 11 rectangle plus the roof rows j = 11..=20 (width
+    // 21 - 2 (j - 10)).
+    let roof: usize = (11..=20).map(|j| 21 - 2 * (j - 10)).sum();
+    assert_eq!(count("water"), 21 * 11 + roof);
+}
+
+#[test]
+fn bad_geometry_input_is_a_typed_error_with_its_line() {
+    let dir = std::env::temp_dir().join(format!("pfem-badstl-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // An open surface: the wedge without its last triangle.
+    let stl = std::fs::read_to_string(scenes().join("wedge.stl")).unwrap();
+    let cut = stl.rfind("  facet").unwrap();
+    std::fs::write(
+        dir.join("open.stl"),
+        format!("{}endsolid wedge\n", &stl[..cut]),
+    )
+    .unwrap();
+    let scene = |geometry: &str, dim: u32| {
+        format!(
+            "name = \"bad\"\ndimension = {dim}\nspacing = 0.02\n[[body]]\nname = \"w\"\nkind = \"wall\"\n{geometry}\n"
+        )
+    };
+    let cases = [
+        (
+            scene("geometry.stl = { file = \"open.stl\", scale = 0.001 }", 3),
+            "not closed",
+        ),
+        (
+            scene("geometry.stl = { file = \"missing.stl\" }", 3),
+            "cannot open",
+        ),
+        (
+            scene("geometry.stl = { file = \"open.stl\", scale = -1.0 }", 3),
+            "positive",
+        ),
+        (
+            scene("geometry.polygon = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]", 3),
+            "is 2D",
+        ),
+        (scene("geometry.stl = { file = \"open.stl\" }", 2), "is 3D"),
+        (
+            scene("geometry.polygon = [[0.0, 0.0], [1.0, 0.0]]", 2),
+            "at least",
+        ),
+    ];
+    for (i, (text, expect)) in cases.iter().enumerate() {
+        let path = dir.join(format!("case{i}.toml"));
+        std::fs::write(&path, text).unwrap();
+        let o = Command::new(PFEM)
+            .args(["check", &path.display().to_string()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        println!("case {i}: {}", err.trim());
+        assert_eq!(o.status.code(), Some(1), "case {i}");
+        assert!(err.contains(expect), "case {i}: {err}");
+        assert!(err.contains("line "), "case {i} names no line: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
