@@ -332,9 +332,22 @@ where
             .map(|&m| m as i32)
             .collect();
         let mut stress = vec![Tensor::<D>::zeros(); n_cells];
+        // The out-of-plane normal stress of plane strain (2D only).
+        let mut stress_zz = vec![0.0; if D == 2 { n_cells } else { 0 }];
         for (e, h) in sim.elements().solid_history().iter().enumerate() {
             stress[e] = h.stress;
+            if D == 2 {
+                stress_zz[e] = h.stress_zz;
+            }
         }
+        // Displacement from where each particle entered the simulation.
+        let displacement: Vec<pfem_core::Vector<D>> = sim
+            .particles()
+            .x()
+            .iter()
+            .zip(sim.particles().initial_positions())
+            .map(|(x, x0)| x - x0)
+            .collect();
         let pressure = sim.water_pressure();
         // Internal variables of the solids' materials, one cell field per
         // name (zero on elements of other materials).
@@ -359,6 +372,9 @@ where
             Field::int("material", &material),
             Field::sym_tensor("stress", &stress),
         ];
+        if D == 2 {
+            cell_data.push(Field::scalar("stress_zz", &stress_zz));
+        }
         for (name, values) in &internal {
             cell_data.push(Field::scalar(name.as_str(), values));
         }
@@ -367,6 +383,7 @@ where
             cells,
             vertex_cells: &vertex_cells,
             point_data: vec![
+                Field::vector("displacement", &displacement),
                 Field::vector("velocity", sim.particles().v()),
                 Field::vector("acceleration", sim.particles().a()),
                 Field::scalar("pressure", &pressure),

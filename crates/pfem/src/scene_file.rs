@@ -70,7 +70,7 @@
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
-//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` or `table = [[t, dx, dy], …]`), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
+//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }`, `table = [[t, dx, dy], …]` or `rotation = { center, axis (3D), rate, amplitude, period, ramp }`, angles in rad), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson }` (kg/m³, Pa, –) |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
@@ -331,6 +331,28 @@ pub enum MotionSpec {
     },
     /// Rows `[t, dx, dy(, dz)]` (s, m), linear in between.
     Table(Vec<Vec<f64>>),
+    /// A rotation about `center` (and `axis` in 3D) by
+    /// `θ(t) = rate t + amplitude sin(2π t/period)` (rad), the amplitude
+    /// ramped from 0 over `ramp` (a flap hinged at `center`).
+    Rotation {
+        /// Centre of rotation (m).
+        center: Coords,
+        /// Axis (3D only).
+        #[serde(default)]
+        axis: Option<Coords>,
+        /// Steady rate (rad/s), 0 by default.
+        #[serde(default)]
+        rate: f64,
+        /// Oscillation amplitude (rad), 0 by default.
+        #[serde(default)]
+        amplitude: f64,
+        /// Oscillation period (s); needed with an amplitude.
+        #[serde(default)]
+        period: f64,
+        /// Ramp duration (s), 0 by default.
+        #[serde(default)]
+        ramp: f64,
+    },
 }
 
 /// A probe: a column of `probes.csv`, sampled after every step. Written as
@@ -1113,6 +1135,35 @@ impl SceneFile {
                 std::sync::Arc::new(
                     PiecewiseLinear::new(table)
                         .map_err(|e| self.error(m.span(), format!("{what}: {e}")))?,
+                )
+            }
+            MotionSpec::Rotation {
+                center,
+                axis,
+                rate,
+                amplitude,
+                period,
+                ramp,
+            } => {
+                let center = Point::from(self.vector::<D>(center, &format!("{what}.center"))?);
+                let axis = match axis {
+                    Some(a) if D == 3 => {
+                        let v = self.vector::<3>(a, &format!("{what}.axis"))?;
+                        Some([v[0], v[1], v[2]])
+                    }
+                    Some(_) => {
+                        return Err(self.error(
+                            m.span(),
+                            format!("{what}: a 2D rotation has no axis (it turns x towards y)"),
+                        ))
+                    }
+                    None => None,
+                };
+                std::sync::Arc::new(
+                    pfem_scene::motion::Rotation::<D>::new(
+                        center, axis, *rate, *amplitude, *period, *ramp,
+                    )
+                    .map_err(|e| self.error(m.span(), format!("{what}: {e}")))?,
                 )
             }
         })

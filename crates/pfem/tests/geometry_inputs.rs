@@ -184,3 +184,42 @@ fn bad_geometry_input_is_a_typed_error_with_its_line() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The bundled flap wave-maker (`motion.rotation` in TOML): its wall
+/// particles turn rigidly about the hinge, as the law says.
+#[test]
+fn a_flap_hinged_on_the_floor_follows_its_rotation_law() {
+    use pfem::hooks::{MotionLaw, Rotation};
+    let LoadedScene::Two(scene, _) =
+        SceneFile::load(scenes().join("flap_2d.toml"), None, Some(0.3)).unwrap()
+    else {
+        panic!("a 2D scene")
+    };
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    sim.run(&mut []).unwrap();
+    let law =
+        Rotation::<2>::new(Point::<2>::new(-0.025, -0.025), None, 0.0, -0.05, 0.8, 0.8).unwrap();
+    let flap = sim.body_particles("flap").unwrap();
+    let t = sim.time();
+    let mut top = (0usize, f64::NEG_INFINITY);
+    for &i in &flap {
+        let expect = law.position(&sim.initial_position(i), t);
+        assert!(
+            (sim.particles().x()[i] - expect).norm() < 1e-12,
+            "particle {i}"
+        );
+        if sim.initial_position(i)[1] > top.1 {
+            top = (i, sim.initial_position(i)[1]);
+        }
+    }
+    // At t = 0.3 s the flap has leaned into the water (θ < 0 turns +y to +x).
+    let dx = sim.particles().x()[top.0][0] - sim.initial_position(top.0)[0];
+    println!("t = {t} s: flap top moved {dx:.4} m");
+    assert!(dx > 0.005, "{dx}");
+    assert!(sim
+        .particles()
+        .x()
+        .iter()
+        .all(|p| p.iter().all(|v| v.is_finite())));
+}

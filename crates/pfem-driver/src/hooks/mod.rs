@@ -59,7 +59,7 @@ mod motion;
 mod volume;
 
 pub use motion::PrescribedMotion;
-pub use pfem_scene::motion::{MotionLaw, PiecewiseLinear, Sinusoidal};
+pub use pfem_scene::motion::{MotionLaw, PiecewiseLinear, Rotation, Sinusoidal};
 pub use volume::{FreeSurfacePressureZero, VolumeCorrection};
 
 use pfem_constitutive::Material;
