@@ -753,9 +753,36 @@ impl SceneFile {
             SceneError::Overlap { second, .. } => Some(second.clone()),
             _ => None,
         };
-        let spec = body.and_then(|b| self.bodies.iter().rev().find(|s| s.get_ref().name == b))?;
-        let (line, col) = line_col(&self.source, spec.span().start);
-        Some(format!("line {line}, column {col}"))
+        if let Some(b) = body {
+            let spec = self.bodies.iter().rev().find(|s| s.get_ref().name == b)?;
+            let (line, col) = line_col(&self.source, spec.span().start);
+            return Some(format!("line {line}, column {col}"));
+        }
+        // Settings: the line of their key, else of the `[run]` table.
+        let keys: &[&str] = match e {
+            SceneError::InvalidSetting { setting, .. }
+            | SceneError::OutOfRange { setting, .. }
+            | SceneError::NonFinite { setting } => &[setting],
+            SceneError::InvalidName { .. } => &["name"],
+            SceneError::CannotFinish { what, .. } if what.contains("output frames") => {
+                &["output_interval", "end_time"]
+            }
+            SceneError::CannotFinish { what, .. } if what.contains("Courant") => {
+                &["velocity", "wall_velocity", "courant", "end_time"]
+            }
+            SceneError::CannotFinish { .. } => &["max_dt", "end_time"],
+            SceneError::TooLarge { .. } => &["spacing"],
+            _ => &[],
+        };
+        let at = keys
+            .iter()
+            .find_map(|k| key_line(&self.source, k))
+            .or_else(|| {
+                (!keys.is_empty())
+                    .then(|| key_line(&self.source, "[run]"))
+                    .flatten()
+            })?;
+        Some(format!("line {at}"))
     }
 
     /// The probes of a 2D file.
@@ -1194,6 +1221,19 @@ impl SceneFile {
             },
         }
     }
+}
+
+/// The first line (1-based) that sets `key` (`key = …`, outside comments)
+/// or, for a table header such as `[run]`, that opens it.
+fn key_line(source: &str, key: &str) -> Option<usize> {
+    source.lines().position(|l| {
+        let l = l.trim_start();
+        if key.starts_with('[') {
+            return l.starts_with(key);
+        }
+        l.strip_prefix(key)
+            .is_some_and(|rest| rest.trim_start().starts_with('='))
+    }).map(|i| i + 1)
 }
 
 /// The particles of `body` that started within `radius` of `point`, or the

@@ -407,3 +407,37 @@ geometry.box = { min = [0.0, 0.05], max = [0.2, 0.2] }
     assert!(err.contains("line 14"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A validation error about a run setting or the scene's name names the
+/// line that sets it (`pfem check`).
+#[test]
+fn setting_errors_name_their_line() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-setline-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = "name = \"s\"\ndimension = 2\ngravity = [0.0, -9.81]\nspacing = 0.05\n\n[run]\nend_time = 0.1\nmax_dt = 1e-3\n\n[[body]]\nname = \"water\"\nkind = \"fluid\"\nmaterial.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }\ngeometry.box = { min = [0.0, 0.05], max = [0.2, 0.2] }\n";
+    let cases = [
+        ("max_dt = 1e-3", "max_dt = 1e-308", "line 8"),
+        ("end_time = 0.1", "end_time = 0.1\ncourant = -1.0", "line 8"),
+        ("end_time = 0.1", "end_time = 0.1\nalpha = 1e9", "line 8"),
+        (
+            "end_time = 0.1",
+            "end_time = 0.1\noutput_interval = 5e-324",
+            "line 8",
+        ),
+        ("gravity = [0.0, -9.81]", "gravity = [0.0, nan]", "line 3"),
+        ("name = \"s\"", "name = \"../x\"", "line 1"),
+    ];
+    for (i, (from, to, line)) in cases.iter().enumerate() {
+        let file = dir.join(format!("set{i}.toml"));
+        std::fs::write(&file, base.replace(from, to)).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_pfem"))
+            .args(["check", file.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        println!("{}", err.trim());
+        assert_eq!(out.status.code(), Some(1), "{to}");
+        assert!(err.contains(line), "{to}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
