@@ -178,11 +178,12 @@ where
             body: "rotation".into(),
             why,
         };
-        if center.iter().any(|c| !c.is_finite())
-            || !rate.is_finite()
-            || !amplitude.is_finite()
-            || !(ramp.is_finite() && ramp >= 0.0)
-        {
+        let finite = center.iter().all(|c| c.is_finite())
+            && rate.is_finite()
+            && amplitude.is_finite()
+            && ramp.is_finite()
+            && ramp >= 0.0;
+        if !finite {
             return Err(bad(
                 "center, rate, amplitude and ramp must be finite, ramp ≥ 0".into(),
             ));
