@@ -30,8 +30,9 @@ fn scenes() -> Vec<(String, String)> {
         .flatten()
         .filter(|e| e.path().extension().is_some_and(|x| x == "toml"))
         .map(|e| {
+            // The full path: a scene's STL file is found beside it.
             (
-                e.file_name().to_string_lossy().into_owned(),
+                e.path().display().to_string(),
                 std::fs::read_to_string(e.path()).unwrap(),
             )
         })
