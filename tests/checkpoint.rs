@@ -73,6 +73,45 @@ fn coming_and_going() -> Simulation<2> {
     sim
 }
 
+/// A free elastic block sliding down a floor tilted by 35° with friction
+/// 0.5: contact elements whose tangential tractions persist from step to
+/// step.
+fn sliding_block() -> Simulation<2> {
+    use pfem::constitutive::Hypoelastic;
+    let h = 0.02;
+    let th = 35f64.to_radians();
+    sim2(
+        Scene::<2>::new("slide")
+            .gravity(Vector::<2>::new(9.81 * th.sin(), -9.81 * th.cos()))
+            .settings(RunSettings {
+                end_time: 0.05,
+                max_dt: 2e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall(
+                "floor",
+                Geometry::Box {
+                    min: Point::<2>::new(-0.2, -h),
+                    max: Point::<2>::new(0.6, 0.0),
+                },
+                h,
+                WallMotion::Fixed,
+            )
+            .solid(
+                "block",
+                Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+                Geometry::Box {
+                    min: Point::<2>::new(0.0, h),
+                    max: Point::<2>::new(0.2, h + 0.1),
+                },
+                h,
+                None,
+            )
+            .friction("block", "floor", 0.5),
+    )
+}
+
 fn column3d() -> Simulation<3> {
     use pfem::cases3d::WaterColumn3d;
     let case = WaterColumn3d {
@@ -166,6 +205,13 @@ fn particles_that_come_and_go_and_hook_states_survive_a_restart() {
     // The set changed during the run, after the checkpoint too.
     assert!(a.particles().generation() > 0);
     assert_same("particle management + inflow", &a, &b);
+}
+
+#[test]
+fn a_restarted_block_in_frictional_contact_ends_bit_for_bit() {
+    let (a, b) = both(sliding_block, 11);
+    assert!(a.elements().n_contact() > 0);
+    assert_same("sliding block", &a, &b);
 }
 
 #[test]

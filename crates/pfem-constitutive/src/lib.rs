@@ -80,11 +80,13 @@
 //! crate's `tests/custom_material.rs` writes a regularised Bingham fluid
 //! this way.
 
+pub mod contact;
 pub mod error;
 pub mod hypoelastic;
 pub mod material;
 pub mod newtonian;
 
+pub use contact::ContactPenalty;
 pub use error::{MaterialError, Parameter};
 pub use hypoelastic::Hypoelastic;
 pub use material::*;

@@ -28,6 +28,14 @@ where
     material: Vec<u16>,
     history: Vec<History<D>>,
     n_solid: usize,
+    n_fluid: usize,
+    /// The two bodies of each contact element (master first).
+    contact_bodies: Vec<(u32, u32)>,
+    /// The last contact range (connectivity, histories), kept when the
+    /// fluid range is replaced so that the next contact range carries the
+    /// tangential tractions of elements that persist.
+    stash: (Vec<u32>, Vec<History<D>>),
+    contact_set: bool,
     shape: AlphaShape,
     close_sealed_voids: bool,
     count_wall_pockets: bool,
@@ -51,6 +59,10 @@ where
             material: solid_material,
             history: vec![History::default(); n_solid],
             n_solid,
+            n_fluid: 0,
+            contact_bodies: Vec::new(),
+            stash: (Vec::new(), Vec::new()),
+            contact_set: false,
             shape: AlphaShape::default(),
             close_sealed_voids,
             count_wall_pockets,
@@ -61,15 +73,99 @@ where
     /// material of each from `material_of(simplex)`.
     pub(crate) fn set_fluid(&mut self, shape: AlphaShape, material_of: impl Fn(&[u32]) -> u16) {
         let nv = D + 1;
-        self.conn.truncate(self.n_solid * nv);
-        self.material.truncate(self.n_solid);
-        self.history.truncate(self.n_solid);
+        self.truncate_to_solid();
         self.conn.extend_from_slice(&shape.mesh.simplices);
         for el in shape.mesh.simplices.chunks_exact(nv) {
             self.material.push(material_of(el));
         }
         self.history.resize(self.material.len(), History::default());
+        self.n_fluid = self.material.len() - self.n_solid;
         self.shape = shape;
+    }
+
+    /// Keeps only the solid range; the contact range goes to the stash
+    /// first (if one was set since the last stash).
+    fn truncate_to_solid(&mut self) {
+        let nv = D + 1;
+        if self.contact_set {
+            let first = self.n_solid + self.n_fluid;
+            self.stash.0.clear();
+            self.stash.0.extend_from_slice(&self.conn[first * nv..]);
+            self.stash.1.clear();
+            self.stash.1.extend_from_slice(&self.history[first..]);
+            self.contact_set = false;
+        }
+        self.conn.truncate(self.n_solid * nv);
+        self.material.truncate(self.n_solid);
+        self.history.truncate(self.n_solid);
+        self.contact_bodies.clear();
+        self.n_fluid = 0;
+    }
+
+    /// Appends the contact range (after the fluid range): one element per
+    /// candidate with `material`, its history's gap ratio (gap over the
+    /// mean spacing of its particles, the contact distance), friction
+    /// (`friction(master, other)`) and normal set, and its tangential
+    /// traction carried from the last contact range when the same
+    /// particles were in contact there.
+    pub(crate) fn set_contact(
+        &mut self,
+        candidates: &[pfem_geometry::ContactCandidate<D>],
+        material: u16,
+        spacing: &[f64],
+        friction: &dyn Fn(u32, u32) -> f64,
+    ) {
+        use pfem_constitutive::contact::{FRICTION, GAP_RATIO, NORMAL, TRACTION};
+        let nv = D + 1;
+        // The shear stress of the last contact range, `τ ⊗ n + n ⊗ τ` (the
+        // same whichever body is the master), averaged at its particles:
+        // a new element takes the mean of its particles' as its traction,
+        // so stick keeps its memory when the tessellation flips a
+        // diagonal between two lattice rows.
+        let mut nodal: std::collections::HashMap<u32, (pfem_core::Tensor<D>, u32)> =
+            std::collections::HashMap::new();
+        for (el, h) in self.stash.0.chunks_exact(nv).zip(&self.stash.1) {
+            let n = pfem_core::Vector::<D>::from_fn(|k, _| h.internal[NORMAL + k]);
+            let t = pfem_core::Vector::<D>::from_fn(|k, _| h.internal[TRACTION + k]);
+            let shear = t * n.transpose() + n * t.transpose();
+            for &p in el {
+                let e = nodal
+                    .entry(p)
+                    .or_insert((pfem_core::Tensor::<D>::zeros(), 0));
+                e.0 += shear;
+                e.1 += 1;
+            }
+        }
+        for c in candidates {
+            let el = &c.nodes[..nv];
+            self.conn.extend_from_slice(el);
+            self.material.push(material);
+            let g0 = el.iter().map(|&p| spacing[p as usize]).sum::<f64>() / nv as f64;
+            let mut h = History::<D>::default();
+            let (mut shear, mut count) = (pfem_core::Tensor::<D>::zeros(), 0u32);
+            for p in el {
+                if let Some((s, k)) = nodal.get(p) {
+                    shear += s / *k as f64;
+                    count += 1;
+                }
+            }
+            if count > 0 {
+                let s = shear / count as f64;
+                let sn = s * c.normal;
+                let t = sn - c.normal * c.normal.dot(&sn);
+                for k in 0..D {
+                    h.internal[TRACTION + k] = t[k];
+                }
+            }
+            h.internal[GAP_RATIO] = c.gap / g0;
+            h.internal[FRICTION] = friction(c.bodies.0, c.bodies.1);
+            for k in 0..D {
+                h.internal[NORMAL + k] = c.normal[k];
+            }
+            self.history.push(h);
+            self.contact_bodies.push(c.bodies);
+        }
+        self.contact_set = true;
     }
 
     /// Takes the alpha shape out to be refilled (its buffers reused).
@@ -127,7 +223,31 @@ where
 
     /// Number of fluid elements.
     pub fn n_fluid(&self) -> usize {
-        self.material.len() - self.n_solid
+        self.n_fluid
+    }
+
+    /// Number of contact elements (after the fluid range).
+    pub fn n_contact(&self) -> usize {
+        self.material.len() - self.n_solid - self.n_fluid
+    }
+
+    /// The contact elements of the current step (flat): simplices joining
+    /// a free solid to a wall or another solid across a gap
+    /// (`pfem_geometry::contact`).
+    pub fn contact(&self) -> &[u32] {
+        &self.conn[(self.n_solid + self.n_fluid) * (D + 1)..]
+    }
+
+    /// History of each contact element (its stress `−p I + τ ⊗ n + n ⊗ τ`
+    /// after the step, and `pfem_constitutive::contact`'s slots).
+    pub fn contact_history(&self) -> &[History<D>] {
+        &self.history[self.n_solid + self.n_fluid..]
+    }
+
+    /// The two bodies of each contact element, the master (whose facet
+    /// gives the normal) first.
+    pub fn contact_bodies(&self) -> &[(u32, u32)] {
+        &self.contact_bodies
     }
 
     /// The solid elements (flat).
@@ -147,12 +267,12 @@ where
 
     /// The fluid elements of the current step (flat).
     pub fn fluid(&self) -> &[u32] {
-        &self.conn[self.n_solid * (D + 1)..]
+        &self.conn[self.n_solid * (D + 1)..(self.n_solid + self.n_fluid) * (D + 1)]
     }
 
     /// Material of each fluid element.
     pub fn fluid_material(&self) -> &[u16] {
-        &self.material[self.n_solid..]
+        &self.material[self.n_solid..self.n_solid + self.n_fluid]
     }
 
     /// The fluid mesh with adjacency ([`AlphaShape::mesh`]): the same
@@ -223,10 +343,7 @@ where
     /// particles keep their indices under [`crate::Particles::remap`], so
     /// the solid range stays valid.
     pub(crate) fn clear_fluid(&mut self) {
-        let nv = D + 1;
-        self.conn.truncate(self.n_solid * nv);
-        self.material.truncate(self.n_solid);
-        self.history.truncate(self.n_solid);
+        self.truncate_to_solid();
         self.shape = AlphaShape::default();
     }
 
@@ -282,6 +399,59 @@ where
             history.push(h);
         }
         self.history[..n].copy_from_slice(&history);
+        Ok(())
+    }
+
+    /// Keeps the stash as the source of the next contact range (after a
+    /// restore has re-formed the contact range from it for the outputs,
+    /// the next step must carry from the checkpoint's range, as the
+    /// uninterrupted run does).
+    pub(crate) fn keep_stash(&mut self) {
+        self.contact_set = false;
+    }
+
+    /// Writes the contact range (connectivity and histories): the
+    /// tangential tractions that stick carries from step to step.
+    pub(crate) fn encode_contact(&self, e: &mut Encoder) {
+        let nv = D + 1;
+        e.u64(self.n_contact() as u64);
+        for (el, h) in self.contact().chunks_exact(nv).zip(self.contact_history()) {
+            for &p in el {
+                e.u64(p as u64);
+            }
+            for v in h.internal {
+                e.f64(v);
+            }
+        }
+    }
+
+    /// Reads what [`Elements::encode_contact`] wrote into the stash, which
+    /// the next contact range carries from.
+    pub(crate) fn decode_contact(
+        &mut self,
+        d: &mut Decoder<'_>,
+        n_particles: usize,
+    ) -> Result<(), CheckpointError> {
+        let nv = D + 1;
+        let n = d.len(8 * (nv + 8))?;
+        let mut conn = Vec::with_capacity(n * nv);
+        let mut hist = Vec::with_capacity(n);
+        for _ in 0..n {
+            for _ in 0..nv {
+                let p = d.u64()?;
+                if p as usize >= n_particles {
+                    return Err(CheckpointError::Corrupt(format!("contact node {p}")));
+                }
+                conn.push(p as u32);
+            }
+            let mut h = History::<D>::default();
+            for v in h.internal.iter_mut() {
+                *v = d.f64()?;
+            }
+            hist.push(h);
+        }
+        self.truncate_to_solid();
+        self.stash = (conn, hist);
         Ok(())
     }
 }

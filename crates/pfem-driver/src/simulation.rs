@@ -15,6 +15,14 @@ use crate::particles::{Particles, NO_MATERIAL};
 use crate::scene::Scene;
 use crate::{RunError, SceneError};
 
+/// Contact elements join particles closer than this many spacings
+/// (every edge), about the diagonal of a lattice cell with room to move.
+const CONTACT_REACH: f64 = 1.6;
+
+/// Contact elements flatter than this fraction of a spacing are slivers of
+/// the tessellation, not gaps: left out.
+const CONTACT_MIN_GAP: f64 = 0.05;
+
 /// Where in a step the hooks run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum HookPoint {
@@ -39,6 +47,10 @@ pub struct Stages {
     /// Flying-particle handling: particles outside every element fly
     /// ballistically (scenes with a fluid that has a free surface).
     pub free_surface: bool,
+    /// Contact elements between free solids and walls or other solids
+    /// (scenes with a free solid and another solid or a wall); the
+    /// particles are tessellated every step for it, fluid or not.
+    pub contact: bool,
 }
 
 /// Wall time and call count of each stage.
@@ -247,6 +259,23 @@ where
     controller: CourantController,
     alpha: AlphaShapeParams,
     stepper: Stepper<D>,
+    contact: ContactSetup<D>,
+}
+
+/// What contact needs each step.
+#[derive(Debug, Clone)]
+struct ContactSetup<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// Index of the contact material.
+    material: u16,
+    /// Per body: takes part in contact (free solids).
+    free: Vec<bool>,
+    /// Friction by pair of bodies.
+    friction: Vec<(u32, u32, f64)>,
+    /// The candidates of the step (buffer).
+    candidates: Vec<pfem_geometry::ContactCandidate<D>>,
 }
 
 impl<const D: usize> std::fmt::Debug for Simulation<D>
@@ -304,16 +333,43 @@ where
             settings,
             merges: _,
             laws,
+            free_solids,
+            friction,
+            contact_stiffness,
+            contact_damping,
         } = built;
         let particles = Particles::from_cloud(cloud);
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);
         let has_solid = particles.kind().contains(&ParticleKind::Solid);
+        let n_solids = (0..body_names.len())
+            .filter(|&b| {
+                particles
+                    .kind()
+                    .iter()
+                    .zip(particles.body())
+                    .any(|(k, &pb)| pb as usize == b && *k == ParticleKind::Solid)
+            })
+            .count();
+        let has_wall = particles.kind().contains(&ParticleKind::Wall);
+        let contact = free_solids.iter().any(|&f| f) && (has_wall || n_solids >= 2);
         let stages = Stages {
-            remesh: has_fluid,
+            remesh: has_fluid || contact,
             pressure: has_fluid,
             solid_stress: has_solid,
             body_force: gravity.is_some_and(|g| g.norm() > 0.0),
             free_surface: has_fluid,
+            contact,
+        };
+        let mut materials = materials;
+        let contact_material = if contact {
+            materials.push(Box::new(pfem_constitutive::ContactPenalty {
+                normal_stiffness: contact_stiffness,
+                shear_stiffness: contact_stiffness,
+                damping: contact_damping,
+            }));
+            (materials.len() - 1) as u16
+        } else {
+            NO_MATERIAL
         };
         let controller = CourantController {
             courant: settings.courant,
@@ -376,6 +432,12 @@ where
                 tessellator,
                 integrator: Integrator::new(params),
                 tess: Tessellation::default(),
+            },
+            contact: ContactSetup {
+                material: contact_material,
+                free: free_solids,
+                friction,
+                candidates: Vec::new(),
             },
         };
         sim.remesh()
@@ -455,6 +517,32 @@ where
                 .map(|&p| material[p as usize])
                 .unwrap_or(NO_MATERIAL)
         });
+        if self.stages.contact {
+            // Contact elements: simplices joining a free solid to a wall
+            // or another solid, no fluid between (pfem_geometry::contact).
+            let mut cands = std::mem::take(&mut self.contact.candidates);
+            pfem_geometry::contact_elements(
+                self.particles.x(),
+                self.particles.kind(),
+                self.particles.body(),
+                self.particles.spacing(),
+                &self.contact.free,
+                &self.stepper.tess,
+                CONTACT_REACH,
+                CONTACT_MIN_GAP,
+                &mut cands,
+            );
+            let friction = &self.contact.friction;
+            let mu = |a: u32, b: u32| {
+                friction
+                    .iter()
+                    .find(|(x, y, _)| (*x == a && *y == b) || (*x == b && *y == a))
+                    .map_or(0.0, |f| f.2)
+            };
+            self.elements
+                .set_contact(&cands, self.contact.material, self.particles.spacing(), &mu);
+            self.contact.candidates = cands;
+        }
         self.stats.remesh.0 += 1;
         self.stats.remesh.1 += t0.elapsed().as_secs_f64();
         Ok(())
@@ -876,6 +964,7 @@ where
         e.u64(c.rejected_by_cause.1);
         self.particles.encode(&mut e);
         self.elements.encode_solid(&mut e);
+        self.elements.encode_contact(&mut e);
         let v = &self.volume;
         e.f64(v.initial);
         e.f64(v.remeshing);
@@ -1010,6 +1099,7 @@ where
             self.run_hooks(HookPoint::Start)?;
         }
         self.elements.decode_solid(&mut d)?;
+        self.elements.decode_contact(&mut d, particles.len())?;
         let mut volume = VolumeLedger {
             initial: d.f64()?,
             remeshing: d.f64()?,
@@ -1067,6 +1157,7 @@ where
         self.stop = None;
         self.elements.clear_fluid();
         self.remesh()?;
+        self.elements.keep_stash();
         if let Some(t) = checkpoint.section(TIMINGS) {
             let mut d = Decoder::new(t);
             let mut pair = || -> Result<(u64, f64), CheckpointError> { Ok((d.u64()?, d.f64()?)) };

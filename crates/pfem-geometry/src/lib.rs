@@ -34,6 +34,7 @@
 //! particle management and quality code.
 pub mod alpha;
 pub mod classify;
+pub mod contact;
 pub mod delaunay2;
 pub mod delaunay3;
 pub mod error;
@@ -45,6 +46,7 @@ pub use alpha::{alpha_shape, alpha_shape_into, AlphaShape, AlphaShapeParams, MIN
 pub use classify::{
     classify, classify_into, BoundaryFacet, Classification, Component, FacetKind, NodeTag,
 };
+pub use contact::{contact_elements, ContactCandidate};
 pub use delaunay2::{Delaunay2, Delaunay2Params};
 pub use delaunay3::Delaunay3;
 pub use error::GeometryError;

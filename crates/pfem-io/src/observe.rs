@@ -375,6 +375,22 @@ where
         if D == 2 {
             cell_data.push(Field::scalar("stress_zz", &stress_zz));
         }
+        // Contact status: the normal pressure of each contact element
+        // (zero on every other cell; zero on a contact element that is
+        // open).
+        let contact_pressure: Vec<f64> = if sim.stages().contact {
+            let mut c = vec![0.0; n_cells];
+            let first = n_cells - sim.elements().n_contact();
+            for (k, h) in sim.elements().contact_history().iter().enumerate() {
+                c[first + k] = -h.stress.trace() / D as f64;
+            }
+            c
+        } else {
+            Vec::new()
+        };
+        if sim.stages().contact {
+            cell_data.push(Field::scalar("contact_pressure", &contact_pressure));
+        }
         for (name, values) in &internal {
             cell_data.push(Field::scalar(name.as_str(), values));
         }

@@ -130,6 +130,15 @@ where
     /// Walls moving along a law of time, by name.
     #[allow(clippy::type_complexity)]
     pub laws: Vec<(String, std::sync::Arc<dyn crate::motion::MotionLaw<D>>)>,
+    /// Per body: a free solid (no clamp, not welded to a wall), which
+    /// takes part in contact.
+    pub free_solids: Vec<bool>,
+    /// Friction coefficients by pair of body indices.
+    pub friction: Vec<(u32, u32, f64)>,
+    /// Normal penalty stiffness of contact (Pa).
+    pub contact_stiffness: f64,
+    /// Normal damping of contact (steps).
+    pub contact_damping: f64,
 }
 
 /// What [`Scene::build`] did to one body's particles that fell on another
@@ -165,7 +174,9 @@ where
             bodies,
             gravity,
             settings,
+            contact,
         } = scene;
+        let mut free_solids = vec![false; bodies.len()];
         let mut particles = Cloud::<D>::default();
         let mut materials: Vec<Box<dyn Material<D>>> = Vec::new();
         let mut body_names = vec![String::new(); bodies.len()];
@@ -322,6 +333,9 @@ where
                 }
                 solid_material.extend(std::iter::repeat_n(mat, conn.len() / (D + 1)));
             }
+            if b.kind == ParticleKind::Solid && b.clamps.is_empty() && welded == 0 {
+                free_solids[bi] = true;
+            }
             if dropped > 0 || welded > 0 {
                 merges.push(Merge {
                     body: b.name.clone(),
@@ -379,9 +393,18 @@ where
         for (i, vel) in fixed {
             particles.fixed[i] = Some(vel);
         }
-        // A solid under gravity needs a clamp, a weld or a fluid to rest in.
+        // A solid under gravity needs a clamp, a weld, a fluid to rest in,
+        // or something to rest on through contact (a wall, another solid).
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);
-        if gravity.is_some_and(|g| g.norm() > 0.0) && !has_fluid {
+        let solids = (0..body_names.len())
+            .filter(|&b| {
+                (0..n).any(|i| {
+                    particles.body()[i] == b as u32 && particles.kind()[i] == ParticleKind::Solid
+                })
+            })
+            .count();
+        let can_touch = particles.kind().contains(&ParticleKind::Wall) || solids >= 2;
+        if gravity.is_some_and(|g| g.norm() > 0.0) && !has_fluid && !can_touch {
             for (bi, name) in body_names.iter().enumerate() {
                 let ids: Vec<usize> = (0..n)
                     .filter(|&i| {
@@ -454,7 +477,29 @@ where
                 particles.pressure[i] = p;
             }
         }
+        // Contact: the default penalty is the stiffest solid's P-wave
+        // modulus ρ c².
+        let contact_stiffness = contact.stiffness.unwrap_or_else(|| {
+            materials
+                .iter()
+                .filter(|m| m.kind() == pfem_constitutive::MaterialKind::Solid)
+                .map(|m| m.density() * m.wave_speed() * m.wave_speed())
+                .fold(0.0, f64::max)
+        });
+        let friction = contact
+            .friction
+            .iter()
+            .filter_map(|(a, b, mu)| {
+                let ia = body_names.iter().position(|n| n == a)? as u32;
+                let ib = body_names.iter().position(|n| n == b)? as u32;
+                Some((ia, ib, *mu))
+            })
+            .collect();
         Ok(Built {
+            free_solids,
+            friction,
+            contact_stiffness,
+            contact_damping: contact.damping,
             name,
             particles,
             materials,

@@ -309,6 +309,39 @@ where
     pub gravity: Option<Vector<D>>,
     /// Run settings.
     pub settings: RunSettings,
+    /// Contact between free solids and walls or other solids.
+    pub contact: ContactSettings,
+}
+
+/// Contact settings ([`Scene::friction`], [`Scene::contact_stiffness`]).
+/// Contact acts between a *free* solid (no clamp, not welded to a wall)
+/// and any wall or other solid it comes within reach of; a scene without
+/// a free solid near another body pays nothing for it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactSettings {
+    /// Coulomb friction coefficients by pair of body names (order free);
+    /// pairs not listed are frictionless.
+    pub friction: Vec<(String, String, f64)>,
+    /// Normal penalty stiffness `K_c` (Pa): the pressure that closes the
+    /// gap entirely. Default: the largest P-wave modulus `λ + 2μ` of the
+    /// scene's solids (the penetration under a stress `σ` is then `σ/K_c`
+    /// of the spacing, the solid's own strain).
+    pub stiffness: Option<f64>,
+    /// Normal damping of the contact layer, in steps
+    /// (`pfem_constitutive::ContactPenalty::damping`): damping ratio
+    /// `c ω Δt / 2` on a contact mode of frequency `ω`. Default 0.1; 0
+    /// for an undamped (energy-conserving) contact.
+    pub damping: f64,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        Self {
+            friction: Vec::new(),
+            stiffness: None,
+            damping: 0.1,
+        }
+    }
 }
 
 impl<const D: usize> Scene<D>
@@ -322,7 +355,28 @@ where
             bodies: Vec::new(),
             gravity: None,
             settings: RunSettings::default(),
+            contact: ContactSettings::default(),
         }
+    }
+
+    /// Coulomb friction `mu` (≥ 0) between bodies `a` and `b` in contact.
+    pub fn friction(mut self, a: &str, b: &str, mu: f64) -> Self {
+        self.contact.friction.push((a.into(), b.into(), mu));
+        self
+    }
+
+    /// The normal damping of contact ([`ContactSettings::damping`]; 0 for
+    /// none).
+    pub fn contact_damping(mut self, c: f64) -> Self {
+        self.contact.damping = c;
+        self
+    }
+
+    /// The normal penalty stiffness of contact (Pa), instead of the
+    /// default ([`ContactSettings::stiffness`]).
+    pub fn contact_stiffness(mut self, k: f64) -> Self {
+        self.contact.stiffness = Some(k);
+        self
     }
 
     /// Sets the gravity (m/s²).
@@ -674,8 +728,11 @@ where
             if b.kind == ParticleKind::Solid {
                 // Boxes keep a structured mesh; any other geometry is meshed
                 // by `solid_mesh` (Delaunay of its particles + alpha shape).
+                // A free solid touching a wall or another solid rests on it
+                // through contact.
                 let touches_wall = self.bodies.iter().any(|w| {
-                    w.kind == ParticleKind::Wall
+                    !std::ptr::eq(w, b)
+                        && matches!(w.kind, ParticleKind::Wall | ParticleKind::Solid)
                         && boxes_touch(&b.geometry, &w.geometry, b.spacing.min(w.spacing))
                 });
                 let supported = !b.clamps.is_empty() || touches_wall || self.gravity.is_none();
@@ -769,6 +826,38 @@ where
                 count: courant_steps,
                 limit: MAX_STEPS,
             });
+        }
+        for (a, b, mu) in &self.contact.friction {
+            for n in [a, b] {
+                if !self.bodies.iter().any(|x| &x.name == n) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: n.clone(),
+                        why: "friction names a body the scene does not have".into(),
+                    });
+                }
+            }
+            if !(mu.is_finite() && *mu >= 0.0) {
+                return Err(SceneError::OutOfRange {
+                    setting: "friction",
+                    value: *mu,
+                    range: "[0, ∞)",
+                });
+            }
+        }
+        if !(self.contact.damping.is_finite() && self.contact.damping >= 0.0) {
+            return Err(SceneError::OutOfRange {
+                setting: "contact_damping",
+                value: self.contact.damping,
+                range: "[0, ∞)",
+            });
+        }
+        if let Some(k) = self.contact.stiffness {
+            if !(k.is_finite() && k > 0.0) {
+                return Err(SceneError::InvalidSetting {
+                    setting: "contact_stiffness",
+                    value: k,
+                });
+            }
         }
         let mut names: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
         names.sort_unstable();

@@ -1226,14 +1226,17 @@ impl SceneFile {
 /// The first line (1-based) that sets `key` (`key = …`, outside comments)
 /// or, for a table header such as `[run]`, that opens it.
 fn key_line(source: &str, key: &str) -> Option<usize> {
-    source.lines().position(|l| {
-        let l = l.trim_start();
-        if key.starts_with('[') {
-            return l.starts_with(key);
-        }
-        l.strip_prefix(key)
-            .is_some_and(|rest| rest.trim_start().starts_with('='))
-    }).map(|i| i + 1)
+    source
+        .lines()
+        .position(|l| {
+            let l = l.trim_start();
+            if key.starts_with('[') {
+                return l.starts_with(key);
+            }
+            l.strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with('='))
+        })
+        .map(|i| i + 1)
 }
 
 /// The particles of `body` that started within `radius` of `point`, or the

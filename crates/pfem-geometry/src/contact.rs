@@ -1,0 +1,265 @@
+//! Contact elements: the simplices of the particles' Delaunay tessellation
+//! that join two bodies with no fluid between them (the contact-domain idea
+//! of the PFEM solid-mechanics codes). The tessellation finds the contact:
+//! where a free solid comes within reach of a wall or another solid, the
+//! simplices spanning the gap become interface elements, and the driver
+//! gives them a penalty material that resists the closing of the gap
+//! (`pfem_constitutive::ContactPenalty`).
+//!
+//! Each element has a *master* facet (the nodes of one body) and the rest
+//! (the other body): its gap is the height of the simplex over the master
+//! facet (2D: the lone node's distance to the master edge; 3D, three nodes
+//! on one body: the distance to their triangle; two and two: the distance
+//! between the two edges), its normal the master facet's, pointing from
+//! the master body towards the other.
+
+use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
+
+use crate::Tessellation;
+
+/// One contact element.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactCandidate<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// The simplex's particles (`D + 1`; the rest unused), as in the
+    /// tessellation.
+    pub nodes: [u32; 4],
+    /// Gap across the element (m), positive.
+    pub gap: f64,
+    /// Unit normal from the master body towards the other.
+    pub normal: Vector<D>,
+    /// The two bodies, master first.
+    pub bodies: (u32, u32),
+}
+
+/// The contact elements of `delaunay`: simplices with no fluid node, with
+/// nodes of at least two bodies of which at least one takes part in
+/// contact (`in_contact[body]`, the free solids), every edge shorter than
+/// `reach` times the mean spacing of its nodes, and a gap above
+/// `min_gap` times that spacing (no slivers). In tessellation order.
+#[allow(clippy::too_many_arguments)]
+pub fn contact_elements<const D: usize>(
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    bodies: &[u32],
+    spacing: &[f64],
+    in_contact: &[bool],
+    delaunay: &Tessellation,
+    reach: f64,
+    min_gap: f64,
+    out: &mut Vec<ContactCandidate<D>>,
+) where
+    Const<D>: Dim,
+{
+    out.clear();
+    let nv = D + 1;
+    for s in delaunay.simplices.chunks_exact(nv) {
+        if s.iter().any(|&p| kinds[p as usize] == ParticleKind::Fluid)
+            || !s.iter().any(|&p| kinds[p as usize] == ParticleKind::Solid)
+        {
+            continue;
+        }
+        // Bodies and their node counts.
+        let mut group: [(u32, usize); 4] = [(u32::MAX, 0); 4];
+        let mut ng = 0;
+        for &p in s {
+            let b = bodies[p as usize];
+            match group[..ng].iter_mut().find(|g| g.0 == b) {
+                Some(g) => g.1 += 1,
+                None => {
+                    group[ng] = (b, 1);
+                    ng += 1;
+                }
+            }
+        }
+        if ng < 2
+            || !group[..ng]
+                .iter()
+                .any(|g| in_contact.get(g.0 as usize).copied().unwrap_or(false))
+        {
+            continue;
+        }
+        let h = s.iter().map(|&p| spacing[p as usize]).sum::<f64>() / nv as f64;
+        let x = |a: usize| points[s[a] as usize];
+        let too_long = (0..nv).any(|a| (a + 1..nv).any(|b| (x(a) - x(b)).norm() > reach * h));
+        if too_long {
+            continue;
+        }
+        // Master: the body with most nodes (the first such).
+        group[..ng].sort_by_key(|g| std::cmp::Reverse(g.1));
+        let master = group[0].0;
+        let other = group[1].0;
+        let on = |a: usize| bodies[s[a] as usize] == master;
+        let Some((gap, normal)) = gap_and_normal::<D>(&x, &on, group[0].1) else {
+            continue;
+        };
+        if gap <= min_gap * h {
+            continue;
+        }
+        let mut nodes = [0u32; 4];
+        nodes[..nv].copy_from_slice(s);
+        out.push(ContactCandidate {
+            nodes,
+            gap,
+            normal,
+            bodies: (master, other),
+        });
+    }
+}
+
+/// Gap and master normal of a simplex whose nodes `a` with `on(a)` are the
+/// master body's (`m` of them).
+fn gap_and_normal<const D: usize>(
+    x: &dyn Fn(usize) -> Point<D>,
+    on: &dyn Fn(usize) -> bool,
+    m: usize,
+) -> Option<(f64, Vector<D>)>
+where
+    Const<D>: Dim,
+{
+    let nv = D + 1;
+    let mine: Vec<usize> = (0..nv).filter(|&a| on(a)).collect();
+    let theirs: Vec<usize> = (0..nv).filter(|&a| !on(a)).collect();
+    let c_other = theirs.iter().map(|&a| x(a)).sum::<Vector<D>>() / theirs.len() as f64;
+    let orient = |n: Vector<D>, base: Point<D>| {
+        let n = n / n.norm();
+        if n.dot(&(c_other - base)) < 0.0 {
+            -n
+        } else {
+            n
+        }
+    };
+    let n = if D == 2 {
+        // 2D: a master edge (2 nodes) or, with three bodies, the
+        // longest edge of the master's single node and… take the edge
+        // opposite the lone non-master node.
+        let (p, q) = if m >= 2 {
+            (x(mine[0]), x(mine[1]))
+        } else {
+            (x(mine[0]), x(theirs[0]))
+        };
+        let e = q - p;
+        let mut n = Vector::<D>::zeros();
+        n[0] = -e[1];
+        n[1] = e[0];
+        if n.norm() == 0.0 {
+            return None;
+        }
+        orient(n, p)
+    } else if m == 3 {
+        let (p, q, r) = (x(mine[0]), x(mine[1]), x(mine[2]));
+        let n = cross3::<D>(&(q - p), &(r - p));
+        if n.norm() == 0.0 {
+            return None;
+        }
+        orient(n, p)
+    } else if m == 2 && theirs.len() == 2 {
+        // Edge against edge: the common normal.
+        let e1 = x(mine[1]) - x(mine[0]);
+        let e2 = x(theirs[1]) - x(theirs[0]);
+        let n = cross3::<D>(&e1, &e2);
+        if n.norm() == 0.0 {
+            return None;
+        }
+        orient(n, x(mine[0]))
+    } else {
+        // Three or four bodies meet: the largest face's normal.
+        let mut best: Option<(f64, Vector<D>, Point<D>)> = None;
+        for skip in 0..nv {
+            let f: Vec<usize> = (0..nv).filter(|&a| a != skip).collect();
+            let n = cross3::<D>(&(x(f[1]) - x(f[0])), &(x(f[2]) - x(f[0])));
+            if best.as_ref().is_none_or(|b| n.norm() > b.0) {
+                best = Some((n.norm(), n, x(f[0])));
+            }
+        }
+        let (a, n, p) = best?;
+        if a == 0.0 {
+            return None;
+        }
+        orient(n, p)
+    };
+    // The gap: the largest distance of a non-master node from the master's
+    // plane through its first node (for edge-edge, the edges' distance).
+    let base = x(mine[0]);
+    let gap = theirs
+        .iter()
+        .map(|&a| (x(a) - base).dot(&n))
+        .fold(f64::NEG_INFINITY, f64::max);
+    (gap.is_finite() && gap > 0.0).then_some((gap, n))
+}
+
+fn cross3<const D: usize>(a: &Vector<D>, b: &Vector<D>) -> Vector<D>
+where
+    Const<D>: Dim,
+{
+    let mut c = Vector::<D>::zeros();
+    if D == 3 {
+        c[0] = a[1] * b[2] - a[2] * b[1];
+        c[1] = a[2] * b[0] - a[0] * b[2];
+        c[2] = a[0] * b[1] - a[1] * b[0];
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Delaunay2, Tessellator};
+
+    /// A solid row one spacing above a wall row: the triangles between them
+    /// are contact elements with gap h and normal +y from the wall, or −y
+    /// from the solid.
+    #[test]
+    fn a_row_above_a_row_makes_contact_elements_of_gap_h() {
+        let h = 0.1;
+        let mut x = Vec::new();
+        let mut kinds = Vec::new();
+        let mut bodies = Vec::new();
+        for i in 0..6 {
+            x.push(Point::<2>::new(i as f64 * h, 0.0));
+            kinds.push(ParticleKind::Wall);
+            bodies.push(0);
+        }
+        for i in 0..6 {
+            x.push(Point::<2>::new(i as f64 * h + 0.013, h));
+            kinds.push(ParticleKind::Solid);
+            bodies.push(1);
+        }
+        let spacing = vec![h; x.len()];
+        let mut t = Tessellation::default();
+        Delaunay2::default().tessellate(&x, &mut t).unwrap();
+        let mut out = Vec::new();
+        contact_elements(
+            &x,
+            &kinds,
+            &bodies,
+            &spacing,
+            &[false, true],
+            &t,
+            1.6,
+            0.05,
+            &mut out,
+        );
+        assert!(out.len() >= 9, "{}", out.len());
+        for c in &out {
+            assert!((c.gap - h).abs() < 1e-12, "gap {}", c.gap);
+            let sign = if c.bodies.0 == 0 { 1.0 } else { -1.0 };
+            assert!((c.normal - Vector::<2>::new(0.0, sign)).norm() < 1e-12);
+        }
+        // Nobody in contact: nothing.
+        contact_elements(
+            &x,
+            &kinds,
+            &bodies,
+            &spacing,
+            &[false, false],
+            &t,
+            1.6,
+            0.05,
+            &mut out,
+        );
+        assert!(out.is_empty());
+    }
+}

