@@ -94,6 +94,16 @@ fn a_free_block_rests_on_the_floor_without_sinking_through_it() {
         penetration,
         s.elements().n_contact()
     );
+    // The floor carries the block's weight, 1000 × 0.4 × 0.2 × g.
+    let f = s.contact_force("block", "floor").unwrap();
+    let weight = 1000.0 * 0.4 * 0.2 * G;
+    println!(
+        "contact force on the block: normal {:.2} N/m (weight {weight:.2}), tangential {:.2e}, {} active elements",
+        f.normal, f.tangential, f.active
+    );
+    assert!((f.normal / weight - 1.0).abs() < 0.01, "{} vs {weight}", f.normal);
+    assert!(f.tangential < 1e-3 * weight);
+    assert!(s.contact_force("block", "nobody").is_err());
     assert!(penetration < 0.05, "penetration {penetration} of a spacing");
     assert!(v < 0.02, "still moving at {v} m/s");
     assert!(s.elements().n_contact() > 0);
@@ -121,14 +131,24 @@ fn friction_holds_below_the_friction_angle_and_lets_go_above_it() {
         let mut s = sim(block_on_floor(h, 0.2, 0.1, theta, mu, 1e7));
         s.set_end_time(0.4).unwrap();
         let mut series = Vec::new();
+        let (mut ft, mut fnorm) = (0.0, 0.0);
         while s.time() < s.end_time() - 1e-12 {
             s.step().unwrap();
             if s.time() > 0.1 {
                 series.push((s.time(), centroid(&s, "block")[0]));
+                let f = s.contact_force("block", "floor").unwrap();
+                ft += f.tangential * s.dt();
+                fnorm += f.normal * s.dt();
             }
         }
         // Least-squares x = a + b t + c t²/2.
         let a = fit_acceleration(&series);
+        // Sliding: the friction impulse is μ times the normal impulse.
+        println!(
+            "θ = {theta_deg}°: friction / normal impulse = {:.4} (μ = {mu})",
+            ft / fnorm
+        );
+        assert!((ft / fnorm / mu - 1.0).abs() < 0.01, "{}", ft / fnorm);
         let expect = G * (theta.sin() - mu * theta.cos());
         println!(
             "θ = {theta_deg}°: acceleration {a:.4} m/s² against g (sin θ − μ cos θ) = {expect:.4} ({:+.2} %)",

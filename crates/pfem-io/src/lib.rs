@@ -10,7 +10,7 @@ pub mod loads;
 pub mod observe;
 pub mod output;
 
-pub use loads::Loads;
+pub use loads::{ContactForce, Loads};
 pub use observe::{Probe, StandardOutput};
 
 impl From<output::OutputError> for pfem_driver::RunError {

@@ -17,6 +17,25 @@ where
     fn water_pressure(&self) -> Vec<f64>;
     /// See the implementation for [`Simulation`].
     fn fluid_at(&self, at: &Point<D>) -> Option<(f64, Vector<D>)>;
+    /// See the implementation for [`Simulation`].
+    fn contact_force(&self, on: &str, from: &str) -> Result<ContactForce<D>, RunError>;
+}
+
+/// The contact force one body exerts on another ([`Loads::contact_force`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactForce<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// The force (N; N per metre in 2D).
+    pub force: Vector<D>,
+    /// Its component along the mean contact normal (pointing into the
+    /// body acted on; positive when it pushes).
+    pub normal: f64,
+    /// The magnitude of the rest (friction).
+    pub tangential: f64,
+    /// Contact elements between the two bodies that carry a pressure.
+    pub active: usize,
 }
 
 impl<const D: usize> Loads<D> for Simulation<D>
@@ -84,6 +103,70 @@ where
     /// sealed voids add their pressure force (3D; without them a 3D block
     /// read 12 N sideways and +47 % up, `tests/water_at_rest_3d.rs`). The
     /// viscous part is left out (negligible for water).
+    /// The force body `from` exerts on body `on` through their contact
+    /// elements at the end of the last step: each element's stress `σ`
+    /// (`−p I + τ ⊗ n + n ⊗ τ`, constant in the simplex) gives its particles
+    /// the nodal forces `−V σ ∇N_a`, summed over the particles of `on`.
+    /// The normal is the mean of the elements' normals, oriented into
+    /// `on`; [`RunError::UnknownBody`] for a name no body has. Zero when
+    /// the two do not touch (or the scene has no contact stage).
+    fn contact_force(&self, on: &str, from: &str) -> Result<ContactForce<D>, RunError> {
+        let (a, b) = (self.body_id(on)?, self.body_id(from)?);
+        let nv = D + 1;
+        let x = self.particles().x();
+        let body = self.particles().body();
+        let mut force = Vector::<D>::zeros();
+        let mut normal = Vector::<D>::zeros();
+        let mut active = 0;
+        let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+        let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
+        let elements = self.elements();
+        for ((el, h), pair) in elements
+            .contact()
+            .chunks_exact(nv)
+            .zip(elements.contact_history())
+            .zip(elements.contact_bodies())
+        {
+            if !((pair.0 == a && pair.1 == b) || (pair.0 == b && pair.1 == a)) {
+                continue;
+            }
+            if h.stress.trace() >= 0.0 {
+                continue; // open
+            }
+            for k in 0..nv {
+                p[k] = x[el[k] as usize];
+            }
+            let Some(vol) = pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]) else {
+                continue;
+            };
+            active += 1;
+            for k in 0..nv {
+                if body[el[k] as usize] == a {
+                    force -= h.stress * g[k] * vol;
+                }
+            }
+            // The element's normal points from its master into the other
+            // body: into `on` when `on` is not the master.
+            let n = Vector::<D>::from_fn(|k, _| {
+                h.internal[pfem_constitutive::contact::NORMAL + k]
+            });
+            normal += if pair.0 == a { -n } else { n };
+        }
+        let (fn_, ft) = if normal.norm() > 0.0 {
+            let n = normal / normal.norm();
+            let f_n = force.dot(&n);
+            (f_n, (force - n * f_n).norm())
+        } else {
+            (0.0, force.norm())
+        };
+        Ok(ContactForce {
+            force,
+            normal: fn_,
+            tangential: ft,
+            active,
+        })
+    }
+
     fn pressure_force_on(&self, name: &str) -> Result<Vector<D>, RunError> {
         let id = self.body_id(name)?;
         let nv = D + 1;

@@ -382,7 +382,7 @@ where
             let mut c = vec![0.0; n_cells];
             let first = n_cells - sim.elements().n_contact();
             for (k, h) in sim.elements().contact_history().iter().enumerate() {
-                c[first + k] = -h.stress.trace() / D as f64;
+                c[first + k] = pfem_constitutive::ContactPenalty::pressure(h);
             }
             c
         } else {
