@@ -147,9 +147,7 @@ where
             }
             // The element's normal points from its master into the other
             // body: into `on` when `on` is not the master.
-            let n = Vector::<D>::from_fn(|k, _| {
-                h.internal[pfem_constitutive::contact::NORMAL + k]
-            });
+            let n = Vector::<D>::from_fn(|k, _| h.internal[pfem_constitutive::contact::NORMAL + k]);
             normal += if pair.0 == a { -n } else { n };
         }
         let (fn_, ft) = if normal.norm() > 0.0 {
