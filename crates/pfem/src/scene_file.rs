@@ -72,6 +72,7 @@
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }`, `table = [[t, dx, dy], …]` or `rotation = { center, axis (3D), rate, amplitude, period, ramp }`, angles in rad), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson }` (kg/m³, Pa, –) |
+//! | `[contact]` | `stiffness` (Pa), `damping`, `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`: contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
 //!
@@ -123,6 +124,10 @@ pub struct SceneFile {
     /// The probes written to `probes.csv`, in order.
     #[serde(default)]
     pub probes: Vec<Spanned<ProbeSpec>>,
+    /// Contact between free solids and walls or solids (the `[contact]`
+    /// table).
+    #[serde(default)]
+    pub contact: Option<Spanned<ContactSpec>>,
     /// The file's text, to turn spans into line numbers.
     #[serde(skip)]
     source: String,
@@ -229,6 +234,33 @@ pub enum MaterialSpec {
         /// Poisson's ratio.
         poisson: f64,
     },
+}
+
+/// The `[contact]` table: `stiffness` (Pa), `damping`, and `friction =
+/// [{ bodies = ["a", "b"], mu = 0.3 }, …]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Normal penalty stiffness (Pa); default the stiffest solid's P-wave
+    /// modulus (`pfem::scene::ContactSettings::stiffness`).
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Normal damping (steps), default 0.1.
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Friction coefficients by pair of bodies.
+    #[serde(default)]
+    pub friction: Vec<FrictionSpec>,
+}
+
+/// `{ bodies = ["a", "b"], mu = 0.3 }`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    /// The two bodies.
+    pub bodies: [String; 2],
+    /// Coulomb coefficient (≥ 0).
+    pub mu: f64,
 }
 
 /// An axis-aligned box `{ min = [..], max = [..] }` (m).
@@ -731,6 +763,26 @@ impl SceneFile {
                 }
                 let (pts, vals) = self.samples::<D>(f, 1, &what("pressure_field"))?;
                 scene = scene.with_pressure_field(move |x| vals[nearest(&pts, x)][0]);
+            }
+        }
+        if let Some(c) = &self.contact {
+            let spec = c.get_ref();
+            for f in &spec.friction {
+                for b in &f.bodies {
+                    if !self.bodies.iter().any(|x| &x.get_ref().name == b) {
+                        return Err(self.error(
+                            c.span(),
+                            format!("`contact.friction` names `{b}`, which is no body"),
+                        ));
+                    }
+                }
+                scene = scene.friction(&f.bodies[0], &f.bodies[1], f.mu);
+            }
+            if let Some(k) = spec.stiffness {
+                scene = scene.contact_stiffness(k);
+            }
+            if let Some(d) = spec.damping {
+                scene = scene.contact_damping(d);
             }
         }
         scene.validate()?;

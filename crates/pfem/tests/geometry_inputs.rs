@@ -223,3 +223,44 @@ fn a_flap_hinged_on_the_floor_follows_its_rotation_law() {
         .iter()
         .all(|p| p.iter().all(|v| v.is_finite())));
 }
+
+/// The `[contact]` table of a scene file: friction by pair, stiffness,
+/// damping; a pair naming no body is an error with its line.
+#[test]
+fn the_contact_table_sets_friction_stiffness_and_damping() {
+    let LoadedScene::Two(scene, _) =
+        SceneFile::load(scenes().join("dam_break_block_2d.toml"), None, None).unwrap()
+    else {
+        panic!("a 2D scene")
+    };
+    assert_eq!(
+        scene.contact.friction,
+        vec![("block".to_string(), "floor".to_string(), 0.1)]
+    );
+    assert_eq!(scene.contact.damping, 0.1);
+    let text = std::fs::read_to_string(scenes().join("dam_break_block_2d.toml")).unwrap();
+    let bad = text.replace(
+        "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }]",
+        "friction = [{ bodies = [\"block\", \"flor\"], mu = 0.1 }]\nstiffness = 5e7\ndamping = 0.0",
+    );
+    let err = SceneFile::parse(&bad, "bad.toml")
+        .unwrap()
+        .build()
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("flor") && err.contains("line"), "{err}");
+    let good = text.replace(
+        "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }]",
+        "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }]\nstiffness = 5e7\ndamping = 0.0",
+    );
+    let LoadedScene::Two(scene, _) = SceneFile::parse(&good, "good.toml")
+        .unwrap()
+        .build()
+        .unwrap()
+    else {
+        panic!("a 2D scene")
+    };
+    assert_eq!(scene.contact.stiffness, Some(5e7));
+    assert_eq!(scene.contact.damping, 0.0);
+}
