@@ -1,0 +1,148 @@
+//! Archimedes (issue 19): a free elastic block of density 500 kg/m³ put in
+//! water at rest at its equilibrium draft (half its height) stays there:
+//! its draft over the last half second within 2 % of half its height, the
+//! water still.
+//! `cargo test --release --test floating -- --ignored --nocapture` (a known
+//! gap: see the test's docs).
+
+use pfem::constitutive::Hypoelastic;
+use pfem::prelude::*;
+
+const G: f64 = 9.81;
+
+/// Known gap (2 December 2026): the draft stays within 0.4 % of half the
+/// height for 1.2 s (bottom 0.2491–0.2500 m against a level of
+/// 0.2994–0.3001 m), then a roll grows (0.066 rad at 1.5 s) and the block
+/// sinks: mean draft over 1.5–2 s +16 %, largest speed 0.16 m/s
+/// (9.5·10⁻² √(gH)). The block's initial vertical acceleration is
+/// −4.4 m/s² (the consistent initial acceleration does not balance it).
+#[test]
+#[ignore = "known gap: a roll grows after 1.2 s and the mean draft over 1.5-2 s is +16 % (bound 2 %): cargo test --release --test floating -- --ignored --nocapture"]
+fn a_block_half_as_dense_as_water_floats_at_half_its_height() {
+    let h = 0.02;
+    let (width, depth) = (1.0, 0.3);
+    let (bw, bh) = (0.2, 0.1);
+    let x0 = 0.5 * (width - bw);
+    let draft = 0.5 * bh;
+    let bottom = depth - draft;
+    // The water around the block: a U-shaped polygon one spacing off it.
+    let water = Geometry::polygon(vec![
+        Point::<2>::new(0.0, 0.0),
+        Point::<2>::new(width, 0.0),
+        Point::<2>::new(width, depth),
+        Point::<2>::new(x0 + bw + h, depth),
+        Point::<2>::new(x0 + bw + h, bottom - h),
+        Point::<2>::new(x0 - h, bottom - h),
+        Point::<2>::new(x0 - h, depth),
+        Point::<2>::new(0.0, depth),
+    ]);
+    let scene = Scene::<2>::new("floating")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 2.0,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-h, -h),
+                max: Point::<2>::new(width + h, -h),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .wall(
+            "left",
+            Geometry::Box {
+                min: Point::<2>::new(-h, 0.0),
+                max: Point::<2>::new(-h, 0.5),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .wall(
+            "right",
+            Geometry::Box {
+                min: Point::<2>::new(width + h, 0.0),
+                max: Point::<2>::new(width + h, 0.5),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid("water", Box::new(Newtonian::water()), water, h)
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(500.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(x0, bottom),
+                max: Point::<2>::new(x0 + bw, bottom + bh),
+            },
+            h,
+            None,
+        );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    let block = sim.body_particles("block").unwrap();
+    let water_p = sim.body_particles("water").unwrap();
+    // The bottom of the block: its centroid less half its height (a
+    // rolling block's lowest particle is not its draft).
+    let lowest = |s: &Simulation<2>| {
+        block.iter().map(|&i| s.particles().x()[i][1]).sum::<f64>() / block.len() as f64 - 0.5 * bh
+    };
+    // The water level far from the block: the highest water particle
+    // within 0.2 m of the side walls.
+    let level = |s: &Simulation<2>| {
+        let far: Vec<f64> = water_p
+            .iter()
+            .map(|&i| s.particles().x()[i])
+            .filter(|p| p[0] < 0.2 || p[0] > width - 0.2)
+            .map(|p| p[1])
+            .collect();
+        far.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+    };
+    let (mut sum, mut n) = (0.0, 0);
+    let mut vmax: f64 = 0.0;
+    let mut next = 0.0;
+    let bw_n = (bw / h).round() as usize + 1; // bottom row: the first particles
+    let a0 = block
+        .iter()
+        .map(|&i| sim.particles().a()[i][1])
+        .sum::<f64>()
+        / block.len() as f64;
+    println!("initial vertical acceleration of the block {a0:.3e} m/s²");
+    while sim.time() < sim.end_time() - 1e-12 {
+        sim.step().unwrap();
+        if sim.time() >= next {
+            next += 0.1;
+            let vy = block
+                .iter()
+                .map(|&i| sim.particles().v()[i][1])
+                .sum::<f64>()
+                / block.len() as f64;
+            let ys: Vec<f64> = block.iter().map(|&i| sim.particles().x()[i][1]).collect();
+            let roll = (ys[bw_n - 1] - ys[0]) / bw;
+            println!(
+                "t {:.2} bottom {:.4} level {:.4} vy {vy:.3e} roll {roll:.3e}",
+                sim.time(),
+                lowest(&sim),
+                level(&sim)
+            );
+        }
+        if sim.time() > 1.5 {
+            sum += level(&sim) - lowest(&sim);
+            n += 1;
+            vmax = vmax.max(sim.v_max());
+        }
+    }
+    let mean = sum / n as f64;
+    println!(
+        "floating block: {} steps ({} rejected); draft over the last 0.5 s {mean:.5} m against {draft} m ({:+.2} %); largest speed {vmax:.2e} m/s ({:.1e} √(gH))",
+        sim.steps(),
+        sim.rejected(),
+        100.0 * (mean / draft - 1.0),
+        vmax / (G * depth).sqrt()
+    );
+    assert!((mean / draft - 1.0).abs() < 0.02, "draft {mean} m");
+}
