@@ -4,7 +4,7 @@
 //! it), an elastic disk bouncing on a floor.
 //!
 //! The incline is the floor under gravity tilted by θ (the same problem in
-//! the floor's frame).
+//! the floor's frame). The 3D block is a known gap (ignored, see its docs).
 //! `cargo test --release --test contact -- --nocapture`
 
 use pfem::constitutive::Hypoelastic;
@@ -344,4 +344,73 @@ fn an_elastic_disk_bounces_off_a_floor_and_keeps_its_energy() {
     assert!(vy > 0.0, "no rebound");
     assert!(deepest > 0.95 * h, "penetrated to {deepest} m");
     assert!((total1 / total0 - 1.0).abs() < 0.05, "{total0} -> {total1}");
+}
+
+/// 3D: a free elastic block resting on a floor (contact elements of three
+/// nodes against one, and two against two) sinks no deeper than a small
+/// fraction of the spacing, and the floor carries its weight.
+///
+/// Known gap (2 December 2026): the block closes 2.8·10⁻³ of the gap, but
+/// Picard rejects 182 of 637 steps and the block still rings at 0.3 s:
+/// the floor's force over 0.2–0.3 s is 179.8 N against a weight of
+/// 176.6 N (+1.8 %, bound 1 %). 32 s.
+#[test]
+#[ignore = "known gap: still ringing at 0.3 s, floor force +1.8 % (bound 1 %), 182 of 637 steps rejected; cargo test --release --test contact -- --ignored 3d"]
+fn a_free_block_rests_on_a_floor_in_3d() {
+    let h = 0.05;
+    let scene = Scene::<3>::new("block3d")
+        .gravity(Vector::<3>::new(0.0, -G, 0.0))
+        .settings(RunSettings {
+            end_time: 0.3,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<3>::new(-0.2, -h, -0.2),
+                max: Point::<3>::new(0.5, 0.0, 0.5),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<3>::new(0.0, h, 0.0),
+                max: Point::<3>::new(0.3, h + 0.2, 0.3),
+            },
+            h,
+            None,
+        );
+    let mut s =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    assert!(s.stages().contact);
+    let block = s.body_particles("block").unwrap();
+    let mut worst: f64 = f64::INFINITY;
+    // The floor's force averaged over the last 0.1 s (impulse / time).
+    let (mut impulse, mut span) = (0.0, 0.0);
+    while s.time() < s.end_time() - 1e-12 {
+        s.step().unwrap();
+        for &i in &block {
+            worst = worst.min(s.particles().x()[i][1]);
+        }
+        if s.time() > 0.2 {
+            impulse += s.contact_force("block", "floor").unwrap().normal * s.dt();
+            span += s.dt();
+        }
+    }
+    let f = impulse / span;
+    let weight = 1000.0 * 0.3 * 0.2 * 0.3 * G;
+    println!(
+        "3D block on floor: {} steps ({} rejected), {} contact elements, deepest penetration {:.2e} spacing, floor force over 0.2-0.3 s {f:.2} N (weight {weight:.2})",
+        s.steps(),
+        s.rejected(),
+        s.elements().n_contact(),
+        (h - worst) / h,
+    );
+    assert!((h - worst) / h < 0.05);
+    assert!((f / weight - 1.0).abs() < 0.01, "{f} vs {weight}");
 }
