@@ -14,8 +14,7 @@ const G: f64 = 9.81;
 /// height for 1.2 s (bottom 0.2491–0.2500 m against a level of
 /// 0.2994–0.3001 m), then a roll grows (0.066 rad at 1.5 s) and the block
 /// sinks: mean draft over 1.5–2 s +16 %, largest speed 0.16 m/s
-/// (9.5·10⁻² √(gH)). The block's initial vertical acceleration is
-/// −4.4 m/s² (the consistent initial acceleration does not balance it).
+/// (9.5·10⁻² √(gH)).
 #[test]
 #[ignore = "known gap: a roll grows after 1.2 s and the mean draft over 1.5-2 s is +16 % (bound 2 %): cargo test --release --test floating -- --ignored --nocapture"]
 fn a_block_half_as_dense_as_water_floats_at_half_its_height() {
@@ -111,7 +110,9 @@ fn a_block_half_as_dense_as_water_floats_at_half_its_height() {
         .map(|&i| sim.particles().a()[i][1])
         .sum::<f64>()
         / block.len() as f64;
-    println!("initial vertical acceleration of the block {a0:.3e} m/s²");
+    // Unweighted: the stress-free block's bottom row is pushed up and its
+    // interior falls at the start; not the net force.
+    println!("mean initial vertical acceleration of the block's particles {a0:.3e} m/s²");
     while sim.time() < sim.end_time() - 1e-12 {
         sim.step().unwrap();
         if sim.time() >= next {
