@@ -71,6 +71,7 @@ pub struct Hypoelastic {
     density: f64,
     lambda: f64,
     mu: f64,
+    plane_stress: bool,
 }
 
 impl Hypoelastic {
@@ -133,6 +134,7 @@ impl Hypoelastic {
             density,
             lambda,
             mu,
+            plane_stress: false,
         };
         // The coefficients the solver uses must not overflow.
         check(
@@ -143,6 +145,37 @@ impl Hypoelastic {
         )?;
         check_wave_speed(solid.wave_speed())?;
         Ok(solid)
+    }
+
+    /// A 2D solid in *plane stress* (a thin strip free to thin out of its
+    /// plane, `σ_zz = 0`) instead of plane strain (the default, `ε_zz = 0`,
+    /// an infinitely deep body): the in-plane law takes the Lamé constant
+    /// `λ* = 2 λ μ / (λ + 2 μ) = E ν / (1 − ν²)`, and `σ_zz` stays zero.
+    /// In 3D the setting does not apply (refuse it upstream); the
+    /// accessors ([`Hypoelastic::lame_lambda`], [`Hypoelastic::young_modulus`]…)
+    /// then report the in-plane constants.
+    ///
+    /// ```
+    /// use pfem_constitutive::Hypoelastic;
+    /// let strain = Hypoelastic::new(1100.0, 12e6, 0.4)?;
+    /// let stress = Hypoelastic::plane_stress(1100.0, 12e6, 0.4)?;
+    /// // E ν / (1 − ν²) against E ν / ((1 + ν)(1 − 2ν)).
+    /// assert!((stress.lame_lambda() - 12e6 * 0.4 / (1.0 - 0.16)).abs() < 1e-6);
+    /// assert!(stress.lame_lambda() < strain.lame_lambda());
+    /// assert!(stress.is_plane_stress() && !strain.is_plane_stress());
+    /// # Ok::<(), pfem_constitutive::MaterialError>(())
+    /// ```
+    pub fn plane_stress(density: f64, young: f64, poisson: f64) -> Result<Self, MaterialError> {
+        let s = Self::new(density, young, poisson)?;
+        let lambda = 2.0 * s.lambda * s.mu / (s.lambda + 2.0 * s.mu);
+        let mut out = Self::from_lame(density, lambda, s.mu)?;
+        out.plane_stress = true;
+        Ok(out)
+    }
+
+    /// Whether this is a 2D plane-stress solid ([`Hypoelastic::plane_stress`]).
+    pub fn is_plane_stress(&self) -> bool {
+        self.plane_stress
     }
 
     /// First Lamé parameter `λ_h` (Pa).
@@ -269,7 +302,9 @@ impl Hypoelastic {
             + pm * de * pm * (2.0 * self.mu))
             / kin.j;
         let sigma = (a + a.transpose()) * 0.5;
-        let sigma_zz = if D == 2 {
+        let sigma_zz = if D == 2 && self.plane_stress {
+            0.0
+        } else if D == 2 {
             (history.stress_zz + self.lambda * tr) / kin.j
         } else {
             0.0
@@ -584,5 +619,25 @@ mod tests {
         }
         // Negative λ is fine while the bulk modulus stays positive (ν < 0).
         assert!(Hypoelastic::from_lame(1e3, -0.5e6, 1e6).is_ok());
+    }
+
+    /// Plane stress: a uniaxial in-plane stretch with the in-plane Poisson
+    /// contraction `−ν ε` leaves `σ_yy = 0` and gives `σ_xx = E ε`,
+    /// `σ_zz = 0`; the same stretch in plane strain does not.
+    #[test]
+    fn plane_stress_is_uniaxial_in_its_plane() {
+        let (e, nu, eps) = (12e6, 0.4, 1e-7);
+        let mut kin = Kinematics::<2>::at_rest(1e-3);
+        kin.f = Tensor::<2>::new(1.0 + eps, 0.0, 0.0, 1.0 - nu * eps);
+        kin.j = kin.f.determinant();
+        let stress = Hypoelastic::plane_stress(1000.0, e, nu).unwrap();
+        let (s, szz) = stress.stress_after(&kin, &History::default());
+        assert!((s[(0, 0)] / (e * eps) - 1.0).abs() < 1e-5, "{}", s[(0, 0)]);
+        assert!(s[(1, 1)].abs() < 1e-5 * e * eps, "{}", s[(1, 1)]);
+        assert_eq!(szz, 0.0);
+        let strain = Hypoelastic::new(1000.0, e, nu).unwrap();
+        let (s, szz) = strain.stress_after(&kin, &History::default());
+        assert!(s[(1, 1)].abs() > 0.1 * e * eps);
+        assert!(szz.abs() > 0.1 * e * eps);
     }
 }

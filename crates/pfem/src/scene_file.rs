@@ -71,7 +71,7 @@
 //! | `spacing` | default particle spacing of every body (m) |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }`, `table = [[t, dx, dy], …]` or `rotation = { center, axis (3D), rate, amplitude, period, ramp }`, angles in rad), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
-//! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson }` (kg/m³, Pa, –) |
+//! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
 //! | `[contact]` | `stiffness` (Pa), `damping`, `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`: contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
@@ -233,6 +233,10 @@ pub enum MaterialSpec {
         young: f64,
         /// Poisson's ratio.
         poisson: f64,
+        /// 2D only: plane stress (a thin strip, `σ_zz = 0`) instead of the
+        /// default plane strain.
+        #[serde(default)]
+        plane_stress: bool,
     },
 }
 
@@ -1126,8 +1130,21 @@ impl SceneFile {
                 density,
                 young,
                 poisson,
-            } => Hypoelastic::new(density, young, poisson)
-                .map(|h| Box::new(h) as Box<dyn Material<D>>),
+                plane_stress,
+            } => {
+                if plane_stress && D != 2 {
+                    return Err(self.error(
+                        m.span(),
+                        format!("body `{body}`: `plane_stress` is a 2D assumption"),
+                    ));
+                }
+                if plane_stress {
+                    Hypoelastic::plane_stress(density, young, poisson)
+                } else {
+                    Hypoelastic::new(density, young, poisson)
+                }
+                .map(|h| Box::new(h) as Box<dyn Material<D>>)
+            }
         };
         made.map_err(|e| self.error(m.span(), format!("body `{body}`: material: {e}")))
     }

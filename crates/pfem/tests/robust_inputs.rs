@@ -441,3 +441,34 @@ fn setting_errors_name_their_line() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `plane_stress = true` on a 2D solid's material is read; in 3D it is an
+/// error naming its line (issue 16's gate option).
+#[test]
+fn plane_stress_is_a_2d_option_of_scene_files() {
+    let text = |dim: u32, coords: &str| {
+        format!(
+            "name = \"ps\"\ndimension = {dim}\nspacing = 0.01\n[[body]]\nname = \"strip\"\nkind = \"solid\"\nmaterial.hypoelastic = {{ density = 1100.0, young = 12e6, poisson = 0.4, plane_stress = true }}\ngeometry.box = {{ min = {coords}, max = {coords} }}\nclamp = {{ min = {coords}, max = {coords} }}\n"
+        )
+    };
+    let ok = pfem::scene_file::SceneFile::parse(
+        &text(2, "[0.0, 0.0]").replace("max = [0.0, 0.0] }\nclamp", "max = [0.1, 0.02] }\nclamp"),
+        "ps.toml",
+    )
+    .unwrap()
+    .build();
+    assert!(ok.is_ok(), "{:?}", ok.err());
+    let err = pfem::scene_file::SceneFile::parse(
+        &text(3, "[0.0, 0.0, 0.0]").replace(
+            "max = [0.0, 0.0, 0.0] }\nclamp",
+            "max = [0.1, 0.02, 0.02] }\nclamp",
+        ),
+        "ps.toml",
+    )
+    .unwrap()
+    .build()
+    .map(|_| ())
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("2D") && err.contains("line 7"), "{err}");
+}
