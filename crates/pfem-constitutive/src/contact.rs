@@ -189,6 +189,14 @@ mod tests {
         k
     }
 
+    fn penalty() -> ContactPenalty {
+        ContactPenalty {
+            normal_stiffness: 1e6,
+            shear_stiffness: 1e6,
+            damping: 0.0,
+        }
+    }
+
     fn layer(ratio: f64, mu: f64) -> History<2> {
         let mut h = History::<2>::default();
         h.internal[GAP_RATIO] = ratio;
@@ -199,11 +207,7 @@ mod tests {
 
     #[test]
     fn the_gap_closing_gives_the_penalty_pressure_and_opening_none() {
-        let m = ContactPenalty {
-            normal_stiffness: 1e6,
-            shear_stiffness: 1e6,
-            damping: 0.0,
-        };
+        let m = penalty();
         // Compressed by 1 % along n: p = K (1 − 0.99).
         let h = layer(1.0, 0.0);
         let s = m.state(&kin(Tensor::<2>::new(1.0, 0.0, 0.0, 0.99)), &h);
@@ -217,11 +221,7 @@ mod tests {
 
     #[test]
     fn shear_sticks_below_coulomb_and_slips_on_it() {
-        let m = ContactPenalty {
-            normal_stiffness: 1e6,
-            shear_stiffness: 1e6,
-            damping: 0.0,
-        };
+        let m = penalty();
         // p = 1e4 Pa; a shear F_xy = 1e-3 gives τ ≈ G γ = 1e3 Pa < μ p.
         let h = layer(1.0, 0.5);
         let f = Tensor::<2>::new(1.0, 1e-3, 0.0, 0.99);

@@ -338,20 +338,11 @@ where
             contact_stiffness,
             contact_damping,
         } = built;
+        let can_touch = cloud.solid_can_touch();
         let particles = Particles::from_cloud(cloud);
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);
         let has_solid = particles.kind().contains(&ParticleKind::Solid);
-        let n_solids = (0..body_names.len())
-            .filter(|&b| {
-                particles
-                    .kind()
-                    .iter()
-                    .zip(particles.body())
-                    .any(|(k, &pb)| pb as usize == b && *k == ParticleKind::Solid)
-            })
-            .count();
-        let has_wall = particles.kind().contains(&ParticleKind::Wall);
-        let contact = free_solids.iter().any(|&f| f) && (has_wall || n_solids >= 2);
+        let contact = free_solids.iter().any(|&f| f) && can_touch;
         let stages = Stages {
             remesh: has_fluid || contact,
             pressure: has_fluid,

@@ -83,6 +83,23 @@ where
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
     }
+    /// Whether a solid here has something to touch through contact: a
+    /// wall, or a second solid body.
+    pub fn solid_can_touch(&self) -> bool {
+        let mut first_solid: Option<u32> = None;
+        for (k, &b) in self.kind.iter().zip(&self.body) {
+            match k {
+                ParticleKind::Wall => return true,
+                ParticleKind::Solid => match first_solid {
+                    None => first_solid = Some(b),
+                    Some(f) if f != b => return true,
+                    Some(_) => {}
+                },
+                ParticleKind::Fluid => {}
+            }
+        }
+        false
+    }
     fn x(&self) -> &[Point<D>] {
         &self.x
     }
@@ -396,15 +413,7 @@ where
         // A solid under gravity needs a clamp, a weld, a fluid to rest in,
         // or something to rest on through contact (a wall, another solid).
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);
-        let solids = (0..body_names.len())
-            .filter(|&b| {
-                (0..n).any(|i| {
-                    particles.body()[i] == b as u32 && particles.kind()[i] == ParticleKind::Solid
-                })
-            })
-            .count();
-        let can_touch = particles.kind().contains(&ParticleKind::Wall) || solids >= 2;
-        if gravity.is_some_and(|g| g.norm() > 0.0) && !has_fluid && !can_touch {
+        if gravity.is_some_and(|g| g.norm() > 0.0) && !has_fluid && !particles.solid_can_touch() {
             for (bi, name) in body_names.iter().enumerate() {
                 let ids: Vec<usize> = (0..n)
                     .filter(|&i| {

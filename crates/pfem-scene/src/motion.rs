@@ -38,11 +38,17 @@ where
     Const<D>: Dim,
 {
     fn factor(&self, t: f64) -> (f64, f64) {
-        if self.ramp > 0.0 && t < self.ramp {
-            (t / self.ramp, 1.0 / self.ramp)
-        } else {
-            (1.0, 0.0)
-        }
+        ramp_factor(self.ramp, t)
+    }
+}
+
+/// A linear ramp from 0 to 1 over `ramp` seconds (none when 0) and its rate:
+/// `(r(t), r'(t))`.
+fn ramp_factor(ramp: f64, t: f64) -> (f64, f64) {
+    if ramp > 0.0 && t < ramp {
+        (t / ramp, 1.0 / ramp)
+    } else {
+        (1.0, 0.0)
     }
 }
 
@@ -217,11 +223,7 @@ where
         let mut dth = self.rate;
         if self.amplitude != 0.0 {
             let w = 2.0 * std::f64::consts::PI / self.period;
-            let (r, dr) = if self.ramp > 0.0 && t < self.ramp {
-                (t / self.ramp, 1.0 / self.ramp)
-            } else {
-                (1.0, 0.0)
-            };
+            let (r, dr) = ramp_factor(self.ramp, t);
             th += self.amplitude * r * (w * t).sin();
             dth += self.amplitude * (r * w * (w * t).cos() + dr * (w * t).sin());
         }

@@ -730,12 +730,12 @@ where
                 // by `solid_mesh` (Delaunay of its particles + alpha shape).
                 // A free solid touching a wall or another solid rests on it
                 // through contact.
-                let touches_wall = self.bodies.iter().any(|w| {
+                let touches = self.bodies.iter().any(|w| {
                     !std::ptr::eq(w, b)
                         && matches!(w.kind, ParticleKind::Wall | ParticleKind::Solid)
                         && boxes_touch(&b.geometry, &w.geometry, b.spacing.min(w.spacing))
                 });
-                let supported = !b.clamps.is_empty() || touches_wall || self.gravity.is_none();
+                let supported = !b.clamps.is_empty() || touches || self.gravity.is_none();
                 let floating = self.bodies.iter().any(|o| o.kind == ParticleKind::Fluid);
                 if !supported && !floating {
                     return Err(SceneError::Unsupported {

@@ -27,9 +27,14 @@ where
     pub facets: Vec<u32>,
 }
 
-impl ClosedSurface<2> {
-    /// The closed polygon through `points` (the last joined to the first).
-    pub fn polygon(points: Vec<Point<2>>) -> Self {
+impl<const D: usize> ClosedSurface<D>
+where
+    Const<D>: Dim,
+{
+    /// The closed polygon through `points` (the last joined to the first):
+    /// a boundary of segments, for `D = 2` ([`Self::check`] refuses it in
+    /// 3D, where facets are triangles).
+    pub fn polygon(points: Vec<Point<D>>) -> Self {
         let n = points.len() as u32;
         let facets = (0..n).flat_map(|i| [i, (i + 1) % n.max(1)]).collect();
         Self {

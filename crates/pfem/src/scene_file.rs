@@ -1054,11 +1054,7 @@ impl SceneFile {
                 for p in ps {
                     vertices.push(Point::from(self.vector::<D>(p, &what("polygon"))?));
                 }
-                let n = vertices.len() as u32;
-                Geometry::Surface(pfem_scene::surface::ClosedSurface {
-                    vertices,
-                    facets: (0..n).flat_map(|i| [i, (i + 1) % n.max(1)]).collect(),
-                })
+                Geometry::Surface(pfem_scene::surface::ClosedSurface::polygon(vertices))
             }
             GeometrySpec::Stl(stl) => {
                 if D != 3 {
