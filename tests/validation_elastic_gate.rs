@@ -1,14 +1,29 @@
-//! Coarse release-mode version of the elastic-gate validation (Antoci,
-//! Gallati & Sibilla 2007). Run with `cargo test --release`.
+//! Release-mode elastic-gate validation (Antoci, Gallati & Sibilla 2007),
+//! with the published E = 12 MPa, ν = 0.4. Run with `cargo test --release
+//! --test validation_elastic_gate` (the refinement and the timing gap:
+//! `-- --ignored`).
 //!
-//! Water at h = 0.005 m (the example uses 0.0025 m), gate at 0.00125 m (four
-//! linear triangles through its thickness, as in the example), to
-//! t = 0.2 s, which holds the measured peak (0.162 s). The bounds
-//! are kept: peak horizontal tip displacement within 15 % and its time
-//! within 0.03 s. Measured: 42.7 mm at 0.122 s against 46.0 mm at 0.162 s
-//! (−7.3 %, 0.04 s early). The amplitude holds; the time does not (the
-//! simulated peak comes 0.04–0.06 s early at every resolution tried), so
-//! that assertion is a separate, ignored test that documents the gap.
+//! The gate is a 2D solid, so the 2D assumption is a modelling choice:
+//! plane stress (a thin strip, `σ_zz = 0`; the case's default) or plane
+//! strain (`ε_zz = 0`, 19 % stiffer in bending at ν = 0.4). The static tip
+//! deflection of a linear cantilever under the initial water load is 45–46
+//! mm in plane stress and 38 mm in plane strain, against the measured peak
+//! of 46.0 mm at 0.162 s.
+//!
+//! Measured (water h, gate spacing; to 0.2–0.25 s):
+//!
+//! | water h | gate h | plane stress | plane strain |
+//! |---|---|---|---|
+//! | 0.005 m | 1.25 mm | 47.40 mm at 0.127 s (+3.0 %) | 46.51 mm at 0.128 s (+1.1 %) |
+//! | 0.0025 m | 0.625 mm | 42.97 mm at 0.109 s (−6.6 %) | |
+//! | 0.0025 m | 1.25 mm | 41.70 mm at 0.103 s (−9.4 %) | 39.05 mm at 0.096 s (−15.1 %) |
+//!
+//! Refining water and gate together (h → h/2) moves the plane-stress peak
+//! by −9.3 %. The gate's free end sits one water spacing above the floor,
+//! so refining the water also narrows the gap under the gate. The peak
+//! comes 0.035–0.055 s before the measured one at every resolution: the
+//! known timing gap (a linear elastic gate's wet mode, about 5 Hz, puts
+//! its peak near 0.1 s), asserted by an ignored test.
 
 use pfem::cases::ElasticGate;
 use pfem::output::{parse_reference_csv, reference};
@@ -21,11 +36,14 @@ fn peak(series: &[(f64, f64)]) -> (f64, f64) {
     )
 }
 
-fn run() -> ((f64, f64), (f64, f64)) {
+/// Peak of the gate's free-end ux `(t, ux)` at water spacing `h` and gate
+/// spacing `gate_h`, to 0.2 s.
+fn run(h: f64, gate_h: f64, plane_stress: bool) -> (f64, f64) {
     let case = ElasticGate {
-        spacing: 0.005,
-        gate_spacing: 0.00125,
+        spacing: h,
+        gate_spacing: gate_h,
         end_time: 0.2,
+        plane_stress,
         ..Default::default()
     };
     let mut sim = Simulation::new(
@@ -35,37 +53,84 @@ fn run() -> ((f64, f64), (f64, f64)) {
     )
     .unwrap();
     let mut out = StandardOutput::new(
-        std::env::temp_dir().join("pfem-test-gate"),
+        std::env::temp_dir().join(format!(
+            "pfem-test-gate-{h}-{gate_h}-{plane_stress}-{}",
+            std::process::id()
+        )),
         false,
         case.probes(),
         true,
     )
     .overwrite(true);
     sim.run(&mut [&mut out]).unwrap();
-    let sim_peak = peak(&out.probe_series("ux_tip"));
-    let exp_peak = peak(&parse_reference_csv(reference::ANTOCI_2007_GATE_UX).unwrap());
+    let p = peak(&out.probe_series("ux_tip"));
     eprintln!(
-        "coarse gate: peak ux {:.2} mm at {:.3} s, experiment {:.2} mm at {:.3} s",
-        1e3 * sim_peak.1,
-        sim_peak.0,
-        1e3 * exp_peak.1,
-        exp_peak.0
+        "gate (water h = {h} m, gate h = {gate_h} m, {}): peak ux {:.2} mm at {:.3} s",
+        if plane_stress {
+            "plane stress"
+        } else {
+            "plane strain"
+        },
+        1e3 * p.1,
+        p.0
     );
-    (sim_peak, exp_peak)
+    p
+}
+
+fn measured_peak() -> (f64, f64) {
+    let p = peak(&parse_reference_csv(reference::ANTOCI_2007_GATE_UX).unwrap());
+    assert!((p.1 - 0.046).abs() < 0.001, "the measured peak is 46 mm");
+    p
 }
 
 #[test]
-fn gate_peak_displacement_within_fifteen_percent_at_coarse_resolution() {
-    let ((_, ux), (_, ux_exp)) = run();
-    let err = (ux / ux_exp - 1.0).abs();
-    assert!(err < 0.15, "peak ux error {err}");
+fn plane_stress_gate_peaks_within_ten_percent_of_the_measured_46_mm() {
+    let (_, ux_exp) = measured_peak();
+    let (t, ux) = run(0.005, 0.00125, true);
+    let err = ux / ux_exp - 1.0;
+    assert!(err.abs() < 0.10, "plane stress: peak ux error {err}");
+    assert!(
+        (0.08..=0.20).contains(&t),
+        "plane stress: peak at {t} s, outside 0.08–0.20 s"
+    );
+    // The plane-strain figure, reported beside it (not bounded: the
+    // assumption is the modelling choice).
+    let (ts, uxs) = run(0.005, 0.00125, false);
+    eprintln!(
+        "plane stress {:+.1} % at {t:.3} s; plane strain {:+.1} % at {ts:.3} s (measured {:.2} mm)",
+        100.0 * err,
+        100.0 * (uxs / ux_exp - 1.0),
+        1e3 * ux_exp
+    );
+    assert!(uxs.is_finite() && uxs > 0.0);
 }
 
-/// `cargo test --release --test validation_elastic_gate -- --ignored`
+/// `cargo test --release --test validation_elastic_gate -- --ignored refinement`
+/// (about 2 minutes).
 #[test]
-#[ignore = "known gap: the simulated peak comes about 0.05 s before the measured one (bound 0.03 s)"]
+#[ignore = "long: the h/2 run takes about 100 s"]
+fn refinement_from_h_to_half_h_moves_the_peak_by_less_than_ten_percent() {
+    let (_, ux_exp) = measured_peak();
+    let (_, coarse) = run(0.005, 0.00125, true);
+    let (t, fine) = run(0.0025, 0.000625, true);
+    let change = fine / coarse - 1.0;
+    eprintln!(
+        "refinement h → h/2: {:.2} → {:.2} mm ({:+.1} %)",
+        1e3 * coarse,
+        1e3 * fine,
+        100.0 * change
+    );
+    assert!(change.abs() < 0.10, "refinement moves the peak by {change}");
+    assert!((fine / ux_exp - 1.0).abs() < 0.10, "h/2 peak {fine}");
+    assert!((0.08..=0.20).contains(&t), "h/2 peak at {t} s");
+}
+
+/// `cargo test --release --test validation_elastic_gate -- --ignored peak_time`
+#[test]
+#[ignore = "known gap: the simulated peak comes 0.035–0.055 s before the measured one (bound 0.03 s)"]
 fn gate_peak_time_within_three_hundredths_of_a_second() {
-    let ((t, _), (t_exp, _)) = run();
+    let (t_exp, _) = measured_peak();
+    let (t, _) = run(0.005, 0.00125, true);
     assert!(
         (t - t_exp).abs() < 0.03,
         "peak at {t} s, measured {t_exp} s"

@@ -315,7 +315,7 @@ impl ColumnOnCylinder3d {
         let mut s = self.column.scene();
         s.name = "column_on_cylinder_3d".into();
         let base = self.base();
-        let cyl = solid_material("cylinder", self.density, self.young, self.poisson)?;
+        let cyl = solid_material("cylinder", self.density, self.young, self.poisson, false)?;
         Ok(s.solid(
             "cylinder",
             Box::new(cyl),

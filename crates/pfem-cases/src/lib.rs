@@ -5,10 +5,13 @@
 //!   al.), dam break on an obstacle, hydrostatic column, open tank at rest;
 //! - [`cases3d`]: 3D water column, column on a cylinder, quasi-2D slab,
 //!   3D tank at rest;
+//! - [`exact`]: cases with exact references for convergence studies
+//!   (start-up Poiseuille flow, a standing wave, the CSM cantilever);
 //! - [`fidelity`]: the draft/standard/fine presets.
 
 pub mod cases;
 pub mod cases3d;
+pub mod exact;
 pub mod fidelity;
 
 // The paths the cases' code uses.

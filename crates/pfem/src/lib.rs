@@ -29,7 +29,7 @@
 pub mod cli;
 pub mod scene_file;
 
-pub use pfem_cases::{cases, cases3d, fidelity};
+pub use pfem_cases::{cases, cases3d, exact, fidelity};
 pub use pfem_driver::{checkpoint, elements, error, particles, simulation};
 
 /// Hooks: the seam ([`Hook`], [`HookContext`]) and the driver's own

@@ -1,0 +1,731 @@
+//! Cases with exact references, for convergence studies (issue 16): each
+//! has a closed-form solution and a measure of the error against it that
+//! falls with resolution.
+//!
+//! - [`StartupPoiseuille`]: viscous flow between two plates started from
+//!   rest by a body force along the channel, against the series solution;
+//! - [`StandingWave`]: the first sloshing mode of a tank, its frequency
+//!   against linear theory;
+//! - [`Cantilever`]: the Turek–Hron CSM beam, its static tip deflection
+//!   and its first free-vibration frequency against Timoshenko beam theory;
+//! - water at rest: [`crate::cases::RestTank`] and
+//!   [`crate::cases::rest_figures`] (the method is exact there: see
+//!   `docs/accuracy-cost.md`).
+//!
+//! Each case sets its time step with its spacing (`max_dt ∝ h`), so a
+//! spacing sweep refines space and time together.
+
+use std::f64::consts::PI;
+
+use pfem_constitutive::Newtonian;
+use pfem_core::{ParticleKind, Point, Vector};
+
+use crate::cases::{solid_material, G};
+use crate::error::SceneError;
+use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
+use crate::simulation::Simulation;
+
+/// Start-up of plane Poiseuille flow: fluid between two no-slip plates
+/// `y = 0` and `y = width`, at rest at `t = 0`, driven by a body force
+/// `forcing` along `x`. The channel's fluid is `length` long with free ends
+/// (no gravity across the channel, so no pressure away from the ends);
+/// the plates extend half a length beyond each end.
+///
+/// Exact velocity (Batchelor 1967 §4.3; the sine series of the steady
+/// parabola times its decay), with `ν = μ/ρ`:
+///
+/// `u(y, t) = Σ_{n odd} 4 f H² / (ν π³ n³) · sin(nπy/H) · (1 − e^{−n²π²νt/H²})`.
+///
+/// The error ([`StartupPoiseuille::profile_error`]) is the RMS of `u − u_exact`
+/// over the fluid particles that started within half a width of the
+/// channel's middle, two widths from either end (where the ends' own flow
+/// has decayed as `e^{−π x/H}` below 10⁻²·⁷), relative to the exact
+/// centre-line speed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartupPoiseuille {
+    /// Channel width `H` (m), default 0.1.
+    pub width: f64,
+    /// Length of fluid (m), default 4 `H`.
+    pub length: f64,
+    /// Density (kg/m³), default 1000.
+    pub density: f64,
+    /// Dynamic viscosity (Pa·s), default 10 (`ν = 0.01` m²/s, so the
+    /// diffusion time `H²/ν` is 1 s).
+    pub viscosity: f64,
+    /// Body force along the channel (m/s²), default 1.
+    pub forcing: f64,
+    /// Cells across the width (`h = H / cells`), default 8.
+    pub cells: usize,
+    /// Time steps over the run at 8 cells, default 20; the step scales
+    /// with the spacing.
+    pub steps_at_8: usize,
+    /// End time (s), default 0.2 (`ν t / H² = 0.2`: the profile still
+    /// developing).
+    pub end_time: f64,
+}
+
+impl Default for StartupPoiseuille {
+    fn default() -> Self {
+        Self {
+            width: 0.1,
+            length: 0.4,
+            density: 1000.0,
+            viscosity: 10.0,
+            forcing: 1.0,
+            cells: 8,
+            steps_at_8: 20,
+            end_time: 0.2,
+        }
+    }
+}
+
+impl StartupPoiseuille {
+    /// Particle spacing (m).
+    pub fn spacing(&self) -> f64 {
+        self.width / self.cells as f64
+    }
+
+    /// Largest time step (s): `end_time / steps_at_8` at 8 cells, ∝ `h`.
+    pub fn max_dt(&self) -> f64 {
+        self.end_time / self.steps_at_8 as f64 * 8.0 / self.cells as f64
+    }
+
+    /// The scene (water's bulk modulus, the given density and viscosity).
+    pub fn scene(&self) -> Result<Scene<2>, SceneError> {
+        let (h, w, l) = (self.spacing(), self.width, self.length);
+        let fluid = Newtonian::new(
+            self.density,
+            self.viscosity,
+            Newtonian::water().bulk_modulus(),
+        )
+        .map_err(|source| SceneError::InvalidMaterial {
+            body: "fluid".into(),
+            source,
+        })?;
+        // Plates from half a length before to half a length after the
+        // fluid, on the same lattice (l/2 is a whole number of spacings
+        // when `length` is).
+        let x0 = -(0.5 * l / h).round() * h;
+        let x1 = l - x0;
+        let s = Scene::<2>::new("startup_poiseuille_2d")
+            .gravity(Vector::<2>::new(self.forcing, 0.0))
+            .settings(RunSettings {
+                end_time: self.end_time,
+                max_dt: self.max_dt(),
+                courant: 0.5,
+                output_interval: None,
+                alpha: 1.3,
+            })
+            .wall(
+                "bottom",
+                Geometry::Box {
+                    min: Point::<2>::new(x0, -h),
+                    max: Point::<2>::new(x1, 0.0),
+                },
+                h,
+                WallMotion::Fixed,
+            )
+            .wall(
+                "top",
+                Geometry::Box {
+                    min: Point::<2>::new(x0, w),
+                    max: Point::<2>::new(x1, w + h),
+                },
+                h,
+                WallMotion::Fixed,
+            );
+        Ok(s.fluid(
+            "fluid",
+            Box::new(fluid),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(l, w),
+            },
+            h,
+        ))
+    }
+
+    /// Exact velocity along the channel at height `y` and time `t` (m/s).
+    pub fn exact(&self, y: f64, t: f64) -> f64 {
+        let nu = self.viscosity / self.density;
+        let hh = self.width;
+        let mut u = 0.0;
+        for k in 0..200 {
+            let n = (2 * k + 1) as f64;
+            let decay = (-(n * PI / hh).powi(2) * nu * t).exp();
+            u += 4.0 * self.forcing * hh * hh / (nu * PI.powi(3) * n.powi(3))
+                * (n * PI * y / hh).sin()
+                * (1.0 - decay);
+        }
+        u
+    }
+
+    /// RMS error of the velocity along the channel over the middle section
+    /// (fluid particles that started within `H/2` of `x = length/2`),
+    /// relative to the exact centre-line speed at the simulation's time.
+    pub fn profile_error(&self, sim: &Simulation<2>) -> f64 {
+        let t = sim.time();
+        let mid = 0.5 * self.length;
+        let (mut e2, mut n) = (0.0, 0usize);
+        for i in 0..sim.particles().len() {
+            if sim.particles().kind()[i] != ParticleKind::Fluid
+                || (sim.initial_position(i).x - mid).abs() > 0.5 * self.width + 1e-12
+            {
+                continue;
+            }
+            let x = sim.particles().x()[i];
+            let v = sim.particles().v()[i];
+            e2 += (v.x - self.exact(x.y, t)).powi(2) + v.y * v.y;
+            n += 1;
+        }
+        let centre = self.exact(0.5 * self.width, t);
+        if n == 0 || centre == 0.0 {
+            return f64::NAN;
+        }
+        (e2 / n as f64).sqrt() / centre
+    }
+}
+
+/// The first sloshing mode of a tank `length` wide holding water `depth`
+/// deep (no-slip walls on three sides, open top), started at `t = 0` with a
+/// flat surface and the mode's potential-flow velocity, so that the surface
+/// elevation is `η(x, t) = a cos(kx) sin(ωt)` with `k = π / length` and
+/// linear theory's frequency `ω² = g k tanh(k · depth)` (Lamb 1932 §227).
+///
+/// [`StandingWave::mode_amplitude`] projects the surface particles'
+/// elevation on `cos(kx)`; [`StandingWave::frequency`] reads `ω` from its
+/// zero crossings. The error is `|ω / ω_exact − 1|`. Linear elements and
+/// a second-order time scheme with the step ∝ `h` should give second
+/// order; the no-slip side walls, which hold the velocity at zero where the
+/// mode's vertical velocity is largest, add an `O(h)` part that would show
+/// at fine resolutions (measured: order 2.1 from 10 to 40 cells,
+/// `tests/convergence.rs`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StandingWave {
+    /// Tank width (m), default 1.
+    pub length: f64,
+    /// Water depth (m), default 0.5.
+    pub depth: f64,
+    /// Surface amplitude `a` (m), default 0.005 (`k a = 0.016`: the
+    /// nonlinear frequency shift is `O((ka)²)`, about 10⁻⁴).
+    pub amplitude: f64,
+    /// Cells across the width (`h = length / cells`), default 20.
+    pub cells: usize,
+    /// Time steps per period at 20 cells, default 40; the step scales with
+    /// the spacing.
+    pub steps_per_period_at_20: usize,
+    /// Run length in periods, default 1.25 (two zero crossings after the
+    /// start's).
+    pub periods: f64,
+}
+
+impl Default for StandingWave {
+    fn default() -> Self {
+        Self {
+            length: 1.0,
+            depth: 0.5,
+            amplitude: 0.005,
+            cells: 20,
+            steps_per_period_at_20: 40,
+            periods: 1.25,
+        }
+    }
+}
+
+impl StandingWave {
+    /// Wave number `k = π / length` (1/m).
+    pub fn wave_number(&self) -> f64 {
+        PI / self.length
+    }
+
+    /// Linear theory's angular frequency (rad/s).
+    pub fn omega(&self) -> f64 {
+        let k = self.wave_number();
+        (G * k * (k * self.depth).tanh()).sqrt()
+    }
+
+    /// Period of linear theory (s).
+    pub fn period(&self) -> f64 {
+        2.0 * PI / self.omega()
+    }
+
+    /// Particle spacing (m).
+    pub fn spacing(&self) -> f64 {
+        self.length / self.cells as f64
+    }
+
+    /// The scene (water, walls on three sides up to 1.2 × depth).
+    pub fn scene(&self) -> Scene<2> {
+        let h = self.spacing();
+        let dt = self.period() / self.steps_per_period_at_20 as f64 * 20.0 / self.cells as f64;
+        let t_end = self.periods * self.period();
+        let top = 1.2 * self.depth;
+        let s = Scene::<2>::new("standing_wave_2d")
+            .gravity(Vector::<2>::new(0.0, -G))
+            .settings(RunSettings {
+                end_time: t_end,
+                max_dt: dt,
+                courant: 0.5,
+                output_interval: None,
+                alpha: 1.3,
+            });
+        crate::cases::tank(
+            s,
+            0.0,
+            self.length,
+            &[(0.0, -1.0, top), (self.length, 1.0, top)],
+            h,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(self.length, self.depth),
+            },
+            h,
+        )
+    }
+
+    /// Sets the fluid particles' velocity to the mode's at `t = 0`
+    /// (`u = −aω cosh(ky)/sinh(kH) sin(kx)`, `v = aω sinh(ky)/sinh(kH)
+    /// cos(kx)`) and the accelerations to match.
+    pub fn start(&self, sim: &mut Simulation<2>) -> Result<(), pfem_driver::RunError> {
+        let (k, w, a, hh) = (self.wave_number(), self.omega(), self.amplitude, self.depth);
+        let n = sim.particles().len();
+        for i in 0..n {
+            if sim.particles().kind()[i] != ParticleKind::Fluid {
+                continue;
+            }
+            let x = sim.particles().x()[i];
+            let c = a * w / (k * hh).sinh();
+            sim.particles_mut().v_mut()[i] = Vector::<2>::new(
+                -c * (k * x.y).cosh() * (k * x.x).sin(),
+                c * (k * x.y).sinh() * (k * x.x).cos(),
+            );
+        }
+        sim.initialize_acceleration()
+    }
+
+    /// The mode's amplitude now (m): the surface particles' (those that
+    /// started at `y = depth`) elevation projected on `cos(kx)`,
+    /// `Σ η_i cos(k x_i) / Σ cos²(k x_i)`.
+    pub fn mode_amplitude(&self, sim: &Simulation<2>) -> f64 {
+        let k = self.wave_number();
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..sim.particles().len() {
+            if sim.particles().kind()[i] != ParticleKind::Fluid
+                || (sim.initial_position(i).y - self.depth).abs() > 1e-9
+            {
+                continue;
+            }
+            let x = sim.particles().x()[i];
+            let c = (k * sim.initial_position(i).x).cos();
+            num += (x.y - self.depth) * c;
+            den += c * c;
+        }
+        if den > 0.0 {
+            num / den
+        } else {
+            f64::NAN
+        }
+    }
+
+    /// Angular frequency (rad/s) read from a series of
+    /// [`StandingWave::mode_amplitude`]: `π` over the mean spacing of its
+    /// zero crossings after `t = 0` (linearly interpolated), or `NaN` with
+    /// fewer than two.
+    pub fn frequency(series: &[(f64, f64)]) -> f64 {
+        let mut crossings = Vec::new();
+        for w in series.windows(2) {
+            let ((t0, y0), (t1, y1)) = (w[0], w[1]);
+            if t0 > 0.0 && y0 != 0.0 && y0.signum() != y1.signum() {
+                crossings.push(t0 + (t1 - t0) * y0 / (y0 - y1));
+            }
+        }
+        if crossings.len() < 2 {
+            return f64::NAN;
+        }
+        let span = crossings[crossings.len() - 1] - crossings[0];
+        PI * (crossings.len() - 1) as f64 / span
+    }
+}
+
+/// The Turek–Hron CSM beam (Turek & Hron 2006): `length` 0.35 m,
+/// `thickness` 0.02 m, `ρ` = 1000 kg/m³, ν = 0.4, E = 5.6 MPa (CSM2),
+/// clamped at `x = 0`, under gravity `gravity` = 2 m/s² along `−y`.
+///
+/// References (Timoshenko beam theory with the shear coefficient
+/// `κ = 5/6`; `E' = E/(1−ν²)` in plane strain, `E` in plane stress;
+/// `q = ρ g t`, `I = t³/12`, `A = t`, `G = E/(2(1+ν))`):
+/// - static tip deflection `δ = q L⁴/(8 E' I) + q L²/(2 κ G A)`: 16.95 mm
+///   for CSM2 in plane strain, against Turek & Hron's nonlinear 16.97 mm;
+/// - first bending frequency `ω₁ = β₁² √(E' I / (ρ A L⁴))`, `β₁ =
+///   1.8751`, less its shear and rotary-inertia correction to first order,
+///   `ω ≈ ω₁ (1 − ½ (β₁ r/L)² (1 + E'/(κ G)))`, `r² = I/A` (Han, Benaroya
+///   & Wei 1999): a 0.3 % correction here.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cantilever {
+    /// Length (m).
+    pub length: f64,
+    /// Thickness (m).
+    pub thickness: f64,
+    /// Density (kg/m³).
+    pub density: f64,
+    /// Young's modulus (Pa).
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Gravity (m/s², along −y).
+    pub gravity: f64,
+    /// Plane stress (`true`) or plane strain (`false`, the default).
+    pub plane_stress: bool,
+    /// Cells through the thickness (`h = thickness / cells`), default 4.
+    pub cells: usize,
+}
+
+impl Default for Cantilever {
+    fn default() -> Self {
+        Self {
+            length: 0.35,
+            thickness: 0.02,
+            density: 1000.0,
+            young: 5.6e6,
+            poisson: 0.4,
+            gravity: 2.0,
+            plane_stress: false,
+            cells: 4,
+        }
+    }
+}
+
+impl Cantilever {
+    /// Particle spacing (m).
+    pub fn spacing(&self) -> f64 {
+        self.thickness / self.cells as f64
+    }
+
+    fn bending_modulus(&self) -> f64 {
+        if self.plane_stress {
+            self.young
+        } else {
+            self.young / (1.0 - self.poisson * self.poisson)
+        }
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        self.young / (2.0 * (1.0 + self.poisson))
+    }
+
+    /// Timoshenko's static tip deflection under the beam's weight (m,
+    /// positive down).
+    pub fn static_deflection(&self) -> f64 {
+        let (l, t) = (self.length, self.thickness);
+        let q = self.density * self.gravity * t;
+        let i = t.powi(3) / 12.0;
+        q * l.powi(4) / (8.0 * self.bending_modulus() * i)
+            + q * l * l / (2.0 * 5.0 / 6.0 * self.shear_modulus() * t)
+    }
+
+    /// First bending frequency with the first-order shear and rotary
+    /// inertia correction (rad/s).
+    pub fn omega(&self) -> f64 {
+        let (l, t) = (self.length, self.thickness);
+        let beta = 1.875_104_068_711_96;
+        let i = t.powi(3) / 12.0;
+        let e = self.bending_modulus();
+        let w1 = beta * beta * (e * i / (self.density * t * l.powi(4))).sqrt();
+        let r2 = i / t;
+        w1 * (1.0
+            - 0.5 * beta * beta * r2 / (l * l) * (1.0 + e / (5.0 / 6.0 * self.shear_modulus())))
+    }
+
+    /// The scene: the beam clamped at `x = 0`, gravity switched on at
+    /// `t = 0` (so it vibrates about its static deflection), to `end_time`
+    /// with steps up to `max_dt`.
+    pub fn scene(&self, end_time: f64, max_dt: f64) -> Result<Scene<2>, SceneError> {
+        let m = solid_material(
+            "beam",
+            self.density,
+            self.young,
+            self.poisson,
+            self.plane_stress,
+        )?;
+        Ok(Scene::<2>::new("cantilever_2d")
+            .gravity(Vector::<2>::new(0.0, -self.gravity))
+            .settings(RunSettings {
+                end_time,
+                max_dt,
+                courant: 0.5,
+                output_interval: None,
+                alpha: 1.3,
+            })
+            .solid(
+                "beam",
+                Box::new(m),
+                Geometry::Box {
+                    min: Point::<2>::new(0.0, 0.0),
+                    max: Point::<2>::new(self.length, self.thickness),
+                },
+                self.spacing(),
+                Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(1e-9, 1.0))),
+            ))
+    }
+
+    /// The particle at the free end's mid-thickness.
+    pub fn tip(&self, sim: &Simulation<2>) -> usize {
+        let target = Point::<2>::new(self.length, 0.5 * self.thickness);
+        (0..sim.particles().len())
+            .min_by(|&a, &b| {
+                (sim.initial_position(a) - target)
+                    .norm()
+                    .total_cmp(&(sim.initial_position(b) - target).norm())
+            })
+            .unwrap_or(0)
+    }
+}
+
+/// A finished run of an exact-reference case.
+pub struct ExactRun {
+    /// Relative error against the exact reference.
+    pub error: f64,
+    /// The case's second figure: the measured frequency (rad/s) for
+    /// [`StandingWave`] and the vibrating [`Cantilever`], the tip deflection
+    /// (m) for the static one, the centre-line speed (m/s) for
+    /// [`StartupPoiseuille`].
+    pub value: f64,
+    /// Wall time of the run (s).
+    pub wall: f64,
+    /// The simulation at its end (statistics, steps, rejected steps).
+    pub sim: Simulation<2>,
+}
+
+/// Errors of an exact-reference run: the scene or the run.
+pub type CaseError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Records `(t, f(sim))` at the start and after every step.
+struct Series<F: Fn(&Simulation<2>) -> f64> {
+    f: F,
+    data: Vec<(f64, f64)>,
+}
+
+impl<F: Fn(&Simulation<2>) -> f64> crate::simulation::Observer<2> for Series<F> {
+    fn start(&mut self, sim: &Simulation<2>) -> Result<(), pfem_driver::RunError> {
+        self.data.push((sim.time(), (self.f)(sim)));
+        Ok(())
+    }
+    fn step(&mut self, sim: &Simulation<2>) -> Result<(), pfem_driver::RunError> {
+        self.data.push((sim.time(), (self.f)(sim)));
+        Ok(())
+    }
+}
+
+/// Runs `sim` to its end, recording `f`; the series and the wall time.
+fn run_series(
+    sim: &mut Simulation<2>,
+    f: impl Fn(&Simulation<2>) -> f64,
+) -> Result<(Vec<(f64, f64)>, f64), CaseError> {
+    let mut rec = Series {
+        f,
+        data: Vec::new(),
+    };
+    let t0 = std::time::Instant::now();
+    sim.run(&mut [&mut rec])?;
+    Ok((rec.data, t0.elapsed().as_secs_f64()))
+}
+
+fn simulation(scene: Scene<2>, params: pfem_time::StepParams) -> Result<Simulation<2>, CaseError> {
+    Ok(Simulation::new(
+        scene,
+        Box::new(pfem_geometry::Delaunay2::default()),
+        params,
+    )?)
+}
+
+impl StartupPoiseuille {
+    /// Runs the case with `params`; the error is
+    /// [`StartupPoiseuille::profile_error`] at the end time.
+    pub fn run(&self, params: pfem_time::StepParams) -> Result<ExactRun, CaseError> {
+        let mut sim = simulation(self.scene()?, params)?;
+        let (_, wall) = run_series(&mut sim, |_| 0.0)?;
+        Ok(ExactRun {
+            error: self.profile_error(&sim),
+            value: self.exact(0.5 * self.width, sim.time()),
+            wall,
+            sim,
+        })
+    }
+}
+
+impl StandingWave {
+    /// Runs the case with `params` from the mode's velocity
+    /// ([`StandingWave::start`]); the error is `|ω / ω_exact − 1|` with `ω`
+    /// from [`StandingWave::frequency`].
+    pub fn run(&self, params: pfem_time::StepParams) -> Result<ExactRun, CaseError> {
+        let mut sim = simulation(self.scene(), params)?;
+        self.start(&mut sim)?;
+        let (series, wall) = run_series(&mut sim, |s| self.mode_amplitude(s))?;
+        let w = Self::frequency(&series);
+        Ok(ExactRun {
+            error: (w / self.omega() - 1.0).abs(),
+            value: w,
+            wall,
+            sim,
+        })
+    }
+}
+
+impl Cantilever {
+    /// Quasi-static run: backward Euler (`params.scheme` is overridden)
+    /// with steps up to 5 s, 20 times the period, to t = 40 s, so that each
+    /// step is a static solve. The error is that of the tip deflection
+    /// against [`Cantilever::static_deflection`].
+    pub fn run_static(&self, params: pfem_time::StepParams) -> Result<ExactRun, CaseError> {
+        let params = pfem_time::StepParams {
+            scheme: pfem_time::Scheme::BackwardEuler,
+            ..params
+        };
+        let mut sim = simulation(self.scene(40.0, 5.0)?, params)?;
+        let tip = self.tip(&sim);
+        let y0 = sim.initial_position(tip).y;
+        let (series, wall) = run_series(&mut sim, |s| s.particles().x()[tip].y - y0)?;
+        let d = -series.last().map_or(f64::NAN, |q| q.1);
+        Ok(ExactRun {
+            error: (d / self.static_deflection() - 1.0).abs(),
+            value: d,
+            wall,
+            sim,
+        })
+    }
+
+    /// Free vibration: gravity switched on at `t = 0`, `periods` periods of
+    /// linear theory with `steps_per_period` steps each (the step also
+    /// held below the Courant limit of `params`); the frequency from the
+    /// zero crossings of the tip's deflection about the mean of its
+    /// extremes. The error is `|ω / ω_exact − 1|`.
+    pub fn run_vibration(
+        &self,
+        params: pfem_time::StepParams,
+        periods: f64,
+        steps_per_period: usize,
+    ) -> Result<ExactRun, CaseError> {
+        let period = 2.0 * PI / self.omega();
+        let mut sim = simulation(
+            self.scene(periods * period, period / steps_per_period as f64)?,
+            params,
+        )?;
+        let tip = self.tip(&sim);
+        let y0 = sim.initial_position(tip).y;
+        let (series, wall) = run_series(&mut sim, |s| s.particles().x()[tip].y - y0)?;
+        let (lo, hi) = series
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+                (a.min(q.1), b.max(q.1))
+            });
+        let mid = 0.5 * (lo + hi);
+        let centred: Vec<(f64, f64)> = series.iter().map(|&(t, y)| (t, y - mid)).collect();
+        let w = StandingWave::frequency(&centred);
+        Ok(ExactRun {
+            error: (w / self.omega() - 1.0).abs(),
+            value: w,
+            wall,
+            sim,
+        })
+    }
+}
+
+/// The 2D dam break ([`crate::cases::DamBreak`], n² = 2) for a
+/// self-convergence study: no closed form exists, so the reference is a
+/// finer run of the library itself. [`DamBreakFront::run`] records the
+/// front `x/a` against `T = t √(2g/a)` up to `t_max`;
+/// [`DamBreakFront::difference`] is the RMS relative difference between two
+/// such curves at `T = 0.5, 0.6, …, t_max` (the surge is under way and the
+/// front has not reached the far wall). The front is the largest `x` of
+/// the main body's particles, so its resolution is one spacing: first
+/// order is what it can show.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DamBreakFront {
+    /// Particles across the column's width (`h = a / cells`).
+    pub cells: usize,
+    /// End of the comparison, in `T` (default 2.5).
+    pub t_max: f64,
+}
+
+impl Default for DamBreakFront {
+    fn default() -> Self {
+        Self {
+            cells: 10,
+            t_max: 2.5,
+        }
+    }
+}
+
+impl DamBreakFront {
+    /// Runs the dam break at `a / cells` with the case's Courant number
+    /// and `params` to `T = t_max`; the front curve `(T, x/a)` and the run
+    /// (its `error` NaN until compared, its `value` the front at `t_max`).
+    pub fn run(
+        &self,
+        params: pfem_time::StepParams,
+        courant: f64,
+    ) -> Result<(Vec<(f64, f64)>, ExactRun), CaseError> {
+        let mut case = crate::cases::DamBreak::default();
+        let a = case.width;
+        let t_scale = (2.0 * G / a).sqrt();
+        case.spacing = a / self.cells as f64;
+        case.end_time = self.t_max / t_scale;
+        let mut scene = case.scene();
+        scene.settings.courant = courant;
+        scene.settings.output_interval = None;
+        let mut sim = simulation(scene, params)?;
+        let (series, wall) = run_series(&mut sim, crate::cases::front_x)?;
+        let front: Vec<(f64, f64)> = series.iter().map(|&(t, x)| (t * t_scale, x / a)).collect();
+        let value = front.last().map_or(f64::NAN, |q| q.1);
+        Ok((
+            front,
+            ExactRun {
+                error: f64::NAN,
+                value,
+                wall,
+                sim,
+            },
+        ))
+    }
+
+    /// RMS relative difference of `front` against `reference` at `T = 0.5,
+    /// 0.6, …, t_max`.
+    pub fn difference(&self, front: &[(f64, f64)], reference: &[(f64, f64)]) -> f64 {
+        let n = ((self.t_max - 0.5) / 0.1).round() as usize;
+        let samples: Vec<(f64, f64)> = (0..=n)
+            .map(|k| {
+                let t = 0.5 + 0.1 * k as f64;
+                (t, crate::cases::interpolate(reference, t))
+            })
+            .collect();
+        crate::cases::rms_relative(front, &samples, 0.0, self.t_max + 1e-9)
+    }
+}
+
+/// Observed order of convergence: the least-squares slope of `log e`
+/// against `log h` over `(h, e)` pairs (`NaN` with fewer than two, or with
+/// a non-positive value).
+///
+/// ```
+/// use pfem_cases::exact::observed_order;
+/// let pts = [(0.1, 0.04), (0.05, 0.01), (0.025, 0.0025)];
+/// assert!((observed_order(&pts) - 2.0).abs() < 1e-12);
+/// ```
+pub fn observed_order(points: &[(f64, f64)]) -> f64 {
+    if points.len() < 2 || points.iter().any(|&(h, e)| !(h > 0.0 && e > 0.0)) {
+        return f64::NAN;
+    }
+    let n = points.len() as f64;
+    let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), &(h, e)| {
+        (a + h.ln() / n, b + e.ln() / n)
+    });
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), &(h, e)| {
+        let dx = h.ln() - mx;
+        (a + dx * (e.ln() - my), b + dx * dx)
+    });
+    sxy / sxx
+}
