@@ -1,31 +1,48 @@
-//! What accuracy costs in time: error against wall time for the dam break
-//! (surge front vs Martin & Moyce 1952), the elastic gate (peak free-end
-//! ux vs Antoci et al. 2007) and the Turek–Hron CSM2 cantilever
-//! (quasi-static tip deflection vs −16.97 mm).
+//! What accuracy costs in time, measured where error converges: error
+//! against wall time on cases with exact or converged references, along
+//! the particle spacing, the time step and the Picard tolerance, with the
+//! observed orders, the Pareto front of each case and the `Fidelity`
+//! presets.
 //!
 //! ```text
 //! cargo run --release --example accuracy_cost -- --out DIR [--quick]
 //! ```
 //!
-//! Around a base point per case, one parameter is varied at a time: the
-//! particle spacing (≥ 4 values), the Courant number (0.25, 0.5, 1) and the
-//! Picard tolerance (1e-6, 1e-3); the dam break also runs the three
-//! [`pfem::fidelity::Fidelity`] presets. Each run records its error, wall
-//! time, accepted and rejected steps and the wall time of each stage
-//! (`Simulation::stats`). Writes `DIR/accuracy_cost.csv`,
-//! `DIR/accuracy_cost.md` (tables, observed convergence orders, cost of
-//! halving the error) and `DIR/<case>_error_vs_time.png` (log10–log10),
-//! `DIR/convergence.png` (log10 error against log10 h).
+//! Cases (`pfem::exact`, `pfem::cases`):
+//! - `poiseuille`: start-up plane Poiseuille flow, velocity profile RMS
+//!   against the series solution (viscous flow);
+//! - `standing_wave`: first sloshing mode, frequency against linear theory
+//!   (free surface, quasi-incompressible pressure);
+//! - `cantilever_static`, `cantilever_vibration`: the CSM2 beam's tip
+//!   deflection and first frequency against Timoshenko beam theory (solid);
+//! - `water_at_rest`: hydrostatic pressure, exact to round-off (no order);
+//! - `dam_break`: the surge front against a finer run of the library (a/45;
+//!   a/32 in `--quick`): self-convergence, with the front error against
+//!   Martin & Moyce (1952) beside it;
+//! - `elastic_gate` (full study only): peak tip displacement against
+//!   Antoci et al. (2007), validation, the gate in plane stress (coupling).
 //!
-//! The gate runs end at 0.2 s (the measured peak of ux is at 0.16 s), not
-//! at the case's default 0.4 s. The full study takes about 25 minutes on
-//! 2 cores, `--quick` about 3.
+//! Around a base point per case one knob is varied at a time: the spacing
+//! (cells across the case's length scale), the time step (a factor on the
+//! case's step: the Courant number 0.5 × factor where the step is
+//! Courant-limited, the dam break and the gate; the fixed step × factor
+//! elsewhere) and the Picard tolerance; the presets run where a case has a
+//! default resolution. Writes `DIR/accuracy_cost.csv` (one row per run,
+//! with the stage times of `Simulation::stats`), `DIR/accuracy_cost.md`
+//! (tables, orders, Pareto fronts, the knob that buys accuracy cheapest,
+//! the presets on every case) and `DIR/<case>.png` (log10 error against
+//! log10 wall time: one curve per knob, the presets, the Pareto front),
+//! `DIR/convergence.png` (log10 error against log10 relative spacing).
+//! The full study takes about 10 minutes on 2 cores, `--quick` about 2.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use pfem::cases::{best_shift, front_x, DamBreak, ElasticGate, G};
+use pfem::cases::{best_shift, rest_figures, ElasticGate, RestTank};
+use pfem::exact::{
+    observed_order, Cantilever, DamBreakFront, ExactRun, StandingWave, StartupPoiseuille,
+};
 use pfem::fidelity::Fidelity;
 use pfem::output::{parse_reference_csv, plot_series_png, reference, PlotSeries, PlotSpec};
 use pfem::prelude::*;
@@ -37,13 +54,17 @@ fn main() {
     }
 }
 
-type Res<T> = Result<T, Box<dyn std::error::Error>>;
+type Res<T> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
 
-/// One parameter set of one case.
-#[derive(Clone, Copy, Debug)]
-struct Point3 {
-    spacing: f64,
-    courant: f64,
+/// One set of knobs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Knobs {
+    /// Cells across the case's length scale (spacing = scale / cells).
+    cells: f64,
+    /// Factor on the case's time step (Courant number 0.5 × step where
+    /// the step is Courant-limited).
+    step: f64,
+    /// Picard tolerance.
     tol: f64,
 }
 
@@ -52,12 +73,13 @@ struct Point3 {
 struct Record {
     case: &'static str,
     varied: String,
-    p: Point3,
-    /// Primary error (relative, dimensionless).
+    k: Knobs,
+    /// Spacing (m).
+    h: f64,
+    /// Relative error.
     error: f64,
-    /// Secondary figure (dam break: fitted time shift in T; gate: peak-time
-    /// error in s; cantilever: tip deflection in mm).
-    secondary: f64,
+    /// A second error or figure (see `Case::second`).
+    second: f64,
     wall: f64,
     steps: u64,
     rejected: u64,
@@ -66,120 +88,173 @@ struct Record {
     status: String,
 }
 
-/// Records `(t, f(sim))` after every step.
-struct Recorder {
-    f: Box<dyn Fn(&Simulation<2>) -> f64>,
-    data: Vec<(f64, f64)>,
-}
-
-impl Observer<2> for Recorder {
-    fn start(&mut self, sim: &Simulation<2>) -> Result<(), pfem::RunError> {
-        self.data.push((sim.time(), (self.f)(sim)));
-        Ok(())
-    }
-    fn step(&mut self, sim: &Simulation<2>) -> Result<(), pfem::RunError> {
-        self.data.push((sim.time(), (self.f)(sim)));
-        Ok(())
-    }
-}
-
-/// Runs `sim` with a recorder; returns the series, the wall time and the
-/// run's error (if any, as text).
-fn run_recorded(
-    sim: &mut Simulation<2>,
-    f: Box<dyn Fn(&Simulation<2>) -> f64>,
-) -> (Vec<(f64, f64)>, f64, String) {
-    let mut rec = Recorder {
-        f,
-        data: Vec::new(),
-    };
-    let t0 = Instant::now();
-    let status = match sim.run(&mut [&mut rec]) {
-        Ok(()) => "ok".to_string(),
-        Err(e) => format!("error: {e}"),
-    };
-    (rec.data, t0.elapsed().as_secs_f64(), status)
-}
-
-fn record(
-    case: &'static str,
-    varied: &str,
-    p: Point3,
-    sim: &Simulation<2>,
+/// What a case's run returns: error, second figure, spacing, the run.
+struct Outcome {
+    error: f64,
+    second: f64,
+    h: f64,
     wall: f64,
-    status: String,
-) -> Record {
-    let s = &sim.stats();
-    Record {
-        case,
-        varied: varied.to_string(),
-        p,
-        error: f64::NAN,
-        secondary: f64::NAN,
-        wall,
-        steps: sim.steps(),
-        rejected: sim.rejected(),
-        stages: [s.remesh.1, s.assemble.1, s.solve.1, s.update.1, s.observe.1],
-        status,
+    sim: Simulation<2>,
+}
+
+impl Outcome {
+    fn of(r: ExactRun, h: f64) -> Self {
+        Outcome {
+            error: r.error,
+            second: r.value,
+            h,
+            wall: r.wall,
+            sim: r.sim,
+        }
     }
 }
 
-fn params(tol: f64, scheme: Scheme) -> StepParams {
+type RunFn = Box<dyn Fn(Knobs) -> Res<Outcome>>;
+
+/// One case of the study.
+struct Case {
+    name: &'static str,
+    /// What the error is, against what.
+    error: &'static str,
+    /// What the second column is.
+    second: &'static str,
+    /// The order the method should reach here, and why.
+    expected: &'static str,
+    run: RunFn,
+    base: Knobs,
+    cells: Vec<f64>,
+    steps: Vec<f64>,
+    tols: Vec<f64>,
+    /// The case's default cells (Standard), or `None`: no presets.
+    preset_cells: Option<f64>,
+    presets: Vec<Fidelity>,
+    /// Whether an observed order is meaningful (not for an exact case).
+    has_order: bool,
+    /// Wall time spent on the case's reference run (s).
+    reference_wall: f64,
+}
+
+fn params(k: Knobs) -> StepParams {
     StepParams {
-        picard_tolerance: tol,
-        scheme,
+        picard_tolerance: k.tol,
         ..StepParams::default()
     }
 }
 
-/// Dam break, n² = 2, a = 2.25 in, to T = 3: RMS relative front error after
-/// the best time shift.
-fn dam_break(varied: &str, p: Point3) -> Res<Record> {
-    let mut case = DamBreak::default();
-    let t_scale = (2.0 * G / case.width).sqrt();
-    case.spacing = p.spacing;
-    case.end_time = 3.0 / t_scale;
-    let mut scene = case.scene();
-    scene.settings.courant = p.courant;
-    scene.settings.output_interval = None;
-    let mut sim = Simulation::new(
-        scene,
-        Box::new(Delaunay2::default()),
-        params(p.tol, Scheme::Bossak),
-    )?;
-    let (series, wall, status) = run_recorded(&mut sim, Box::new(front_x));
-    let a = case.width;
-    let front: Vec<(f64, f64)> = series.iter().map(|&(t, x)| (t * t_scale, x / a)).collect();
-    let measured = parse_reference_csv(reference::MARTIN_MOYCE_N2_2_A2_25IN_FRONT)?;
-    let (shift, rms) = best_shift(&front, &measured, 3.0, 0.5, 0.01);
-    let mut r = record("dam_break", varied, p, &sim, wall, status);
-    r.error = rms;
-    r.secondary = shift;
-    Ok(r)
+fn cells(k: Knobs) -> usize {
+    k.cells.round().max(1.0) as usize
 }
 
-/// Elastic gate to 0.2 s: relative error of the peak free-end ux and the
-/// error of its time (s) against Antoci et al. (2007).
-fn gate(varied: &str, p: Point3) -> Res<Record> {
+fn poiseuille(k: Knobs) -> Res<Outcome> {
+    let case = StartupPoiseuille {
+        cells: cells(k),
+        steps_at_8: (20.0 / k.step).round().max(1.0) as usize,
+        ..StartupPoiseuille::default()
+    };
+    Ok(Outcome::of(case.run(params(k))?, case.spacing()))
+}
+
+fn standing_wave(k: Knobs) -> Res<Outcome> {
+    let case = StandingWave {
+        cells: cells(k),
+        steps_per_period_at_20: (40.0 / k.step).round().max(1.0) as usize,
+        ..StandingWave::default()
+    };
+    Ok(Outcome::of(case.run(params(k))?, case.spacing()))
+}
+
+fn cantilever_static(k: Knobs) -> Res<Outcome> {
+    let case = Cantilever {
+        cells: cells(k),
+        ..Cantilever::default()
+    };
+    let mut r = case.run_static(params(k))?;
+    r.value *= 1e3;
+    Ok(Outcome::of(r, case.spacing()))
+}
+
+fn cantilever_vibration(k: Knobs) -> Res<Outcome> {
+    let case = Cantilever {
+        cells: cells(k),
+        ..Cantilever::default()
+    };
+    let steps = (40.0 / k.step).round().max(1.0) as usize;
+    Ok(Outcome::of(
+        case.run_vibration(params(k), 1.5, steps)?,
+        case.spacing(),
+    ))
+}
+
+fn water_at_rest(k: Knobs) -> Res<Outcome> {
+    let case = RestTank {
+        spacing: 1.0 / k.cells,
+        end_time: 0.5,
+        ..RestTank::default()
+    };
+    let mut scene = case.scene();
+    scene.settings.max_dt *= k.step;
+    let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), params(k))?;
+    let t0 = Instant::now();
+    sim.run(&mut [])?;
+    let wall = t0.elapsed().as_secs_f64();
+    let f = rest_figures(&sim, case.depth);
+    Ok(Outcome {
+        error: f.pressure_rms,
+        second: f.max_speed,
+        h: case.spacing,
+        wall,
+        sim,
+    })
+}
+
+/// The dam break against `reference` (its front curve), with the front
+/// error against Martin & Moyce (T ≤ 2.5, best shift) as second figure.
+fn dam_break(k: Knobs, reference: &[(f64, f64)]) -> Res<Outcome> {
+    let case = DamBreakFront {
+        cells: cells(k),
+        ..DamBreakFront::default()
+    };
+    let (front, r) = case.run(params(k), 0.5 * k.step)?;
+    let measured = parse_reference_csv(reference::MARTIN_MOYCE_N2_2_A2_25IN_FRONT)?;
+    let (_, experiment) = best_shift(&front, &measured, case.t_max, 0.5, 0.01);
+    let a = pfem::cases::DamBreak::default().width;
+    Ok(Outcome {
+        error: case.difference(&front, reference),
+        second: experiment,
+        h: a / cells(k) as f64,
+        wall: r.wall,
+        sim: r.sim,
+    })
+}
+
+/// The elastic gate (plane stress) to 0.2 s, water spacing 0.1 m / cells,
+/// gate spacing 1.25 mm: peak ux against Antoci et al. (2007); second
+/// figure the peak-time error (s).
+fn gate(k: Knobs) -> Res<Outcome> {
     let case = ElasticGate {
-        spacing: p.spacing,
+        spacing: 0.1 / k.cells,
         end_time: 0.2,
         ..ElasticGate::default()
     };
     let mut scene = case.scene()?;
-    scene.settings.courant = p.courant;
+    scene.settings.courant = 0.5 * k.step;
     scene.settings.output_interval = None;
-    let mut sim = Simulation::new(
-        scene,
-        Box::new(Delaunay2::default()),
-        params(p.tol, Scheme::Bossak),
-    )?;
+    let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), params(k))?;
     let probe = case
         .probes()
         .into_iter()
         .find(|q| q.name == "ux_tip")
         .ok_or("no ux_tip probe")?;
-    let (ux, wall, status) = run_recorded(&mut sim, probe.measure);
+    let mut out = Vec::new();
+    let t0 = Instant::now();
+    {
+        let mut rec = Recorder {
+            f: &*probe.measure,
+            data: &mut out,
+        };
+        sim.run(&mut [&mut rec])?;
+    }
+    let wall = t0.elapsed().as_secs_f64();
     let peak = |s: &[(f64, f64)]| {
         s.iter().copied().fold(
             (0.0, f64::NEG_INFINITY),
@@ -187,261 +262,209 @@ fn gate(varied: &str, p: Point3) -> Res<Record> {
         )
     };
     let exp = parse_reference_csv(reference::ANTOCI_2007_GATE_UX)?;
-    let exp: Vec<(f64, f64)> = exp.into_iter().filter(|q| q.0 <= 0.2).collect();
-    let (t_sim, u_sim) = peak(&ux);
+    let (t_sim, u_sim) = peak(&out);
     let (t_exp, u_exp) = peak(&exp);
-    let mut r = record("elastic_gate", varied, p, &sim, wall, status);
-    r.error = (u_sim / u_exp - 1.0).abs();
-    r.secondary = t_sim - t_exp;
-    Ok(r)
+    Ok(Outcome {
+        error: (u_sim / u_exp - 1.0).abs(),
+        second: t_sim - t_exp,
+        h: case.spacing,
+        wall,
+        sim,
+    })
 }
 
-/// CSM2 tip deflection (m).
-const CSM2_TIP: f64 = -16.97e-3;
-
-/// Turek–Hron CSM2 cantilever (L = 0.35 m, t = 0.02 m, E = 5.6 MPa,
-/// ν = 0.4, ρ = 1000 kg/m³, g = 2 m/s²), clamped at x = 0, through
-/// `Simulation`: backward Euler with steps up to 5 s (far longer than the
-/// 0.46 s period) to t = 40 s, so each step is a static solve. Error:
-/// relative error of the tip deflection at mid-thickness against CSM2.
-fn cantilever(varied: &str, p: Point3) -> Res<Record> {
-    let (l, t) = (0.35, 0.02);
-    let solid = Hypoelastic::new(1000.0, 5.6e6, 0.4)?;
-    let scene = Scene::<2>::new("cantilever")
-        .gravity(Vector::<2>::new(0.0, -2.0))
-        .settings(RunSettings {
-            end_time: 40.0,
-            max_dt: 5.0,
-            courant: p.courant,
-            output_interval: None,
-            alpha: 1.3,
-        })
-        .solid(
-            "beam",
-            Box::new(solid),
-            Geometry::Box {
-                min: Point::<2>::new(0.0, 0.0),
-                max: Point::<2>::new(l, t),
-            },
-            p.spacing,
-            Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(1e-9, 1.0))),
-        );
-    let mut sim = Simulation::new(
-        scene,
-        Box::new(Delaunay2::default()),
-        params(p.tol, Scheme::BackwardEuler),
-    )?;
-    let target = Point::<2>::new(l, 0.5 * t);
-    let tip = (0..sim.particles().len())
-        .min_by(|&a, &b| {
-            (sim.particles().x()[a] - target)
-                .norm()
-                .total_cmp(&(sim.particles().x()[b] - target).norm())
-        })
-        .ok_or("empty beam")?;
-    let y0 = sim.particles().x()[tip].y;
-    let (series, wall, status) = run_recorded(
-        &mut sim,
-        Box::new(move |s: &Simulation<2>| s.particles().x()[tip].y - y0),
-    );
-    let deflection = series.last().map_or(f64::NAN, |q| q.1);
-    let mut r = record("cantilever", varied, p, &sim, wall, status);
-    r.error = (deflection / CSM2_TIP - 1.0).abs();
-    r.secondary = 1e3 * deflection;
-    Ok(r)
+/// Records `(t, f(sim))` after every step.
+struct Recorder<'a> {
+    f: &'a dyn Fn(&Simulation<2>) -> f64,
+    data: &'a mut Vec<(f64, f64)>,
 }
 
-/// A case's sweep: base point, spacings, Courant numbers, tolerances.
-struct Sweep {
-    name: &'static str,
-    run: fn(&str, Point3) -> Res<Record>,
-    base: Point3,
-    spacings: Vec<f64>,
-    courants: Vec<f64>,
-    tols: Vec<f64>,
-    presets: Vec<Fidelity>,
-    /// The case's default spacing (for the presets).
-    default_spacing: f64,
+impl Observer<2> for Recorder<'_> {
+    fn step(&mut self, sim: &Simulation<2>) -> Result<(), pfem::RunError> {
+        self.data.push((sim.time(), (self.f)(sim)));
+        Ok(())
+    }
 }
 
-impl Sweep {
-    /// The runs: base point, then one parameter at a time (the base point is
-    /// run once and counted in every sweep).
-    fn points(&self) -> Vec<(String, Point3)> {
+const STEPS: [f64; 3] = [0.5, 1.0, 2.0];
+
+fn cases(quick: bool) -> Res<Vec<Case>> {
+    let tols = vec![1e-6, 1e-4, 1e-3];
+    let knobs = |cells: f64| Knobs {
+        cells,
+        step: 1.0,
+        tol: 1e-6,
+    };
+    let presets = if quick {
+        vec![Fidelity::Draft, Fidelity::Standard]
+    } else {
+        Fidelity::ALL.to_vec()
+    };
+    let mut v = vec![
+        Case {
+            name: "poiseuille",
+            error: "RMS of u − u_exact over the middle section / exact centre-line speed, t = 0.2 s (ν t/H² = 0.2)",
+            second: "exact centre-line speed (m/s)",
+            expected: "2: linear elements, nodal exactness of the steady part, a second-order scheme with Δt ∝ h",
+            run: Box::new(poiseuille),
+            base: knobs(8.0),
+            cells: if quick { vec![4.0, 8.0, 16.0] } else { vec![4.0, 8.0, 16.0, 32.0] },
+            steps: STEPS.to_vec(),
+            tols: tols.clone(),
+            preset_cells: Some(8.0),
+            presets: presets.clone(),
+            has_order: true,
+            reference_wall: 0.0,
+        },
+        Case {
+            name: "standing_wave",
+            error: "|ω/ω_linear − 1| of the first sloshing mode (1 m tank, 0.5 m deep, a = 5 mm)",
+            second: "ω (rad/s; linear theory 5.3166)",
+            expected: "2 (linear elements, Δt ∝ h); the no-slip side walls add an O(h) part",
+            run: Box::new(standing_wave),
+            base: knobs(20.0),
+            cells: if quick { vec![10.0, 20.0, 40.0] } else { vec![10.0, 20.0, 40.0, 80.0] },
+            steps: STEPS.to_vec(),
+            tols: tols.clone(),
+            preset_cells: Some(20.0),
+            presets: presets.clone(),
+            has_order: true,
+            reference_wall: 0.0,
+        },
+        Case {
+            name: "cantilever_static",
+            error: "|δ/δ_Timoshenko − 1| of the CSM2 tip deflection (16.95 mm), backward Euler to the static state",
+            second: "tip deflection (mm)",
+            expected: "2 in energy for linear triangles, less at coarse resolutions where they lock in bending",
+            run: Box::new(cantilever_static),
+            base: knobs(4.0),
+            cells: if quick { vec![2.0, 4.0, 8.0] } else { vec![2.0, 4.0, 8.0, 16.0, 32.0] },
+            steps: vec![],
+            tols: tols.clone(),
+            preset_cells: Some(4.0),
+            presets: presets.clone(),
+            has_order: true,
+            reference_wall: 0.0,
+        },
+        Case {
+            name: "cantilever_vibration",
+            error: "|ω/ω_Timoshenko − 1| of the CSM2 beam's first bending frequency (13.50 rad/s), 1.5 periods",
+            second: "ω (rad/s)",
+            expected: "2 (frequency error of linear triangles, locking at coarse resolutions)",
+            run: Box::new(cantilever_vibration),
+            base: knobs(4.0),
+            cells: if quick { vec![2.0, 4.0, 8.0] } else { vec![2.0, 4.0, 8.0, 16.0] },
+            steps: STEPS.to_vec(),
+            tols: tols.clone(),
+            preset_cells: Some(4.0),
+            presets: presets.clone(),
+            has_order: true,
+            reference_wall: 0.0,
+        },
+        Case {
+            name: "water_at_rest",
+            error: "RMS of p − ρg(H − y) below the surface layer / RMS of ρg(H − y), after 0.5 s (1 m tank, 0.5 m deep)",
+            second: "largest speed (√(gH))",
+            expected: "none: exact (linear pressure is in the P1 space, the lattice a discrete equilibrium)",
+            run: Box::new(water_at_rest),
+            base: knobs(20.0),
+            cells: if quick { vec![10.0, 20.0, 40.0] } else { vec![10.0, 20.0, 40.0, 80.0] },
+            steps: vec![],
+            tols: vec![],
+            preset_cells: None,
+            presets: vec![],
+            has_order: false,
+            reference_wall: 0.0,
+        },
+    ];
+    // The dam break's reference: a finer run of the library itself.
+    let ref_cells = if quick { 32 } else { 45 };
+    eprintln!("dam_break: the reference run at a/{ref_cells} …");
+    let t0 = Instant::now();
+    let (reference, _) = DamBreakFront {
+        cells: ref_cells,
+        ..DamBreakFront::default()
+    }
+    .run(StepParams::default(), 0.5)?;
+    let reference_wall = t0.elapsed().as_secs_f64();
+    eprintln!("dam_break: reference done in {reference_wall:.0} s");
+    v.push(Case {
+        name: "dam_break",
+        error: if quick {
+            "RMS relative difference of the front x/a at T = 0.5…2.5 against a run at a/32"
+        } else {
+            "RMS relative difference of the front x/a at T = 0.5…2.5 against a run at a/45"
+        },
+        second: "front error vs Martin & Moyce (T ≤ 2.5, best shift)",
+        expected: "1: the front is the leading particle, resolved to one spacing",
+        run: Box::new(move |k| dam_break(k, &reference)),
+        base: knobs(16.0),
+        cells: if quick { vec![8.0, 11.0, 16.0] } else { vec![8.0, 11.0, 16.0, 23.0] },
+        steps: STEPS.to_vec(),
+        tols: tols.clone(),
+        preset_cells: Some(20.0),
+        presets: presets.clone(),
+        has_order: true,
+        reference_wall,
+    });
+    if !quick {
+        v.push(Case {
+            name: "elastic_gate",
+            error: "|peak ux / 46.0 mm − 1| against Antoci et al. 2007 (t ≤ 0.2 s; plane stress; gate spacing 1.25 mm)",
+            second: "peak-time error (s)",
+            expected: "none (validation against an experiment; the timing gap is known)",
+            run: Box::new(gate),
+            base: knobs(20.0),
+            cells: vec![10.0, 13.3, 20.0, 28.6],
+            steps: STEPS.to_vec(),
+            tols: vec![1e-6, 1e-3],
+            preset_cells: None,
+            presets: vec![],
+            has_order: false,
+            reference_wall: 0.0,
+        });
+    }
+    Ok(v)
+}
+
+impl Case {
+    /// The runs: base point, then one knob at a time, then the presets.
+    fn points(&self) -> Vec<(String, Knobs)> {
         let mut v = vec![("base".to_string(), self.base)];
-        for &s in &self.spacings {
-            if s != self.base.spacing {
-                v.push((
-                    "spacing".into(),
-                    Point3 {
-                        spacing: s,
-                        ..self.base
-                    },
-                ));
+        let mut add = |name: &str, k: Knobs| {
+            if k != self.base {
+                v.push((name.to_string(), k));
             }
+        };
+        for &c in &self.cells {
+            add(
+                "spacing",
+                Knobs {
+                    cells: c,
+                    ..self.base
+                },
+            );
         }
-        for &c in &self.courants {
-            if c != self.base.courant {
-                v.push((
-                    "courant".into(),
-                    Point3 {
-                        courant: c,
-                        ..self.base
-                    },
-                ));
-            }
+        for &s in &self.steps {
+            add("step", Knobs { step: s, ..self.base });
         }
         for &t in &self.tols {
-            if t != self.base.tol {
+            add("picard_tol", Knobs { tol: t, ..self.base });
+        }
+        if let Some(c) = self.preset_cells {
+            for &f in &self.presets {
                 v.push((
-                    "picard_tol".into(),
-                    Point3 {
-                        tol: t,
-                        ..self.base
+                    format!("preset:{}", f.name()),
+                    Knobs {
+                        cells: c / f.spacing_factor(),
+                        step: f.courant() / 0.5,
+                        tol: f.picard_tolerance(),
                     },
                 ));
             }
-        }
-        for &f in &self.presets {
-            v.push((
-                format!("preset:{}", f.name()),
-                Point3 {
-                    spacing: f.spacing(self.default_spacing),
-                    courant: f.courant(),
-                    tol: f.picard_tolerance(),
-                },
-            ));
         }
         v
     }
-}
-
-fn sweeps(quick: bool) -> Vec<Sweep> {
-    let a = DamBreak::default().width;
-    let cs = vec![0.25, 0.5, 1.0];
-    let tols = vec![1e-6, 1e-3];
-    if quick {
-        vec![
-            Sweep {
-                name: "dam_break",
-                run: dam_break,
-                base: Point3 {
-                    spacing: a / 12.0,
-                    courant: 0.5,
-                    tol: 1e-6,
-                },
-                spacings: vec![a / 8.0, a / 10.0, a / 12.0, a / 16.0],
-                courants: cs.clone(),
-                tols: tols.clone(),
-                presets: vec![Fidelity::Draft, Fidelity::Standard],
-                default_spacing: a / 20.0,
-            },
-            Sweep {
-                name: "elastic_gate",
-                run: gate,
-                base: Point3 {
-                    spacing: 0.0075,
-                    courant: 0.5,
-                    tol: 1e-6,
-                },
-                spacings: vec![0.01, 0.0075, 0.006, 0.005],
-                courants: cs.clone(),
-                tols: tols.clone(),
-                presets: vec![],
-                default_spacing: 0.0025,
-            },
-            Sweep {
-                name: "cantilever",
-                run: cantilever,
-                base: Point3 {
-                    spacing: 0.02 / 4.0,
-                    courant: 0.5,
-                    tol: 1e-6,
-                },
-                spacings: vec![0.01, 0.02 / 3.0, 0.005, 0.004],
-                courants: cs,
-                tols,
-                presets: vec![],
-                default_spacing: 0.005,
-            },
-        ]
-    } else {
-        vec![
-            Sweep {
-                name: "dam_break",
-                run: dam_break,
-                base: Point3 {
-                    spacing: a / 14.0,
-                    courant: 0.5,
-                    tol: 1e-6,
-                },
-                spacings: vec![a / 10.0, a / 14.0, a / 20.0, a / 28.0],
-                courants: cs.clone(),
-                tols: tols.clone(),
-                presets: Fidelity::ALL.to_vec(),
-                default_spacing: a / 20.0,
-            },
-            Sweep {
-                name: "elastic_gate",
-                run: gate,
-                base: Point3 {
-                    spacing: 0.005,
-                    courant: 0.5,
-                    tol: 1e-6,
-                },
-                spacings: vec![0.01, 0.0075, 0.005, 0.0035],
-                courants: cs.clone(),
-                tols: tols.clone(),
-                presets: vec![],
-                default_spacing: 0.0025,
-            },
-            Sweep {
-                name: "cantilever",
-                run: cantilever,
-                base: Point3 {
-                    spacing: 0.02 / 8.0,
-                    courant: 0.5,
-                    tol: 1e-6,
-                },
-                spacings: vec![0.01, 0.005, 0.0025, 0.00125, 0.000625],
-                courants: cs,
-                tols,
-                presets: vec![],
-                default_spacing: 0.0025,
-            },
-        ]
-    }
-}
-
-/// Least-squares slope of `y` against `x`.
-fn slope(pts: &[(f64, f64)]) -> f64 {
-    let n = pts.len() as f64;
-    if pts.len() < 2 {
-        return f64::NAN;
-    }
-    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
-}
-
-fn usable(r: &Record) -> bool {
-    r.status == "ok" && r.error.is_finite() && r.error > 0.0
-}
-
-/// The records of `case` in the sweep of `param` (the base point included).
-fn sweep_of<'a>(records: &'a [Record], case: &str, param: &str) -> Vec<&'a Record> {
-    let mut v: Vec<&Record> = records
-        .iter()
-        .filter(|r| r.case == case && (r.varied == param || r.varied == "base"))
-        .collect();
-    v.sort_by(|a, b| match param {
-        "spacing" => b.p.spacing.total_cmp(&a.p.spacing),
-        "courant" => a.p.courant.total_cmp(&b.p.courant),
-        _ => b.p.tol.total_cmp(&a.p.tol),
-    });
-    v
 }
 
 fn run() -> Res<()> {
@@ -459,28 +482,44 @@ fn run() -> Res<()> {
     }
     let out = out.unwrap_or_else(|| "out/accuracy_cost".into());
     std::fs::create_dir_all(&out)?;
-    let sweeps = sweeps(quick);
-    let total: usize = sweeps.iter().map(|s| s.points().len()).sum();
+    let started = Instant::now();
+    let cases = cases(quick)?;
+    let total: usize = cases.iter().map(|c| c.points().len()).sum();
     eprintln!(
         "accuracy_cost: {} runs ({}), writing {}",
         total,
         if quick { "quick" } else { "full" },
         out.display()
     );
-    let started = Instant::now();
     let mut records = Vec::new();
-    let mut k = 0;
-    for sw in &sweeps {
-        for (varied, p) in sw.points() {
-            k += 1;
-            let rec = match (sw.run)(&varied, p) {
-                Ok(r) => r,
+    let mut n = 0;
+    for case in &cases {
+        for (varied, k) in case.points() {
+            n += 1;
+            let rec = match (case.run)(k) {
+                Ok(o) => {
+                    let s = o.sim.stats();
+                    Record {
+                        case: case.name,
+                        varied: varied.clone(),
+                        k,
+                        h: o.h,
+                        error: o.error,
+                        second: o.second,
+                        wall: o.wall,
+                        steps: o.sim.steps(),
+                        rejected: o.sim.rejected(),
+                        stages: [s.remesh.1, s.assemble.1, s.solve.1, s.update.1, s.observe.1],
+                        status: "ok".into(),
+                    }
+                }
                 Err(e) => Record {
-                    case: sw.name,
+                    case: case.name,
                     varied: varied.clone(),
-                    p,
+                    k,
+                    h: f64::NAN,
                     error: f64::NAN,
-                    secondary: f64::NAN,
+                    second: f64::NAN,
                     wall: 0.0,
                     steps: 0,
                     rejected: 0,
@@ -489,13 +528,13 @@ fn run() -> Res<()> {
                 },
             };
             eprintln!(
-                "[{k:2}/{total}] {:12} {:16} h = {:.3e} m  C = {:<4}  tol = {:.0e}: error {:6.2}%  wall {:7.1} s  {:5} steps ({} rejected)  {}  [elapsed {:.0} s]",
+                "[{n:2}/{total}] {:20} {:16} cells {:5.1}  step ×{:<4} tol {:.0e}: error {:.3e}  wall {:6.1} s  {:4} steps ({} rejected)  {}  [elapsed {:.0} s]",
                 rec.case,
                 rec.varied,
-                rec.p.spacing,
-                rec.p.courant,
-                rec.p.tol,
-                100.0 * rec.error,
+                rec.k.cells,
+                rec.k.step,
+                rec.k.tol,
+                rec.error,
                 rec.wall,
                 rec.steps,
                 rec.rejected,
@@ -509,7 +548,7 @@ fn run() -> Res<()> {
     write_outputs(
         &out,
         &records,
-        &sweeps,
+        &cases,
         quick,
         started.elapsed().as_secs_f64(),
     )?;
@@ -522,19 +561,20 @@ fn run() -> Res<()> {
     Ok(())
 }
 
-fn write_csv(out: &std::path::Path, records: &[Record]) -> Res<()> {
-    let mut csv = String::from("case,varied,spacing_m,courant,picard_tol,error,secondary,wall_s,steps,rejected,remesh_s,assemble_s,solve_s,update_s,observe_s,status\n");
+fn write_csv(out: &Path, records: &[Record]) -> Res<()> {
+    let mut csv = String::from("case,varied,cells,spacing_m,step_factor,picard_tol,error,second,wall_s,steps,rejected,remesh_s,assemble_s,solve_s,update_s,observe_s,status\n");
     for r in records {
         writeln!(
             csv,
-            "{},{},{:.6e},{},{:.0e},{:.6e},{:.6e},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},\"{}\"",
+            "{},{},{},{:.6e},{},{:.0e},{:.6e},{:.6e},{:.3},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},\"{}\"",
             r.case,
             r.varied,
-            r.p.spacing,
-            r.p.courant,
-            r.p.tol,
+            r.k.cells,
+            r.h,
+            r.k.step,
+            r.k.tol,
             r.error,
-            r.secondary,
+            r.second,
             r.wall,
             r.steps,
             r.rejected,
@@ -550,154 +590,231 @@ fn write_csv(out: &std::path::Path, records: &[Record]) -> Res<()> {
     Ok(())
 }
 
-fn secondary_label(case: &str) -> &'static str {
-    match case {
-        "dam_break" => "time shift (T)",
-        "elastic_gate" => "peak-time error (s)",
-        _ => "tip deflection (mm)",
-    }
+fn usable(r: &Record) -> bool {
+    r.status == "ok" && r.error.is_finite() && r.error > 0.0
 }
 
-fn error_label(case: &str) -> &'static str {
-    match case {
-        "dam_break" => "front RMS relative error vs Martin & Moyce (T ≤ 3, best shift)",
-        "elastic_gate" => "relative error of peak ux vs Antoci et al. 2007 (t ≤ 0.2 s)",
-        _ => "relative error of tip deflection vs CSM2 (−16.97 mm)",
+/// The records of `case` along `knob` (the base point included), in the
+/// knob's order from cheap to dear.
+fn sweep<'a>(records: &'a [Record], case: &str, knob: &str) -> Vec<&'a Record> {
+    let mut v: Vec<&Record> = records
+        .iter()
+        .filter(|r| r.case == case && (r.varied == knob || r.varied == "base"))
+        .collect();
+    v.sort_by(|a, b| match knob {
+        "spacing" => a.k.cells.total_cmp(&b.k.cells),
+        "step" => b.k.step.total_cmp(&a.k.step),
+        _ => b.k.tol.total_cmp(&a.k.tol),
+    });
+    v
+}
+
+/// The records on the Pareto front of `case` (no other run has both a
+/// smaller error and a smaller wall time), by wall time.
+fn pareto<'a>(records: &'a [Record], case: &str) -> Vec<&'a Record> {
+    let mut v: Vec<&Record> = records
+        .iter()
+        .filter(|r| r.case == case && usable(r))
+        .collect();
+    v.sort_by(|a, b| a.wall.total_cmp(&b.wall));
+    let mut front: Vec<&Record> = Vec::new();
+    for r in v {
+        if front.last().is_none_or(|l| r.error < l.error) {
+            front.push(r);
+        }
     }
+    front
+}
+
+/// Least-squares slope of `y` against `x`.
+fn slope(pts: &[(f64, f64)]) -> f64 {
+    if pts.len() < 2 {
+        return f64::NAN;
+    }
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+fn label(r: &Record) -> String {
+    format!(
+        "{} (cells {}, step ×{}, tol {:.0e})",
+        r.varied, r.k.cells, r.k.step, r.k.tol
+    )
 }
 
 fn write_outputs(
-    out: &std::path::Path,
+    out: &Path,
     records: &[Record],
-    sweeps: &[Sweep],
+    cases: &[Case],
     quick: bool,
     elapsed: f64,
 ) -> Res<()> {
     let mut md = String::new();
+    let kind = if quick { "quick" } else { "full" };
+    writeln!(md, "# Accuracy against cost ({kind} study)\n")?;
     writeln!(
         md,
-        "# Accuracy against cost ({} study)\n",
-        if quick { "quick" } else { "full" }
-    )?;
-    writeln!(
-        md,
-        "`cargo run --release --example accuracy_cost -- --out {}{}`; {} runs in {:.0} s.\n",
+        "`cargo run --release --example accuracy_cost -- --out {}{}`: {} runs in {:.0} s (reference runs included).\n",
         out.display(),
         if quick { " --quick" } else { "" },
         records.len(),
         elapsed
     )?;
-    let mut conv_series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-    for sw in sweeps {
-        let case = sw.name;
-        writeln!(md, "## {case}\n\nError: {}.\n", error_label(case))?;
-        writeln!(md, "| varied | h (m) | Courant | Picard tol | error | {} | wall (s) | steps | rejected | remesh (s) | assemble (s) | solve (s) | update (s) | observe (s) | status |", secondary_label(case))?;
-        writeln!(
-            md,
-            "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
-        )?;
-        for r in records.iter().filter(|r| r.case == case) {
+    let mut summary = String::from(
+        "| case | observed order in h (runs) | expected | halving the error by refining costs | cheapest knob |\n|---|---:|---|---:|---|\n",
+    );
+    let mut conv: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for case in cases {
+        let name = case.name;
+        writeln!(md, "## {name}\n\nError: {}.\n", case.error)?;
+        if case.reference_wall > 0.0 {
             writeln!(
                 md,
-                "| {} | {:.3e} | {} | {:.0e} | {:.2}% | {:.3} | {:.1} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
-                r.varied,
-                r.p.spacing,
-                r.p.courant,
-                r.p.tol,
-                100.0 * r.error,
-                r.secondary,
-                r.wall,
-                r.steps,
-                r.rejected,
-                r.stages[0],
-                r.stages[1],
-                r.stages[2],
-                r.stages[3],
-                r.stages[4],
-                r.status
+                "The reference run took {:.0} s.\n",
+                case.reference_wall
             )?;
         }
-        // Convergence order and cost of halving the error.
-        let sp: Vec<&Record> = sweep_of(records, case, "spacing")
+        writeln!(md, "| varied | cells | h (m) | step × | Picard tol | error | {} | wall (s) | steps | rejected | remesh (s) | assemble (s) | solve (s) | update (s) | observe (s) | status |", case.second)?;
+        writeln!(
+            md,
+            "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+        )?;
+        for r in records.iter().filter(|r| r.case == name) {
+            writeln!(
+                md,
+                "| {} | {} | {:.3e} | {} | {:.0e} | {:.3e} | {:.4} | {:.2} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} |",
+                r.varied, r.k.cells, r.h, r.k.step, r.k.tol, r.error, r.second, r.wall, r.steps,
+                r.rejected, r.stages[0], r.stages[1], r.stages[2], r.stages[3], r.stages[4], r.status
+            )?;
+        }
+        writeln!(md)?;
+        // Order along the spacing sweep.
+        let sp: Vec<&Record> = sweep(records, name, "spacing")
             .into_iter()
             .filter(|r| usable(r))
             .collect();
-        let eh: Vec<(f64, f64)> = sp
-            .iter()
-            .map(|r| (r.p.spacing.log10(), r.error.log10()))
-            .collect();
-        let order = slope(&eh);
-        let ew: Vec<(f64, f64)> = sp
-            .iter()
-            .map(|r| (r.error.log10(), r.wall.log10()))
-            .collect();
-        let k = slope(&ew);
-        let th: Vec<(f64, f64)> = sp
-            .iter()
-            .map(|r| (r.p.spacing.log10(), r.wall.log10()))
-            .collect();
-        let cost_h = slope(&th);
-        writeln!(md)?;
-        writeln!(
-            md,
-            "Spacing sweep: observed order {order:.2} (least-squares slope of log error against log h over {} runs); wall time ∝ h^{cost_h:.2}.",
-            sp.len()
-        )?;
-        if order > 0.0 && k < 0.0 {
+        let eh: Vec<(f64, f64)> = sp.iter().map(|r| (r.h, r.error)).collect();
+        let order = observed_order(&eh);
+        let cost_h = slope(
+            &sp.iter()
+                .map(|r| (r.h.ln(), r.wall.max(1e-3).ln()))
+                .collect::<Vec<_>>(),
+        );
+        let k = slope(
+            &sp.iter()
+                .map(|r| (r.error.ln(), r.wall.max(1e-3).ln()))
+                .collect::<Vec<_>>(),
+        );
+        let halving = if case.has_order && order > 0.0 && k < 0.0 {
+            format!("{:.1}×", 2f64.powf(-k))
+        } else {
+            "–".into()
+        };
+        if case.has_order {
             writeln!(
                 md,
-                "Along the spacing sweep, wall time ∝ error^{k:.2}: halving the error costs {:.1}× the time.",
-                2f64.powf(-k)
+                "Spacing sweep: observed order **{order:.2}** (least-squares slope of log error against log h over {} runs; expected {}); wall time ∝ h^{cost_h:.2}; halving the error by refining costs {halving} the time.\n",
+                sp.len(),
+                case.expected
             )?;
         } else {
+            writeln!(md, "No order: {}.\n", case.expected)?;
+        }
+        // The knob that buys accuracy cheapest: the steepest fall of log
+        // error per log wall time along its sweep.
+        let mut best: Option<(&str, f64)> = None;
+        let mut knob_lines = String::new();
+        for knob in ["spacing", "step", "picard_tol"] {
+            let pts: Vec<(f64, f64)> = sweep(records, name, knob)
+                .into_iter()
+                .filter(|r| usable(r))
+                .map(|r| (r.wall.max(1e-3).ln(), r.error.ln()))
+                .collect();
+            if pts.len() < 2 {
+                continue;
+            }
+            let s = slope(&pts);
+            writeln!(
+                knob_lines,
+                "- {knob}: d log(error) / d log(wall) = {s:.2}"
+            )?;
+            if s < 0.0 && best.is_none_or(|b| s < b.1) {
+                best = Some((knob, s));
+            }
+        }
+        let cheapest = best.map_or("none (no knob lowers the error)".to_string(), |b| {
+            format!("{} ({:.2})", b.0, b.1)
+        });
+        if case.has_order {
             writeln!(
                 md,
-                "The error does not decrease with refinement in this sweep (slope {order:.2}); halving it by refining alone is not possible here."
+                "Along each knob (negative: more time buys less error):\n\n{knob_lines}\nCheapest: **{cheapest}**.\n"
+            )?;
+        }
+        let front = pareto(records, name);
+        writeln!(md, "Pareto front (no run is both faster and more accurate):\n")?;
+        for r in &front {
+            writeln!(
+                md,
+                "- {:.3e} in {:.2} s: {}",
+                r.error,
+                r.wall,
+                label(r)
             )?;
         }
         writeln!(md)?;
-        conv_series.push((case.to_string(), eh));
-
-        // Error against wall time, one curve per varied parameter.
-        let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-        for param in ["spacing", "courant", "picard_tol"] {
-            let pts: Vec<(f64, f64)> = sweep_of(records, case, param)
-                .into_iter()
-                .filter(|r| usable(r))
-                .map(|r| (r.wall.max(1e-3).log10(), r.error.log10()))
-                .collect();
-            if !pts.is_empty() {
-                curves.push((format!("vary {param}"), pts));
-            }
+        writeln!(
+            summary,
+            "| {name} | {} | {} | {halving} | {} |",
+            if case.has_order {
+                format!("{order:.2} ({})", sp.len())
+            } else {
+                "exact / validation".into()
+            },
+            case.expected,
+            if case.has_order { cheapest.as_str() } else { "–" }
+        )?;
+        if case.has_order {
+            let base_h = sp.first().map_or(1.0, |r| r.h * r.k.cells);
+            conv.push((
+                name.to_string(),
+                sp.iter()
+                    .map(|r| ((r.h / base_h).log10(), r.error.log10()))
+                    .collect(),
+            ));
         }
-        let presets: Vec<(f64, f64)> = records
-            .iter()
-            .filter(|r| r.case == case && r.varied.starts_with("preset") && usable(r))
-            .map(|r| (r.wall.max(1e-3).log10(), r.error.log10()))
-            .collect();
-        let mut series: Vec<PlotSeries> = curves
-            .iter()
-            .map(|(l, p)| PlotSeries::line(l.as_str(), p))
-            .collect();
-        if !presets.is_empty() {
-            series.push(PlotSeries::markers("Fidelity presets", &presets));
-        }
-        if !series.is_empty() {
-            let png = format!("{case}_error_vs_time.png");
-            plot_series_png(
-                out.join(&png),
-                &PlotSpec {
-                    title: format!("{case}: error against wall time").into(),
-                    x_label: "log10(wall time / s)".into(),
-                    y_label: "log10(relative error)".into(),
-                    series,
-                    ..Default::default()
-                },
-            )?;
-            writeln!(md, "![{case}]({png})\n")?;
-        }
+        plot_case(out, records, name, &front)?;
+        writeln!(md, "![{name}]({name}.png)\n")?;
     }
-    let series: Vec<PlotSeries> = conv_series
+    // The presets on every case.
+    let mut presets = String::from(
+        "| case | preset | cells | step × | Picard tol | error | wall (s) | steps (rejected) |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for r in records.iter().filter(|r| r.varied.starts_with("preset:")) {
+        writeln!(
+            presets,
+            "| {} | {} | {:.1} | {} | {:.0e} | {:.3e} | {:.2} | {} ({}) |",
+            r.case,
+            r.varied.trim_start_matches("preset:"),
+            r.k.cells,
+            r.k.step,
+            r.k.tol,
+            r.error,
+            r.wall,
+            r.steps,
+            r.rejected
+        )?;
+    }
+    let head = format!(
+        "## Summary\n\n{summary}\n## The presets on every case\n\n{presets}\n![convergence](convergence.png)\n\n"
+    );
+    let at = md.find("## ").unwrap_or(md.len());
+    md.insert_str(at, &head);
+    let series: Vec<PlotSeries> = conv
         .iter()
         .filter(|(_, p)| !p.is_empty())
         .map(|(l, p)| PlotSeries::line(l.as_str(), p))
@@ -706,15 +823,61 @@ fn write_outputs(
         plot_series_png(
             out.join("convergence.png"),
             &PlotSpec {
-                title: "Error against particle spacing".into(),
-                x_label: "log10(h / m)".into(),
+                title: "Error against spacing (relative to each case's length scale)".into(),
+                x_label: "log10(h / L)".into(),
                 y_label: "log10(relative error)".into(),
                 series,
                 ..Default::default()
             },
         )?;
-        writeln!(md, "![convergence](convergence.png)")?;
     }
     pfem::output::write_atomic(out.join("accuracy_cost.md"), md.as_bytes())?;
+    Ok(())
+}
+
+/// `DIR/<case>.png`: log10 error against log10 wall time, one curve per
+/// knob, the presets as markers, the Pareto front.
+fn plot_case(out: &Path, records: &[Record], case: &str, front: &[&Record]) -> Res<()> {
+    let xy = |r: &Record| (r.wall.max(1e-3).log10(), r.error.log10());
+    let mut curves: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for knob in ["spacing", "step", "picard_tol"] {
+        let pts: Vec<(f64, f64)> = sweep(records, case, knob)
+            .into_iter()
+            .filter(|r| usable(r))
+            .map(xy)
+            .collect();
+        if pts.len() > 1 {
+            curves.push((format!("vary {knob}"), pts));
+        }
+    }
+    let presets: Vec<(f64, f64)> = records
+        .iter()
+        .filter(|r| r.case == case && r.varied.starts_with("preset") && usable(r))
+        .map(xy)
+        .collect();
+    let front: Vec<(f64, f64)> = front.iter().map(|r| xy(r)).collect();
+    let mut series: Vec<PlotSeries> = curves
+        .iter()
+        .map(|(l, p)| PlotSeries::line(l.as_str(), p))
+        .collect();
+    if !presets.is_empty() {
+        series.push(PlotSeries::markers("Fidelity presets", &presets));
+    }
+    if !front.is_empty() {
+        series.push(PlotSeries::markers("Pareto front", &front));
+    }
+    if series.is_empty() {
+        return Ok(());
+    }
+    plot_series_png(
+        out.join(format!("{case}.png")),
+        &PlotSpec {
+            title: format!("{case}: error against wall time").into(),
+            x_label: "log10(wall time / s)".into(),
+            y_label: "log10(relative error)".into(),
+            series,
+            ..Default::default()
+        },
+    )?;
     Ok(())
 }
