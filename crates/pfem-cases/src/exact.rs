@@ -2,8 +2,11 @@
 //! has a closed-form solution and a measure of the error against it that
 //! falls with resolution.
 //!
+//! - [`CircularCouette`]: viscous flow between a turning and a fixed
+//!   cylinder, its steady state against `A r + B / r`;
 //! - [`StartupPoiseuille`]: viscous flow between two plates started from
-//!   rest by a body force along the channel, against the series solution;
+//!   rest by a body force along the channel, against the series solution
+//!   (a column with free ends: see its known defect);
 //! - [`StandingWave`]: the first sloshing mode of a tank, its frequency
 //!   against linear theory;
 //! - [`Cantilever`]: the Turek–Hron CSM beam, its static tip deflection
@@ -38,9 +41,20 @@ use crate::simulation::Simulation;
 ///
 /// The error ([`StartupPoiseuille::profile_error`]) is the RMS of `u − u_exact`
 /// over the fluid particles that started within half a width of the
-/// channel's middle, two widths from either end (where the ends' own flow
-/// has decayed as `e^{−π x/H}` below 10⁻²·⁷), relative to the exact
+/// channel's middle, two widths from either end, relative to the exact
 /// centre-line speed.
+///
+/// **Known defect, measured**: the free ends drive the whole column faster
+/// than the exact solution by an amount that grows with refinement and
+/// falls as `1/length` (at 32 cells across, error 1.55·10⁻², 7.3·10⁻³,
+/// 3.6·10⁻³ for lengths 2, 4, 8 `H`; the middle section runs uniformly
+/// +0.7 % fast at 32 cells, +0.4 % at 16 beyond the interior error; the
+/// step, the bulk modulus, the volume correction, `p = 0` on the surface
+/// and α do not change it). The profile error therefore converges from 4
+/// to 16 cells (order 2.7) and rises at 32. Something at the moving
+/// contact lines, where the column's ends meet the plates, exerts a net
+/// force along the channel; it is not yet found.
+/// [`CircularCouette`], which has no ends, measures viscous convergence.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StartupPoiseuille {
     /// Channel width `H` (m), default 0.1.
@@ -54,6 +68,8 @@ pub struct StartupPoiseuille {
     pub viscosity: f64,
     /// Body force along the channel (m/s²), default 1.
     pub forcing: f64,
+    /// Bulk modulus (Pa), default water's 2.2 GPa.
+    pub bulk_modulus: f64,
     /// Cells across the width (`h = H / cells`), default 8.
     pub cells: usize,
     /// Time steps over the run at 8 cells, default 20; the step scales
@@ -72,6 +88,7 @@ impl Default for StartupPoiseuille {
             density: 1000.0,
             viscosity: 10.0,
             forcing: 1.0,
+            bulk_modulus: Newtonian::water().bulk_modulus(),
             cells: 8,
             steps_at_8: 20,
             end_time: 0.2,
@@ -90,7 +107,7 @@ impl StartupPoiseuille {
         self.end_time / self.steps_at_8 as f64 * 8.0 / self.cells as f64
     }
 
-    /// The scene (water's bulk modulus, the given density and viscosity).
+    /// The scene.
     pub fn scene(&self) -> Result<Scene<2>, SceneError> {
         let (h, w, l) = (self.spacing(), self.width, self.length);
         let fluid = Newtonian::new(
@@ -186,6 +203,169 @@ impl StartupPoiseuille {
     }
 }
 
+/// Circular Couette flow: fluid between a cylinder of radius `inner`
+/// turning at `rate` and a fixed one of radius `outer` (2D, no gravity),
+/// from rest to its steady state. The annulus has no ends and no free
+/// surface, so it measures the viscous discretisation alone (the straight
+/// channel of [`StartupPoiseuille`] has free ends, whose effect does not
+/// vanish with refinement: see its docs).
+///
+/// Exact steady velocity (Batchelor 1967 §4.5): azimuthal, `u_θ(r) = A r
+/// + B / r` with `A = −ω R₁² / (R₂² − R₁²)` and `B = ω R₁² R₂² / (R₂² −
+/// R₁²)`. With the defaults the diffusion time `(R₂ − R₁)²/ν` is 1 s and the
+/// run ends at 1.5 s, when the slowest transient has decayed by e⁻¹⁴.
+///
+/// Particles lie on rings `h` apart (two wall rings each side), `round(2π
+/// r / h)` per ring, alternate rings turned by half a spacing. The error
+/// ([`CircularCouette::velocity_error`]) is the RMS of `|v − u_θ e_θ|`
+/// over the fluid particles, relative to the wall speed `ω R₁`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CircularCouette {
+    /// Inner radius `R₁` (m), default 0.5.
+    pub inner: f64,
+    /// Outer radius `R₂` (m), default 1.
+    pub outer: f64,
+    /// Angular velocity of the inner cylinder `ω` (rad/s), default 0.1.
+    pub rate: f64,
+    /// Density (kg/m³), default 1000.
+    pub density: f64,
+    /// Dynamic viscosity (Pa·s), default 250 (`ν = 0.25` m²/s).
+    pub viscosity: f64,
+    /// Cells across the gap (`h = (R₂ − R₁) / cells`), default 8.
+    pub cells: usize,
+    /// Time step (s), default 0.02: the answer is the steady state, so the
+    /// step does not scale with the spacing.
+    pub dt: f64,
+    /// End time (s), default 1.5.
+    pub end_time: f64,
+}
+
+impl Default for CircularCouette {
+    fn default() -> Self {
+        Self {
+            inner: 0.5,
+            outer: 1.0,
+            rate: 0.1,
+            density: 1000.0,
+            viscosity: 250.0,
+            cells: 8,
+            dt: 0.02,
+            end_time: 1.5,
+        }
+    }
+}
+
+impl CircularCouette {
+    /// Particle spacing (m).
+    pub fn spacing(&self) -> f64 {
+        (self.outer - self.inner) / self.cells as f64
+    }
+
+    /// Particles on the rings `r = r0 + k h`, `k = 0 .. rings`.
+    fn rings(&self, r0: f64, rings: usize) -> Vec<Point<2>> {
+        let h = self.spacing();
+        let mut pts = Vec::new();
+        for k in 0..rings {
+            let r = r0 + k as f64 * h;
+            // The ring's index from the inner wall sets the stagger.
+            let index = ((r - self.inner) / h).round() as i64;
+            let n = ((2.0 * PI * r / h).round() as usize).max(3);
+            let shift = if index.rem_euclid(2) == 1 { 0.5 } else { 0.0 };
+            for j in 0..n {
+                let a = 2.0 * PI * (j as f64 + shift) / n as f64;
+                pts.push(Point::<2>::new(r * a.cos(), r * a.sin()));
+            }
+        }
+        pts
+    }
+
+    /// The scene (water's bulk modulus).
+    pub fn scene(&self) -> Result<Scene<2>, SceneError> {
+        let h = self.spacing();
+        let fluid = Newtonian::new(
+            self.density,
+            self.viscosity,
+            Newtonian::water().bulk_modulus(),
+        )
+        .map_err(|source| SceneError::InvalidMaterial {
+            body: "fluid".into(),
+            source,
+        })?;
+        let spin = pfem_scene::motion::Rotation::new(Point::<2>::zeros(), None, self.rate, 0.0, 1.0, 0.0)?;
+        Ok(Scene::<2>::new("circular_couette_2d")
+            .settings(RunSettings {
+                end_time: self.end_time,
+                max_dt: self.dt,
+                courant: 0.5,
+                output_interval: None,
+                alpha: 1.3,
+            })
+            .wall(
+                "inner",
+                Geometry::Particles(self.rings(self.inner - h, 2)),
+                h,
+                WallMotion::Law(std::sync::Arc::new(spin)),
+            )
+            .wall(
+                "outer",
+                Geometry::Particles(self.rings(self.outer, 2)),
+                h,
+                WallMotion::Fixed,
+            )
+            .fluid(
+                "fluid",
+                Box::new(fluid),
+                Geometry::Particles(self.rings(self.inner + h, self.cells - 1)),
+                h,
+            ))
+    }
+
+    /// Exact steady azimuthal velocity at radius `r` (m/s).
+    pub fn exact(&self, r: f64) -> f64 {
+        let (r1, r2) = (self.inner * self.inner, self.outer * self.outer);
+        let a = -self.rate * r1 / (r2 - r1);
+        let b = self.rate * r1 * r2 / (r2 - r1);
+        a * r + b / r
+    }
+
+    /// RMS of `|v − u_θ(r) e_θ|` over the fluid particles, relative to
+    /// `ω R₁`.
+    pub fn velocity_error(&self, sim: &Simulation<2>) -> f64 {
+        let (mut e2, mut n) = (0.0, 0usize);
+        for i in 0..sim.particles().len() {
+            if sim.particles().kind()[i] != ParticleKind::Fluid {
+                continue;
+            }
+            let x = sim.particles().x()[i];
+            let r = x.norm();
+            if r == 0.0 {
+                continue;
+            }
+            let e_theta = Vector::<2>::new(-x.y / r, x.x / r);
+            e2 += (sim.particles().v()[i] - e_theta * self.exact(r)).norm_squared();
+            n += 1;
+        }
+        if n == 0 {
+            return f64::NAN;
+        }
+        (e2 / n as f64).sqrt() / (self.rate * self.inner)
+    }
+
+    /// Runs the case with `params`; the error is
+    /// [`CircularCouette::velocity_error`] at the end time, the value the
+    /// wall speed `ω R₁` (m/s).
+    pub fn run(&self, params: pfem_time::StepParams) -> Result<ExactRun, CaseError> {
+        let mut sim = simulation(self.scene()?, params)?;
+        let (_, wall) = run_series(&mut sim, |_| 0.0)?;
+        Ok(ExactRun {
+            error: self.velocity_error(&sim),
+            value: self.rate * self.inner,
+            wall,
+            sim,
+        })
+    }
+}
+
 /// The first sloshing mode of a tank `length` wide holding water `depth`
 /// deep (no-slip walls on three sides, open top), started at `t = 0` with a
 /// flat surface and the mode's potential-flow velocity, so that the surface
@@ -194,7 +374,7 @@ impl StartupPoiseuille {
 ///
 /// [`StandingWave::mode_amplitude`] projects the surface particles'
 /// elevation on `cos(kx)`; [`StandingWave::frequency`] reads `ω` from its
-/// zero crossings. The error is `|ω / ω_exact − 1|`. Linear elements and
+/// first zero crossing after the start, at `T/2`. The error is `|ω / ω_exact − 1|`. Linear elements and
 /// a second-order time scheme with the step ∝ `h` should give second
 /// order; the no-slip side walls, which hold the velocity at zero where the
 /// mode's vertical velocity is largest, add an `O(h)` part that would show
@@ -206,16 +386,22 @@ pub struct StandingWave {
     pub length: f64,
     /// Water depth (m), default 0.5.
     pub depth: f64,
-    /// Surface amplitude `a` (m), default 0.005 (`k a = 0.016`: the
-    /// nonlinear frequency shift is `O((ka)²)`, about 10⁻⁴).
+    /// Surface amplitude `a` (m), default 0.001 (`k a = 0.0031`). The
+    /// particles' (Lagrangian) elevation differs from the Eulerian `η` by
+    /// `O(ka · a)`, which moves the measured crossing by `O(ka)` relative:
+    /// with `a` = 5 mm the frequency read at 80 cells was 1.8·10⁻³ high, at
+    /// 1 mm 1.4·10⁻⁴.
     pub amplitude: f64,
     /// Cells across the width (`h = length / cells`), default 20.
     pub cells: usize,
     /// Time steps per period at 20 cells, default 40; the step scales with
     /// the spacing.
     pub steps_per_period_at_20: usize,
-    /// Run length in periods, default 1.25 (two zero crossings after the
-    /// start's).
+    /// Run length in periods, default 0.75: the frequency is read from the
+    /// first half period (the crossing at `T/2`). Later, from about
+    /// 0.85 `T`, the surface particles beside the left wall sink by up to
+    /// 2 cm at some resolutions (29 and 80 cells): the wall–free-surface
+    /// corner of issue 13, in motion.
     pub periods: f64,
 }
 
@@ -224,10 +410,10 @@ impl Default for StandingWave {
         Self {
             length: 1.0,
             depth: 0.5,
-            amplitude: 0.005,
+            amplitude: 0.001,
             cells: 20,
             steps_per_period_at_20: 40,
-            periods: 1.25,
+            periods: 0.75,
         }
     }
 }
@@ -331,12 +517,15 @@ impl StandingWave {
         }
     }
 
-    /// Angular frequency (rad/s) read from a series of
-    /// [`StandingWave::mode_amplitude`]: `π` over the mean spacing of its
-    /// zero crossings after `t = 0` (linearly interpolated), or `NaN` with
-    /// fewer than two.
-    pub fn frequency(series: &[(f64, f64)]) -> f64 {
+    /// Angular frequency (rad/s) read from a time series: `π` over the
+    /// mean spacing of its zero crossings after `t = 0` (linearly
+    /// interpolated), counting `t = 0` as one when `starts_at_zero` (the
+    /// wave starts with a flat surface), or `NaN` with fewer than two.
+    pub fn frequency(series: &[(f64, f64)], starts_at_zero: bool) -> f64 {
         let mut crossings = Vec::new();
+        if starts_at_zero {
+            crossings.push(0.0);
+        }
         for w in series.windows(2) {
             let ((t0, y0), (t1, y1)) = (w[0], w[1]);
             if t0 > 0.0 && y0 != 0.0 && y0.signum() != y1.signum() {
@@ -565,7 +754,7 @@ impl StandingWave {
         let mut sim = simulation(self.scene(), params)?;
         self.start(&mut sim)?;
         let (series, wall) = run_series(&mut sim, |s| self.mode_amplitude(s))?;
-        let w = Self::frequency(&series);
+        let w = Self::frequency(&series, true);
         Ok(ExactRun {
             error: (w / self.omega() - 1.0).abs(),
             value: w,
@@ -624,7 +813,7 @@ impl Cantilever {
             });
         let mid = 0.5 * (lo + hi);
         let centred: Vec<(f64, f64)> = series.iter().map(|&(t, y)| (t, y - mid)).collect();
-        let w = StandingWave::frequency(&centred);
+        let w = StandingWave::frequency(&centred, false);
         Ok(ExactRun {
             error: (w / self.omega() - 1.0).abs(),
             value: w,

@@ -87,6 +87,20 @@ impl Fidelity {
         default * self.spacing_factor()
     }
 
+    /// Cells across a length scale for a case whose default is `default`
+    /// cells (the spacing scaled by [`Fidelity::spacing_factor`], rounded
+    /// to a whole number of cells).
+    pub fn cells(self, default: usize) -> usize {
+        ((default as f64 / self.spacing_factor()).round() as usize).max(1)
+    }
+
+    /// Factor on a case's time step: the Courant number over the default
+    /// 0.5 (for cases whose step is set in seconds rather than by the
+    /// Courant limit).
+    pub fn step_factor(self) -> f64 {
+        self.courant() / 0.5
+    }
+
     /// Sets the Courant number of `settings`.
     pub fn apply(self, settings: &mut RunSettings) {
         settings.courant = self.courant();
