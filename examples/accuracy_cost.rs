@@ -36,7 +36,7 @@
 //! the presets on every case) and `DIR/<case>.png` (log10 error against
 //! log10 wall time: one curve per knob, the presets, the Pareto front),
 //! `DIR/convergence.png` (log10 error against log10 relative spacing).
-//! The full study takes about 10 minutes on 2 cores, `--quick` about 2.
+//! The full study takes about 8 minutes on 2 cores, `--quick` about 2.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -427,7 +427,11 @@ fn cases(quick: bool) -> Res<Vec<Case>> {
         expected: "1: the front is the leading particle, resolved to one spacing",
         run: Box::new(move |k| dam_break(k, &reference)),
         base: knobs(16.0),
-        cells: if quick { vec![8.0, 11.0, 16.0] } else { vec![8.0, 11.0, 16.0, 23.0] },
+        cells: if quick {
+            vec![8.0, 11.0, 16.0]
+        } else {
+            vec![8.0, 11.0, 16.0, 23.0]
+        },
         steps: STEPS.to_vec(),
         tols: tols.clone(),
         preset_cells: Some(20),
@@ -474,10 +478,22 @@ impl Case {
             );
         }
         for &s in &self.steps {
-            add("step", Knobs { step: s, ..self.base });
+            add(
+                "step",
+                Knobs {
+                    step: s,
+                    ..self.base
+                },
+            );
         }
         for &t in &self.tols {
-            add("picard_tol", Knobs { tol: t, ..self.base });
+            add(
+                "picard_tol",
+                Knobs {
+                    tol: t,
+                    ..self.base
+                },
+            );
         }
         if let Some(c) = self.preset_cells {
             for &f in &self.presets {
@@ -700,11 +716,7 @@ fn write_outputs(
         let name = case.name;
         writeln!(md, "## {name}\n\nError: {}.\n", case.error)?;
         if case.reference_wall > 0.0 {
-            writeln!(
-                md,
-                "The reference run took {:.0} s.\n",
-                case.reference_wall
-            )?;
+            writeln!(md, "The reference run took {:.0} s.\n", case.reference_wall)?;
         }
         writeln!(md, "| varied | cells | h (m) | step × | Picard tol | error | {} | wall (s) | steps | rejected | remesh (s) | assemble (s) | solve (s) | update (s) | observe (s) | status |", case.second)?;
         writeln!(
@@ -766,10 +778,7 @@ fn write_outputs(
                 continue;
             }
             let s = slope(&pts);
-            writeln!(
-                knob_lines,
-                "- {knob}: d log(error) / d log(wall) = {s:.2}"
-            )?;
+            writeln!(knob_lines, "- {knob}: d log(error) / d log(wall) = {s:.2}")?;
             if s < 0.0 && best.is_none_or(|b| s < b.1) {
                 best = Some((knob, s));
             }
@@ -784,15 +793,12 @@ fn write_outputs(
             )?;
         }
         let front = pareto(records, name);
-        writeln!(md, "Pareto front (no run is both faster and more accurate):\n")?;
+        writeln!(
+            md,
+            "Pareto front (no run is both faster and more accurate):\n"
+        )?;
         for r in &front {
-            writeln!(
-                md,
-                "- {:.3e} in {:.2} s: {}",
-                r.error,
-                r.wall,
-                label(r)
-            )?;
+            writeln!(md, "- {:.3e} in {:.2} s: {}", r.error, r.wall, label(r))?;
         }
         writeln!(md)?;
         writeln!(
@@ -804,7 +810,11 @@ fn write_outputs(
                 "exact / validation".into()
             },
             case.expected,
-            if case.has_order { cheapest.as_str() } else { "–" }
+            if case.has_order {
+                cheapest.as_str()
+            } else {
+                "–"
+            }
         )?;
         if case.has_order {
             let base_h = sp.first().map_or(1.0, |r| r.h * r.k.cells);
@@ -892,7 +902,7 @@ fn plot_case(out: &Path, records: &[Record], case: &str, front: &[&Record]) -> R
         series.push(PlotSeries::markers("Fidelity presets", &presets));
     }
     if !front.is_empty() {
-        series.push(PlotSeries::markers("Pareto front", &front));
+        series.push(PlotSeries::line("Pareto front", &front));
     }
     if series.is_empty() {
         return Ok(());

@@ -291,7 +291,8 @@ impl CircularCouette {
             body: "fluid".into(),
             source,
         })?;
-        let spin = pfem_scene::motion::Rotation::new(Point::<2>::zeros(), None, self.rate, 0.0, 1.0, 0.0)?;
+        let spin =
+            pfem_scene::motion::Rotation::new(Point::<2>::zeros(), None, self.rate, 0.0, 1.0, 0.0)?;
         Ok(Scene::<2>::new("circular_couette_2d")
             .settings(RunSettings {
                 end_time: self.end_time,
