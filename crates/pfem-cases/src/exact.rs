@@ -210,10 +210,11 @@ impl StartupPoiseuille {
 /// channel of [`StartupPoiseuille`] has free ends, whose effect does not
 /// vanish with refinement: see its docs).
 ///
-/// Exact steady velocity (Batchelor 1967 §4.5): azimuthal, `u_θ(r) = A r
-/// + B / r` with `A = −ω R₁² / (R₂² − R₁²)` and `B = ω R₁² R₂² / (R₂² −
-/// R₁²)`. With the defaults the diffusion time `(R₂ − R₁)²/ν` is 1 s and the
-/// run ends at 1.5 s, when the slowest transient has decayed by e⁻¹⁴.
+/// Exact steady velocity (Batchelor 1967 §4.5): azimuthal,
+/// `u_θ(r) = A r + B / r` with `A = −ω R₁² / (R₂² − R₁²)` and
+/// `B = ω R₁² R₂² / (R₂² − R₁²)`. With the defaults the diffusion time
+/// `(R₂ − R₁)²/ν` is 1 s and the run ends at 1.5 s, when the slowest
+/// transient has decayed by e⁻¹⁴.
 ///
 /// Particles lie on rings `h` apart (two wall rings each side), `round(2π
 /// r / h)` per ring, alternate rings turned by half a spacing. The error
