@@ -28,7 +28,7 @@
 //! every case (the time step pays until its error falls below the
 //! spacing's: on the standing wave, T/40 instead of T/20 at 20 cells cuts
 //! the error 3× for 1.4× the time, T/80 only 6 % more); the Picard
-//! tolerance changes no error on the exact cases (1e-3 saves 10–35 % of
+//! tolerance changes no error on the exact cases (1e-3 saves 20–50 % of
 //! the time) and little on the dam break. Standard keeps the
 //! library's defaults (1e-6), with which the hard cases of the stability
 //! suite were verified.
@@ -40,23 +40,23 @@ use crate::scene::RunSettings;
 /// How much accuracy to buy with time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Fidelity {
-    /// Quick look: twice the default spacing, Courant 1 (twice the step),
-    /// Picard 1e-3. Couette 2.2 %, standing wave 7.4 %, cantilever static
-    /// 34 % and frequency 20 % (two linear triangles through the
-    /// thickness lock in bending), dam break (a/10) 9.0 % against a/45 and
-    /// 1.9 % against the experiment, in 0.6 s.
+    /// Quick look: twice the default spacing, Courant 0.5, Picard 1e-3.
+    /// Couette 2.3 %, standing wave 3.8 %, cantilever static 34 % and
+    /// frequency 22 % (two linear triangles through the thickness lock in
+    /// bending), dam break (a/10) 9.2 % against a/45 and 2.0 % against the
+    /// experiment, in 0.7 s.
     Draft,
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
-    /// Couette 0.33 % (2.6 s), standing wave 0.65 % (0.4 s), cantilever
+    /// Couette 0.33 % (2.2 s), standing wave 0.65 % (0.4 s), cantilever
     /// static 12.5 % and frequency 6.5 %, dam break (a/20) 2.2 % against
-    /// a/45 and 1.8 % against the experiment, in 9 s.
+    /// a/45 and 1.8 % against the experiment, in 8 s.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
-    /// Couette 0.19 % (3.1 s), standing wave 0.27 % (2.0 s), cantilever
+    /// Couette 0.19 % (2.7 s), standing wave 0.27 % (1.9 s), cantilever
     /// static 6.5 % and frequency 3.1 %, dam break (a/29) 1.4 % against
-    /// a/45 and 1.1 % against the experiment, in 30 s: about 3× Standard's
-    /// time on the dam break for 0.6 of its error.
+    /// a/45 and 1.1 % against the experiment, in 27 s: about 3× Standard's
+    /// time on the dam break for 0.65 of its error.
     Fine,
 }
 
@@ -74,9 +74,9 @@ impl Fidelity {
     }
 
     /// Courant number (`RunSettings::courant`): the default 0.5 for every
-    /// preset. The study found Courant 1 (a Draft of the previous study)
-    /// dominated on the dam break: a/8 at Courant 0.5 was both faster and
-    /// more accurate than a/10 at Courant 1.
+    /// preset. On the dam break the study found Courant 1 (Draft's before)
+    /// a poor trade: at a/16 it rejected 11 of 84 steps and saved 11 % of
+    /// the time for a front 9 % further from a/45.
     pub fn courant(self) -> f64 {
         0.5
     }
