@@ -39,8 +39,8 @@ fn circular_couette_converges() {
 }
 
 #[test]
-fn standing_wave_frequency_converges() {
-    let (mut h, mut e) = (Vec::new(), Vec::new());
+fn standing_wave_frequency_and_amplitude_converge() {
+    let (mut h, mut e, mut a) = (Vec::new(), Vec::new(), Vec::new());
     for n in [10, 20, 40] {
         let case = StandingWave {
             cells: n,
@@ -48,14 +48,17 @@ fn standing_wave_frequency_converges() {
         };
         let r = case.run(StepParams::default()).unwrap();
         eprintln!(
-            "standing wave {n} cells: ω = {:.4} rad/s, linear theory {:.4}",
+            "standing wave {n} cells: ω = {:.4} rad/s, linear theory {:.4}; decay error {:.3e}",
             r.value,
-            case.omega()
+            case.omega(),
+            r.second_error
         );
         h.push(case.spacing());
         e.push(r.error);
+        a.push(r.second_error);
     }
     assert_converges("standing wave (frequency)", &h, &e);
+    assert_converges("standing wave (amplitude decay over T/2)", &h, &a);
 }
 
 #[test]
