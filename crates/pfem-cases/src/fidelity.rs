@@ -28,7 +28,7 @@
 //! every case (the time step pays until its error falls below the
 //! spacing's: on the standing wave, T/40 instead of T/20 at 20 cells cuts
 //! the error 3× for 1.4× the time, T/80 only 6 % more); the Picard
-//! tolerance changes no error on the exact cases (1e-3 saves 20–50 % of
+//! tolerance changes no error on the exact cases (1e-3 saves 15–45 % of
 //! the time) and little on the dam break. Standard keeps the
 //! library's defaults (1e-6), with which the hard cases of the stability
 //! suite were verified.
@@ -44,18 +44,18 @@ pub enum Fidelity {
     /// Couette 2.3 %, standing wave 3.8 %, cantilever static 34 % and
     /// frequency 22 % (two linear triangles through the thickness lock in
     /// bending), dam break (a/10) 9.2 % against a/45 and 2.0 % against the
-    /// experiment, in 0.7 s.
+    /// experiment, in 0.6 s.
     Draft,
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
-    /// Couette 0.33 % (2.2 s), standing wave 0.65 % (0.4 s), cantilever
+    /// Couette 0.33 % (2.6 s), standing wave 0.65 % (0.3 s), cantilever
     /// static 12.5 % and frequency 6.5 %, dam break (a/20) 2.2 % against
-    /// a/45 and 1.8 % against the experiment, in 8 s.
+    /// a/45 and 1.8 % against the experiment, in 9 s.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
-    /// Couette 0.19 % (2.7 s), standing wave 0.27 % (1.9 s), cantilever
+    /// Couette 0.19 % (3.1 s), standing wave 0.27 % (1.7 s), cantilever
     /// static 6.5 % and frequency 3.1 %, dam break (a/29) 1.4 % against
-    /// a/45 and 1.1 % against the experiment, in 27 s: about 3× Standard's
+    /// a/45 and 1.1 % against the experiment, in 24 s: about 3× Standard's
     /// time on the dam break for 0.65 of its error.
     Fine,
 }
