@@ -28,6 +28,15 @@ use crate::error::SceneError;
 use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
 use crate::simulation::Simulation;
 
+/// A Newtonian fluid body's material, or [`SceneError::InvalidMaterial`]
+/// naming the body `fluid`.
+fn fluid(density: f64, viscosity: f64, bulk_modulus: f64) -> Result<Newtonian, SceneError> {
+    Newtonian::new(density, viscosity, bulk_modulus).map_err(|source| SceneError::InvalidMaterial {
+        body: "fluid".into(),
+        source,
+    })
+}
+
 /// Start-up of plane Poiseuille flow: fluid between two no-slip plates
 /// `y = 0` and `y = width`, at rest at `t = 0`, driven by a body force
 /// `forcing` along `x`. The channel's fluid is `length` long with free ends
@@ -115,15 +124,7 @@ impl StartupPoiseuille {
     /// The scene.
     pub fn scene(&self) -> Result<Scene<2>, SceneError> {
         let (h, w, l) = (self.spacing(), self.width, self.length);
-        let fluid = Newtonian::new(
-            self.density,
-            self.viscosity,
-            Newtonian::water().bulk_modulus(),
-        )
-        .map_err(|source| SceneError::InvalidMaterial {
-            body: "fluid".into(),
-            source,
-        })?;
+        let fluid = fluid(self.density, self.viscosity, self.bulk_modulus)?;
         // Plates from half a length before to half a length after the
         // fluid, on the same lattice (l/2 is a whole number of spacings
         // when `length` is).
@@ -288,15 +289,11 @@ impl CircularCouette {
     /// The scene (water's bulk modulus).
     pub fn scene(&self) -> Result<Scene<2>, SceneError> {
         let h = self.spacing();
-        let fluid = Newtonian::new(
+        let fluid = fluid(
             self.density,
             self.viscosity,
             Newtonian::water().bulk_modulus(),
-        )
-        .map_err(|source| SceneError::InvalidMaterial {
-            body: "fluid".into(),
-            source,
-        })?;
+        )?;
         let spin =
             pfem_scene::motion::Rotation::new(Point::<2>::zeros(), None, self.rate, 0.0, 1.0, 0.0)?;
         Ok(Scene::<2>::new("circular_couette_2d")
