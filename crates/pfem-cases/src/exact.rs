@@ -57,9 +57,11 @@ fn fluid(density: f64, viscosity: f64, bulk_modulus: f64) -> Result<Newtonian, S
 /// than the exact solution by an amount that grows with refinement and
 /// falls as `1/length` (at 32 cells across, error 1.55·10⁻², 7.3·10⁻³,
 /// 3.6·10⁻³ for lengths 2, 4, 8 `H`; the middle section runs uniformly
-/// +0.7 % fast at 32 cells, +0.4 % at 16 beyond the interior error; the
-/// step, the bulk modulus, the volume correction, `p = 0` on the surface
-/// and α do not change it). The profile error therefore converges from 4
+/// +0.7 % fast at 32 cells, +0.4 % at 16 beyond the interior error; at
+/// 32 cells the step (×2, ×½: 7.31, 7.68·10⁻³), the bulk modulus
+/// (2.2·10⁷ Pa: 7.49·10⁻³), the volume correction (off: 7.13·10⁻³) and
+/// `p = 0` on the surface (off: 7.50·10⁻³) barely move it, α some (1.15:
+/// 7.44·10⁻³, 1.6: 5.93·10⁻³)). The profile error therefore converges from 4
 /// to 16 cells (order 2.7) and rises at 32. The column's ends are moving
 /// contact lines on no-slip plates, where the continuum stress is
 /// singular (Huh & Scriven 1971) and the discrete model regularises it at
