@@ -44,7 +44,7 @@ use std::time::Instant;
 
 use pfem::cases::{best_shift, rest_figures, ElasticGate, RestTank};
 use pfem::exact::{
-    observed_order, Cantilever, CircularCouette, DamBreakFront, ExactRun, StandingWave,
+    observed_order, slope, Cantilever, CircularCouette, DamBreakFront, ExactRun, StandingWave,
     StartupPoiseuille,
 };
 use pfem::fidelity::Fidelity;
@@ -672,19 +672,6 @@ fn pareto<'a>(records: &'a [Record], case: &str) -> Vec<&'a Record> {
         }
     }
     front
-}
-
-/// Least-squares slope of `y` against `x`.
-fn slope(pts: &[(f64, f64)]) -> f64 {
-    if pts.len() < 2 {
-        return f64::NAN;
-    }
-    let n = pts.len() as f64;
-    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
 }
 
 fn label(r: &Record) -> String {

@@ -67,13 +67,7 @@ impl Default for DamBreak {
 /// Two layers of wall particles: the floor from `x0` to `x1` at `y = 0`
 /// and below, and vertical walls at the given `x` positions from `y = 0`
 /// to `top`, extending outwards (`-1` to the left, `+1` to the right).
-pub(crate) fn tank(
-    scene: Scene<2>,
-    x0: f64,
-    x1: f64,
-    walls: &[(f64, f64, f64)],
-    h: f64,
-) -> Scene<2> {
+fn tank(scene: Scene<2>, x0: f64, x1: f64, walls: &[(f64, f64, f64)], h: f64) -> Scene<2> {
     let mut s = scene.wall(
         "floor",
         Geometry::Box {

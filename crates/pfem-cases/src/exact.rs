@@ -452,33 +452,17 @@ impl StandingWave {
     pub fn scene(&self) -> Scene<2> {
         let h = self.spacing();
         let dt = self.period() / self.steps_per_period_at_20 as f64 * 20.0 / self.cells as f64;
-        let t_end = self.periods * self.period();
-        let top = 1.2 * self.depth;
-        let s = Scene::<2>::new("standing_wave_2d")
-            .gravity(Vector::<2>::new(0.0, -G))
-            .settings(RunSettings {
-                end_time: t_end,
-                max_dt: dt,
-                courant: 0.5,
-                output_interval: None,
-                alpha: 1.3,
-            });
-        crate::cases::tank(
-            s,
-            0.0,
-            self.length,
-            &[(0.0, -1.0, top), (self.length, 1.0, top)],
-            h,
-        )
-        .fluid(
-            "water",
-            Box::new(Newtonian::water()),
-            Geometry::Box {
-                min: Point::<2>::new(0.0, 0.0),
-                max: Point::<2>::new(self.length, self.depth),
-            },
-            h,
-        )
+        // The open tank of water at rest, with the wave's step and length.
+        let mut scene = crate::cases::RestTank {
+            width: self.length,
+            depth: self.depth,
+            spacing: h,
+            end_time: self.periods * self.period(),
+        }
+        .scene();
+        scene.name = "standing_wave_2d".into();
+        scene.settings.max_dt = dt;
+        scene
     }
 
     /// Sets the fluid particles' velocity to the mode's at `t = 0`
@@ -953,16 +937,25 @@ impl DamBreakFront {
 /// assert!((observed_order(&pts) - 2.0).abs() < 1e-12);
 /// ```
 pub fn observed_order(points: &[(f64, f64)]) -> f64 {
-    if points.len() < 2 || points.iter().any(|&(h, e)| !(h > 0.0 && e > 0.0)) {
+    if points.iter().any(|&(h, e)| !(h > 0.0 && e > 0.0)) {
+        return f64::NAN;
+    }
+    let logs: Vec<(f64, f64)> = points.iter().map(|&(h, e)| (h.ln(), e.ln())).collect();
+    slope(&logs)
+}
+
+/// Least-squares slope of `y` against `x` over `(x, y)` pairs (`NaN` with
+/// fewer than two).
+pub fn slope(points: &[(f64, f64)]) -> f64 {
+    if points.len() < 2 {
         return f64::NAN;
     }
     let n = points.len() as f64;
-    let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), &(h, e)| {
-        (a + h.ln() / n, b + e.ln() / n)
-    });
-    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), &(h, e)| {
-        let dx = h.ln() - mx;
-        (a + dx * (e.ln() - my), b + dx * dx)
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), &(x, y)| (a + x / n, b + y / n));
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
+        (a + (x - mx) * (y - my), b + (x - mx) * (x - mx))
     });
     sxy / sxx
 }
