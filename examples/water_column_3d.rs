@@ -6,7 +6,7 @@
 //!
 //! ```text
 //! cargo run --release --example water_column_3d -- --out out/water_column_3d \
-//!     [--spacing H] [--end-time T] [--depth W] [--solver direct|cg] [--quiet] [--no-vtu]
+//!     [--spacing H] [--end-time T] [--depth W] [--solver direct|block|cg] [--quiet] [--no-vtu]
 //! ```
 //! Defaults: h = 0.0146 m (a/10), depth 0.0584 m (a slice of the
 //! experiment's 0.146 m), end time 1 s. Writes
@@ -26,7 +26,7 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env()?;
-    args.reject_unknown(&["depth", "solver"])?;
+    args.reject_unknown(&["depth"])?;
     let mut case = WaterColumn3d {
         side_walls: false,
         ..Default::default()
@@ -52,11 +52,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         case.depth,
         case.end_time
     );
-    match args.options.get("solver").map(String::as_str) {
-        None | Some("direct") => {}
-        Some("cg") => sim.set_solver(Box::new(pfem::assembly::ConjugateGradient::default())),
-        Some(other) => return Err(format!("unknown --solver {other} (direct, cg)").into()),
-    }
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;

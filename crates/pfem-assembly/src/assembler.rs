@@ -27,6 +27,7 @@ use crate::kernels::{
     VolumetricTreatment, MAX_LOCAL,
 };
 use crate::pattern::BlockPattern;
+use crate::solver::SplitSystem;
 use crate::AssemblyError;
 
 const NONE: u32 = u32::MAX;
@@ -213,6 +214,19 @@ where
     states: Vec<ElementState<D>>,
     unified: Vec<Unified<D>>,
     local: Vec<f64>,
+    /// Whether the nodal volumetric term is kept apart as `Cᵀ C`
+    /// ([`Assembler::set_split`]).
+    split: bool,
+    /// Split form: the rows of `C` (one per system node with a nodal
+    /// patch), CSR over dofs; row `r` belongs to system node
+    /// `c_node[r]`; node `a`'s row is `c_row[a]` (NONE without a patch).
+    c_node: Vec<u32>,
+    c_row: Vec<u32>,
+    c_ptr: Vec<usize>,
+    c_idx: Vec<usize>,
+    c_val: Vec<f64>,
+    /// System node coordinates of the last assembly, `D` per node.
+    coords: Vec<f64>,
 }
 
 /// Work an [`Assembler`] has done.
@@ -251,6 +265,42 @@ where
     /// The work done so far.
     pub fn work(&self) -> AssemblerWork {
         self.work
+    }
+
+    /// Keeps the nodal volumetric term (eq. 56, `Gᵀ M̂⁻¹ 𝒦 G`) out of the
+    /// matrix and apart as `Cᵀ C`, `C = (𝒦/M̂)^{1/2} G` with one row per
+    /// fluid node ([`Assembler::split_system`]), for solvers that treat it
+    /// as a second field ([`crate::LinearSolver::wants_split`]). The matrix
+    /// then holds only the element couplings, so its pattern is the mesh's
+    /// and not its neighbours' neighbours'. Takes effect at the next
+    /// [`Assembler::prepare`].
+    pub fn set_split(&mut self, on: bool) {
+        if on != self.split {
+            self.split = on;
+            self.last_mesh.3 = usize::MAX;
+        }
+    }
+
+    /// Whether the nodal volumetric term is kept apart.
+    pub fn is_split(&self) -> bool {
+        self.split
+    }
+
+    /// The last assembled system in split form, `(A_v + Cᵀ C) V = f`, or
+    /// `None` when the assembler is not split ([`Assembler::set_split`]).
+    pub fn split_system(&self) -> Option<SplitSystem<'_>> {
+        if !self.split {
+            return None;
+        }
+        Some(SplitSystem {
+            a_v: self.matrix(),
+            c_ptr: &self.c_ptr,
+            c_idx: &self.c_idx,
+            c_val: &self.c_val,
+            block_size: D,
+            coords: &self.coords,
+            rhs: &self.rhs,
+        })
     }
 
     /// Builds the pattern and index maps for the mesh of a step; keeps them
@@ -418,9 +468,13 @@ where
         // volumetric term and the pressure coupling.
         let (elem_sys, patch_ptr, patch_nodes) =
             (&self.elem_sys, &self.patch_ptr, &self.patch_nodes);
+        let split = self.split;
         self.pattern.build(ns, D, |visit| {
             for el in elem_sys.chunks_exact(nv) {
                 visit(el);
+            }
+            if split {
+                return;
             }
             for a in 0..ns {
                 let p = &patch_nodes[patch_ptr[a]..patch_ptr[a + 1]];
@@ -469,7 +523,33 @@ where
         self.patch_block_ptr.clear();
         self.patch_block_ptr.push(0);
         self.patch_blocks.clear();
+        self.c_node.clear();
+        self.c_row.clear();
+        self.c_ptr.clear();
+        self.c_idx.clear();
+        if self.split {
+            // Rows of `C`: a node's patch, D dofs per patch node.
+            self.c_row.resize(ns, NONE);
+            self.c_ptr.push(0);
+            for a in 0..ns {
+                let p = &self.patch_nodes[self.patch_ptr[a]..self.patch_ptr[a + 1]];
+                if p.is_empty() {
+                    continue;
+                }
+                self.c_row[a] = self.c_node.len() as u32;
+                self.c_node.push(a as u32);
+                for &i in p {
+                    self.c_idx.extend((0..D).map(|k| i as usize * D + k));
+                }
+                self.c_ptr.push(self.c_idx.len());
+            }
+            self.c_val.resize(self.c_idx.len(), 0.0);
+        }
         for a in 0..ns {
+            if self.split {
+                self.patch_block_ptr.push(0);
+                continue;
+            }
             let p = &self.patch_nodes[self.patch_ptr[a]..self.patch_ptr[a + 1]];
             for &i in p {
                 for &j in p {
@@ -627,6 +707,12 @@ where
                 }
             }
         }
+        if self.split {
+            self.coords.clear();
+            for &p in &self.particle_of {
+                self.coords.extend(input.x[p as usize].iter());
+            }
+        }
         // 3. Nodal volumetric term and fluid pressure force (eqs. 56, 58),
         // closures included.
         let nc = self.clo_sys.len() / nv;
@@ -660,6 +746,41 @@ where
                     let f = p_a * self.w[slot][k];
                     sink.rhs(i, k, f);
                 }
+            }
+            if self.split {
+                // Row of `C`: (𝒦/M̂)^{1/2} w on free dofs; prescribed dofs'
+                // share of `Cᵀ C` moves to the right-hand side.
+                let r = self.c_row[a] as usize;
+                let row = &mut self.c_val[self.c_ptr[r]..self.c_ptr[r + 1]];
+                let nodal =
+                    self.treatment == VolumetricTreatment::NodalAveraged && self.vol_hat[a] > 0.0;
+                let c = if nodal {
+                    self.kappa_hat[a] / self.vol_hat[a]
+                } else {
+                    0.0
+                };
+                let sc = c.sqrt();
+                let mut fixed = 0.0;
+                for (ii, si) in (s..e).enumerate() {
+                    let pi = self.particle_of[self.patch_nodes[si] as usize] as usize;
+                    for k in 0..D {
+                        if input.constraints.is_fixed(pi, k) {
+                            fixed += self.w[si][k] * input.constraints.velocity[pi][k];
+                            row[ii * D + k] = 0.0;
+                        } else {
+                            row[ii * D + k] = sc * self.w[si][k];
+                        }
+                    }
+                }
+                if fixed != 0.0 {
+                    for si in s..e {
+                        let i = self.patch_nodes[si];
+                        for k in 0..D {
+                            sink.rhs(i, k, -c * self.w[si][k] * fixed);
+                        }
+                    }
+                }
+                continue;
             }
             if self.treatment == VolumetricTreatment::NodalAveraged && self.vol_hat[a] > 0.0 {
                 let c = self.kappa_hat[a] / self.vol_hat[a];

@@ -6,7 +6,9 @@
 //! [`Assembler::prepare`], which builds the sparsity pattern once; each
 //! Picard iteration then calls [`Assembler::assemble`] and a
 //! [`LinearSolver`].
+pub mod amg;
 pub mod assembler;
+pub mod block;
 pub mod error;
 pub mod kernels;
 pub mod pattern;
@@ -16,10 +18,11 @@ pub use assembler::{
     Assembler, AssemblerWork, AssemblyInfo, AssemblyInput, Constraints, Inertia, NodalRate,
     StepMesh,
 };
+pub use block::{AutoSolver, BlockSolver, BlockStats, PressureSolve, VelocityBlock};
 pub use error::{AssemblyError, SolveError};
 pub use faer::Par;
 pub use kernels::VolumetricTreatment;
 pub use solver::{
     ConjugateGradient, DirectSolver, LinearSolver, SolveReport, SolverWork, SparseCholesky,
-    SparseLu, DEFAULT_PARALLELISM,
+    SparseLu, SplitSystem, DEFAULT_PARALLELISM,
 };

@@ -36,8 +36,12 @@ pub struct SolverWork {
     /// Numeric factorisations (direct) or preconditioner set-ups
     /// (iterative).
     pub factorizations: u64,
-    /// Solves with a kept factorisation ([`LinearSolver::resolve`]).
+    /// Solves with a kept factorisation ([`LinearSolver::resolve`]), or
+    /// with a kept preconditioner (iterative).
     pub resolves: u64,
+    /// Krylov iterations summed over solves (iterative solvers; 0 for a
+    /// direct one).
+    pub iterations: u64,
 }
 
 impl std::ops::Add for SolverWork {
@@ -47,6 +51,7 @@ impl std::ops::Add for SolverWork {
             symbolic_analyses: self.symbolic_analyses + o.symbolic_analyses,
             factorizations: self.factorizations + o.factorizations,
             resolves: self.resolves + o.resolves,
+            iterations: self.iterations + o.iterations,
         }
     }
 }
@@ -81,6 +86,117 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
     /// The work done so far (zeros for a solver that does not count).
     fn work(&self) -> SolverWork {
         SolverWork::default()
+    }
+
+    /// Whether this solver wants a system of about `dofs` unknowns in split
+    /// form ([`SplitSystem`], solved by [`LinearSolver::solve_split`])
+    /// rather than assembled whole. Asked once per step, before assembly.
+    fn wants_split(&self, _dofs: usize) -> bool {
+        false
+    }
+
+    /// Solves `(A_v + Cᵀ C) x = f` given in split form. `x` holds an
+    /// initial guess on entry. Only called when
+    /// [`LinearSolver::wants_split`] said so; the default forms the
+    /// whole matrix and calls [`LinearSolver::solve`].
+    fn solve_split(
+        &mut self,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolveError> {
+        let a = sys.to_matrix()?;
+        self.solve(a.as_ref(), generation.wrapping_add(1 << 62), sys.rhs, x)
+    }
+}
+
+/// The monolithic system with its nodal volumetric term kept apart:
+/// `(A_v + Cᵀ C) V = f`, where `A_v` holds inertia, viscosity, solid
+/// stiffness and the prescribed rows, and `C = (𝒦/M̂)^{1/2} G` has one row
+/// per fluid node (eq. 56 with `G` of eq. 58). With `q = C V` (the nodal
+/// pressure increment scaled by `(M̂/𝒦)^{1/2}`) it is the saddle-point
+/// system `[A_v Cᵀ; C −I] [V; q] = [f; 0]`, which block preconditioners
+/// solve in a time close to linear in the unknowns.
+#[derive(Debug, Clone, Copy)]
+pub struct SplitSystem<'a> {
+    /// `A_v` (symmetric, CSC).
+    pub a_v: SparseColMatRef<'a, usize, f64>,
+    /// Row pointers of `C` (CSR).
+    pub c_ptr: &'a [usize],
+    /// Column (dof) indices of `C`.
+    pub c_idx: &'a [usize],
+    /// Values of `C`.
+    pub c_val: &'a [f64],
+    /// Unknowns per node (the dimension).
+    pub block_size: usize,
+    /// Node coordinates, `block_size` per node (rigid-body modes).
+    pub coords: &'a [f64],
+    /// Right-hand side `f`.
+    pub rhs: &'a [f64],
+}
+
+impl SplitSystem<'_> {
+    /// Rows of `C`.
+    pub fn c_rows(&self) -> usize {
+        self.c_ptr.len().saturating_sub(1)
+    }
+
+    /// `y = (A_v + Cᵀ C) x`; `q` is scratch of [`SplitSystem::c_rows`].
+    pub fn apply(&self, x: &[f64], y: &mut [f64], q: &mut Vec<f64>) {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        let a = self.a_v;
+        for j in 0..a.ncols() {
+            let xj = x[j];
+            for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                y[i] += v * xj;
+            }
+        }
+        q.clear();
+        for r in 0..self.c_rows() {
+            let (s, e) = (self.c_ptr[r], self.c_ptr[r + 1]);
+            q.push(
+                self.c_idx[s..e]
+                    .iter()
+                    .zip(&self.c_val[s..e])
+                    .map(|(&j, v)| v * x[j])
+                    .sum(),
+            );
+        }
+        for (r, &qr) in q.iter().enumerate() {
+            for s in self.c_ptr[r]..self.c_ptr[r + 1] {
+                y[self.c_idx[s]] += self.c_val[s] * qr;
+            }
+        }
+    }
+
+    /// The whole matrix `A_v + Cᵀ C` (CSC), as the assembler would have
+    /// built it unsplit.
+    pub fn to_matrix(&self) -> Result<faer::sparse::SparseColMat<usize, f64>, SolveError> {
+        let a = self.a_v;
+        let mut t: Vec<faer::sparse::Triplet<usize, usize, f64>> = Vec::new();
+        for j in 0..a.ncols() {
+            for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                t.push(faer::sparse::Triplet::new(i, j, *v));
+            }
+        }
+        for r in 0..self.c_rows() {
+            let (s, e) = (self.c_ptr[r], self.c_ptr[r + 1]);
+            for p in s..e {
+                for q in s..e {
+                    let v = self.c_val[p] * self.c_val[q];
+                    if v != 0.0 {
+                        t.push(faer::sparse::Triplet::new(self.c_idx[p], self.c_idx[q], v));
+                    }
+                }
+            }
+        }
+        let n = a.nrows();
+        faer::sparse::SparseColMat::try_new_from_triplets(n, n, &t).map_err(|e| {
+            SolveError::Factorization {
+                solver: "split system",
+                detail: format!("cannot form A_v + CᵀC: {e:?}"),
+            }
+        })
     }
 }
 
@@ -118,7 +234,7 @@ fn spmv_sub(a: SparseColMatRef<'_, usize, f64>, x: &[f64], r: &mut [f64]) {
     }
 }
 
-fn check_finite(b: &[f64]) -> Result<(), SolveError> {
+pub(crate) fn check_finite(b: &[f64]) -> Result<(), SolveError> {
     match b.iter().position(|v| !v.is_finite()) {
         Some(i) => Err(SolveError::NonFinite { index: i }),
         None => Ok(()),
@@ -169,13 +285,13 @@ pub const DEFAULT_PARALLELISM: Par = Par::Seq;
 /// system outgrows every earlier one (allocating per solve cost about 6%
 /// of the time of the 2D gate in page clearing alone).
 #[derive(Default)]
-struct Workspace {
+pub(crate) struct Workspace {
     req: Option<StackReq>,
     buf: Option<MemBuffer>,
 }
 
 impl Workspace {
-    fn stack(&mut self, req: StackReq) -> Result<&mut MemStack, String> {
+    pub(crate) fn stack(&mut self, req: StackReq) -> Result<&mut MemStack, String> {
         let need = match self.req {
             Some(have) => have.or(req),
             None => req,
@@ -195,7 +311,7 @@ impl Workspace {
 
 /// One kind of sparse direct factorisation (Cholesky or LU) through faer's
 /// low-level API, with explicit parallelism and caller-owned storage.
-trait Kind {
+pub(crate) trait Kind {
     type Symbolic: Send + Sync;
     type Numeric: Send + Sync + Default;
     /// Appended to a factorisation error.
@@ -219,7 +335,7 @@ trait Kind {
     ) -> Result<(), String>;
 }
 
-struct CholeskyKind;
+pub(crate) struct CholeskyKind;
 
 impl Kind for CholeskyKind {
     type Symbolic = SymbolicCholesky<usize>;

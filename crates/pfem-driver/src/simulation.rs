@@ -170,8 +170,11 @@ pub struct Work {
     pub elements_assembled: u64,
     /// Symbolic analyses of the linear solver.
     pub symbolic_analyses: u64,
-    /// Numeric factorisations of the linear solver.
+    /// Numeric factorisations (direct) or preconditioner set-ups
+    /// (iterative) of the linear solver.
     pub factorizations: u64,
+    /// Krylov iterations of the linear solver (0 for a direct one).
+    pub solver_iterations: u64,
 }
 
 /// Driver options chosen at construction ([`Simulation::with_options`]):
@@ -765,6 +768,7 @@ where
             elements_assembled: a.elements_assembled,
             symbolic_analyses: s.symbolic_analyses,
             factorizations: s.factorizations,
+            solver_iterations: s.iterations,
         }
     }
 

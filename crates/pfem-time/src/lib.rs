@@ -597,6 +597,7 @@ where
             dt,
             ..Default::default()
         };
+        self.assembler.set_split(self.solver.wants_split(n * D));
         self.assembler
             .prepare(n, input.mesh, input.materials)
             .map_err(|source| StepError::Assembly { time, dt, source })?;
@@ -668,7 +669,8 @@ where
             // A frozen-matrix correction when the last one shrank well,
             // a fresh factorisation otherwise.
             let mut corrected = false;
-            if self.params.reuse_factorization && it > 1 && !refactor {
+            let split = self.assembler.is_split();
+            if self.params.reuse_factorization && it > 1 && !refactor && !split {
                 self.res.resize(dofs, 0.0);
                 self.delta.resize(dofs, 0.0);
                 pfem_assembly::solver::residual(
@@ -686,15 +688,17 @@ where
                 }
             }
             if !corrected {
-                let sr = self
-                    .solver
-                    .solve(
+                let generation = self.assembler.generation();
+                let sr = match self.assembler.split_system() {
+                    Some(sys) => self.solver.solve_split(&sys, generation, &mut self.sol),
+                    None => self.solver.solve(
                         self.assembler.matrix(),
-                        self.assembler.generation(),
+                        generation,
                         self.assembler.rhs(),
                         &mut self.sol,
-                    )
-                    .map_err(|source| StepError::Solve { time, dt, source })?;
+                    ),
+                }
+                .map_err(|source| StepError::Solve { time, dt, source })?;
                 rep.residual = rep.residual.max(sr.residual);
                 rep.factorizations += 1;
             }

@@ -121,18 +121,22 @@ impl Args {
         Ok(p)
     }
 
-    /// The linear solver chosen by `--solver direct|lu|cholesky|cg`
-    /// (default `direct`: Cholesky with LU fallback).
+    /// The linear solver chosen by `--solver direct|lu|cholesky|cg|block`
+    /// (default `direct`: Cholesky with LU fallback; `block`: the
+    /// block-preconditioned MINRES of issue 18, [`pfem_assembly::BlockSolver`]).
     pub fn solver(&self) -> Result<Box<dyn pfem_assembly::LinearSolver>, ArgsError> {
-        use pfem_assembly::{ConjugateGradient, DirectSolver, SparseCholesky, SparseLu};
+        use pfem_assembly::{
+            BlockSolver, ConjugateGradient, DirectSolver, SparseCholesky, SparseLu,
+        };
         Ok(match self.options.get("solver").map(String::as_str) {
             None | Some("direct") => Box::new(DirectSolver::default()),
             Some("lu") => Box::new(SparseLu::default()),
             Some("cholesky") => Box::new(SparseCholesky::default()),
             Some("cg") => Box::new(ConjugateGradient::default()),
+            Some("block") => Box::new(BlockSolver::default()),
             Some(other) => {
                 return Err(ArgsError(format!(
-                    "--solver must be direct, lu, cholesky or cg, got `{other}`"
+                    "--solver must be direct, lu, cholesky, cg or block, got `{other}`"
                 )))
             }
         })

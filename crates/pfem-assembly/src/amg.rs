@@ -1,0 +1,2135 @@
+//! Smoothed-aggregation algebraic multigrid (SA-AMG) preconditioner and a
+//! preconditioned conjugate gradient solver.
+//!
+//! # Algorithm
+//!
+//! The hierarchy follows the classical smoothed-aggregation method of
+//! Vaněk, Mandel and Brezina:
+//!
+//! 1. **Strength of connection** is evaluated on *nodes* (groups of
+//!    `block_size` consecutive dofs). Nodes `I != J` are strongly connected if
+//!    `||A_IJ||_F^2 >= theta_l^2 ||A_II||_F ||A_JJ||_F`, where
+//!    `theta_l = strength_threshold * 0.5^l` on level `l` (the level-halving
+//!    rule of the original method; with a constant threshold the coarse-level
+//!    operators of 3D problems get partially-strong neighbourhoods and
+//!    irregular, too large aggregates). Weak connections are only ignored
+//!    for aggregation; the operators always use the full matrix.
+//! 2. **Greedy aggregation** (deterministic, natural node order):
+//!    pass 1 turns every node whose strong neighbours are all still free into
+//!    a new aggregate together with those neighbours; pass 2 attaches each
+//!    remaining node to the pass-1 aggregate of its strongest aggregated
+//!    neighbour; pass 3 builds new aggregates from whatever is left (a node
+//!    plus its free strong neighbours). Nodes without any strong neighbour
+//!    (e.g. decoupled identity rows, or rows dominated by their diagonal) are
+//!    left out of every aggregate, as in PyAMG: their prolongator rows are
+//!    zero and they are handled by the smoother alone. This keeps such nodes
+//!    from piling up as singleton aggregates on every coarse level.
+//! 3. **Tentative prolongator**: on each aggregate the rows of the near-null
+//!    space `B` (`m` vectors) are orthonormalised by modified Gram-Schmidt
+//!    with reorthogonalisation, `B_agg = Q R`. `Q` gives the aggregate's block
+//!    of `P_tent`, `R` the coarse near-null space. Every aggregate contributes
+//!    `m` coarse dofs (so the coarse block size is `m`); columns that are
+//!    numerically dependent (norm below `1e-10` of their original norm) are set
+//!    to zero, which yields zero rows/columns in the coarse operator that the
+//!    rest of the method tolerates.
+//! 4. **Prolongator smoothing**: `P = (I - omega D^{-1} A) P_tent` with
+//!    `omega = prolongator_damping / lambda_max(D^{-1} A)`; `lambda_max` is
+//!    estimated by 20 steps of Lanczos on `D^{-1/2} A D^{-1/2}` from a fixed
+//!    pseudo-random start vector, times a safety factor 1.05.
+//! 5. **Galerkin coarse operator** `A_c = P^T A P`. Coarsening stops when the
+//!    operator has at most `max_coarse` dofs, `max_levels` is reached, no
+//!    aggregate could be formed, or coarsening stalls (coarse dofs greater
+//!    than 0.9 × fine dofs).
+//! 6. **Coarsest level**: dense `L D L^T` factorisation (no pivoting) with a
+//!    pivot guard: pivots below `1e-10` times the original diagonal entry are
+//!    treated as zero (the corresponding component of the solution is set to
+//!    zero), so semi-definite operators such as a pure Neumann Laplacian are
+//!    handled without failure. If the coarsest operator is larger than
+//!    [`DENSE_COARSE_LIMIT`] dofs (only possible when coarsening stopped
+//!    early), it is instead "solved" by a high-degree Chebyshev smoother.
+//! 7. **Cycle**: a symmetric V-cycle. Pre- and post-smoothing use the same
+//!    Jacobi-preconditioned Chebyshev polynomial of degree `smoother_degree`
+//!    on the interval `[lambda_max / smoother_eig_ratio, 1.1 lambda_max]` of
+//!    `D^{-1} A`, so the cycle is a symmetric positive definite operator and
+//!    can be used to precondition CG or MINRES. The default ratio is 5, not
+//!    the 30 often quoted: with degree 2 and ratio 30 the polynomial only
+//!    damps the mid/high-frequency range by about 0.79 per sweep, and the
+//!    stand-alone V-cycle for 2D Poisson converged at about 0.6 per cycle
+//!    (PCG: 16-17 iterations); with ratio 5 it converges at about 0.21-0.26
+//!    per cycle (PCG: 9-10 iterations).
+//!
+//! The matrix must be symmetric positive (semi)definite; symmetry is assumed,
+//! not checked. Sparse matrix-vector products run in parallel with rayon for
+//! matrices with more than 20 000 rows; sparse matrix-matrix products are
+//! parallel over row chunks.
+#![allow(clippy::needless_range_loop)]
+
+use rayon::prelude::*;
+use std::fmt;
+use std::sync::{Mutex, TryLockError};
+
+/// Number of rows above which sparse matrix-vector products run in parallel.
+const PAR_ROWS: usize = 20_000;
+/// Number of rows per parallel chunk of a sparse matrix-vector product.
+const SPMV_CHUNK: usize = 4096;
+/// Largest coarsest-level operator that is factorised densely. Larger
+/// coarsest operators (only possible when coarsening stopped early) are
+/// approximated by a high-degree Chebyshev smoother instead.
+pub const DENSE_COARSE_LIMIT: usize = 2000;
+/// Degree of the Chebyshev polynomial used when the coarsest level is too
+/// large for the dense factorisation.
+const COARSE_CHEBYSHEV_DEGREE: usize = 8;
+/// Marker for a node that belongs to no aggregate.
+const UNAGGREGATED: usize = usize::MAX;
+
+// ---------------------------------------------------------------------------
+// Errors
+// ---------------------------------------------------------------------------
+
+/// Errors reported by [`Amg::new`] and [`Csr::try_from_triplets`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum AmgError {
+    /// The matrix is not square.
+    NotSquare {
+        /// Number of rows.
+        nrows: usize,
+        /// Number of columns.
+        ncols: usize,
+    },
+    /// The matrix has no rows.
+    Empty,
+    /// The CSR arrays are inconsistent (pointer array length, monotonicity,
+    /// column index out of range, array lengths).
+    InvalidStructure(String),
+    /// A matrix entry is NaN or infinite.
+    NonFiniteEntry {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+    /// A diagonal entry is missing, zero, negative or not finite.
+    NonPositiveDiagonal {
+        /// Row of the diagonal entry.
+        row: usize,
+        /// Its value (0 if the entry is missing).
+        value: f64,
+    },
+    /// The block size is zero or does not divide the matrix dimension.
+    InvalidBlockSize {
+        /// Requested block size.
+        block_size: usize,
+        /// Matrix dimension.
+        n: usize,
+    },
+    /// The near-null space has the wrong length (must be `n * m`, `m >= 1`).
+    NearNullLength {
+        /// Expected length `n * m`.
+        expected: usize,
+        /// Actual length.
+        got: usize,
+    },
+    /// The near-null space contains a NaN or infinite value.
+    NonFiniteNearNull,
+    /// An option is out of range; the string names it.
+    InvalidOption(&'static str),
+    /// A triplet index is outside the matrix dimensions.
+    IndexOutOfBounds {
+        /// Row index of the offending triplet.
+        row: usize,
+        /// Column index of the offending triplet.
+        col: usize,
+    },
+}
+
+impl fmt::Display for AmgError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AmgError::NotSquare { nrows, ncols } => {
+                write!(f, "matrix is not square ({nrows} x {ncols})")
+            }
+            AmgError::Empty => write!(f, "matrix is empty"),
+            AmgError::InvalidStructure(s) => write!(f, "invalid CSR structure: {s}"),
+            AmgError::NonFiniteEntry { row, col } => {
+                write!(f, "non-finite matrix entry at ({row}, {col})")
+            }
+            AmgError::NonPositiveDiagonal { row, value } => {
+                write!(f, "diagonal entry of row {row} is not positive ({value})")
+            }
+            AmgError::InvalidBlockSize { block_size, n } => {
+                write!(f, "block size {block_size} does not divide dimension {n}")
+            }
+            AmgError::NearNullLength { expected, got } => {
+                write!(
+                    f,
+                    "near-null space has length {got}, expected {expected} (n * m, m >= 1)"
+                )
+            }
+            AmgError::NonFiniteNearNull => write!(f, "near-null space contains non-finite values"),
+            AmgError::InvalidOption(name) => write!(f, "invalid AMG option: {name}"),
+            AmgError::IndexOutOfBounds { row, col } => {
+                write!(f, "triplet index ({row}, {col}) out of bounds")
+            }
+        }
+    }
+}
+
+impl std::error::Error for AmgError {}
+
+// ---------------------------------------------------------------------------
+// CSR matrix
+// ---------------------------------------------------------------------------
+
+/// Compressed sparse row matrix.
+///
+/// Row `i` holds the column indices `idx[ptr[i]..ptr[i + 1]]` and the values
+/// `val[ptr[i]..ptr[i + 1]]`. Matrices built by this module have sorted column
+/// indices without duplicates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Csr {
+    /// Number of rows.
+    pub nrows: usize,
+    /// Number of columns.
+    pub ncols: usize,
+    /// Row pointers, length `nrows + 1`.
+    pub ptr: Vec<usize>,
+    /// Column indices, length `nnz`.
+    pub idx: Vec<usize>,
+    /// Values, length `nnz`.
+    pub val: Vec<f64>,
+}
+
+impl Csr {
+    /// Builds a matrix from `(row, col, value)` triplets, summing duplicates.
+    /// Columns within each row are sorted.
+    ///
+    /// # Panics
+    /// Panics if an index is out of bounds; use [`Csr::try_from_triplets`] for
+    /// a fallible version.
+    pub fn from_triplets(nrows: usize, ncols: usize, triplets: &[(usize, usize, f64)]) -> Csr {
+        match Csr::try_from_triplets(nrows, ncols, triplets) {
+            Ok(m) => m,
+            Err(e) => panic!("Csr::from_triplets: {e}"),
+        }
+    }
+
+    /// Fallible version of [`Csr::from_triplets`]: returns
+    /// [`AmgError::IndexOutOfBounds`] instead of panicking.
+    pub fn try_from_triplets(
+        nrows: usize,
+        ncols: usize,
+        triplets: &[(usize, usize, f64)],
+    ) -> Result<Csr, AmgError> {
+        let mut count = vec![0usize; nrows + 1];
+        for &(r, c, _) in triplets {
+            if r >= nrows || c >= ncols {
+                return Err(AmgError::IndexOutOfBounds { row: r, col: c });
+            }
+            count[r + 1] += 1;
+        }
+        for i in 0..nrows {
+            count[i + 1] += count[i];
+        }
+        let mut next = count.clone();
+        let mut pairs = vec![(0usize, 0.0f64); triplets.len()];
+        for &(r, c, v) in triplets {
+            pairs[next[r]] = (c, v);
+            next[r] += 1;
+        }
+        let mut ptr = Vec::with_capacity(nrows + 1);
+        let mut idx = Vec::with_capacity(triplets.len());
+        let mut val = Vec::with_capacity(triplets.len());
+        ptr.push(0);
+        for i in 0..nrows {
+            let row = &mut pairs[count[i]..count[i + 1]];
+            row.sort_unstable_by_key(|p| p.0);
+            push_merged(row.iter().copied(), &mut idx, &mut val);
+            ptr.push(idx.len());
+        }
+        Ok(Csr {
+            nrows,
+            ncols,
+            ptr,
+            idx,
+            val,
+        })
+    }
+
+    /// Converts a faer compressed-sparse-column matrix (any shape, possibly
+    /// with unsorted or duplicate row indices) into CSR by a transpose
+    /// (counting sort). Duplicates are summed; columns of each row are sorted.
+    pub fn from_faer_csc(a: faer::sparse::SparseColMatRef<'_, usize, f64>) -> Csr {
+        let nrows = a.nrows();
+        let ncols = a.ncols();
+        let col_ptr = a.col_ptr();
+        let col_nnz = a.col_nnz();
+        let row_idx = a.row_idx();
+        let values = a.val();
+        let range = |j: usize| -> std::ops::Range<usize> {
+            let start = col_ptr[j];
+            let end = match col_nnz {
+                Some(nnz) => start + nnz[j],
+                None => col_ptr[j + 1],
+            };
+            start..end
+        };
+        let mut count = vec![0usize; nrows + 1];
+        for j in 0..ncols {
+            for k in range(j) {
+                count[row_idx[k] + 1] += 1;
+            }
+        }
+        for i in 0..nrows {
+            count[i + 1] += count[i];
+        }
+        let total = count[nrows];
+        let mut next = count.clone();
+        let mut pairs = vec![(0usize, 0.0f64); total];
+        // Columns are visited in increasing order, so each row's entries come
+        // out sorted by column.
+        for j in 0..ncols {
+            for k in range(j) {
+                let i = row_idx[k];
+                pairs[next[i]] = (j, values[k]);
+                next[i] += 1;
+            }
+        }
+        let mut ptr = Vec::with_capacity(nrows + 1);
+        let mut idx = Vec::with_capacity(total);
+        let mut val = Vec::with_capacity(total);
+        ptr.push(0);
+        for i in 0..nrows {
+            push_merged(
+                pairs[count[i]..count[i + 1]].iter().copied(),
+                &mut idx,
+                &mut val,
+            );
+            ptr.push(idx.len());
+        }
+        Csr {
+            nrows,
+            ncols,
+            ptr,
+            idx,
+            val,
+        }
+    }
+
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.idx.len()
+    }
+
+    #[inline]
+    fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
+        let mut s = 0.0;
+        for k in self.ptr[i]..self.ptr[i + 1] {
+            s += self.val[k] * x[self.idx[k]];
+        }
+        s
+    }
+
+    /// `y = A x`. Runs in parallel (rayon, row chunks) when the matrix has
+    /// more than 20 000 rows.
+    ///
+    /// # Panics
+    /// Panics if `x.len() != ncols` or `y.len() != nrows`.
+    pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
+        assert_eq!(x.len(), self.ncols, "spmv: x has wrong length");
+        assert_eq!(y.len(), self.nrows, "spmv: y has wrong length");
+        if self.nrows > PAR_ROWS {
+            y.par_chunks_mut(SPMV_CHUNK)
+                .enumerate()
+                .for_each(|(c, ys)| {
+                    let base = c * SPMV_CHUNK;
+                    for (j, yi) in ys.iter_mut().enumerate() {
+                        *yi = self.row_dot(base + j, x);
+                    }
+                });
+        } else {
+            for (i, yi) in y.iter_mut().enumerate() {
+                *yi = self.row_dot(i, x);
+            }
+        }
+    }
+
+    /// `y += alpha A x`. Parallel like [`Csr::spmv`].
+    ///
+    /// # Panics
+    /// Panics if `x.len() != ncols` or `y.len() != nrows`.
+    pub fn spmv_add(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
+        assert_eq!(x.len(), self.ncols, "spmv_add: x has wrong length");
+        assert_eq!(y.len(), self.nrows, "spmv_add: y has wrong length");
+        if self.nrows > PAR_ROWS {
+            y.par_chunks_mut(SPMV_CHUNK)
+                .enumerate()
+                .for_each(|(c, ys)| {
+                    let base = c * SPMV_CHUNK;
+                    for (j, yi) in ys.iter_mut().enumerate() {
+                        *yi += alpha * self.row_dot(base + j, x);
+                    }
+                });
+        } else {
+            for (i, yi) in y.iter_mut().enumerate() {
+                *yi += alpha * self.row_dot(i, x);
+            }
+        }
+    }
+
+    /// Returns `A^T` (columns sorted within each row).
+    pub fn transpose(&self) -> Csr {
+        let mut count = vec![0usize; self.ncols + 1];
+        for &j in &self.idx {
+            count[j + 1] += 1;
+        }
+        for j in 0..self.ncols {
+            count[j + 1] += count[j];
+        }
+        let mut next = count.clone();
+        let mut idx = vec![0usize; self.nnz()];
+        let mut val = vec![0.0; self.nnz()];
+        for i in 0..self.nrows {
+            for k in self.ptr[i]..self.ptr[i + 1] {
+                let j = self.idx[k];
+                idx[next[j]] = i;
+                val[next[j]] = self.val[k];
+                next[j] += 1;
+            }
+        }
+        Csr {
+            nrows: self.ncols,
+            ncols: self.nrows,
+            ptr: count,
+            idx,
+            val,
+        }
+    }
+
+    /// Sparse product `self * other` (Gustavson's algorithm with a dense
+    /// marker array; rows are processed in parallel chunks).
+    ///
+    /// # Panics
+    /// Panics if `self.ncols != other.nrows`.
+    pub fn matmul(&self, other: &Csr) -> Csr {
+        assert_eq!(self.ncols, other.nrows, "matmul: inner dimensions differ");
+        let nrows = self.nrows;
+        let ncols = other.ncols;
+        let nchunks = if nrows > 4096 {
+            (rayon::current_num_threads() * 4).max(1)
+        } else {
+            1
+        };
+        let chunk = nrows.div_ceil(nchunks).max(1);
+        let starts: Vec<usize> = (0..nrows).step_by(chunk).collect();
+        let parts: Vec<(Vec<usize>, Vec<usize>, Vec<f64>)> = starts
+            .par_iter()
+            .map(|&r0| {
+                let r1 = (r0 + chunk).min(nrows);
+                let mut marker = vec![usize::MAX; ncols];
+                let mut acc = vec![0.0f64; ncols];
+                let mut cols: Vec<usize> = Vec::new();
+                let mut lens = Vec::with_capacity(r1 - r0);
+                let mut idx = Vec::new();
+                let mut val = Vec::new();
+                for i in r0..r1 {
+                    cols.clear();
+                    for ka in self.ptr[i]..self.ptr[i + 1] {
+                        let k = self.idx[ka];
+                        let a = self.val[ka];
+                        for kb in other.ptr[k]..other.ptr[k + 1] {
+                            let j = other.idx[kb];
+                            if marker[j] != i {
+                                marker[j] = i;
+                                acc[j] = 0.0;
+                                cols.push(j);
+                            }
+                            acc[j] += a * other.val[kb];
+                        }
+                    }
+                    cols.sort_unstable();
+                    for &j in &cols {
+                        idx.push(j);
+                        val.push(acc[j]);
+                    }
+                    lens.push(cols.len());
+                }
+                (lens, idx, val)
+            })
+            .collect();
+        let total: usize = parts.iter().map(|p| p.1.len()).sum();
+        let mut ptr = Vec::with_capacity(nrows + 1);
+        let mut idx = Vec::with_capacity(total);
+        let mut val = Vec::with_capacity(total);
+        ptr.push(0);
+        for (lens, pidx, pval) in parts {
+            for l in lens {
+                let last = ptr[ptr.len() - 1];
+                ptr.push(last + l);
+            }
+            idx.extend_from_slice(&pidx);
+            val.extend_from_slice(&pval);
+        }
+        Csr {
+            nrows,
+            ncols,
+            ptr,
+            idx,
+            val,
+        }
+    }
+
+    /// Main diagonal (length `min(nrows, ncols)`); missing entries are 0 and
+    /// duplicate entries are summed.
+    pub fn diagonal(&self) -> Vec<f64> {
+        let n = self.nrows.min(self.ncols);
+        let mut d = vec![0.0; n];
+        for (i, di) in d.iter_mut().enumerate() {
+            for k in self.ptr[i]..self.ptr[i + 1] {
+                if self.idx[k] == i {
+                    *di += self.val[k];
+                }
+            }
+        }
+        d
+    }
+
+    /// Checks the internal consistency of the CSR arrays.
+    fn validate_structure(&self) -> Result<(), AmgError> {
+        if self.ptr.len() != self.nrows + 1 {
+            return Err(AmgError::InvalidStructure(format!(
+                "ptr has length {}, expected {}",
+                self.ptr.len(),
+                self.nrows + 1
+            )));
+        }
+        if self.ptr[0] != 0 {
+            return Err(AmgError::InvalidStructure("ptr[0] != 0".into()));
+        }
+        if self.ptr.windows(2).any(|w| w[0] > w[1]) {
+            return Err(AmgError::InvalidStructure("ptr is not monotone".into()));
+        }
+        let nnz = self.ptr[self.nrows];
+        if self.idx.len() != nnz || self.val.len() != nnz {
+            return Err(AmgError::InvalidStructure(format!(
+                "idx/val lengths ({}, {}) differ from ptr[nrows] = {nnz}",
+                self.idx.len(),
+                self.val.len()
+            )));
+        }
+        if let Some(&j) = self.idx.iter().find(|&&j| j >= self.ncols) {
+            return Err(AmgError::InvalidStructure(format!(
+                "column index {j} out of range (ncols = {})",
+                self.ncols
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Appends column-sorted `(col, val)` pairs to `idx`/`val`, summing runs of
+/// equal columns.
+fn push_merged(
+    pairs: impl Iterator<Item = (usize, f64)>,
+    idx: &mut Vec<usize>,
+    val: &mut Vec<f64>,
+) {
+    let row_start = idx.len();
+    for (c, v) in pairs {
+        if idx.len() > row_start && idx[idx.len() - 1] == c {
+            let last = val.len() - 1;
+            val[last] += v;
+        } else {
+            idx.push(c);
+            val.push(v);
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Small vector helpers
+// ---------------------------------------------------------------------------
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn norm2(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Deterministic pseudo-random numbers in `[-1, 1)` (64-bit LCG).
+fn lcg_vector(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    (0..n)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        })
+        .collect()
+}
+
+// ---------------------------------------------------------------------------
+// Options
+// ---------------------------------------------------------------------------
+
+/// Parameters of the smoothed-aggregation hierarchy.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AmgOptions {
+    /// Dofs per node (1 for scalar problems, 2 or 3 for vector problems). The
+    /// dofs of node `i` are `i*bs..i*bs+bs`.
+    pub block_size: usize,
+    /// Strength threshold `theta` of the symmetric node-level criterion
+    /// `||A_IJ||_F^2 >= theta_l^2 ||A_II||_F ||A_JJ||_F` (default 0.08). It
+    /// applies to the finest level; level `l` uses `theta_l = theta * 0.5^l`.
+    pub strength_threshold: f64,
+    /// Operators with at most this many dofs are solved directly (default 500).
+    pub max_coarse: usize,
+    /// Maximum number of levels including the coarsest (default 20).
+    pub max_levels: usize,
+    /// Degree of the Jacobi-preconditioned Chebyshev smoother (default 2).
+    pub smoother_degree: usize,
+    /// The Chebyshev smoother targets the interval
+    /// `[lambda_max / smoother_eig_ratio, 1.1 lambda_max]` of `D^{-1} A`
+    /// (default 5). Must be greater than 1.1.
+    pub smoother_eig_ratio: f64,
+    /// Prolongator damping: `omega = damping / lambda_max(D^{-1} A)`
+    /// (default 4/3).
+    pub prolongator_damping: f64,
+}
+
+impl Default for AmgOptions {
+    fn default() -> Self {
+        AmgOptions {
+            block_size: 1,
+            strength_threshold: 0.08,
+            max_coarse: 500,
+            max_levels: 20,
+            smoother_degree: 2,
+            smoother_eig_ratio: 5.0,
+            prolongator_damping: 4.0 / 3.0,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Setup pieces
+// ---------------------------------------------------------------------------
+
+/// `1 / d_i` for positive finite diagonal entries, 0 otherwise (zero rows of
+/// coarse operators that come from dependent near-null columns).
+fn inverse_diagonal(a: &Csr) -> Vec<f64> {
+    a.diagonal()
+        .into_iter()
+        .map(|d| {
+            if d > 0.0 && d.is_finite() {
+                1.0 / d
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// Largest eigenvalue of the symmetric tridiagonal matrix with diagonal
+/// `alpha` and off-diagonal `beta` (Sturm-sequence bisection).
+fn tridiag_max_eig(alpha: &[f64], beta: &[f64]) -> f64 {
+    let m = alpha.len();
+    if m == 0 {
+        return 0.0;
+    }
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for i in 0..m {
+        let r = if i > 0 { beta[i - 1].abs() } else { 0.0 }
+            + if i + 1 < m { beta[i].abs() } else { 0.0 };
+        lo = lo.min(alpha[i] - r);
+        hi = hi.max(alpha[i] + r);
+    }
+    // Number of eigenvalues smaller than x.
+    let count = |x: f64| -> usize {
+        let mut c = 0;
+        let mut q = alpha[0] - x;
+        if q < 0.0 {
+            c += 1;
+        }
+        for i in 1..m {
+            let qq = if q == 0.0 { f64::MIN_POSITIVE } else { q };
+            q = alpha[i] - x - beta[i - 1] * beta[i - 1] / qq;
+            if q < 0.0 {
+                c += 1;
+            }
+        }
+        c
+    };
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if count(mid) == m {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
+}
+
+/// Estimate of `lambda_max(D^{-1} A)` by Lanczos on `D^{-1/2} A D^{-1/2}`
+/// (20 steps, deterministic start vector), times the safety factor 1.05.
+fn estimate_lambda_max(a: &Csr, dinv: &[f64]) -> f64 {
+    let n = a.nrows;
+    if n == 0 {
+        return 1.0;
+    }
+    let dsq: Vec<f64> = dinv.iter().map(|d| d.sqrt()).collect();
+    let steps = n.min(20);
+    let mut v = lcg_vector(n, 12345);
+    for (vi, s) in v.iter_mut().zip(&dsq) {
+        if *s == 0.0 {
+            *vi = 0.0;
+        }
+    }
+    let nv = norm2(&v);
+    if nv == 0.0 {
+        return 1.0;
+    }
+    v.iter_mut().for_each(|x| *x /= nv);
+    let mut v_prev = vec![0.0; n];
+    let mut t = vec![0.0; n];
+    let mut w = vec![0.0; n];
+    let mut alphas = Vec::new();
+    let mut betas = Vec::new();
+    let mut beta_prev = 0.0;
+    for step in 0..steps {
+        for i in 0..n {
+            t[i] = dsq[i] * v[i];
+        }
+        a.spmv(&t, &mut w);
+        for i in 0..n {
+            w[i] *= dsq[i];
+        }
+        let alpha = dot(&w, &v);
+        for i in 0..n {
+            w[i] -= alpha * v[i] + beta_prev * v_prev[i];
+        }
+        alphas.push(alpha);
+        let beta = norm2(&w);
+        if step + 1 == steps || beta.is_nan() || beta <= 1e-12 * alpha.abs().max(f64::MIN_POSITIVE)
+        {
+            break;
+        }
+        betas.push(beta);
+        std::mem::swap(&mut v_prev, &mut v);
+        for i in 0..n {
+            v[i] = w[i] / beta;
+        }
+        beta_prev = beta;
+    }
+    let lmax = tridiag_max_eig(&alphas, &betas);
+    if lmax.is_finite() && lmax > 0.0 {
+        1.05 * lmax
+    } else {
+        1.0
+    }
+}
+
+/// Node-level strength graph: for each node, its strongly connected
+/// neighbours and the connection strength.
+struct StrengthGraph {
+    ptr: Vec<usize>,
+    idx: Vec<usize>,
+    weight: Vec<f64>,
+}
+
+fn strength_graph(a: &Csr, bs: usize, theta: f64) -> StrengthGraph {
+    let nn = a.nrows / bs;
+    // Node-level matrix of squared Frobenius norms of the blocks.
+    let mut bptr = Vec::with_capacity(nn + 1);
+    let mut bidx = Vec::new();
+    let mut bval = Vec::new();
+    let mut marker = vec![usize::MAX; nn];
+    let mut pos = vec![0usize; nn];
+    bptr.push(0);
+    for node in 0..nn {
+        for i in node * bs..node * bs + bs {
+            for k in a.ptr[i]..a.ptr[i + 1] {
+                let j = a.idx[k] / bs;
+                let v = a.val[k] * a.val[k];
+                if marker[j] != node {
+                    marker[j] = node;
+                    pos[j] = bidx.len();
+                    bidx.push(j);
+                    bval.push(v);
+                } else {
+                    bval[pos[j]] += v;
+                }
+            }
+        }
+        bptr.push(bidx.len());
+    }
+    let mut dnorm = vec![0.0; nn];
+    for node in 0..nn {
+        for k in bptr[node]..bptr[node + 1] {
+            if bidx[k] == node {
+                dnorm[node] = bval[k].sqrt();
+            }
+        }
+    }
+    let theta2 = theta * theta;
+    let mut ptr = Vec::with_capacity(nn + 1);
+    let mut idx = Vec::new();
+    let mut weight = Vec::new();
+    ptr.push(0);
+    for node in 0..nn {
+        for k in bptr[node]..bptr[node + 1] {
+            let j = bidx[k];
+            let s = bval[k];
+            if j == node || s.is_nan() || s <= 0.0 {
+                continue;
+            }
+            let scale = dnorm[node] * dnorm[j];
+            if s >= theta2 * scale {
+                idx.push(j);
+                weight.push(if scale > 0.0 { s / scale } else { s });
+            }
+        }
+        ptr.push(idx.len());
+    }
+    StrengthGraph { ptr, idx, weight }
+}
+
+/// Greedy three-pass aggregation. Returns the aggregate of every node
+/// (`UNAGGREGATED` for nodes without strong neighbours) and the number of
+/// aggregates.
+fn aggregate(g: &StrengthGraph) -> (Vec<usize>, usize) {
+    let nn = g.ptr.len() - 1;
+    let mut agg = vec![UNAGGREGATED; nn];
+    let mut nagg = 0;
+    let nbrs = |i: usize| &g.idx[g.ptr[i]..g.ptr[i + 1]];
+    // Pass 1: root nodes whose strong neighbourhood is entirely free.
+    for i in 0..nn {
+        if agg[i] != UNAGGREGATED || nbrs(i).is_empty() {
+            continue;
+        }
+        if nbrs(i).iter().all(|&j| agg[j] == UNAGGREGATED) {
+            agg[i] = nagg;
+            for &j in nbrs(i) {
+                agg[j] = nagg;
+            }
+            nagg += 1;
+        }
+    }
+    // Pass 2: attach to the strongest neighbouring pass-1 aggregate.
+    let pass1 = agg.clone();
+    for i in 0..nn {
+        if agg[i] != UNAGGREGATED {
+            continue;
+        }
+        let mut best = UNAGGREGATED;
+        let mut best_w = f64::NEG_INFINITY;
+        for k in g.ptr[i]..g.ptr[i + 1] {
+            let j = g.idx[k];
+            if pass1[j] != UNAGGREGATED && g.weight[k] > best_w {
+                best_w = g.weight[k];
+                best = pass1[j];
+            }
+        }
+        agg[i] = best;
+    }
+    // Pass 3: new aggregates from the leftovers.
+    for i in 0..nn {
+        if agg[i] != UNAGGREGATED || nbrs(i).is_empty() {
+            continue;
+        }
+        agg[i] = nagg;
+        for &j in nbrs(i) {
+            if agg[j] == UNAGGREGATED {
+                agg[j] = nagg;
+            }
+        }
+        nagg += 1;
+    }
+    (agg, nagg)
+}
+
+/// Per-aggregate QR result: `(dof, row of Q)` pairs and `R` (row-major).
+type AggregateQr = (Vec<(usize, Vec<f64>)>, Vec<f64>);
+
+/// Tentative prolongator and coarse near-null space. `b` is the near-null
+/// space (n x m, column-major). Returns `(P_tent, B_c)` with `B_c` of size
+/// `(nagg * m) x m`, column-major.
+fn tentative_prolongator(
+    agg: &[usize],
+    nagg: usize,
+    bs: usize,
+    b: &[f64],
+    m: usize,
+) -> (Csr, Vec<f64>) {
+    let nn = agg.len();
+    let n = nn * bs;
+    let nc = nagg * m;
+    // Node lists per aggregate (counting sort keeps natural order).
+    let mut aptr = vec![0usize; nagg + 1];
+    for &a in agg {
+        if a != UNAGGREGATED {
+            aptr[a + 1] += 1;
+        }
+    }
+    for a in 0..nagg {
+        aptr[a + 1] += aptr[a];
+    }
+    let mut next = aptr.clone();
+    let mut nodes = vec![0usize; aptr[nagg]];
+    for (i, &a) in agg.iter().enumerate() {
+        if a != UNAGGREGATED {
+            nodes[next[a]] = i;
+            next[a] += 1;
+        }
+    }
+    // Per aggregate: Q rows (written into q, n x m row-major) and R.
+    let results: Vec<AggregateQr> = (0..nagg)
+        .into_par_iter()
+        .map(|a| {
+            let dofs: Vec<usize> = nodes[aptr[a]..aptr[a + 1]]
+                .iter()
+                .flat_map(|&node| node * bs..node * bs + bs)
+                .collect();
+            let rows = dofs.len();
+            // Columns of the local block, column-major rows x m.
+            let mut q = vec![0.0; rows * m];
+            for j in 0..m {
+                for (r, &d) in dofs.iter().enumerate() {
+                    q[j * rows + r] = b[j * n + d];
+                }
+            }
+            let mut rmat = vec![0.0; m * m]; // row-major R
+            for j in 0..m {
+                let (prev, cur) = q.split_at_mut(j * rows);
+                let col = &mut cur[..rows];
+                let orig = norm2(col);
+                // Modified Gram-Schmidt, two passes.
+                for _ in 0..2 {
+                    for k in 0..j {
+                        let qk = &prev[k * rows..(k + 1) * rows];
+                        let c = dot(qk, col);
+                        rmat[k * m + j] += c;
+                        for (x, y) in col.iter_mut().zip(qk) {
+                            *x -= c * y;
+                        }
+                    }
+                }
+                let nrm = norm2(col);
+                if orig > 0.0 && nrm > 1e-10 * orig {
+                    rmat[j * m + j] = nrm;
+                    col.iter_mut().for_each(|x| *x /= nrm);
+                } else {
+                    col.iter_mut().for_each(|x| *x = 0.0);
+                }
+            }
+            let out: Vec<(usize, Vec<f64>)> = dofs
+                .iter()
+                .enumerate()
+                .map(|(r, &d)| (d, (0..m).map(|j| q[j * rows + r]).collect()))
+                .collect();
+            (out, rmat)
+        })
+        .collect();
+    let mut qrows = vec![0.0; n * m];
+    let mut bc = vec![0.0; nc * m];
+    for (a, (out, rmat)) in results.into_iter().enumerate() {
+        for (d, row) in out {
+            qrows[d * m..d * m + m].copy_from_slice(&row);
+        }
+        for k in 0..m {
+            for j in 0..m {
+                bc[j * nc + a * m + k] = rmat[k * m + j];
+            }
+        }
+    }
+    let mut ptr = Vec::with_capacity(n + 1);
+    let mut idx = Vec::new();
+    let mut val = Vec::new();
+    ptr.push(0);
+    for d in 0..n {
+        let a = agg[d / bs];
+        if a != UNAGGREGATED {
+            for j in 0..m {
+                let v = qrows[d * m + j];
+                if v != 0.0 {
+                    idx.push(a * m + j);
+                    val.push(v);
+                }
+            }
+        }
+        ptr.push(idx.len());
+    }
+    (
+        Csr {
+            nrows: n,
+            ncols: nc,
+            ptr,
+            idx,
+            val,
+        },
+        bc,
+    )
+}
+
+/// `S = I - omega D^{-1} A` (diagonal inserted if absent).
+fn jacobi_smoother_matrix(a: &Csr, dinv: &[f64], omega: f64) -> Csr {
+    let n = a.nrows;
+    let mut ptr = Vec::with_capacity(n + 1);
+    let mut idx = Vec::with_capacity(a.nnz() + n);
+    let mut val = Vec::with_capacity(a.nnz() + n);
+    ptr.push(0);
+    let mut pairs: Vec<(usize, f64)> = Vec::new();
+    for i in 0..n {
+        pairs.clear();
+        pairs.push((i, 1.0));
+        let s = -omega * dinv[i];
+        for k in a.ptr[i]..a.ptr[i + 1] {
+            pairs.push((a.idx[k], s * a.val[k]));
+        }
+        pairs.sort_by_key(|p| p.0);
+        push_merged(pairs.iter().copied(), &mut idx, &mut val);
+        ptr.push(idx.len());
+    }
+    Csr {
+        nrows: n,
+        ncols: a.ncols,
+        ptr,
+        idx,
+        val,
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Smoother and coarse solver
+// ---------------------------------------------------------------------------
+
+/// Jacobi-preconditioned Chebyshev iteration of the given degree for
+/// `A x = b` on `[lmax/ratio, 1.1 lmax]`. With `zero_guess` the incoming `x` is
+/// ignored. `r` and `d` are scratch vectors.
+#[allow(clippy::too_many_arguments)]
+fn chebyshev(
+    a: &Csr,
+    dinv: &[f64],
+    lmax: f64,
+    ratio: f64,
+    degree: usize,
+    b: &[f64],
+    x: &mut [f64],
+    zero_guess: bool,
+    r: &mut [f64],
+    d: &mut [f64],
+) {
+    let upper = 1.1 * lmax;
+    let lower = lmax / ratio;
+    let theta = 0.5 * (upper + lower);
+    let delta = 0.5 * (upper - lower);
+    let sigma = theta / delta;
+    let mut rho = 1.0 / sigma;
+    if zero_guess {
+        r.copy_from_slice(b);
+    } else {
+        a.spmv(x, r);
+        for (ri, bi) in r.iter_mut().zip(b) {
+            *ri = bi - *ri;
+        }
+    }
+    for i in 0..d.len() {
+        d[i] = dinv[i] * r[i] / theta;
+    }
+    if zero_guess {
+        x.copy_from_slice(d);
+    } else {
+        for (xi, di) in x.iter_mut().zip(d.iter()) {
+            *xi += di;
+        }
+    }
+    for _ in 1..degree {
+        a.spmv_add(-1.0, d, r);
+        let rho_new = 1.0 / (2.0 * sigma - rho);
+        let c1 = rho_new * rho;
+        let c2 = 2.0 * rho_new / delta;
+        for i in 0..d.len() {
+            d[i] = c1 * d[i] + c2 * dinv[i] * r[i];
+            x[i] += d[i];
+        }
+        rho = rho_new;
+    }
+}
+
+/// Dense `L D L^T` factorisation with a pivot guard (pseudo-inverse-like on
+/// semi-definite matrices).
+#[derive(Debug)]
+struct DenseLdl {
+    n: usize,
+    /// Unit lower triangular factor, row-major (strict lower part used).
+    l: Vec<f64>,
+    /// Inverse pivots (0 for guarded pivots).
+    dinv: Vec<f64>,
+}
+
+impl DenseLdl {
+    fn factor(a: &Csr) -> DenseLdl {
+        let n = a.nrows;
+        let mut l = vec![0.0; n * n];
+        for i in 0..n {
+            for k in a.ptr[i]..a.ptr[i + 1] {
+                l[i * n + a.idx[k]] += a.val[k];
+            }
+        }
+        let mut d = vec![0.0; n];
+        let mut dinv = vec![0.0; n];
+        let mut ld = vec![0.0; n];
+        for j in 0..n {
+            let orig = l[j * n + j];
+            // ld[k] = L_jk d_k
+            for k in 0..j {
+                ld[k] = l[j * n + k] * d[k];
+            }
+            let mut dj = orig;
+            for k in 0..j {
+                dj -= l[j * n + k] * ld[k];
+            }
+            let ok = dj.is_finite() && dj > 0.0 && dj > 1e-10 * orig.abs();
+            if ok {
+                d[j] = dj;
+                dinv[j] = 1.0 / dj;
+            }
+            for i in j + 1..n {
+                let row_i = &mut l[i * n..i * n + n];
+                if ok {
+                    let mut s = row_i[j];
+                    for k in 0..j {
+                        s -= row_i[k] * ld[k];
+                    }
+                    row_i[j] = s * dinv[j];
+                } else {
+                    row_i[j] = 0.0;
+                }
+            }
+            l[j * n + j] = 1.0;
+            // Clear the (unused) upper part of row j.
+            for k in j + 1..n {
+                l[j * n + k] = 0.0;
+            }
+        }
+        DenseLdl { n, l, dinv }
+    }
+
+    fn solve(&self, b: &[f64], x: &mut [f64]) {
+        let n = self.n;
+        x.copy_from_slice(b);
+        for i in 0..n {
+            let row = &self.l[i * n..i * n + i];
+            let s = dot(row, &x[..i]);
+            x[i] -= s;
+        }
+        for i in 0..n {
+            x[i] *= self.dinv[i];
+        }
+        for i in (0..n).rev() {
+            let xi = x[i];
+            let row = &self.l[i * n..i * n + i];
+            for (xk, lik) in x[..i].iter_mut().zip(row) {
+                *xk -= lik * xi;
+            }
+        }
+    }
+}
+
+#[derive(Debug)]
+enum CoarseSolver {
+    Dense(DenseLdl),
+    Chebyshev { dinv: Vec<f64>, lmax: f64 },
+}
+
+// ---------------------------------------------------------------------------
+// Hierarchy
+// ---------------------------------------------------------------------------
+
+#[derive(Debug)]
+struct Level {
+    a: Csr,
+    dinv: Vec<f64>,
+    lmax: f64,
+    p: Csr,
+    r: Csr,
+}
+
+#[derive(Debug)]
+struct Work {
+    b: Vec<f64>,
+    x: Vec<f64>,
+    r: Vec<f64>,
+    d: Vec<f64>,
+}
+
+impl Work {
+    fn new(n: usize) -> Work {
+        Work {
+            b: vec![0.0; n],
+            x: vec![0.0; n],
+            r: vec![0.0; n],
+            d: vec![0.0; n],
+        }
+    }
+}
+
+/// Smoothed-aggregation AMG hierarchy, usable as an SPD preconditioner via
+/// [`Amg::apply`]. `Amg` is `Send + Sync`: the per-level scratch vectors sit
+/// behind a mutex, and concurrent callers that find it busy allocate their
+/// own scratch.
+#[derive(Debug)]
+pub struct Amg {
+    levels: Vec<Level>,
+    coarse_a: Csr,
+    coarse: CoarseSolver,
+    degree: usize,
+    ratio: f64,
+    fine_nnz: usize,
+    scratch: Mutex<Vec<Work>>,
+}
+
+impl Amg {
+    /// Builds the hierarchy.
+    ///
+    /// `a` must be symmetric positive (semi)definite (symmetry is assumed,
+    /// not checked). `near_null` is `Some((b, m))` with `m` vectors of length
+    /// `n` stored column-major in `b` (length `n * m`), e.g. constants (`m =
+    /// 1`) for scalar problems or rigid-body modes for elasticity; `None`
+    /// means one constant vector per dof component (`m = block_size`).
+    ///
+    /// Errors: non-square or empty matrix, inconsistent CSR arrays,
+    /// non-finite entries, missing/non-positive/non-finite diagonal entries,
+    /// a block size that does not divide `n`, a near-null space of the wrong
+    /// length or with non-finite values, and out-of-range options.
+    pub fn new(
+        a: &Csr,
+        near_null: Option<(&[f64], usize)>,
+        opts: &AmgOptions,
+    ) -> Result<Amg, AmgError> {
+        if a.nrows != a.ncols {
+            return Err(AmgError::NotSquare {
+                nrows: a.nrows,
+                ncols: a.ncols,
+            });
+        }
+        a.validate_structure()?;
+        let n = a.nrows;
+        if n == 0 {
+            return Err(AmgError::Empty);
+        }
+        let bs = opts.block_size;
+        if bs == 0 || (n / bs) * bs != n {
+            return Err(AmgError::InvalidBlockSize { block_size: bs, n });
+        }
+        if !(opts.strength_threshold.is_finite() && opts.strength_threshold >= 0.0) {
+            return Err(AmgError::InvalidOption("strength_threshold"));
+        }
+        if opts.max_levels == 0 {
+            return Err(AmgError::InvalidOption("max_levels"));
+        }
+        if opts.smoother_degree == 0 {
+            return Err(AmgError::InvalidOption("smoother_degree"));
+        }
+        if !(opts.smoother_eig_ratio.is_finite() && opts.smoother_eig_ratio > 1.1) {
+            return Err(AmgError::InvalidOption("smoother_eig_ratio"));
+        }
+        if !(opts.prolongator_damping.is_finite() && opts.prolongator_damping >= 0.0) {
+            return Err(AmgError::InvalidOption("prolongator_damping"));
+        }
+        for i in 0..n {
+            for k in a.ptr[i]..a.ptr[i + 1] {
+                if !a.val[k].is_finite() {
+                    return Err(AmgError::NonFiniteEntry {
+                        row: i,
+                        col: a.idx[k],
+                    });
+                }
+            }
+        }
+        let diag = a.diagonal();
+        if let Some((row, &value)) = diag
+            .iter()
+            .enumerate()
+            .find(|(_, d)| d.is_nan() || **d <= 0.0)
+        {
+            return Err(AmgError::NonPositiveDiagonal { row, value });
+        }
+        let (mut b, m) = match near_null {
+            Some((b, m)) => {
+                if m == 0 || b.len() != n * m {
+                    return Err(AmgError::NearNullLength {
+                        expected: n * m.max(1),
+                        got: b.len(),
+                    });
+                }
+                if b.iter().any(|x| !x.is_finite()) {
+                    return Err(AmgError::NonFiniteNearNull);
+                }
+                (b.to_vec(), m)
+            }
+            None => {
+                let mut b = vec![0.0; n * bs];
+                for c in 0..bs {
+                    for node in 0..n / bs {
+                        b[c * n + node * bs + c] = 1.0;
+                    }
+                }
+                (b, bs)
+            }
+        };
+
+        let mut levels = Vec::new();
+        let mut cur = a.clone();
+        let mut cur_bs = bs;
+        loop {
+            let nf = cur.nrows;
+            if nf <= opts.max_coarse || levels.len() + 1 >= opts.max_levels {
+                break;
+            }
+            // Vaněk-Mandel-Brezina: the threshold halves on every coarser level.
+            let theta = opts.strength_threshold * 0.5f64.powi(levels.len() as i32);
+            let g = strength_graph(&cur, cur_bs, theta);
+            let (agg, nagg) = aggregate(&g);
+            let nc = nagg * m;
+            if nagg == 0 || nc as f64 > 0.9 * nf as f64 {
+                break;
+            }
+            let dinv = inverse_diagonal(&cur);
+            let lmax = estimate_lambda_max(&cur, &dinv);
+            let (p_tent, bc) = tentative_prolongator(&agg, nagg, cur_bs, &b, m);
+            let omega = opts.prolongator_damping / lmax;
+            let s = jacobi_smoother_matrix(&cur, &dinv, omega);
+            let p = s.matmul(&p_tent);
+            let r = p.transpose();
+            let ac = r.matmul(&cur.matmul(&p));
+            let next = ac;
+            levels.push(Level {
+                a: std::mem::replace(&mut cur, next),
+                dinv,
+                lmax,
+                p,
+                r,
+            });
+            b = bc;
+            cur_bs = m;
+        }
+        let coarse = if cur.nrows <= DENSE_COARSE_LIMIT {
+            CoarseSolver::Dense(DenseLdl::factor(&cur))
+        } else {
+            let dinv = inverse_diagonal(&cur);
+            let lmax = estimate_lambda_max(&cur, &dinv);
+            CoarseSolver::Chebyshev { dinv, lmax }
+        };
+        let mut work: Vec<Work> = levels.iter().map(|l| Work::new(l.a.nrows)).collect();
+        work.push(Work::new(cur.nrows));
+        Ok(Amg {
+            levels,
+            coarse_a: cur,
+            coarse,
+            degree: opts.smoother_degree,
+            ratio: opts.smoother_eig_ratio,
+            fine_nnz: a.nnz(),
+            scratch: Mutex::new(work),
+        })
+    }
+
+    /// Number of rows of the fine operator.
+    fn n(&self) -> usize {
+        match self.levels.first() {
+            Some(l) => l.a.nrows,
+            None => self.coarse_a.nrows,
+        }
+    }
+
+    fn new_work(&self) -> Vec<Work> {
+        let mut work: Vec<Work> = self.levels.iter().map(|l| Work::new(l.a.nrows)).collect();
+        work.push(Work::new(self.coarse_a.nrows));
+        work
+    }
+
+    /// One symmetric V-cycle from a zero initial guess: `z ≈ A^{-1} r`.
+    /// The operator `r -> z` is linear, symmetric and positive definite (for
+    /// SPD `A`), so it is a valid preconditioner for CG or MINRES.
+    ///
+    /// # Panics
+    /// Panics if `r` or `z` does not have the length of the fine operator.
+    pub fn apply(&self, r: &[f64], z: &mut [f64]) {
+        let n = self.n();
+        assert_eq!(r.len(), n, "Amg::apply: r has wrong length");
+        assert_eq!(z.len(), n, "Amg::apply: z has wrong length");
+        match self.scratch.try_lock() {
+            Ok(mut w) => self.cycle(&mut w, r, z),
+            Err(TryLockError::Poisoned(p)) => {
+                // The scratch is fully overwritten by every cycle, so a
+                // panic in another thread cannot leave it in a harmful state.
+                let mut w = p.into_inner();
+                self.cycle(&mut w, r, z)
+            }
+            Err(TryLockError::WouldBlock) => {
+                let mut w = self.new_work();
+                self.cycle(&mut w, r, z)
+            }
+        }
+    }
+
+    fn coarse_solve(&self, w: &mut Work) {
+        match &self.coarse {
+            CoarseSolver::Dense(ldl) => ldl.solve(&w.b, &mut w.x),
+            CoarseSolver::Chebyshev { dinv, lmax } => chebyshev(
+                &self.coarse_a,
+                dinv,
+                *lmax,
+                self.ratio,
+                COARSE_CHEBYSHEV_DEGREE.max(self.degree),
+                &w.b,
+                &mut w.x,
+                true,
+                &mut w.r,
+                &mut w.d,
+            ),
+        }
+    }
+
+    fn cycle(&self, work: &mut [Work], r: &[f64], z: &mut [f64]) {
+        let nl = self.levels.len();
+        work[0].b.copy_from_slice(r);
+        for (l, lev) in self.levels.iter().enumerate() {
+            let (lo, hi) = work.split_at_mut(l + 1);
+            let w = &mut lo[l];
+            chebyshev(
+                &lev.a,
+                &lev.dinv,
+                lev.lmax,
+                self.ratio,
+                self.degree,
+                &w.b,
+                &mut w.x,
+                true,
+                &mut w.r,
+                &mut w.d,
+            );
+            lev.a.spmv(&w.x, &mut w.r);
+            for (ri, bi) in w.r.iter_mut().zip(&w.b) {
+                *ri = bi - *ri;
+            }
+            lev.r.spmv(&w.r, &mut hi[0].b);
+        }
+        self.coarse_solve(&mut work[nl]);
+        for (l, lev) in self.levels.iter().enumerate().rev() {
+            let (lo, hi) = work.split_at_mut(l + 1);
+            let w = &mut lo[l];
+            lev.p.spmv_add(1.0, &hi[0].x, &mut w.x);
+            chebyshev(
+                &lev.a,
+                &lev.dinv,
+                lev.lmax,
+                self.ratio,
+                self.degree,
+                &w.b,
+                &mut w.x,
+                false,
+                &mut w.r,
+                &mut w.d,
+            );
+        }
+        z.copy_from_slice(&work[0].x);
+    }
+
+    /// Number of levels, including the coarsest.
+    pub fn levels(&self) -> usize {
+        self.levels.len() + 1
+    }
+
+    /// Number of dofs on each level, finest first.
+    pub fn level_sizes(&self) -> Vec<usize> {
+        self.levels
+            .iter()
+            .map(|l| l.a.nrows)
+            .chain(std::iter::once(self.coarse_a.nrows))
+            .collect()
+    }
+
+    /// Operator complexity: sum of `nnz` over all level operators divided by
+    /// `nnz` of the fine operator.
+    pub fn operator_complexity(&self) -> f64 {
+        let total: usize =
+            self.levels.iter().map(|l| l.a.nnz()).sum::<usize>() + self.coarse_a.nnz();
+        total as f64 / self.fine_nnz.max(1) as f64
+    }
+}
+
+// ---------------------------------------------------------------------------
+// PCG
+// ---------------------------------------------------------------------------
+
+/// Preconditioned conjugate gradient for SPD `a`.
+///
+/// `x` holds the initial guess and receives the solution; `precond(r, z)`
+/// must write `z = M^{-1} r` for an SPD `M`. Iterates until the recursively
+/// updated residual satisfies `||r|| <= tol ||b||` or `max_iter` iterations
+/// are done (or a breakdown occurs). Returns `(iterations, ||b - A x|| /
+/// ||b||)` with the *true* final residual. For `b = 0` the solution is
+/// `x = 0` and `(0, 0.0)` is returned.
+///
+/// # Panics
+/// Panics if `b` or `x` does not match the dimension of `a`.
+pub fn pcg(
+    a: &Csr,
+    b: &[f64],
+    x: &mut [f64],
+    precond: &dyn Fn(&[f64], &mut [f64]),
+    tol: f64,
+    max_iter: usize,
+) -> (usize, f64) {
+    let n = a.nrows;
+    assert_eq!(b.len(), n, "pcg: b has wrong length");
+    assert_eq!(x.len(), n, "pcg: x has wrong length");
+    let bnorm = norm2(b);
+    if bnorm == 0.0 {
+        x.iter_mut().for_each(|v| *v = 0.0);
+        return (0, 0.0);
+    }
+    let mut r = vec![0.0; n];
+    a.spmv(x, &mut r);
+    for (ri, bi) in r.iter_mut().zip(b) {
+        *ri = bi - *ri;
+    }
+    let true_residual = |x: &[f64], tmp: &mut [f64]| -> f64 {
+        a.spmv(x, tmp);
+        let s: f64 = tmp.iter().zip(b).map(|(t, bi)| (bi - t) * (bi - t)).sum();
+        s.sqrt() / bnorm
+    };
+    if norm2(&r) <= tol * bnorm {
+        return (0, norm2(&r) / bnorm);
+    }
+    let mut z = vec![0.0; n];
+    precond(&r, &mut z);
+    let mut p = z.clone();
+    let mut q = vec![0.0; n];
+    let mut rz = dot(&r, &z);
+    let mut iters = 0;
+    for it in 1..=max_iter {
+        iters = it;
+        a.spmv(&p, &mut q);
+        let pq = dot(&p, &q);
+        if pq.is_nan() || pq <= 0.0 || !pq.is_finite() {
+            break;
+        }
+        let alpha = rz / pq;
+        for i in 0..n {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * q[i];
+        }
+        if norm2(&r) <= tol * bnorm {
+            break;
+        }
+        precond(&r, &mut z);
+        let rz_new = dot(&r, &z);
+        if !rz_new.is_finite() || rz == 0.0 {
+            break;
+        }
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for i in 0..n {
+            p[i] = z[i] + beta * p[i];
+        }
+    }
+    let res = true_residual(x, &mut q);
+    (iters, res)
+}
+
+// ---------------------------------------------------------------------------
+// Tests
+// ---------------------------------------------------------------------------
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Instant;
+
+    /// 5-point Dirichlet Laplacian on an n x n interior grid (unscaled).
+    fn poisson2d(n: usize) -> Csr {
+        let id = |i: usize, j: usize| j * n + i;
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let r = id(i, j);
+                t.push((r, r, 4.0));
+                if i > 0 {
+                    t.push((r, id(i - 1, j), -1.0));
+                }
+                if i + 1 < n {
+                    t.push((r, id(i + 1, j), -1.0));
+                }
+                if j > 0 {
+                    t.push((r, id(i, j - 1), -1.0));
+                }
+                if j + 1 < n {
+                    t.push((r, id(i, j + 1), -1.0));
+                }
+            }
+        }
+        Csr::from_triplets(n * n, n * n, &t)
+    }
+
+    /// 7-point Dirichlet Laplacian on an n^3 interior grid.
+    fn poisson3d(n: usize) -> Csr {
+        let id = |i: usize, j: usize, k: usize| (k * n + j) * n + i;
+        let mut t = Vec::new();
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let r = id(i, j, k);
+                    t.push((r, r, 6.0));
+                    let mut nb = |c: usize| t.push((r, c, -1.0));
+                    if i > 0 {
+                        nb(id(i - 1, j, k));
+                    }
+                    if i + 1 < n {
+                        nb(id(i + 1, j, k));
+                    }
+                    if j > 0 {
+                        nb(id(i, j - 1, k));
+                    }
+                    if j + 1 < n {
+                        nb(id(i, j + 1, k));
+                    }
+                    if k > 0 {
+                        nb(id(i, j, k - 1));
+                    }
+                    if k + 1 < n {
+                        nb(id(i, j, k + 1));
+                    }
+                }
+            }
+        }
+        Csr::from_triplets(n * n * n, n * n * n, &t)
+    }
+
+    /// Plane-strain linear elasticity (E = 1, nu = 0.3) with P1 triangles on
+    /// the unit square, `ne x ne` squares each cut into two triangles. The
+    /// nodes on the clamped left edge (x = 0) are removed from the system
+    /// (their dofs are eliminated), so every remaining node has 2 dofs
+    /// (block size 2). Returns the matrix and the 3 rigid-body modes
+    /// (column-major, n x 3) built from the free nodes' coordinates.
+    fn elasticity2d(ne: usize) -> (Csr, Vec<f64>) {
+        let nu = 0.3;
+        let e = 1.0;
+        let c = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let dmat = [
+            [c * (1.0 - nu), c * nu, 0.0],
+            [c * nu, c * (1.0 - nu), 0.0],
+            [0.0, 0.0, c * (1.0 - 2.0 * nu) / 2.0],
+        ];
+        let h = 1.0 / ne as f64;
+        let np = ne + 1;
+        // Free node numbering: skip i == 0.
+        let free = |i: usize, j: usize| -> Option<usize> {
+            if i == 0 {
+                None
+            } else {
+                Some(j * ne + (i - 1))
+            }
+        };
+        let nfree = np * ne;
+        let mut t = Vec::new();
+        for j in 0..ne {
+            for i in 0..ne {
+                let quads = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+                for tri in [[0usize, 1, 2], [0, 2, 3]] {
+                    let p: Vec<(usize, usize)> = tri.iter().map(|&k| quads[k]).collect();
+                    let xy: Vec<(f64, f64)> = p
+                        .iter()
+                        .map(|&(a, b)| (a as f64 * h, b as f64 * h))
+                        .collect();
+                    let det = (xy[1].0 - xy[0].0) * (xy[2].1 - xy[0].1)
+                        - (xy[2].0 - xy[0].0) * (xy[1].1 - xy[0].1);
+                    let area = 0.5 * det;
+                    let mut bm = [[0.0f64; 6]; 3];
+                    for a in 0..3 {
+                        let (b1, b2) = ((a + 1) % 3, (a + 2) % 3);
+                        let bb = (xy[b1].1 - xy[b2].1) / det;
+                        let cc = (xy[b2].0 - xy[b1].0) / det;
+                        bm[0][2 * a] = bb;
+                        bm[1][2 * a + 1] = cc;
+                        bm[2][2 * a] = cc;
+                        bm[2][2 * a + 1] = bb;
+                    }
+                    for r in 0..6 {
+                        for s in 0..6 {
+                            let mut v = 0.0;
+                            for k in 0..3 {
+                                for l in 0..3 {
+                                    v += bm[k][r] * dmat[k][l] * bm[l][s];
+                                }
+                            }
+                            v *= area;
+                            let (nr, ns) = (p[r / 2], p[s / 2]);
+                            if let (Some(fr), Some(fs)) = (free(nr.0, nr.1), free(ns.0, ns.1)) {
+                                t.push((2 * fr + r % 2, 2 * fs + s % 2, v));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let n = 2 * nfree;
+        let a = Csr::from_triplets(n, n, &t);
+        let mut b = vec![0.0; n * 3];
+        for j in 0..np {
+            for i in 1..np {
+                let f = free(i, j).unwrap_or(0);
+                let (x, y) = (i as f64 * h, j as f64 * h);
+                b[2 * f] = 1.0;
+                b[n + 2 * f + 1] = 1.0;
+                b[2 * n + 2 * f] = -y;
+                b[2 * n + 2 * f + 1] = x;
+            }
+        }
+        (a, b)
+    }
+
+    /// Neumann 5-point operator with a node coefficient jumping from 1
+    /// (x < 1/2) to `jump` (x >= 1/2) (harmonic face averages), plus `c I`
+    /// (a lumped mass term relative to the unit Laplacian scale).
+    fn jump_laplacian_plus_mass(n: usize, jump: f64, c: f64) -> Csr {
+        let id = |i: usize, j: usize| j * n + i;
+        let k = |i: usize| if 2 * i < n { 1.0 } else { jump };
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let r = id(i, j);
+                t.push((r, r, c));
+                let mut face = |i2: usize, j2: usize| {
+                    let kf = 2.0 * k(i) * k(i2) / (k(i) + k(i2));
+                    let s = id(i2, j2);
+                    t.push((r, r, kf));
+                    t.push((r, s, -kf));
+                };
+                if i > 0 {
+                    face(i - 1, j);
+                }
+                if i + 1 < n {
+                    face(i + 1, j);
+                }
+                if j > 0 {
+                    face(i, j - 1);
+                }
+                if j + 1 < n {
+                    face(i, j + 1);
+                }
+            }
+        }
+        Csr::from_triplets(n * n, n * n, &t)
+    }
+
+    struct Run {
+        iters: usize,
+        res: f64,
+        levels: usize,
+        sizes: Vec<usize>,
+        oc: f64,
+        setup: f64,
+        solve: f64,
+    }
+
+    fn solve(a: &Csr, b: &[f64], nn: Option<(&[f64], usize)>, opts: &AmgOptions) -> Run {
+        let t0 = Instant::now();
+        let amg = match Amg::new(a, nn, opts) {
+            Ok(m) => m,
+            Err(e) => panic!("setup failed: {e}"),
+        };
+        let setup = t0.elapsed().as_secs_f64();
+        let mut x = vec![0.0; a.nrows];
+        let t1 = Instant::now();
+        let (iters, res) = pcg(a, b, &mut x, &|r, z| amg.apply(r, z), 1e-8, 500);
+        let solve = t1.elapsed().as_secs_f64();
+        Run {
+            iters,
+            res,
+            levels: amg.levels(),
+            sizes: amg.level_sizes(),
+            oc: amg.operator_complexity(),
+            setup,
+            solve,
+        }
+    }
+
+    fn print_run(label: &str, r: &Run) {
+        println!(
+            "{label}: iters {:3}  relres {:.2e}  levels {}  sizes {:?}  op.complexity {:.3}  setup {:.3}s  solve {:.3}s",
+            r.iters, r.res, r.levels, r.sizes, r.oc, r.setup, r.solve
+        );
+    }
+
+    #[test]
+    fn poisson_2d_scaling() {
+        let opts = AmgOptions::default();
+        let mut its = Vec::new();
+        for n in [32usize, 64, 128, 256] {
+            let a = poisson2d(n);
+            let b = vec![1.0; a.nrows];
+            let r = solve(&a, &b, None, &opts);
+            print_run(&format!("2D Poisson n={n:4} (dofs {:6})", a.nrows), &r);
+            assert!(r.res <= 1e-8, "not converged");
+            assert!(r.iters <= 25);
+            its.push(r.iters);
+        }
+        assert!(its[3] as f64 <= 1.5 * its[0] as f64);
+    }
+
+    #[test]
+    fn poisson_3d_scaling() {
+        let opts = AmgOptions::default();
+        let mut its = Vec::new();
+        for n in [12usize, 24, 40] {
+            let a = poisson3d(n);
+            let b = vec![1.0; a.nrows];
+            let r = solve(&a, &b, None, &opts);
+            print_run(&format!("3D Poisson n={n:3} (dofs {:6})", a.nrows), &r);
+            assert!(r.res <= 1e-8, "not converged");
+            assert!(r.iters <= 25);
+            its.push(r.iters);
+        }
+        assert!(its[2] as f64 <= 1.5 * its[0] as f64);
+    }
+
+    #[test]
+    fn elasticity_2d_scaling() {
+        let opts = AmgOptions {
+            block_size: 2,
+            ..AmgOptions::default()
+        };
+        let mut its = Vec::new();
+        for ne in [16usize, 32, 64, 128] {
+            let (a, rbm) = elasticity2d(ne);
+            let b = vec![1.0; a.nrows];
+            let r = solve(&a, &b, Some((&rbm, 3)), &opts);
+            print_run(&format!("elasticity {ne:3}^2 RBM (dofs {:6})", a.nrows), &r);
+            assert!(r.res <= 1e-8, "not converged");
+            assert!(r.iters <= 40);
+            its.push(r.iters);
+            let r2 = solve(&a, &b, None, &opts);
+            print_run(
+                &format!("elasticity {ne:3}^2 const(dofs {:6})", a.nrows),
+                &r2,
+            );
+            assert!(r2.res <= 1e-8, "not converged (constant near-null)");
+        }
+        assert!(its[3] as f64 <= 1.6 * its[0] as f64);
+    }
+
+    #[test]
+    fn mass_term_and_coefficient_jump() {
+        let opts = AmgOptions::default();
+        for n in [64usize, 128] {
+            for jump in [1.0, 1e4] {
+                for c in [1e-6, 1e-3, 1.0, 1e3, 1e6] {
+                    let a = jump_laplacian_plus_mass(n, jump, c);
+                    // Zero-mean right-hand side: with pure Neumann K the
+                    // constant is an eigenvector with eigenvalue c, and a
+                    // constant component of size 1/c would make a relative
+                    // residual of 1e-8 unattainable in double precision.
+                    let mut b = lcg_vector(a.nrows, 21);
+                    let mean = b.iter().sum::<f64>() / b.len() as f64;
+                    b.iter_mut().for_each(|v| *v -= mean);
+                    let r = solve(&a, &b, None, &opts);
+                    print_run(&format!("K+cM n={n:3} jump={jump:.0e} c={c:.0e}"), &r);
+                    assert!(r.res <= 1e-8, "not converged");
+                    assert!(r.iters <= 40);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn neumann_semidefinite() {
+        // Pure Neumann Laplacian (singular); compatible right-hand side.
+        let opts = AmgOptions::default();
+        for n in [64usize, 128] {
+            let a = jump_laplacian_plus_mass(n, 1.0, 0.0);
+            let mut b = lcg_vector(a.nrows, 7);
+            let mean = b.iter().sum::<f64>() / b.len() as f64;
+            b.iter_mut().for_each(|v| *v -= mean);
+            let r = solve(&a, &b, None, &opts);
+            print_run(&format!("Neumann singular n={n:3}"), &r);
+            assert!(r.res <= 1e-8, "not converged");
+            assert!(r.iters <= 40);
+        }
+    }
+
+    #[test]
+    fn vcycle_convergence_factor() {
+        let opts = AmgOptions::default();
+        for n in [64usize, 256] {
+            let a = poisson2d(n);
+            let amg = match Amg::new(&a, None, &opts) {
+                Ok(m) => m,
+                Err(e) => panic!("{e}"),
+            };
+            let b = lcg_vector(a.nrows, 3);
+            let mut x = vec![0.0; a.nrows];
+            let mut r = b.clone();
+            let mut z = vec![0.0; a.nrows];
+            let r0 = norm2(&r);
+            let mut factors = Vec::new();
+            let mut prev = r0;
+            for _ in 0..10 {
+                amg.apply(&r, &mut z);
+                for i in 0..x.len() {
+                    x[i] += z[i];
+                }
+                a.spmv(&x, &mut r);
+                for i in 0..r.len() {
+                    r[i] = b[i] - r[i];
+                }
+                let cur = norm2(&r);
+                factors.push(cur / prev);
+                prev = cur;
+            }
+            let rho = (prev / r0).powf(0.1);
+            println!(
+                "V-cycle n={n}: geometric-mean residual reduction {rho:.3}; per-cycle {:?}",
+                factors
+                    .iter()
+                    .map(|f| format!("{f:.3}"))
+                    .collect::<Vec<_>>()
+            );
+            assert!(rho < 0.3);
+        }
+    }
+
+    #[test]
+    fn bad_input_is_error() {
+        let opts = AmgOptions::default();
+        let ns = Csr::from_triplets(2, 3, &[(0, 0, 1.0), (1, 1, 1.0)]);
+        let e = Amg::new(&ns, None, &opts).err();
+        println!("non-square: {e:?}");
+        assert!(matches!(e, Some(AmgError::NotSquare { .. })));
+
+        let nan = Csr::from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, 1.0), (0, 1, f64::NAN)]);
+        let e = Amg::new(&nan, None, &opts).err();
+        println!("NaN: {e:?}");
+        assert!(matches!(e, Some(AmgError::NonFiniteEntry { .. })));
+
+        let zero = Csr::from_triplets(2, 2, &[(0, 0, 1.0), (1, 0, -1.0)]);
+        let e = Amg::new(&zero, None, &opts).err();
+        println!("zero diagonal: {e:?}");
+        assert!(matches!(
+            e,
+            Some(AmgError::NonPositiveDiagonal { row: 1, .. })
+        ));
+
+        let neg = Csr::from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, -2.0)]);
+        let e = Amg::new(&neg, None, &opts).err();
+        println!("negative diagonal: {e:?}");
+        assert!(matches!(
+            e,
+            Some(AmgError::NonPositiveDiagonal { row: 1, .. })
+        ));
+
+        let a = poisson2d(4);
+        let nn = vec![1.0; 15];
+        let e = Amg::new(&a, Some((&nn, 1)), &opts).err();
+        println!("near-null length: {e:?}");
+        assert!(matches!(e, Some(AmgError::NearNullLength { .. })));
+        let e = Amg::new(&a, Some((&nn, 0)), &opts).err();
+        assert!(matches!(e, Some(AmgError::NearNullLength { .. })));
+        let nn_nan = vec![f64::NAN; 16];
+        let e = Amg::new(&a, Some((&nn_nan, 1)), &opts).err();
+        assert!(matches!(e, Some(AmgError::NonFiniteNearNull)));
+
+        let bs3 = AmgOptions {
+            block_size: 3,
+            ..AmgOptions::default()
+        };
+        let e = Amg::new(&a, None, &bs3).err();
+        println!("block size: {e:?}");
+        assert!(matches!(e, Some(AmgError::InvalidBlockSize { .. })));
+
+        let mut broken = a.clone();
+        broken.idx[0] = 99;
+        let e = Amg::new(&broken, None, &opts).err();
+        println!("broken structure: {e:?}");
+        assert!(matches!(e, Some(AmgError::InvalidStructure(_))));
+        let mut broken = a.clone();
+        broken.ptr.pop();
+        assert!(Amg::new(&broken, None, &opts).is_err());
+
+        let empty = Csr::from_triplets(0, 0, &[]);
+        assert!(matches!(
+            Amg::new(&empty, None, &opts).err(),
+            Some(AmgError::Empty)
+        ));
+        assert!(Csr::try_from_triplets(2, 2, &[(2, 0, 1.0)]).is_err());
+        // Display works.
+        println!("{}", AmgError::NotSquare { nrows: 2, ncols: 3 });
+
+        // Tiny matrices (fine level = coarsest) still work.
+        let one = Csr::from_triplets(1, 1, &[(0, 0, 2.0)]);
+        let amg = match Amg::new(&one, None, &opts) {
+            Ok(m) => m,
+            Err(e) => panic!("{e}"),
+        };
+        let mut z = [0.0];
+        amg.apply(&[4.0], &mut z);
+        assert!((z[0] - 2.0).abs() < 1e-12);
+    }
+
+    fn dense(a: &Csr) -> Vec<Vec<f64>> {
+        let mut d = vec![vec![0.0; a.ncols]; a.nrows];
+        for i in 0..a.nrows {
+            for k in a.ptr[i]..a.ptr[i + 1] {
+                d[i][a.idx[k]] += a.val[k];
+            }
+        }
+        d
+    }
+
+    fn random_csr(nrows: usize, ncols: usize, per_row: usize, seed: u64) -> Csr {
+        let r = lcg_vector(nrows * per_row * 2, seed);
+        let mut t = Vec::new();
+        for i in 0..nrows {
+            for k in 0..per_row {
+                let u = (r[2 * (i * per_row + k)] + 1.0) * 0.5;
+                let j = ((u * ncols as f64) as usize).min(ncols - 1);
+                t.push((i, j, r[2 * (i * per_row + k) + 1]));
+            }
+        }
+        Csr::from_triplets(nrows, ncols, &t)
+    }
+
+    #[test]
+    fn csr_basics() {
+        let a = Csr::from_triplets(
+            2,
+            3,
+            &[
+                (1, 2, 1.0),
+                (0, 1, 2.0),
+                (1, 2, 3.0),
+                (0, 0, 1.0),
+                (0, 1, -1.0),
+            ],
+        );
+        assert_eq!(a.ptr, vec![0, 2, 3]);
+        assert_eq!(a.idx, vec![0, 1, 2]);
+        assert_eq!(a.val, vec![1.0, 1.0, 4.0]);
+        assert_eq!(a.nnz(), 3);
+
+        let m = random_csr(37, 23, 5, 11);
+        assert_eq!(m.transpose().transpose(), m);
+        let n = random_csr(23, 41, 4, 5);
+        let prod = m.matmul(&n);
+        let (dm, dn, dp) = (dense(&m), dense(&n), dense(&prod));
+        let mut maxerr: f64 = 0.0;
+        for i in 0..37 {
+            for j in 0..41 {
+                let mut s = 0.0;
+                for k in 0..23 {
+                    s += dm[i][k] * dn[k][j];
+                }
+                maxerr = maxerr.max((s - dp[i][j]).abs());
+            }
+            assert!(prod.idx[prod.ptr[i]..prod.ptr[i + 1]]
+                .windows(2)
+                .all(|w| w[0] < w[1]));
+        }
+        println!("matmul vs dense max error {maxerr:.2e}");
+        assert!(maxerr < 1e-12);
+
+        // Large product exercises the parallel path.
+        let big = random_csr(9000, 9000, 6, 17);
+        let bt = big.transpose();
+        let p1 = big.matmul(&bt);
+        let x = lcg_vector(9000, 2);
+        let mut y1 = vec![0.0; 9000];
+        let mut t = vec![0.0; 9000];
+        let mut y2 = vec![0.0; 9000];
+        p1.spmv(&x, &mut y1);
+        bt.spmv(&x, &mut t);
+        big.spmv(&t, &mut y2);
+        let err = y1
+            .iter()
+            .zip(&y2)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-10);
+
+        // spmv parallel path and spmv_add.
+        let a = poisson2d(160);
+        let x = lcg_vector(a.nrows, 9);
+        let mut y = vec![0.0; a.nrows];
+        a.spmv(&x, &mut y);
+        let mut y2 = y.clone();
+        a.spmv_add(-1.0, &x, &mut y2);
+        assert!(y2.iter().all(|v| v.abs() < 1e-12));
+        let ys: Vec<f64> = (0..a.nrows).map(|i| a.row_dot(i, &x)).collect();
+        assert_eq!(ys, y);
+        assert_eq!(a.diagonal(), vec![4.0; a.nrows]);
+
+        // faer CSC conversion on a non-symmetric rectangular matrix.
+        let trip: Vec<faer::sparse::Triplet<usize, usize, f64>> = (0..m.nrows)
+            .flat_map(|i| {
+                (m.ptr[i]..m.ptr[i + 1])
+                    .map(move |k| (i, k))
+                    .collect::<Vec<_>>()
+            })
+            .map(|(i, k)| faer::sparse::Triplet::new(i, m.idx[k], m.val[k]))
+            .collect();
+        let fm = match faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(
+            m.nrows, m.ncols, &trip,
+        ) {
+            Ok(f) => f,
+            Err(e) => panic!("{e:?}"),
+        };
+        let conv = Csr::from_faer_csc(fm.as_ref());
+        assert_eq!(conv, m);
+    }
+
+    #[test]
+    fn amg_is_send_sync() {
+        fn check<T: Send + Sync>() {}
+        check::<Amg>();
+        check::<Csr>();
+        // Concurrent use of one hierarchy gives identical results.
+        let a = poisson2d(40);
+        let amg = match Amg::new(&a, None, &AmgOptions::default()) {
+            Ok(m) => m,
+            Err(e) => panic!("{e}"),
+        };
+        let r = lcg_vector(a.nrows, 4);
+        let mut z0 = vec![0.0; a.nrows];
+        amg.apply(&r, &mut z0);
+        let outs: Vec<Vec<f64>> = (0..8)
+            .into_par_iter()
+            .map(|_| {
+                let mut z = vec![0.0; a.nrows];
+                amg.apply(&r, &mut z);
+                z
+            })
+            .collect();
+        for z in outs {
+            assert_eq!(z, z0);
+        }
+        // Symmetry of the preconditioner: <M^-1 u, v> = <u, M^-1 v>.
+        let u = lcg_vector(a.nrows, 5);
+        let v = lcg_vector(a.nrows, 6);
+        let (mut mu, mut mv) = (vec![0.0; a.nrows], vec![0.0; a.nrows]);
+        amg.apply(&u, &mut mu);
+        amg.apply(&v, &mut mv);
+        let (s1, s2) = (dot(&mu, &v), dot(&u, &mv));
+        println!("symmetry check: {s1:.12e} vs {s2:.12e}");
+        assert!((s1 - s2).abs() <= 1e-10 * s1.abs().max(s2.abs()));
+    }
+}

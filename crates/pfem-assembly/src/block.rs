@@ -1,0 +1,1040 @@
+//! An iterative path for the monolithic system that keeps the nodal
+//! volumetric term apart: the split system ([`SplitSystem`],
+//! `(A_v + Cᵀ C) V = f`), solved by [`BlockSolver`].
+//!
+//! With real water the eliminated matrix `A = A_v + Cᵀ C` is dominated by
+//! the nodal volumetric term `Cᵀ C` (`Δt 𝒦` is 10⁶–10⁷ times the viscous
+//! term), which defeats plain Krylov methods and plain algebraic multigrid.
+//! Its structure is what makes it cheap: `A_v` (inertia, viscosity, solid
+//! stiffness) is nearly its diagonal `Â` for water, and `C` has one row per
+//! fluid node. Two ways are offered ([`PressureSolve`]):
+//!
+//! - **[`PressureSolve::Cholesky`]** (default): conjugate gradient on `A`
+//!   itself, preconditioned by `M = Â + Cᵀ C` applied exactly through the
+//!   Woodbury identity
+//!
+//!   `M⁻¹ = Â⁻¹ − Â⁻¹ Cᵀ Ŝ⁻¹ C Â⁻¹`, `Ŝ = I + C Â⁻¹ Cᵀ`,
+//!
+//!   with `Ŝ` (one unknown per fluid node, a pressure Laplacian plus a mass
+//!   term) factored by sparse Cholesky. `M` is symmetric positive definite
+//!   and differs from `A` only by the off-diagonal part of `A_v`, so a few
+//!   iterations reach the direct solver's residual; the factor is `D`
+//!   times smaller in unknowns and `D³` in flops than the whole system's.
+//!   The set-up (`Â`, `C`, the factor) is kept for the Picard iterates of
+//!   a step ([`BlockSolver::reuse_setup`]): an older `M` is still symmetric
+//!   positive definite, only a little further from `A`.
+//! - **[`PressureSolve::Multigrid`]**: MINRES on the equivalent
+//!   saddle-point system `[A_v Cᵀ; C −I] [V; q] = [f; 0]` (`q = C V`, the
+//!   scaled nodal pressure increment; eliminating `q` gives eq. 55 back)
+//!   with the block-diagonal preconditioner `diag(Â_v, Ŝ)`, `Â_v` Jacobi or
+//!   one V-cycle of smoothed aggregation ([`crate::amg`], rigid-body modes)
+//!   and `Ŝ` one V-cycle of smoothed aggregation, inside passes of
+//!   refinement on the eliminated residual. Its cost per iteration grows
+//!   linearly, but its iterations do not stay bounded yet: the equal-order
+//!   nodal pressure's spurious modes (fields with zero mean on every
+//!   element, which `Cᵀ` does not see) are near-null vectors of `Ŝ` that
+//!   aggregation does not capture (measured on the 2D dam break at a/20:
+//!   143 iterations of multigrid-preconditioned CG on `Ŝ` alone). A
+//!   pressure stabilisation term would remove them; until then it is not
+//!   the default.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LdltRef, LltRef, SymbolicCholesky,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, Par, Side};
+
+use crate::amg::{Amg, AmgOptions, Csr};
+use crate::solver::{
+    DirectSolver, LinearSolver, SolveReport, SolverWork, SplitSystem, Workspace,
+    DEFAULT_PARALLELISM,
+};
+use crate::SolveError;
+
+/// How [`BlockSolver`] applies the inverse of the pressure matrix `Ŝ`
+/// (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PressureSolve {
+    /// Sparse Cholesky of `Ŝ`, inside conjugate gradient on the
+    /// eliminated system.
+    #[default]
+    Cholesky,
+    /// One V-cycle of smoothed aggregation, inside MINRES on the
+    /// saddle-point form.
+    Multigrid,
+}
+
+/// The preconditioner of the velocity block `A_v`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum VelocityBlock {
+    /// `diag(A_v)`: enough while the block is mass dominated (fluids).
+    Jacobi,
+    /// One V-cycle of smoothed aggregation with rigid-body modes.
+    Amg,
+    /// Jacobi while the off-diagonal part of `A_v` is small against its
+    /// diagonal (measured each set-up, [`BlockSolver::dominance_limit`]),
+    /// multigrid otherwise.
+    #[default]
+    Auto,
+}
+
+/// The iterative solver of the split system (module docs).
+#[derive(Debug)]
+pub struct BlockSolver {
+    /// How the pressure matrix `Ŝ` is inverted.
+    pub pressure: PressureSolve,
+    /// Relative residual `‖f − (A_v + CᵀC) V‖/‖f‖` of the eliminated
+    /// system (the one the direct solver reports) at which the solve stops.
+    pub target: f64,
+    /// Reduction of the preconditioned residual at which each MINRES pass
+    /// stops (module docs: passes of refinement on the eliminated system).
+    pub tolerance: f64,
+    /// The largest relative residual accepted when the iteration limit is
+    /// reached first.
+    pub residual_limit: f64,
+    /// Iteration limit.
+    pub max_iterations: usize,
+    /// [`PressureSolve::Multigrid`]: how the velocity block is
+    /// preconditioned.
+    pub velocity: VelocityBlock,
+    /// [`VelocityBlock::Auto`] chooses multigrid when
+    /// `Σᵢ Σ_{j≠i} |a_ij| / Σᵢ a_ii` exceeds this.
+    pub dominance_limit: f64,
+    /// [`PressureSolve::Multigrid`]: options of both hierarchies (block
+    /// size and near-null space are set per block).
+    pub amg: AmgOptions,
+    /// Keep the preconditioners across solves with the same pattern
+    /// generation (the Picard iterates of one step).
+    pub reuse_setup: bool,
+    setup: Option<Setup>,
+    direct: DirectSolver,
+    work: SolverWork,
+    stats: BlockStats,
+}
+
+/// What a [`BlockSolver`] has done.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BlockStats {
+    /// Solves.
+    pub solves: u64,
+    /// MINRES iterations summed over solves.
+    pub iterations: u64,
+    /// Largest iteration count of one solve.
+    pub max_iterations: usize,
+    /// Preconditioner set-ups (factorisations of `Ŝ` or multigrid
+    /// hierarchies).
+    pub setups: u64,
+    /// Set-ups whose velocity block used multigrid
+    /// ([`PressureSolve::Multigrid`]).
+    pub velocity_amg: u64,
+    /// Set-ups that kept stiff (solid) rows whole
+    /// ([`PressureSolve::Cholesky`]).
+    pub stiff_setups: u64,
+    /// Solves handed to the direct solver because the iteration could
+    /// not set up or did not converge.
+    pub fallbacks: u64,
+    /// Wall time in set-ups (s).
+    pub setup_seconds: f64,
+    /// Wall time in iterations (s).
+    pub iterate_seconds: f64,
+}
+
+enum VelocityPrec {
+    Jacobi(Vec<f64>),
+    Amg(Amg),
+}
+
+/// A symmetric quasi-definite matrix factored as `L D Lᵀ` (faer; any
+/// fill-reducing order is stable for such matrices), with its symbolic
+/// analysis kept while the pattern stays the same.
+#[derive(Default)]
+struct QuasiDefinite {
+    symbolic: Option<(Vec<usize>, Vec<usize>, SymbolicCholesky<usize>)>,
+    values: Vec<f64>,
+    ws: Workspace,
+    /// Factored as `L Lᵀ` (positive definite), not `L D Lᵀ`.
+    definite: bool,
+}
+
+impl QuasiDefinite {
+    /// Factors the symmetric `r` (CSR of both triangles); `signs` gives the
+    /// expected sign of each pivot (+1 velocity, −1 pressure), `None` for
+    /// a positive definite `r` (Cholesky, faster).
+    fn factorise(&mut self, r: &Csr, signs: Option<&[i8]>) -> Result<(), String> {
+        // Symmetric: its CSR arrays are its CSC arrays.
+        let sym = SymbolicSparseColMatRef::new_checked(r.nrows, r.ncols, &r.ptr, None, &r.idx);
+        let a = SparseColMatRef::new(sym, &r.val);
+        let same = self
+            .symbolic
+            .as_ref()
+            .is_some_and(|(p, i, _)| p == &r.ptr && i == &r.idx);
+        if !same {
+            self.symbolic = None;
+            let sc = factorize_symbolic_cholesky(
+                a.symbolic(),
+                Side::Lower,
+                Default::default(),
+                Default::default(),
+            )
+            .map_err(|e| format!("{e:?}"))?;
+            self.symbolic = Some((r.ptr.clone(), r.idx.clone(), sc));
+        }
+        let Some((_, _, sc)) = self.symbolic.as_ref() else {
+            return Err("no symbolic factorisation".into());
+        };
+        self.values.resize(sc.len_val(), 0.0);
+        let par = DEFAULT_PARALLELISM;
+        self.definite = signs.is_none();
+        let Some(signs) = signs else {
+            let stack = self
+                .ws
+                .stack(sc.factorize_numeric_llt_scratch::<f64>(par, Default::default()))?;
+            return sc
+                .factorize_numeric_llt::<f64>(
+                    &mut self.values,
+                    a,
+                    Side::Lower,
+                    Default::default(),
+                    par,
+                    stack,
+                    Default::default(),
+                )
+                .map(|_| ())
+                .map_err(|e| format!("{e:?}"));
+        };
+        let stack = self
+            .ws
+            .stack(sc.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()))?;
+        let reg = LdltRegularization {
+            dynamic_regularization_signs: Some(signs),
+            dynamic_regularization_delta: 0.0,
+            dynamic_regularization_epsilon: 0.0,
+        };
+        sc.factorize_numeric_ldlt::<f64>(
+            &mut self.values,
+            a,
+            Side::Lower,
+            reg,
+            par,
+            stack,
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| format!("{e:?}"))
+    }
+
+    fn solve_in_place(&mut self, x: &mut [f64]) -> Result<(), String> {
+        let Some((_, _, sc)) = self.symbolic.as_ref() else {
+            return Err("not factored".into());
+        };
+        let stack = self
+            .ws
+            .stack(sc.solve_in_place_scratch::<f64>(1, Par::Seq))?;
+        if self.definite {
+            LltRef::new(sc, &self.values).solve_in_place_with_conj(
+                Conj::No,
+                faer::col::ColMut::from_slice_mut(x).as_mat_mut(),
+                Par::Seq,
+                stack,
+            );
+            return Ok(());
+        }
+        LdltRef::new(sc, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            faer::col::ColMut::from_slice_mut(x).as_mat_mut(),
+            Par::Seq,
+            stack,
+        );
+        Ok(())
+    }
+}
+
+const NONE: usize = usize::MAX;
+
+/// The preconditioner `M = Ã + Cᵀ C` (module docs), `Ã` the velocity
+/// block with the rows of its *stiff* nodes (solids: off-diagonal weight
+/// above [`BlockSolver::dominance_limit`] of the diagonal) kept whole and
+/// every other row cut to its diagonal `Â`, applied exactly through the
+/// quasi-definite system it reduces to (`S` the stiff dofs, `F` the
+/// others):
+///
+/// `[A_SS  C_Sᵀ; C_S  −Ŝ_F] [z_S; s] = [r_S; −C_F Â_F⁻¹ r_F]`,
+/// `Ŝ_F = I + C_F Â_F⁻¹ C_Fᵀ`, `z_F = Â_F⁻¹ (r_F − C_Fᵀ s)`.
+///
+/// With water alone it is `Â⁻¹ − Â⁻¹ Cᵀ Ŝ⁻¹ C Â⁻¹` (Woodbury). It keeps
+/// its own copies of what it needs, so that it stays one symmetric
+/// positive definite operator while the system's values move.
+struct Woodbury {
+    /// `Â⁻¹` on `F` dofs (0 on `S` dofs).
+    inv: Vec<f64>,
+    /// Position of each `S` dof in the reduced system (NONE for `F`).
+    pos: Vec<usize>,
+    /// `S` dofs.
+    stiff: Vec<usize>,
+    c: Csr,
+    ct: Csr,
+    factor: QuasiDefinite,
+    /// Scratch: reduced right-hand side, `C`'s rows, dofs.
+    red: Vec<f64>,
+    t: Vec<f64>,
+    u: Vec<f64>,
+}
+
+impl Woodbury {
+    fn new(
+        a: &Csr,
+        c: &Csr,
+        block: usize,
+        limit: f64,
+        factor: QuasiDefinite,
+    ) -> Result<(Self, usize), SolveError> {
+        let n = a.nrows;
+        let m = c.nrows;
+        let diag = a.diagonal();
+        if let Some(i) = diag.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
+            return Err(SolveError::Factorization {
+                solver: NAME,
+                detail: format!("velocity block has diagonal {} at dof {i}", diag[i]),
+            });
+        }
+        // Stiff nodes: a row whose off-diagonal weight passes the limit
+        // makes its node's dofs stiff.
+        let block = block.max(1);
+        let mut stiff_node = vec![false; n.div_ceil(block)];
+        for i in 0..n {
+            let off: f64 = (a.ptr[i]..a.ptr[i + 1])
+                .filter(|&p| a.idx[p] != i)
+                .map(|p| a.val[p].abs())
+                .sum();
+            if off > limit * diag[i] {
+                stiff_node[i / block] = true;
+            }
+        }
+        let mut pos = vec![NONE; n];
+        let mut stiff = Vec::new();
+        for i in 0..n {
+            if stiff_node[i / block] {
+                pos[i] = stiff.len();
+                stiff.push(i);
+            }
+        }
+        let ns = stiff.len();
+        let inv: Vec<f64> = (0..n)
+            .map(|i| if pos[i] == NONE { 1.0 / diag[i] } else { 0.0 })
+            .collect();
+        let ct = c.transpose();
+        // Ŝ_F = I + C_F Â_F⁻¹ C_Fᵀ (the S columns weigh 0 in `inv`).
+        let mut cd = c.clone();
+        for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
+            *v *= inv[j];
+        }
+        let sf = add_identity(&cd.matmul(&ct));
+        let mut factor = factor;
+        let fail = |detail: String| SolveError::Factorization {
+            solver: NAME,
+            detail: format!("reduced system: {detail}"),
+        };
+        if ns == 0 {
+            // No stiff rows: `Ŝ_F s = C_F Â_F⁻¹ r_F`, positive definite.
+            factor.factorise(&sf, None).map_err(fail)?;
+            return Ok((
+                Self {
+                    inv,
+                    pos,
+                    stiff,
+                    c: c.clone(),
+                    ct,
+                    factor,
+                    red: vec![0.0; m],
+                    t: vec![0.0; m],
+                    u: vec![0.0; n],
+                },
+                0,
+            ));
+        }
+        // The reduced matrix, both triangles.
+        let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(sf.nnz() + 2 * c.nnz());
+        for &i in &stiff {
+            for p in a.ptr[i]..a.ptr[i + 1] {
+                let j = a.idx[p];
+                if pos[j] != NONE {
+                    t.push((pos[i], pos[j], a.val[p]));
+                }
+            }
+        }
+        for r in 0..m {
+            for p in c.ptr[r]..c.ptr[r + 1] {
+                let j = c.idx[p];
+                if pos[j] != NONE && c.val[p] != 0.0 {
+                    t.push((ns + r, pos[j], c.val[p]));
+                    t.push((pos[j], ns + r, c.val[p]));
+                }
+            }
+            for p in sf.ptr[r]..sf.ptr[r + 1] {
+                t.push((ns + r, ns + sf.idx[p], -sf.val[p]));
+            }
+        }
+        let reduced =
+            Csr::try_from_triplets(ns + m, ns + m, &t).map_err(|e| fail(e.to_string()))?;
+        let signs: Vec<i8> = (0..ns + m).map(|k| if k < ns { 1 } else { -1 }).collect();
+        factor.factorise(&reduced, Some(&signs)).map_err(fail)?;
+        Ok((
+            Self {
+                inv,
+                pos,
+                stiff,
+                c: c.clone(),
+                ct,
+                factor,
+                red: vec![0.0; ns + m],
+                t: vec![0.0; m],
+                u: vec![0.0; n],
+            },
+            ns,
+        ))
+    }
+
+    /// `z ← M⁻¹ r`.
+    fn apply(&mut self, r: &[f64], z: &mut [f64]) -> Result<(), SolveError> {
+        let ns = self.stiff.len();
+        // u = Â_F⁻¹ r_F (zero on S).
+        self.u
+            .iter_mut()
+            .zip(r)
+            .zip(&self.inv)
+            .for_each(|((u, r), d)| *u = r * d);
+        self.c.spmv(&self.u, &mut self.t);
+        for (k, &i) in self.stiff.iter().enumerate() {
+            self.red[k] = r[i];
+        }
+        // The reduced system's second row is `−Ŝ_F` (the positive `Ŝ_F`
+        // alone when there are no stiff rows).
+        let sign = if ns == 0 { 1.0 } else { -1.0 };
+        for (red, t) in self.red[ns..].iter_mut().zip(&self.t) {
+            *red = sign * t;
+        }
+        self.factor
+            .solve_in_place(&mut self.red)
+            .map_err(|detail| SolveError::Factorization {
+                solver: NAME,
+                detail,
+            })?;
+        // z_F = Â_F⁻¹ (r_F − C_Fᵀ s), z_S from the reduced solve.
+        self.ct.spmv(&self.red[ns..], z);
+        for i in 0..z.len() {
+            z[i] = if self.pos[i] == NONE {
+                self.u[i] - self.inv[i] * z[i]
+            } else {
+                self.red[self.pos[i]]
+            };
+        }
+        Ok(())
+    }
+}
+
+enum Prec {
+    Woodbury(Box<Woodbury>),
+    Blocks {
+        velocity: Box<VelocityPrec>,
+        schur: Box<Amg>,
+    },
+}
+
+struct Setup {
+    generation: u64,
+    n: usize,
+    m: usize,
+    prec: Prec,
+}
+
+impl std::fmt::Debug for Setup {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Setup")
+            .field("generation", &self.generation)
+            .field("n", &self.n)
+            .field("m", &self.m)
+            .finish()
+    }
+}
+
+impl Default for BlockSolver {
+    fn default() -> Self {
+        Self {
+            target: 1e-9,
+            tolerance: 1e-6,
+            residual_limit: 1e-7,
+            max_iterations: 2000,
+            pressure: PressureSolve::Cholesky,
+            velocity: VelocityBlock::Auto,
+            dominance_limit: 0.5,
+            amg: AmgOptions::default(),
+            reuse_setup: false,
+            setup: None,
+            direct: DirectSolver::default(),
+            work: SolverWork::default(),
+            stats: BlockStats::default(),
+        }
+    }
+}
+
+const NAME: &str = "block-split iterative";
+
+/// Parallel dot product above a size where it pays.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    if a.len() > 50_000 {
+        a.par_chunks(8192)
+            .zip(b.par_chunks(8192))
+            .map(|(x, y)| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>())
+            .sum()
+    } else {
+        a.iter().zip(b).map(|(p, q)| p * q).sum()
+    }
+}
+
+/// The rigid-body modes of nodes at `coords` (`d` per node), centred:
+/// `d` translations and `d (d − 1) / 2` rotations, column-major.
+fn rigid_modes(coords: &[f64], d: usize) -> (Vec<f64>, usize) {
+    let nn = coords.len() / d.max(1);
+    let n = nn * d;
+    let mut c = vec![0.0; d];
+    for p in coords.chunks_exact(d) {
+        for k in 0..d {
+            c[k] += p[k] / nn.max(1) as f64;
+        }
+    }
+    let m = d + d * (d - 1) / 2;
+    let mut b = vec![0.0; n * m];
+    for (i, p) in coords.chunks_exact(d).enumerate() {
+        for k in 0..d {
+            b[k * n + i * d + k] = 1.0;
+        }
+        let x: Vec<f64> = (0..d).map(|k| p[k] - c[k]).collect();
+        // Rotations in the planes (k, l), k < l: u_k = −x_l, u_l = x_k.
+        let mut col = d;
+        for k in 0..d {
+            for l in k + 1..d {
+                b[col * n + i * d + k] = -x[l];
+                b[col * n + i * d + l] = x[k];
+                col += 1;
+            }
+        }
+    }
+    (b, m)
+}
+
+impl BlockSolver {
+    /// What this solver has done so far.
+    pub fn stats(&self) -> BlockStats {
+        self.stats
+    }
+
+    fn build(
+        &mut self,
+        a: &Csr,
+        c: &Csr,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+    ) -> Result<Setup, SolveError> {
+        let n = a.nrows;
+        let diag = a.diagonal();
+        if let Some(i) = diag.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
+            return Err(SolveError::Factorization {
+                solver: NAME,
+                detail: format!("velocity block has diagonal {} at dof {i}", diag[i]),
+            });
+        }
+        let inv: Vec<f64> = diag.iter().map(|v| 1.0 / v).collect();
+        // Ŝ = I + C Â⁻¹ Cᵀ.
+        let ct = c.transpose();
+        let mut cd = c.clone();
+        for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
+            *v *= inv[j];
+        }
+        let s = add_identity(&cd.matmul(&ct));
+        let prec = match self.pressure {
+            PressureSolve::Cholesky => {
+                // The factor of the last set-up gives its storage and, for
+                // the same pattern, its symbolic analysis.
+                let factor = match self.setup.take().map(|s| s.prec) {
+                    Some(Prec::Woodbury(w)) => w.factor,
+                    _ => QuasiDefinite::default(),
+                };
+                let (w, ns) = Woodbury::new(a, c, sys.block_size, self.dominance_limit, factor)?;
+                if ns > 0 {
+                    self.stats.stiff_setups += 1;
+                }
+                Prec::Woodbury(Box::new(w))
+            }
+            PressureSolve::Multigrid => {
+                let amg_err = |what: &str, e: crate::amg::AmgError| SolveError::Factorization {
+                    solver: NAME,
+                    detail: format!("{what} multigrid: {e}"),
+                };
+                let use_amg = match self.velocity {
+                    VelocityBlock::Jacobi => false,
+                    VelocityBlock::Amg => true,
+                    VelocityBlock::Auto => {
+                        let mut off = 0.0;
+                        for i in 0..n {
+                            for p in a.ptr[i]..a.ptr[i + 1] {
+                                if a.idx[p] != i {
+                                    off += a.val[p].abs();
+                                }
+                            }
+                        }
+                        off > self.dominance_limit * diag.iter().sum::<f64>()
+                    }
+                };
+                let velocity = if use_amg {
+                    let d = sys.block_size;
+                    let (modes, m) = rigid_modes(sys.coords, d);
+                    let opts = AmgOptions {
+                        block_size: d,
+                        ..self.amg.clone()
+                    };
+                    self.stats.velocity_amg += 1;
+                    VelocityPrec::Amg(
+                        Amg::new(a, Some((&modes, m)), &opts)
+                            .map_err(|e| amg_err("velocity", e))?,
+                    )
+                } else {
+                    VelocityPrec::Jacobi(inv)
+                };
+                let opts = AmgOptions {
+                    block_size: 1,
+                    ..self.amg.clone()
+                };
+                let schur = Amg::new(&s, None, &opts).map_err(|e| amg_err("pressure", e))?;
+                Prec::Blocks {
+                    velocity: Box::new(velocity),
+                    schur: Box::new(schur),
+                }
+            }
+        };
+        Ok(Setup {
+            generation,
+            n,
+            m: c.nrows,
+            prec,
+        })
+    }
+}
+
+/// `S + I` for a square CSR matrix with sorted rows.
+fn add_identity(s: &Csr) -> Csr {
+    let n = s.nrows;
+    let mut ptr = Vec::with_capacity(n + 1);
+    let mut idx = Vec::with_capacity(s.nnz() + n);
+    let mut val = Vec::with_capacity(s.nnz() + n);
+    ptr.push(0);
+    for i in 0..n {
+        let mut done = false;
+        for p in s.ptr[i]..s.ptr[i + 1] {
+            let j = s.idx[p];
+            if !done && j > i {
+                idx.push(i);
+                val.push(1.0);
+                done = true;
+            }
+            if j == i {
+                idx.push(i);
+                val.push(s.val[p] + 1.0);
+                done = true;
+            } else {
+                idx.push(j);
+                val.push(s.val[p]);
+            }
+        }
+        if !done {
+            idx.push(i);
+            val.push(1.0);
+        }
+        ptr.push(idx.len());
+    }
+    Csr {
+        nrows: n,
+        ncols: n,
+        ptr,
+        idx,
+        val,
+    }
+}
+
+impl LinearSolver for BlockSolver {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    /// Without a split (a caller that assembled the whole matrix): the
+    /// direct solver.
+    fn solve(
+        &mut self,
+        a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+        generation: u64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolveError> {
+        self.direct.solve(a, generation, b, x)
+    }
+
+    fn wants_split(&self, _dofs: usize) -> bool {
+        true
+    }
+
+    /// The iteration; when it cannot set up or does not converge, the
+    /// direct solver on the whole matrix ([`BlockStats::fallbacks`]).
+    fn solve_split(
+        &mut self,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolveError> {
+        match self.iterate(sys, generation, x) {
+            Ok(r) => Ok(r),
+            Err(e @ SolveError::NonFinite { .. }) => Err(e),
+            Err(_) => {
+                self.stats.fallbacks += 1;
+                let a = sys.to_matrix()?;
+                self.direct.solve(a.as_ref(), generation, sys.rhs, x)
+            }
+        }
+    }
+
+    fn work(&self) -> SolverWork {
+        self.work + self.direct.work()
+    }
+}
+
+impl BlockSolver {
+    fn iterate(
+        &mut self,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolveError> {
+        crate::solver::check_finite(sys.rhs)?;
+        let t0 = Instant::now();
+        let a = Csr::from_faer_csc(sys.a_v);
+        let n = a.nrows;
+        let m = sys.c_rows();
+        let c = Csr {
+            nrows: m,
+            ncols: n,
+            ptr: sys.c_ptr.to_vec(),
+            idx: sys.c_idx.to_vec(),
+            val: sys.c_val.to_vec(),
+        };
+        let keep = self.reuse_setup
+            && self
+                .setup
+                .as_ref()
+                .is_some_and(|s| s.generation == generation && s.n == n && s.m == m);
+        if !keep {
+            let s = self.build(&a, &c, sys, generation)?;
+            self.setup = Some(s);
+            self.work.factorizations += 1;
+            self.stats.setups += 1;
+        } else {
+            self.work.resolves += 1;
+        }
+        let t1 = Instant::now();
+        self.stats.setup_seconds += (t1 - t0).as_secs_f64();
+        // The residual of the eliminated system, the one the direct path
+        // reports: `e ← f − (A_v + CᵀC) v`, returns ‖e‖/‖f‖.
+        let den = dot(sys.rhs, sys.rhs).sqrt();
+        let eliminated = |v: &[f64], e: &mut [f64], q: &mut Vec<f64>| {
+            sys.apply(v, e, q);
+            e.iter_mut().zip(sys.rhs).for_each(|(e, b)| *e = b - *e);
+            let num = dot(e, e).sqrt();
+            if den > 0.0 {
+                num / den
+            } else {
+                num
+            }
+        };
+        let mut r = vec![0.0; n];
+        let mut q = Vec::new();
+        let mut residual = eliminated(x, &mut r, &mut q);
+        let (target, max_iterations, tolerance) =
+            (self.target, self.max_iterations, self.tolerance);
+        let Some(setup) = self.setup.as_mut() else {
+            return Err(SolveError::Factorization {
+                solver: NAME,
+                detail: "no preconditioner".into(),
+            });
+        };
+        let mut iterations = 0;
+        match &mut setup.prec {
+            Prec::Woodbury(w) => {
+                // Preconditioned conjugate gradient on A, with the true
+                // residual's recurrence.
+                let mut z = vec![0.0; n];
+                let mut d = vec![0.0; n];
+                let mut ad = vec![0.0; n];
+                if residual > target {
+                    w.apply(&r, &mut z)?;
+                    d.copy_from_slice(&z);
+                    let mut rz = dot(&r, &z);
+                    while iterations < max_iterations {
+                        sys.apply(&d, &mut ad, &mut q);
+                        let curvature = dot(&d, &ad);
+                        if curvature.is_nan() || curvature <= 0.0 {
+                            break;
+                        }
+                        let alpha = rz / curvature;
+                        x.iter_mut().zip(&d).for_each(|(x, d)| *x += alpha * d);
+                        r.iter_mut().zip(&ad).for_each(|(r, a)| *r -= alpha * a);
+                        iterations += 1;
+                        let rn = dot(&r, &r).sqrt();
+                        residual = if den > 0.0 { rn / den } else { rn };
+                        if residual <= target {
+                            break;
+                        }
+                        w.apply(&r, &mut z)?;
+                        let rz_new = dot(&r, &z);
+                        let beta = rz_new / rz;
+                        rz = rz_new;
+                        d.iter_mut().zip(&z).for_each(|(d, z)| *d = z + beta * *d);
+                    }
+                    residual = eliminated(x, &mut r, &mut q);
+                }
+            }
+            Prec::Blocks { velocity, schur } => {
+                let ct = c.transpose();
+                // y = [V; q], K y = [A V + Cᵀ q; C V − q].
+                let apply_k = |y: &[f64], out: &mut [f64], tmp: &mut [f64]| {
+                    let (yv, yq) = y.split_at(n);
+                    let (ov, oq) = out.split_at_mut(n);
+                    a.spmv(yv, ov);
+                    ct.spmv(yq, tmp);
+                    ov.iter_mut().zip(tmp.iter()).for_each(|(o, t)| *o += t);
+                    c.spmv(yv, oq);
+                    oq.iter_mut().zip(yq).for_each(|(o, q)| *o -= q);
+                };
+                let apply_p = |r: &[f64], z: &mut [f64]| {
+                    let (rv, rq) = r.split_at(n);
+                    let (zv, zq) = z.split_at_mut(n);
+                    match &**velocity {
+                        VelocityPrec::Jacobi(inv) => zv
+                            .iter_mut()
+                            .zip(rv)
+                            .zip(inv)
+                            .for_each(|((z, r), d)| *z = r * d),
+                        VelocityPrec::Amg(amg) => amg.apply(rv, zv),
+                    }
+                    schur.apply(rq, zq);
+                };
+                let nt = n + m;
+                let mut y = vec![0.0; nt];
+                let mut tmp = vec![0.0; n];
+                let mut rhs = vec![0.0; nt];
+                // Refinement on the eliminated system: each pass solves the
+                // saddle-point form for the correction of the current
+                // residual, `K [δV; δq] = [e; 0]`, to `tolerance` in the
+                // preconditioner's norm. That norm weighs the second row's
+                // residual lightly, and `Cᵀ` magnifies it in `e`, so one pass
+                // reaches a few digits of `e`, never all: the passes
+                // recompute `e` exactly.
+                while residual > target && iterations < max_iterations {
+                    rhs[..n].copy_from_slice(&r);
+                    rhs[n..].iter_mut().for_each(|v| *v = 0.0);
+                    y.iter_mut().for_each(|v| *v = 0.0);
+                    let it = minres(
+                        &apply_k,
+                        &apply_p,
+                        &rhs,
+                        &mut y,
+                        &mut tmp,
+                        tolerance,
+                        max_iterations - iterations,
+                    );
+                    iterations += it.max(1);
+                    x.iter_mut().zip(&y[..n]).for_each(|(x, d)| *x += d);
+                    let new = eliminated(x, &mut r, &mut q);
+                    if new.is_nan() || new >= residual {
+                        residual = new;
+                        break;
+                    }
+                    residual = new;
+                }
+            }
+        }
+        self.stats.iterate_seconds += t1.elapsed().as_secs_f64();
+        self.stats.solves += 1;
+        self.stats.iterations += iterations as u64;
+        self.work.iterations += iterations as u64;
+        self.stats.max_iterations = self.stats.max_iterations.max(iterations);
+        if residual.is_nan() || residual > self.residual_limit || x.iter().any(|v| !v.is_finite()) {
+            // A stale set-up may be what failed: the next call builds anew.
+            self.setup = None;
+            return Err(SolveError::NoConvergence {
+                solver: NAME,
+                iterations,
+                residual,
+            });
+        }
+        Ok(SolveReport {
+            residual,
+            iterations,
+        })
+    }
+}
+
+/// Preconditioned MINRES (Paige & Saunders; the three-term form of Elman,
+/// Silvester & Wathen, alg. 4.1) for a symmetric `K` and a symmetric
+/// positive definite preconditioner `P⁻¹`. `y` holds the initial guess on
+/// entry. Stops when the `P⁻¹`-norm of the residual has fallen by `tol`.
+/// Returns the iterations done.
+/// `out ← K y` with scratch of the velocity size.
+type Operator<'a> = &'a dyn Fn(&[f64], &mut [f64], &mut [f64]);
+
+fn minres(
+    apply_k: Operator<'_>,
+    apply_p: &dyn Fn(&[f64], &mut [f64]),
+    b: &[f64],
+    y: &mut [f64],
+    tmp: &mut [f64],
+    tol: f64,
+    max_iter: usize,
+) -> usize {
+    let nt = b.len();
+    let mut v_old = vec![0.0; nt];
+    let mut v = vec![0.0; nt];
+    apply_k(y, &mut v, tmp);
+    v.iter_mut().zip(b).for_each(|(v, b)| *v = b - *v);
+    let mut z = vec![0.0; nt];
+    apply_p(&v, &mut z);
+    let mut gamma = dot(&z, &v).max(0.0).sqrt();
+    if gamma == 0.0 || !gamma.is_finite() {
+        return 0;
+    }
+    let gamma1 = gamma;
+    let mut gamma_old = 1.0;
+    let mut eta = gamma;
+    let (mut s_old, mut s) = (0.0, 0.0);
+    let (mut c_old, mut c) = (1.0, 1.0);
+    let mut w_old = vec![0.0; nt];
+    let mut w = vec![0.0; nt];
+    let mut kz = vec![0.0; nt];
+    let mut z_new = vec![0.0; nt];
+    for it in 1..=max_iter {
+        z.iter_mut().for_each(|x| *x /= gamma);
+        apply_k(&z, &mut kz, tmp);
+        let delta = dot(&kz, &z);
+        // v_new = K z − (δ/γ) v − (γ/γ_old) v_old, stored in v_old.
+        let (f1, f2) = (delta / gamma, gamma / gamma_old);
+        v_old
+            .iter_mut()
+            .zip(&kz)
+            .zip(&v)
+            .for_each(|((vo, k), v)| *vo = k - f1 * v - f2 * *vo);
+        std::mem::swap(&mut v_old, &mut v); // v = v_new, v_old = v
+        apply_p(&v, &mut z_new);
+        let gamma_new = dot(&z_new, &v).max(0.0).sqrt();
+        let a0 = c * delta - c_old * s * gamma;
+        let a1 = (a0 * a0 + gamma_new * gamma_new).sqrt();
+        let a2 = s * delta + c_old * c * gamma;
+        let a3 = s_old * gamma;
+        if a1 == 0.0 || !a1.is_finite() {
+            return it;
+        }
+        let c_new = a0 / a1;
+        let s_new = gamma_new / a1;
+        // w_new = (z − a3 w_old − a2 w) / a1, stored in w_old.
+        w_old
+            .iter_mut()
+            .zip(&z)
+            .zip(&w)
+            .for_each(|((wo, z), w)| *wo = (z - a3 * *wo - a2 * w) / a1);
+        std::mem::swap(&mut w_old, &mut w);
+        let step = c_new * eta;
+        y.iter_mut().zip(&w).for_each(|(y, w)| *y += step * w);
+        eta *= -s_new;
+        gamma_old = gamma;
+        gamma = gamma_new;
+        (c_old, c) = (c, c_new);
+        (s_old, s) = (s, s_new);
+        std::mem::swap(&mut z, &mut z_new);
+        if eta.abs() <= tol * gamma1 || gamma == 0.0 {
+            return it;
+        }
+    }
+    max_iter
+}
+
+/// The direct solver below a size, the block-preconditioned iterative
+/// path above it: the library's choice by size.
+#[derive(Debug)]
+pub struct AutoSolver {
+    /// Unknowns from which the iterative path is taken.
+    pub threshold: usize,
+    direct: DirectSolver,
+    block: BlockSolver,
+    last_direct: bool,
+}
+
+impl AutoSolver {
+    /// The direct solver below `threshold` unknowns, [`BlockSolver`] from
+    /// there.
+    pub fn with_threshold(threshold: usize) -> Self {
+        Self {
+            threshold,
+            direct: DirectSolver::default(),
+            block: BlockSolver::default(),
+            last_direct: true,
+        }
+    }
+
+    /// The iterative path's figures.
+    pub fn block_stats(&self) -> BlockStats {
+        self.block.stats()
+    }
+}
+
+impl LinearSolver for AutoSolver {
+    fn name(&self) -> &str {
+        "direct or block MINRES by size"
+    }
+
+    fn solve(
+        &mut self,
+        a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+        generation: u64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolveError> {
+        self.last_direct = true;
+        self.direct.solve(a, generation, b, x)
+    }
+
+    fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
+        if self.last_direct {
+            self.direct.resolve(b, x)
+        } else {
+            None
+        }
+    }
+
+    fn wants_split(&self, dofs: usize) -> bool {
+        dofs >= self.threshold
+    }
+
+    fn solve_split(
+        &mut self,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolveError> {
+        self.last_direct = false;
+        self.block.solve_split(sys, generation, x)
+    }
+
+    fn work(&self) -> SolverWork {
+        self.direct.work() + self.block.work()
+    }
+}

@@ -1,0 +1,204 @@
+//! What a step costs as the particle count grows, direct solver against the
+//! block-preconditioned iterative path (issue 18): the 2D dam break and the
+//! 3D water column at several spacings, a few steps each, every
+//! (case, size, solver) in a child process of its own so that its peak
+//! memory is its own.
+//!
+//! ```text
+//! cargo run --release --example solver_scaling -- \
+//!     [--case dam2d|column3d|all] [--sizes 20,40,80] [--steps 10] \
+//!     [--solvers direct,block] [--end-time T]
+//! ```
+//! `--sizes` are spacings as fractions of the column width (a/n); defaults
+//! 20,40,80 (2D) and 10,14,18 (3D). Prints, per run: particles, unknowns,
+//! seconds per accepted step and per stage (remesh, assemble, solve, the
+//! rest), Picard iterations per step, Krylov iterations per solve,
+//! rejected attempts and peak memory; then the fitted exponent of time per
+//! step against particles for each solver.
+
+use std::process::Command;
+use std::time::Instant;
+
+use pfem::cases::DamBreak;
+use pfem::cases3d::WaterColumn3d;
+use pfem::prelude::*;
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}
+
+type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+/// Peak resident memory of this process (MB), from /proc (0 elsewhere).
+fn peak_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map(|kb| kb / 1024.0)
+        .unwrap_or(0.0)
+}
+
+fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
+    Ok(match name {
+        "direct" => Box::new(pfem::assembly::DirectSolver::default()),
+        "block" => Box::new(pfem::assembly::BlockSolver::default()),
+        other => return Err(format!("unknown solver {other} (direct, block)").into()),
+    })
+}
+
+/// One run, in this process: prints one `RESULT` line.
+fn one<const D: usize>(mut sim: Simulation<D>, solver_name: &str, steps: u64) -> Res<()>
+where
+    pfem::core::Const<D>: pfem::core::Dim,
+{
+    sim.set_solver(solver(solver_name)?);
+    let n = sim.particles().len();
+    let t0 = Instant::now();
+    while sim.steps() < steps {
+        sim.step()?;
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    let st = sim.stats().clone();
+    let w = sim.work();
+    let k = steps as f64;
+    let solves = st.solve.0.max(1) as f64;
+    println!(
+        "RESULT {n} {:.4e} {:.4e} {:.4e} {:.4e} {:.4e} {:.2} {:.1} {} {:.0} {:.4e}",
+        wall / k,
+        st.remesh.1 / k,
+        st.assemble.1 / k,
+        st.solve.1 / k,
+        st.rejected.1 / k,
+        st.solve.0 as f64 / k,
+        w.solver_iterations as f64 / solves,
+        sim.rejected(),
+        peak_mb(),
+        sim.time(),
+    );
+    Ok(())
+}
+
+fn run() -> Res<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let opt = |name: &str| {
+        args.iter()
+            .position(|a| a == &format!("--{name}"))
+            .and_then(|i| args.get(i + 1).cloned())
+    };
+    let steps: u64 = opt("steps").map(|s| s.parse()).transpose()?.unwrap_or(10);
+    // Child: one case, one size, one solver.
+    if let Some(spec) = opt("one") {
+        let parts: Vec<&str> = spec.split(':').collect();
+        let [case, n, solver_name] = parts[..] else {
+            return Err("--one CASE:N:SOLVER".into());
+        };
+        let n: f64 = n.parse()?;
+        return match case {
+            "dam2d" => {
+                let mut c = DamBreak::default();
+                c.spacing = c.width / n;
+                let sim = Simulation::new(
+                    c.scene(),
+                    Box::new(Delaunay2::default()),
+                    StepParams::default(),
+                )?;
+                one(sim, solver_name, steps)
+            }
+            "column3d" => {
+                let mut c = WaterColumn3d {
+                    side_walls: false,
+                    ..Default::default()
+                };
+                c.spacing = c.width / n;
+                let mut sim = Simulation::new(
+                    c.scene(),
+                    Box::new(Delaunay3::default()),
+                    StepParams::default(),
+                )?;
+                pfem::cases3d::slip_sides(&mut sim);
+                one(sim, solver_name, steps)
+            }
+            other => Err(format!("unknown case {other}").into()),
+        };
+    }
+    let case = opt("case").unwrap_or_else(|| "all".into());
+    let solvers = opt("solvers").unwrap_or_else(|| "direct,block".into());
+    let cases: Vec<&str> = match case.as_str() {
+        "all" => vec!["dam2d", "column3d"],
+        c => vec![if c == "dam2d" { "dam2d" } else { "column3d" }],
+    };
+    let exe = std::env::current_exe()?;
+    println!(
+        "{:<9} {:>4} {:<7} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>5} {:>8}",
+        "case",
+        "a/n",
+        "solver",
+        "particles",
+        "s/step",
+        "remesh",
+        "assemble",
+        "solve",
+        "rejected",
+        "picard",
+        "krylov",
+        "rej",
+        "peak MB"
+    );
+    for case in cases {
+        let sizes = opt("sizes").unwrap_or_else(|| {
+            if case == "dam2d" {
+                "20,40,80".into()
+            } else {
+                "10,14,18".into()
+            }
+        });
+        let mut fits: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+        for n in sizes.split(',') {
+            for s in solvers.split(',') {
+                let out = Command::new(&exe)
+                    .args([
+                        "--one",
+                        &format!("{case}:{n}:{s}"),
+                        "--steps",
+                        &steps.to_string(),
+                    ])
+                    .output()?;
+                let text = String::from_utf8_lossy(&out.stdout);
+                let Some(line) = text.lines().find(|l| l.starts_with("RESULT")) else {
+                    println!(
+                        "{case:<9} {n:>4} {s:<7} failed: {}",
+                        String::from_utf8_lossy(&out.stderr).trim()
+                    );
+                    continue;
+                };
+                let v: Vec<f64> = line
+                    .split_whitespace()
+                    .skip(1)
+                    .map(|x| x.parse().unwrap_or(f64::NAN))
+                    .collect();
+                println!(
+                    "{case:<9} {n:>4} {s:<7} {:>8} {:>9.4} {:>8.4} {:>8.4} {:>8.4} {:>8.4} {:>7.2} {:>8.1} {:>5} {:>8.0}",
+                    v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9]
+                );
+                match fits.iter_mut().find(|(name, _)| name == s) {
+                    Some((_, pts)) => pts.push((v[0].ln(), v[1].ln())),
+                    None => fits.push((s.to_string(), vec![(v[0].ln(), v[1].ln())])),
+                }
+            }
+        }
+        for (s, pts) in &fits {
+            println!(
+                "{case}: {s}: time per step grows as N^{:.2} over these sizes",
+                pfem::exact::slope(pts)
+            );
+        }
+    }
+    Ok(())
+}
