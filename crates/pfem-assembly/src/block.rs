@@ -164,8 +164,14 @@ struct QuasiDefinite {
 impl QuasiDefinite {
     /// Factors the symmetric `r` (CSR of both triangles); `signs` gives the
     /// expected sign of each pivot (+1 velocity, −1 pressure), `None` for
-    /// a positive definite `r` (Cholesky, faster).
-    fn factorise(&mut self, r: &Csr, signs: Option<&[i8]>) -> Result<(), String> {
+    /// a positive definite `r` (Cholesky, faster). Counts a new symbolic
+    /// analysis in `work`.
+    fn factorise(
+        &mut self,
+        r: &Csr,
+        signs: Option<&[i8]>,
+        work: &mut SolverWork,
+    ) -> Result<(), String> {
         // Symmetric: its CSR arrays are its CSC arrays.
         let sym = SymbolicSparseColMatRef::new_checked(r.nrows, r.ncols, &r.ptr, None, &r.idx);
         let a = SparseColMatRef::new(sym, &r.val);
@@ -183,6 +189,7 @@ impl QuasiDefinite {
             )
             .map_err(|e| format!("{e:?}"))?;
             self.symbolic = Some((r.ptr.clone(), r.idx.clone(), sc));
+            work.symbolic_analyses += 1;
         }
         let Some((_, _, sc)) = self.symbolic.as_ref() else {
             return Err("no symbolic factorisation".into());
@@ -292,6 +299,7 @@ impl Woodbury {
         block: usize,
         limit: f64,
         factor: QuasiDefinite,
+        work: &mut SolverWork,
     ) -> Result<(Self, usize), SolveError> {
         let n = a.nrows;
         let m = c.nrows;
@@ -341,7 +349,7 @@ impl Woodbury {
         };
         if ns == 0 {
             // No stiff rows: `Ŝ_F s = C_F Â_F⁻¹ r_F`, positive definite.
-            factor.factorise(&sf, None).map_err(fail)?;
+            factor.factorise(&sf, None, work).map_err(fail)?;
             return Ok((
                 Self {
                     inv,
@@ -382,7 +390,9 @@ impl Woodbury {
         let reduced =
             Csr::try_from_triplets(ns + m, ns + m, &t).map_err(|e| fail(e.to_string()))?;
         let signs: Vec<i8> = (0..ns + m).map(|k| if k < ns { 1 } else { -1 }).collect();
-        factor.factorise(&reduced, Some(&signs)).map_err(fail)?;
+        factor
+            .factorise(&reduced, Some(&signs), work)
+            .map_err(fail)?;
         Ok((
             Self {
                 inv,
@@ -564,7 +574,14 @@ impl BlockSolver {
                     Some(Prec::Woodbury(w)) => w.factor,
                     _ => QuasiDefinite::default(),
                 };
-                let (w, ns) = Woodbury::new(a, c, sys.block_size, self.dominance_limit, factor)?;
+                let (w, ns) = Woodbury::new(
+                    a,
+                    c,
+                    sys.block_size,
+                    self.dominance_limit,
+                    factor,
+                    &mut self.work,
+                )?;
                 if ns > 0 {
                     self.stats.stiff_setups += 1;
                 }
@@ -965,76 +982,4 @@ fn minres(
         }
     }
     max_iter
-}
-
-/// The direct solver below a size, the block-preconditioned iterative
-/// path above it: the library's choice by size.
-#[derive(Debug)]
-pub struct AutoSolver {
-    /// Unknowns from which the iterative path is taken.
-    pub threshold: usize,
-    direct: DirectSolver,
-    block: BlockSolver,
-    last_direct: bool,
-}
-
-impl AutoSolver {
-    /// The direct solver below `threshold` unknowns, [`BlockSolver`] from
-    /// there.
-    pub fn with_threshold(threshold: usize) -> Self {
-        Self {
-            threshold,
-            direct: DirectSolver::default(),
-            block: BlockSolver::default(),
-            last_direct: true,
-        }
-    }
-
-    /// The iterative path's figures.
-    pub fn block_stats(&self) -> BlockStats {
-        self.block.stats()
-    }
-}
-
-impl LinearSolver for AutoSolver {
-    fn name(&self) -> &str {
-        "direct or block MINRES by size"
-    }
-
-    fn solve(
-        &mut self,
-        a: faer::sparse::SparseColMatRef<'_, usize, f64>,
-        generation: u64,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> Result<SolveReport, SolveError> {
-        self.last_direct = true;
-        self.direct.solve(a, generation, b, x)
-    }
-
-    fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
-        if self.last_direct {
-            self.direct.resolve(b, x)
-        } else {
-            None
-        }
-    }
-
-    fn wants_split(&self, dofs: usize) -> bool {
-        dofs >= self.threshold
-    }
-
-    fn solve_split(
-        &mut self,
-        sys: &SplitSystem<'_>,
-        generation: u64,
-        x: &mut [f64],
-    ) -> Result<SolveReport, SolveError> {
-        self.last_direct = false;
-        self.block.solve_split(sys, generation, x)
-    }
-
-    fn work(&self) -> SolverWork {
-        self.direct.work() + self.block.work()
-    }
 }

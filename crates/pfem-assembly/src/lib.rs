@@ -18,7 +18,7 @@ pub use assembler::{
     Assembler, AssemblerWork, AssemblyInfo, AssemblyInput, Constraints, Inertia, NodalRate,
     StepMesh,
 };
-pub use block::{AutoSolver, BlockSolver, BlockStats, PressureSolve, VelocityBlock};
+pub use block::{BlockSolver, BlockStats, PressureSolve, VelocityBlock};
 pub use error::{AssemblyError, SolveError};
 pub use faer::Par;
 pub use kernels::VolumetricTreatment;

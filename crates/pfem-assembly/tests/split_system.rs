@@ -196,7 +196,11 @@ fn against_direct(t: &Tank, block: &mut BlockSolver, label: &str) -> f64 {
 #[test]
 fn the_block_solver_solves_the_split_system_as_the_direct_one_does() {
     let mut block = BlockSolver::default();
-    let d = against_direct(&tank(12), &mut block, "water, Cholesky of the pressure matrix");
+    let d = against_direct(
+        &tank(12),
+        &mut block,
+        "water, Cholesky of the pressure matrix",
+    );
     assert!(d <= 1e-8, "{d}");
     assert_eq!(block.stats().stiff_setups, 0);
     assert_eq!(block.stats().fallbacks, 0);

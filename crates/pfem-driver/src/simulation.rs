@@ -777,7 +777,9 @@ where
         self.stop.as_deref()
     }
 
-    /// Replaces the linear solver (default: [`pfem_assembly::DirectSolver`], sparse Cholesky with an LU fallback).
+    /// Replaces the linear solver (default: [`pfem_assembly::BlockSolver`];
+    /// [`pfem_assembly::DirectSolver`] is sparse Cholesky of the whole
+    /// system with an LU fallback).
     pub fn set_solver(&mut self, solver: Box<dyn pfem_assembly::LinearSolver>) {
         let params = self.stepper.integrator.params;
         self.stepper.integrator = Integrator::with_solver(params, solver);

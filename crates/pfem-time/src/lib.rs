@@ -20,7 +20,7 @@
 //! until it succeeds or the step falls below the minimum, a typed error.
 
 use pfem_assembly::{
-    Assembler, AssemblyError, AssemblyInput, Constraints, DirectSolver, Inertia, LinearSolver,
+    Assembler, AssemblyError, AssemblyInput, BlockSolver, Constraints, Inertia, LinearSolver,
     NodalRate, SolveError, StepMesh, VolumetricTreatment,
 };
 use pfem_constitutive::{History, Material, MaterialKind};
@@ -408,10 +408,11 @@ impl<const D: usize> Integrator<D>
 where
     Const<D>: Dim,
 {
-    /// An integrator with the default direct solver (sparse Cholesky with
-    /// an LU fallback, see [`DirectSolver`]).
+    /// An integrator with the default solver, [`BlockSolver`]: the split
+    /// system by conjugate gradient with an exact pressure-block
+    /// preconditioner (the direct solver when it cannot).
     pub fn new(params: StepParams) -> Self {
-        Self::with_solver(params, Box::new(DirectSolver::default()))
+        Self::with_solver(params, Box::new(BlockSolver::default()))
     }
 
     /// An integrator with a given linear solver.
@@ -453,6 +454,8 @@ where
     ) -> Result<(), StepError> {
         let n = state.len();
         let dt = 1e-12; // rate terms scale with Δt: take the limit Δt → 0
+        // The steps' own split, so that their first one keeps this pattern.
+        self.assembler.set_split(self.solver.wants_split(n * D));
         self.assembler
             .prepare(n, input.mesh, input.materials)
             .map_err(|source| StepError::Assembly {

@@ -121,22 +121,23 @@ impl Args {
         Ok(p)
     }
 
-    /// The linear solver chosen by `--solver direct|lu|cholesky|cg|block`
-    /// (default `direct`: Cholesky with LU fallback; `block`: the
-    /// block-preconditioned MINRES of issue 18, [`pfem_assembly::BlockSolver`]).
+    /// The linear solver chosen by `--solver block|direct|lu|cholesky|cg`
+    /// (default `block`: [`pfem_assembly::BlockSolver`], the split system by
+    /// conjugate gradient; `direct`: Cholesky of the whole system with LU
+    /// fallback).
     pub fn solver(&self) -> Result<Box<dyn pfem_assembly::LinearSolver>, ArgsError> {
         use pfem_assembly::{
             BlockSolver, ConjugateGradient, DirectSolver, SparseCholesky, SparseLu,
         };
         Ok(match self.options.get("solver").map(String::as_str) {
-            None | Some("direct") => Box::new(DirectSolver::default()),
+            Some("direct") => Box::new(DirectSolver::default()),
             Some("lu") => Box::new(SparseLu::default()),
             Some("cholesky") => Box::new(SparseCholesky::default()),
             Some("cg") => Box::new(ConjugateGradient::default()),
-            Some("block") => Box::new(BlockSolver::default()),
+            None | Some("block") => Box::new(BlockSolver::default()),
             Some(other) => {
                 return Err(ArgsError(format!(
-                    "--solver must be direct, lu, cholesky, cg or block, got `{other}`"
+                    "--solver must be block, direct, lu, cholesky or cg, got `{other}`"
                 )))
             }
         })
