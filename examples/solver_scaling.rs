@@ -15,6 +15,13 @@
 //! rest), Picard iterations per step, Krylov iterations per solve,
 //! rejected attempts and peak memory; then the fitted exponent of time per
 //! step against particles for each solver.
+//!
+//! One run alone, writing the whole system of its third solve (the first
+//! step's third Picard iterate) as Matrix Market (`STEM.mtx`,
+//! `STEM_rhs.mtx`) for solvers outside the library:
+//! ```text
+//! cargo run --release --example solver_scaling -- --one dam2d:40:block --steps 1 --export out/dam2d_a40
+//! ```
 
 use std::process::Command;
 use std::time::Instant;
@@ -54,11 +61,23 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
 }
 
 /// One run, in this process: prints one `RESULT` line.
-fn one<const D: usize>(mut sim: Simulation<D>, solver_name: &str, steps: u64) -> Res<()>
+fn one<const D: usize>(
+    mut sim: Simulation<D>,
+    solver_name: &str,
+    steps: u64,
+    export: Option<String>,
+) -> Res<()>
 where
     pfem::core::Const<D>: pfem::core::Dim,
 {
-    sim.set_solver(solver(solver_name)?);
+    match export {
+        Some(stem) => sim.set_solver(Box::new(pfem::assembly::MatrixExport::new(
+            solver(solver_name)?,
+            stem,
+            2,
+        ))),
+        None => sim.set_solver(solver(solver_name)?),
+    }
     let n = sim.particles().len();
     let t0 = Instant::now();
     while sim.steps() < steps {
@@ -94,6 +113,7 @@ fn run() -> Res<()> {
     };
     let steps: u64 = opt("steps").map(|s| s.parse()).transpose()?.unwrap_or(10);
     // Child: one case, one size, one solver.
+    let export = opt("export");
     if let Some(spec) = opt("one") {
         let parts: Vec<&str> = spec.split(':').collect();
         let [case, n, solver_name] = parts[..] else {
@@ -109,7 +129,7 @@ fn run() -> Res<()> {
                     Box::new(Delaunay2::default()),
                     StepParams::default(),
                 )?;
-                one(sim, solver_name, steps)
+                one(sim, solver_name, steps, export)
             }
             "column3d" => {
                 let mut c = WaterColumn3d {
@@ -123,7 +143,7 @@ fn run() -> Res<()> {
                     StepParams::default(),
                 )?;
                 pfem::cases3d::slip_sides(&mut sim);
-                one(sim, solver_name, steps)
+                one(sim, solver_name, steps, export)
             }
             other => Err(format!("unknown case {other}").into()),
         };

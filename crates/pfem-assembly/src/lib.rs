@@ -10,6 +10,7 @@ pub mod amg;
 pub mod assembler;
 pub mod block;
 pub mod error;
+pub mod export;
 pub mod kernels;
 pub mod pattern;
 pub mod solver;
@@ -20,6 +21,7 @@ pub use assembler::{
 };
 pub use block::{BlockSolver, BlockStats, PressureSolve, VelocityBlock};
 pub use error::{AssemblyError, SolveError};
+pub use export::MatrixExport;
 pub use faer::Par;
 pub use kernels::VolumetricTreatment;
 pub use solver::{

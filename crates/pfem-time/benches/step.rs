@@ -2,14 +2,15 @@
 //! tank (real bulk modulus, hydrostatic pressure, trapezoidal-Newmark inertia
 //! weights; the scheme changes only two scalars of the system) at 10k
 //! and 100k particles: assembly alone, and assembly plus one solve with
-//! sparse LU, sparse Cholesky and PCG (IC(0)).
+//! sparse LU, sparse Cholesky and PCG (IC(0)), and the default path: the
+//! split system (`Assembler::set_split`) and `BlockSolver`.
 //!
 //! `cargo bench -p pfem-time --bench step`
 #![allow(missing_docs)] // criterion_group! generates undocumented items
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use pfem_assembly::{
-    Assembler, AssemblyInput, ConjugateGradient, Constraints, Inertia, LinearSolver,
+    Assembler, AssemblyInput, BlockSolver, ConjugateGradient, Constraints, Inertia, LinearSolver,
     SparseCholesky, SparseLu, StepMesh, VolumetricTreatment,
 };
 use pfem_constitutive::{History, Material, Newtonian};
@@ -112,6 +113,23 @@ fn prepared(t: &Tank) -> Assembler<2> {
     asm
 }
 
+/// [`prepared`], with the nodal volumetric term kept apart.
+fn prepared_split(t: &Tank) -> Assembler<2> {
+    let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
+    asm.set_split(true);
+    asm.prepare(
+        t.x.len(),
+        StepMesh {
+            elements: &t.tris,
+            element_material: &t.mat,
+            closures: &[],
+        },
+        &t.materials,
+    )
+    .unwrap();
+    asm
+}
+
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("assembly_and_solve");
     g.sample_size(10)
@@ -162,6 +180,29 @@ fn bench(c: &mut Criterion) {
                 })
             });
         }
+        // The default path: the split system and BlockSolver.
+        let mut split = prepared_split(&t);
+        split.assemble(&inp).unwrap();
+        let mut s = BlockSolver::default();
+        let mut x = vec![0.0; split.dofs()];
+        let gen = split.generation();
+        let sys = split.split_system().unwrap();
+        let r = s.solve_split(&sys, gen, &mut x).unwrap();
+        eprintln!(
+            "{label} {}: residual {:.1e}, {} iterations, split matrix {} nonzeros",
+            s.name(),
+            r.residual,
+            r.iterations,
+            sys.a_v.compute_nnz()
+        );
+        g.bench_function(BenchmarkId::new("assemble_split+block", label), |b| {
+            b.iter(|| {
+                split.assemble(&inp).unwrap();
+                x.iter_mut().for_each(|v| *v = 0.0);
+                let sys = split.split_system().unwrap();
+                s.solve_split(&sys, gen, &mut x).unwrap()
+            })
+        });
     }
     g.finish();
 }

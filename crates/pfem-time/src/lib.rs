@@ -454,7 +454,7 @@ where
     ) -> Result<(), StepError> {
         let n = state.len();
         let dt = 1e-12; // rate terms scale with Δt: take the limit Δt → 0
-        // The steps' own split, so that their first one keeps this pattern.
+                        // The steps' own split, so that their first one keeps this pattern.
         self.assembler.set_split(self.solver.wants_split(n * D));
         self.assembler
             .prepare(n, input.mesh, input.materials)
