@@ -100,6 +100,8 @@ where
             // A solid's own mesh has no free surface against walls.
             drop_dry_bridges: false,
             up: None,
+            // A solid's mesh is made once: keep it as it always was.
+            min_quality_3d: pfem_geometry::MIN_SHAPE_QUALITY,
         },
     )
     .map_err(|e| err(format!("solid mesh: {e}")))?;
