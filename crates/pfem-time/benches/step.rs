@@ -98,25 +98,11 @@ fn input(t: &Tank) -> AssemblyInput<'_, 2> {
     }
 }
 
-fn prepared(t: &Tank) -> Assembler<2> {
+/// An assembler prepared for the tank's mesh; `split` keeps the nodal
+/// volumetric term apart (`Assembler::set_split`).
+fn prepared(t: &Tank, split: bool) -> Assembler<2> {
     let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
-    asm.prepare(
-        t.x.len(),
-        StepMesh {
-            elements: &t.tris,
-            element_material: &t.mat,
-            closures: &[],
-        },
-        &t.materials,
-    )
-    .unwrap();
-    asm
-}
-
-/// [`prepared`], with the nodal volumetric term kept apart.
-fn prepared_split(t: &Tank) -> Assembler<2> {
-    let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
-    asm.set_split(true);
+    asm.set_split(split);
     asm.prepare(
         t.x.len(),
         StepMesh {
@@ -138,7 +124,7 @@ fn bench(c: &mut Criterion) {
     for (label, n) in [("10k", 99usize), ("100k", 315)] {
         let t = tank(n);
         let inp = input(&t);
-        let mut asm = prepared(&t);
+        let mut asm = prepared(&t, false);
         let info = asm.assemble(&inp).unwrap();
         eprintln!(
             "{label}: {} particles, {} elements, {} dofs, {} nonzeros",
@@ -181,7 +167,7 @@ fn bench(c: &mut Criterion) {
             });
         }
         // The default path: the split system and BlockSolver.
-        let mut split = prepared_split(&t);
+        let mut split = prepared(&t, true);
         split.assemble(&inp).unwrap();
         let mut s = BlockSolver::default();
         let mut x = vec![0.0; split.dofs()];
