@@ -315,11 +315,7 @@ impl Woodbury {
         let block = block.max(1);
         let mut stiff_node = vec![false; n.div_ceil(block)];
         for i in 0..n {
-            let off: f64 = (a.ptr[i]..a.ptr[i + 1])
-                .filter(|&p| a.idx[p] != i)
-                .map(|p| a.val[p].abs())
-                .sum();
-            if off > limit * diag[i] {
+            if off_diagonal(a, i) > limit * diag[i] {
                 stiff_node[i / block] = true;
             }
         }
@@ -596,14 +592,7 @@ impl BlockSolver {
                     VelocityBlock::Jacobi => false,
                     VelocityBlock::Amg => true,
                     VelocityBlock::Auto => {
-                        let mut off = 0.0;
-                        for i in 0..n {
-                            for p in a.ptr[i]..a.ptr[i + 1] {
-                                if a.idx[p] != i {
-                                    off += a.val[p].abs();
-                                }
-                            }
-                        }
+                        let off: f64 = (0..n).map(|i| off_diagonal(a, i)).sum();
                         off > self.dominance_limit * diag.iter().sum::<f64>()
                     }
                 };
@@ -640,6 +629,14 @@ impl BlockSolver {
             prec,
         })
     }
+}
+
+/// `Σ_{j≠i} |a_ij|` of row `i`.
+fn off_diagonal(a: &Csr, i: usize) -> f64 {
+    (a.ptr[i]..a.ptr[i + 1])
+        .filter(|&p| a.idx[p] != i)
+        .map(|p| a.val[p].abs())
+        .sum()
 }
 
 /// `S + I` for a square CSR matrix with sorted rows.
