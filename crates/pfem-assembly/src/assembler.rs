@@ -19,7 +19,9 @@
 //! `−D σ̂⁽ⁿ⁾` with `σ̂ = −pⁿ I` is `Gᵀ pⁿ` in both cases.
 
 use pfem_constitutive::{History, Material, MaterialKind, Unified};
-use pfem_core::{weighted_shape_gradients, Const, Dim, Point, Tensor, Vector, MAX_NV};
+use pfem_core::{
+    below_water_line, weighted_shape_gradients, Const, Dim, Point, Tensor, Vector, MAX_NV,
+};
 use rayon::prelude::*;
 
 use crate::kernels::{
@@ -101,8 +103,10 @@ pub struct Inertia {
 }
 
 /// The mesh of one step: all elements (fluid from the tessellation, solid
-/// from each solid's own mesh) with their material index.
-#[derive(Debug, Clone, Copy)]
+/// from each solid's own mesh) with their material index. `Default` is the
+/// empty mesh: build one as `StepMesh { elements, element_material,
+/// ..Default::default() }`.
+#[derive(Debug, Clone, Copy, Default)]
 pub struct StepMesh<'a> {
     /// Flat connectivity, `D + 1` particle indices per element.
     pub elements: &'a [u32],
@@ -118,6 +122,26 @@ pub struct StepMesh<'a> {
     /// are not all nodes of elements is ignored. Empty in 2D and when the
     /// driver turns closing off.
     pub closures: &'a [u32],
+    /// Fluid elements integrated only below their water line (issue 19;
+    /// `pfem_geometry::AlphaShape::surface_cuts`). Empty by default.
+    pub surface_cuts: SurfaceCuts<'a>,
+}
+
+/// Fluid elements that join free-surface particles to a wall or a solid
+/// above their water line: each is integrated only over its part below the
+/// plane normal to `up` through the mean height of its free-surface nodes
+/// (`pfem_core::below_water_line`), at every iterate. Its mass, viscous
+/// stiffness, nodal volume `M̂` and pressure rows `G` (eqs. 56, 58) are the
+/// integrals of the element's own linear shape functions over that part,
+/// so a hydrostatic pressure balances its weight wherever the wall's nodes
+/// lie with respect to the water line.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SurfaceCuts<'a> {
+    /// `(element, mask of its free-surface nodes)`, the element indexing
+    /// [`StepMesh::elements`], bit `a` for local node `a`.
+    pub elements: &'a [(u32, u8)],
+    /// The unit vector opposite to gravity (first `D` components used).
+    pub up: [f64; 3],
 }
 
 /// What the assembly reads at a Picard iterate.
@@ -204,6 +228,15 @@ where
     /// Per closure: `V grad W` of its nodes and `V`, at the iterate.
     clo_w: Vec<[Vector<D>; MAX_NV]>,
     clo_vol: Vec<f64>,
+    /// Surface cuts ([`StepMesh::surface_cuts`]): per element its cut
+    /// (NONE when whole), the cuts, `up`, and per cut the share below the
+    /// water line with its centroid's barycentric coordinates at the
+    /// iterate and at `t_n`.
+    cut_of: Vec<u32>,
+    cuts: Vec<(u32, u8)>,
+    cut_up: [f64; 3],
+    cut_share: Vec<(f64, [f64; MAX_NV])>,
+    cut_share_n: Vec<(f64, [f64; MAX_NV])>,
     // Per-iteration values.
     values: Vec<f64>,
     rhs: Vec<f64>,
@@ -314,6 +347,10 @@ where
         materials: &[Box<dyn Material<D>>],
     ) -> Result<(), AssemblyError> {
         self.work.prepares += 1;
+        self.set_cuts(
+            mesh.elements.len() / <Const<D> as Dim>::NV,
+            mesh.surface_cuts,
+        )?;
         let (ref le, ref lm, ref lc, ln) = self.last_mesh;
         if self.work.patterns_built > 0
             && ln == n_particles
@@ -340,6 +377,36 @@ where
         last.2.extend_from_slice(mesh.closures);
         last.3 = n_particles;
         Ok(())
+    }
+
+    /// Records the surface cuts of a step's mesh.
+    fn set_cuts(&mut self, ne: usize, cuts: SurfaceCuts<'_>) -> Result<(), AssemblyError> {
+        self.cut_of.clear();
+        self.cuts.clear();
+        if cuts.elements.is_empty() {
+            return Ok(());
+        }
+        self.cut_of.resize(ne, NONE);
+        for (k, &(e, mask)) in cuts.elements.iter().enumerate() {
+            if e as usize >= ne || mask == 0 || mask >> <Const<D> as Dim>::NV != 0 {
+                return Err(AssemblyError::MeshMismatch {
+                    what: "a surface cut names no element or no node of it",
+                });
+            }
+            self.cut_of[e as usize] = k as u32;
+        }
+        self.cuts.extend_from_slice(cuts.elements);
+        self.cut_up = cuts.up;
+        Ok(())
+    }
+
+    /// The share of element `e` integrated at the iterate (1 unless cut).
+    #[inline]
+    fn share(&self, e: usize) -> f64 {
+        match self.cut_of.get(e) {
+            Some(&c) if c != NONE => self.cut_share_n[c as usize].0,
+            _ => 1.0,
+        }
     }
 
     fn prepare_new(
@@ -638,6 +705,22 @@ where
             .flatten();
         self.states = states;
         self.unified = unified;
+        self.cut_share.clear();
+        self.cut_share_n.clear();
+        let up = Vector::<D>::from_fn(|k, _| self.cut_up[k]);
+        for &(e, mask) in &self.cuts {
+            let mut x = [Point::<D>::zeros(); MAX_NV];
+            let mut xn = [Point::<D>::zeros(); MAX_NV];
+            for a in 0..nv {
+                let p = self.particle_of[self.elem_sys[e as usize * nv + a] as usize] as usize;
+                x[a] = input.x[p];
+                xn[a] = input.x_n[p];
+            }
+            self.cut_share
+                .push(below_water_line::<D>(&x[..nv], mask, &up));
+            self.cut_share_n
+                .push(below_water_line::<D>(&xn[..nv], mask, &up));
+        }
         if let Some((e, inverted)) = bad {
             let nodes = (0..nv)
                 .map(|a| self.particle_of[self.elem_sys[e * nv + a] as usize])
@@ -666,6 +749,7 @@ where
             let unified = &self.unified;
             let elem_vol = &self.elem_vol;
             let elem_fluid = &self.elem_fluid;
+            let (cut_of, cut_share) = (&self.cut_of, &self.cut_share_n);
             self.local[..(c1 - c0) * stride]
                 .par_chunks_mut(stride)
                 .enumerate()
@@ -673,6 +757,10 @@ where
                     let e = c0 + i;
                     let (k, f) = buf.split_at_mut(n_local * n_local);
                     element_stiffness::<D>(&states[e], &unified[e], elem_vol[e], k);
+                    if let Some(&c) = cut_of.get(e).filter(|&&c| c != NONE) {
+                        let share = cut_share[c as usize].0;
+                        k.iter_mut().for_each(|v| *v *= share);
+                    }
                     f.iter_mut().for_each(|v| *v = 0.0);
                     if !elem_fluid[e] {
                         element_history_force::<D>(&states[e], &unified[e].sigma_hat, f);
@@ -689,9 +777,17 @@ where
                 let buf = &self.local[(e - c0) * stride..(e - c0 + 1) * stride];
                 let el = &self.elem_sys[e * nv..(e + 1) * nv];
                 let rho = input.materials[self.elem_material[e] as usize].density();
-                let m = rho * self.states[e].volume_n / nv as f64;
+                let m = rho * self.states[e].volume_n;
+                let cut = self.cut_of.get(e).copied().filter(|&c| c != NONE);
                 for a in 0..nv {
-                    self.mass[el[a] as usize] += m;
+                    // Lumped: ∫ ρ W_a over the element (or its cut part).
+                    self.mass[el[a] as usize] += match cut {
+                        Some(c) => {
+                            let (share, l) = self.cut_share_n[c as usize];
+                            m * share * l[a]
+                        }
+                        None => m / nv as f64,
+                    };
                     for k in 0..D {
                         sink.rhs(el[a], k, buf[n_local * n_local + a * D + k]);
                     }
@@ -862,8 +958,16 @@ where
                 continue;
             }
             let st = &self.states[e];
-            let wv = st.volume / nv as f64;
+            let cut = self.cut_of.get(e).copied().filter(|&c| c != NONE);
             for a in 0..nv {
+                // ∫ W_a over the element (or its cut part).
+                let wv = match cut {
+                    Some(c) => {
+                        let (share, l) = self.cut_share_n[c as usize];
+                        st.volume * share * l[a]
+                    }
+                    None => st.volume / nv as f64,
+                };
                 let na = self.elem_sys[e * nv + a] as usize;
                 self.vol_hat[na] += wv;
                 self.kappa_hat[na] += wv * self.unified[e].kappa;
@@ -992,6 +1096,10 @@ where
             let st = &self.states[e];
             let un = &self.unified[e];
             element_stiffness::<D>(st, un, self.elem_vol[e], &mut k[..n_local * n_local]);
+            let share = self.share(e);
+            if share != 1.0 {
+                k[..n_local * n_local].iter_mut().for_each(|v| *v *= share);
+            }
             let mut f = [0.0; MAX_LOCAL];
             if !self.elem_fluid[e] {
                 element_history_force::<D>(st, &un.sigma_hat, &mut f[..n_local]);

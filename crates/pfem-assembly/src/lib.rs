@@ -17,7 +17,7 @@ pub mod solver;
 
 pub use assembler::{
     Assembler, AssemblerWork, AssemblyInfo, AssemblyInput, Constraints, Inertia, NodalRate,
-    StepMesh,
+    StepMesh, SurfaceCuts,
 };
 pub use block::{BlockSolver, BlockStats, PressureSolve, VelocityBlock};
 pub use error::{AssemblyError, SolveError};

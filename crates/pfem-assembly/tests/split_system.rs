@@ -97,6 +97,7 @@ fn assembled(t: &Tank, split: bool) -> Assembler<2> {
             elements: &t.tris,
             element_material: &t.mat,
             closures: &[],
+            surface_cuts: Default::default(),
         },
         &t.materials,
     )

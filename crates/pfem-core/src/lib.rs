@@ -182,6 +182,162 @@ where
     e.determinant() * f
 }
 
+/// The part of a simplex where a linear height `s` is not positive: its
+/// share of the simplex's measure and the barycentric coordinates of its
+/// centroid. `s[a]` is the height of vertex `a` (`NV` entries, `D` 2 or 3).
+/// Since the shape functions are linear, `∫_part W_a = frac · V · λ_a`,
+/// which is all a linear element integrated over the part needs (issue 19:
+/// the cut of a dry bridge at the water line). The whole simplex gives
+/// `(1, 1/NV …)`, none of it `(0, 1/NV …)`; the share is continuous in `s`.
+pub fn part_below<const D: usize>(s: &[f64]) -> (f64, [f64; MAX_NV])
+where
+    Const<D>: Dim,
+{
+    let nv = D + 1;
+    let uniform = {
+        let mut u = [0.0; MAX_NV];
+        u[..nv].iter_mut().for_each(|v| *v = 1.0 / nv as f64);
+        u
+    };
+    let above: usize = s[..nv].iter().filter(|&&v| v > 0.0).count();
+    if above == 0 {
+        return (1.0, uniform);
+    }
+    if above == nv {
+        return (0.0, uniform);
+    }
+    // Vertices and edge crossings in barycentric coordinates.
+    let vertex = |a: usize| {
+        let mut l = [0.0; MAX_NV];
+        l[a] = 1.0;
+        l
+    };
+    let crossing = |a: usize, b: usize| {
+        // The point of edge a–b where s = 0 (s[a] and s[b] of opposite sides).
+        let t = s[a] / (s[a] - s[b]);
+        let mut l = [0.0; MAX_NV];
+        l[a] = 1.0 - t;
+        l[b] = t;
+        l
+    };
+    // Measure (relative to the simplex) and first moment of a sub-simplex
+    // given by the barycentric coordinates of its vertices.
+    let sub = |v: &[[f64; MAX_NV]]| {
+        // The nv × nv determinant, padded with the identity to 4 × 4.
+        let m = nalgebra::Matrix4::<f64>::from_fn(|i, j| {
+            if i < nv && j < nv {
+                v[j][i]
+            } else if i == j {
+                1.0
+            } else {
+                0.0
+            }
+        });
+        let frac = m.determinant().abs();
+        let mut c = [0.0; MAX_NV];
+        for l in v {
+            for a in 0..nv {
+                c[a] += l[a] * frac / nv as f64;
+            }
+        }
+        (frac, c)
+    };
+    let (mut up, mut down) = ([0usize; MAX_NV], [0usize; MAX_NV]);
+    let (mut nu, mut nd) = (0, 0);
+    for a in 0..nv {
+        if s[a] > 0.0 {
+            up[nu] = a;
+            nu += 1;
+        } else {
+            down[nd] = a;
+            nd += 1;
+        }
+    }
+    let mut parts = [[0.0; MAX_NV]; MAX_NV];
+    let (frac, moment) = if nd == 1 {
+        // A corner at the one vertex below.
+        let b = down[0];
+        parts[0] = vertex(b);
+        for (k, &a) in up[..nu].iter().enumerate() {
+            parts[k + 1] = crossing(b, a);
+        }
+        sub(&parts[..nv])
+    } else if nu == 1 {
+        // The whole less the corner at the one vertex above.
+        let a = up[0];
+        parts[0] = vertex(a);
+        for (k, &b) in down[..nd].iter().enumerate() {
+            parts[k + 1] = crossing(a, b);
+        }
+        let (fc, mc) = sub(&parts[..nv]);
+        let mut m = uniform;
+        for k in 0..nv {
+            m[k] -= mc[k];
+        }
+        (1.0 - fc, m)
+    } else {
+        // 3D, two above and two below: a prism with the triangles
+        // (b0, c00, c01) and (b1, c10, c11), split into three tetrahedra.
+        let (b0, b1, a0, a1) = (down[0], down[1], up[0], up[1]);
+        let t0 = [vertex(b0), crossing(b0, a0), crossing(b0, a1)];
+        let t1 = [vertex(b1), crossing(b1, a0), crossing(b1, a1)];
+        let mut frac = 0.0;
+        let mut m = [0.0; MAX_NV];
+        for tet in [
+            [t0[0], t0[1], t0[2], t1[0]],
+            [t0[1], t0[2], t1[0], t1[1]],
+            [t0[2], t1[0], t1[1], t1[2]],
+        ] {
+            let (f, c) = sub(&tet);
+            frac += f;
+            for k in 0..nv {
+                m[k] += c[k];
+            }
+        }
+        (frac, m)
+    };
+    if frac <= 0.0 {
+        return (0.0, uniform);
+    }
+    let mut l = [0.0; MAX_NV];
+    for k in 0..nv {
+        l[k] = moment[k] / frac;
+    }
+    (frac.min(1.0), l)
+}
+
+/// The share of a simplex below its *water line* and the barycentric
+/// coordinates of that part's centroid ([`part_below`]): the water line is
+/// the plane normal to `up` through the mean height of the vertices in
+/// `surface` (a bit mask of local vertices: the free-surface fluid nodes of
+/// a simplex that joins them to a wall or a solid; issue 19). `p` holds the
+/// simplex's `D + 1` vertices.
+pub fn below_water_line<const D: usize>(
+    p: &[Point<D>],
+    surface: u8,
+    up: &Vector<D>,
+) -> (f64, [f64; MAX_NV])
+where
+    Const<D>: Dim,
+{
+    let nv = D + 1;
+    let (mut level, mut n) = (0.0, 0);
+    for (a, x) in p[..nv].iter().enumerate() {
+        if surface & (1 << a) != 0 {
+            level += x.dot(up);
+            n += 1;
+        }
+    }
+    let mut s = [0.0; MAX_NV];
+    if n > 0 {
+        level /= n as f64;
+        for (a, x) in p[..nv].iter().enumerate() {
+            s[a] = x.dot(up) - level;
+        }
+    }
+    part_below::<D>(&s[..nv])
+}
+
 /// Circumcentre and circumradius of a simplex, `None` if degenerate.
 pub fn circumsphere<const D: usize>(p: &[Point<D>]) -> Option<(Point<D>, f64)>
 where
@@ -219,6 +375,106 @@ pub type BodyId = u32;
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    /// The part below a plane, against a fine sampling of the simplex in
+    /// barycentric coordinates: share and centroid, every case of the cut.
+    fn check_part_below<const D: usize>(s: &[f64])
+    where
+        Const<D>: Dim,
+    {
+        let nv = D + 1;
+        let (frac, l) = part_below::<D>(s);
+        let n = if D == 2 { 600 } else { 120 };
+        let (mut count, mut total) = (0usize, 0usize);
+        let mut c = [0.0; MAX_NV];
+        // Points at the centres of a regular subdivision of the simplex.
+        let mut idx = vec![0usize; D];
+        loop {
+            let sum: usize = idx.iter().sum();
+            if sum < n {
+                let mut lam = [0.0; MAX_NV];
+                for k in 0..D {
+                    lam[k + 1] = (idx[k] as f64 + 1.0 / nv as f64) / n as f64;
+                }
+                lam[0] = 1.0 - lam[1..nv].iter().sum::<f64>();
+                if lam[0] > 0.0 {
+                    total += 1;
+                    let h: f64 = (0..nv).map(|a| lam[a] * s[a]).sum();
+                    if h <= 0.0 {
+                        count += 1;
+                        for a in 0..nv {
+                            c[a] += lam[a];
+                        }
+                    }
+                }
+            }
+            let mut k = 0;
+            loop {
+                idx[k] += 1;
+                if idx[k] < n {
+                    break;
+                }
+                idx[k] = 0;
+                k += 1;
+                if k == D {
+                    break;
+                }
+            }
+            if k == D {
+                break;
+            }
+        }
+        let sampled = count as f64 / total as f64;
+        assert!(
+            (frac - sampled).abs() < 1e-2,
+            "{s:?}: {frac} against {sampled}"
+        );
+        if count > 0 {
+            for a in 0..nv {
+                assert!((l[a] - c[a] / count as f64).abs() < 2e-2, "{s:?}: λ {l:?}");
+            }
+        }
+        let sum: f64 = l[..nv].iter().sum();
+        assert_relative_eq!(sum, 1.0, epsilon = 1e-12);
+        // The two sides make the whole.
+        let flip: Vec<f64> = s[..nv].iter().map(|v| -v).collect();
+        let (other, lo) = part_below::<D>(&flip);
+        if (0..nv).all(|a| s[a] != 0.0) {
+            assert_relative_eq!(frac + other, 1.0, epsilon = 1e-12);
+            for a in 0..nv {
+                let whole = frac * l[a] + other * lo[a];
+                assert_relative_eq!(whole, 1.0 / nv as f64, epsilon = 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn the_part_below_a_plane_matches_a_sampling_in_every_case() {
+        for s in [
+            [-1.0, -2.0, -0.5],
+            [1.0, 2.0, 0.5],
+            [0.3, -0.7, -0.2],
+            [0.3, 0.7, -0.2],
+            [1.0, -1.0, 0.0],
+        ] {
+            check_part_below::<2>(&s);
+        }
+        for s in [
+            [-1.0, -2.0, -0.5, -0.1],
+            [0.4, -0.7, -0.2, -0.9],
+            [0.4, 0.7, -0.2, -0.9],
+            [0.4, 0.7, 0.2, -0.9],
+            [-0.3, 0.5, -0.8, 0.6],
+            [0.5, -0.5, 0.5, -0.5],
+        ] {
+            check_part_below::<3>(&s);
+        }
+        // Continuous as a vertex crosses the plane.
+        let (a, _) = part_below::<2>(&[1e-12, -1.0, -1.0]);
+        assert_relative_eq!(a, 1.0, epsilon = 1e-9);
+        let (b, _) = part_below::<3>(&[1.0, 1.0, 1.0, -1e-12]);
+        assert!(b < 1e-9);
+    }
 
     #[test]
     fn gradients_sum_to_zero_and_reproduce_linear_fields_3d() {

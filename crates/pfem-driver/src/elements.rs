@@ -39,6 +39,9 @@ where
     shape: AlphaShape,
     close_sealed_voids: bool,
     count_wall_pockets: bool,
+    /// The shape's surface cuts in element numbering, and `up`.
+    cuts: Vec<(u32, u8)>,
+    up: [f64; 3],
 }
 
 impl<const D: usize> Elements<D>
@@ -66,12 +69,20 @@ where
             shape: AlphaShape::default(),
             close_sealed_voids,
             count_wall_pockets,
+            cuts: Vec::new(),
+            up: [0.0; 3],
         }
     }
 
     /// Replaces the fluid range with the kept simplices of `shape`, the
-    /// material of each from `material_of(simplex)`.
-    pub(crate) fn set_fluid(&mut self, shape: AlphaShape, material_of: impl Fn(&[u32]) -> u16) {
+    /// material of each from `material_of(simplex)`; `up` is the alpha
+    /// shape's (for its surface cuts).
+    pub(crate) fn set_fluid(
+        &mut self,
+        shape: AlphaShape,
+        up: Option<[f64; 3]>,
+        material_of: impl Fn(&[u32]) -> u16,
+    ) {
         let nv = D + 1;
         self.truncate_to_solid();
         self.conn.extend_from_slice(&shape.mesh.simplices);
@@ -80,6 +91,17 @@ where
         }
         self.history.resize(self.material.len(), History::default());
         self.n_fluid = self.material.len() - self.n_solid;
+        self.cuts.clear();
+        if let Some(up) = up {
+            let first = self.n_solid as u32;
+            self.cuts.extend(
+                shape
+                    .surface_cuts
+                    .iter()
+                    .map(|&(m, mask)| (first + m, mask)),
+            );
+            self.up = up;
+        }
         self.shape = shape;
     }
 
@@ -186,6 +208,10 @@ where
                 elements: &self.conn,
                 element_material: &self.material,
                 closures,
+                surface_cuts: pfem_assembly::SurfaceCuts {
+                    elements: &self.cuts,
+                    up: self.up,
+                },
             },
             &mut self.history,
         )
@@ -328,7 +354,18 @@ where
             }
             simplex_measure::<D>(&p[..nv])
         };
-        let elements: f64 = self.fluid().chunks_exact(nv).map(measure).sum();
+        let mut elements: f64 = self.fluid().chunks_exact(nv).map(measure).sum();
+        // Surface cuts count their part below the water line.
+        let up = pfem_core::Vector::<D>::from_fn(|k, _| self.up[k]);
+        for &(e, mask) in &self.cuts {
+            let el = &self.conn[e as usize * nv..(e as usize + 1) * nv];
+            let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+            for (a, &i) in el.iter().enumerate() {
+                p[a] = x[i as usize];
+            }
+            let share = pfem_core::below_water_line::<D>(&p[..nv], mask, &up).0;
+            elements -= (1.0 - share) * simplex_measure::<D>(&p[..nv]);
+        }
         let pockets: f64 = self
             .wall_pockets()
             .chunks_exact(nv)
@@ -344,6 +381,7 @@ where
     /// the solid range stays valid.
     pub(crate) fn clear_fluid(&mut self) {
         self.truncate_to_solid();
+        self.cuts.clear();
         self.shape = AlphaShape::default();
     }
 

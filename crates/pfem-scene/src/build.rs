@@ -463,11 +463,22 @@ where
                         ),
                         |(lo, hi), &i| (lo.inf(&x[i]), hi.sup(&x[i])),
                     );
+                    // Within a spacing above the water line the hydrostatic
+                    // field goes on linearly (negative) on solids: a solid
+                    // node there is a vertex of an element cut at the water
+                    // line (issue 19, `AlphaShapeParams::cut_dry_bridges`),
+                    // whose pressure must be the linear field's for the
+                    // water to start in equilibrium. Walls are not cut.
                     let h = spacing[idx[0]] * 1.01;
                     for i in 0..n {
                         let inside = (0..D).all(|k| x[i][k] >= lo[k] - h && x[i][k] <= hi[k] + h);
                         if kind[i] != ParticleKind::Fluid && inside {
-                            pressure[i] = (rho * gn * (x[i].dot(&dir) - top)).max(0.0);
+                            let depth = x[i].dot(&dir) - top;
+                            pressure[i] = if kind[i] == ParticleKind::Solid && depth >= -h {
+                                rho * gn * depth
+                            } else {
+                                (rho * gn * depth).max(0.0)
+                            };
                         }
                     }
                 }

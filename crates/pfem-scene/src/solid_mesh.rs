@@ -99,6 +99,7 @@ where
             alpha: params.alpha,
             // A solid's own mesh has no free surface against walls.
             drop_dry_bridges: false,
+            cut_dry_bridges: false,
             up: None,
             // A solid's mesh is made once: keep it as it always was.
             min_quality_3d: pfem_geometry::MIN_SHAPE_QUALITY,

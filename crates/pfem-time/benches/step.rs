@@ -109,6 +109,7 @@ fn prepared(t: &Tank, split: bool) -> Assembler<2> {
             elements: &t.tris,
             element_material: &t.mat,
             closures: &[],
+            surface_cuts: Default::default(),
         },
         &t.materials,
     )

@@ -144,6 +144,7 @@ impl<'b> Sim<'b> {
                     elements: &self.b.tris,
                     element_material: &self.mat,
                     closures: &[],
+                    surface_cuts: Default::default(),
                 },
                 materials: &self.materials,
                 constraints: &self.b.constraints,

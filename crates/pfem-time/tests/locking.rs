@@ -81,6 +81,7 @@ fn collapse(treatment: VolumetricTreatment, union_jack: bool, t_end: f64) -> Col
             elements: &tris,
             element_material: &mat,
             closures: &[],
+            surface_cuts: Default::default(),
         },
         materials: &materials,
         constraints: &constraints,

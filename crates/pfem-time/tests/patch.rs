@@ -86,6 +86,7 @@ where
             elements: &elems,
             element_material: &mat,
             closures: &[],
+            surface_cuts: Default::default(),
         },
         materials: &materials,
         constraints: &constraints,

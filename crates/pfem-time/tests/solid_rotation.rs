@@ -109,6 +109,7 @@ where
                 elements: &self.elements,
                 element_material: &self.material_of,
                 closures: &[],
+                surface_cuts: Default::default(),
             },
             materials: &self.materials,
             constraints: &constraints,

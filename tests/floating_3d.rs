@@ -1,0 +1,132 @@
+//! Archimedes in 3D (issue 19): a free elastic block of density
+//! 500 kg/m³ put in water at rest at its equilibrium draft (half its
+//! height) stays there: its draft over the last half second within 2 % of
+//! half its height, and the water around it meets the 3D rest bounds of
+//! water at rest (issue 13: largest speed ≤ 5·10⁻³ √(gH), pressure within
+//! 2 % RMS of ρ g (H − y)). The block's rows lie half a spacing off the
+//! water's, as in `tests/floating.rs`.
+//!
+//! `cargo test --release --test floating_3d -- --ignored --nocapture`
+//! (about 5 minutes on 2 cores).
+
+use pfem::cases::rest_figures;
+use pfem::cases3d::tank3d;
+use pfem::constitutive::Hypoelastic;
+use pfem::prelude::*;
+
+const G: f64 = 9.81;
+/// The release of the stress-free block shakes the water next to it for
+/// a few steps (see `tests/floating.rs`); the bounds hold from here on.
+const RELEASE: f64 = 0.1;
+
+#[test]
+#[ignore = "about 5 minutes: cargo test --release --test floating_3d -- --ignored --nocapture"]
+fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
+    let h = 0.025;
+    let (length, width, depth) = (0.6, 0.4, 0.2);
+    let (bw, bh) = (0.2, 0.125);
+    let draft = 0.5 * bh;
+    let lo = Point::<3>::new(0.5 * (length - bw), depth - draft, 0.5 * (width - bw));
+    let hi = lo + Vector::<3>::new(bw, bh, bw);
+    // The water: the tank's lattice less the block and one spacing round it.
+    let n = |l: f64| (l / h).round() as usize;
+    let mut water = Vec::new();
+    for i in 0..=n(length) {
+        for j in 1..=n(depth) {
+            for k in 0..=n(width) {
+                let p = Point::<3>::new(i as f64 * h, j as f64 * h, k as f64 * h);
+                let near = (0..3).all(|d| p[d] > lo[d] - h + 1e-9 && p[d] < hi[d] + h - 1e-9);
+                if !near {
+                    water.push(p);
+                }
+            }
+        }
+    }
+    let scene = tank3d(
+        Scene::<3>::new("floating_3d"),
+        length,
+        width,
+        1.5 * depth,
+        h,
+        true,
+    )
+    .gravity(Vector::<3>::new(0.0, -G, 0.0))
+    .settings(RunSettings {
+        end_time: 2.0,
+        max_dt: 5e-3,
+        output_interval: None,
+        ..Default::default()
+    })
+    .fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        Geometry::Particles(water),
+        h,
+    )
+    .solid(
+        "block",
+        Box::new(Hypoelastic::new(500.0, 1e7, 0.3).unwrap()),
+        Geometry::Box { min: lo, max: hi },
+        h,
+        None,
+    );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    let block = sim.body_particles("block").unwrap();
+    let water_p = sim.body_particles("water").unwrap();
+    let bottom = |s: &Simulation<3>| {
+        block.iter().map(|&i| s.particles().x()[i][1]).sum::<f64>() / block.len() as f64 - 0.5 * bh
+    };
+    // The water level far from the block: the highest water particle
+    // within 0.1 m of the end walls.
+    let level = |s: &Simulation<3>| {
+        water_p
+            .iter()
+            .map(|&i| s.particles().x()[i])
+            .filter(|p| p[0] < 0.1 || p[0] > length - 0.1)
+            .map(|p| p[1])
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let v0 = sim.fluid_volume();
+    let (mut sum, mut count) = (0.0, 0);
+    let (mut vmax, mut start): (f64, f64) = (0.0, 0.0);
+    let mut next = 0.0;
+    while sim.time() < sim.end_time() - 1e-12 {
+        sim.step().unwrap();
+        let f = rest_figures(&sim, depth);
+        if sim.time() < RELEASE {
+            start = start.max(f.max_speed);
+        } else {
+            vmax = vmax.max(f.max_speed);
+        }
+        if sim.time() >= next {
+            next += 0.25;
+            println!(
+                "t {:.2} bottom {:.5} level {:.5} largest speed {:.2e} √(gH)",
+                sim.time(),
+                bottom(&sim),
+                level(&sim),
+                f.max_speed
+            );
+        }
+        if sim.time() > sim.end_time() - 0.5 {
+            sum += level(&sim) - bottom(&sim);
+            count += 1;
+        }
+    }
+    let mean = sum / count as f64;
+    let pressure = rest_figures(&sim, depth).pressure_rms;
+    let dv = sim.fluid_volume() / v0 - 1.0;
+    println!(
+        "3D floating block: {} particles, {} steps ({} rejected); draft over the last 0.5 s {mean:.5} m against {draft} m ({:+.2} %); water after {RELEASE} s: largest speed {vmax:.2e} √(gH) ({start:.2e} before), pressure {:.3} % RMS off ρ g (H − y), volume {:+.4} %",
+        sim.particles().len(),
+        sim.steps(),
+        sim.rejected(),
+        100.0 * (mean / draft - 1.0),
+        100.0 * pressure,
+        100.0 * dv
+    );
+    assert!((mean / draft - 1.0).abs() < 0.02, "draft {mean} m");
+    assert!(vmax <= 5e-3, "largest speed {vmax} √(gH)");
+    assert!(pressure <= 0.02, "pressure {pressure} RMS");
+}
