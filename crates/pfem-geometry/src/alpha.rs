@@ -18,13 +18,13 @@ pub struct AlphaShapeParams {
     /// [`alpha_shape_into`]). Default `true`; `false` is the paper's plain
     /// alpha shape. Needs [`Self::up`].
     pub drop_dry_bridges: bool,
-    /// With [`Self::drop_dry_bridges`]: a dry bridge is *cut at the water
-    /// line* instead of dropped whole: it stays an element, integrated only
-    /// over its part below the plane normal to [`Self::up`] through its
-    /// free-surface fluid nodes ([`AlphaShape::surface_cuts`]). Default
-    /// `true`; `false` is the earlier rule (drop when a wall or solid node
-    /// lies more than half a spacing above and outside). See
-    /// [`alpha_shape_into`].
+    /// With [`Self::drop_dry_bridges`]: a dry bridge against a solid, where
+    /// the free surface faces up, is *cut at the water line* instead of
+    /// kept or dropped whole: it stays an element, integrated only over its
+    /// part below the plane normal to [`Self::up`] through its free-surface
+    /// fluid nodes ([`AlphaShape::surface_cuts`]). Default `false` (the
+    /// rule: drop when a wall or solid node lies more than half a spacing
+    /// above and outside); for floating bodies. See `drop_dry_bridges`.
     pub cut_dry_bridges: bool,
     /// The unit vector opposite to gravity (its first `D` components are
     /// used), which says where "above the water line" is; `None` (the
@@ -55,7 +55,7 @@ impl Default for AlphaShapeParams {
         Self {
             alpha: 1.3,
             drop_dry_bridges: true,
-            cut_dry_bridges: true,
+            cut_dry_bridges: false,
             up: None,
             min_quality_3d: MIN_SHAPE_QUALITY,
         }
@@ -320,6 +320,10 @@ where
     (measure, if r2 <= ah * ah { KEPT } else { DROPPED })
 }
 
+/// Smallest cosine between a free-surface normal and `up` for a surface
+/// node to make a water line that [`drop_dry_bridges`] cuts (45°).
+const WATER_LINE_COS: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
 /// Drops the *dry bridges* among the kept simplices of `decided` and says
 /// whether it dropped any: kept
 /// simplices that join free-surface fluid particles to a wall or solid
@@ -462,7 +466,14 @@ where
         // lies above it (dropped when nothing lies below).
         let mask = fl[..nf].iter().fold(0u8, |m, &a| m | (1 << a));
         let level = fl[..nf].iter().map(|&a| p[a].dot(up)).sum::<f64>() / nf as f64;
+        // A water line: every surface node's free surface faces up (a
+        // front running into a body is left to the rule).
+        let facing_up = fl[..nf].iter().all(|&a| {
+            let n = normal[simplex[a] as usize];
+            n.dot(up) >= WATER_LINE_COS * n.norm()
+        });
         if cut
+            && facing_up
             && (0..nv)
                 .any(|b| kinds[simplex[b] as usize] == ParticleKind::Solid && p[b].dot(up) > level)
         {
