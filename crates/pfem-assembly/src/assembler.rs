@@ -935,6 +935,10 @@ where
         if let Some(i) = self.rhs.iter().position(|v| !v.is_finite()) {
             return Err(AssemblyError::NonFiniteSystem { dof: i });
         }
+        let c_val = if self.split { &self.c_val[..] } else { &[] };
+        if let Some(entry) = self.values.iter().chain(c_val).position(|v| !v.is_finite()) {
+            return Err(AssemblyError::NonFiniteMatrix { entry });
+        }
         Ok(AssemblyInfo {
             dofs: self.pattern.dofs(),
             nnz: self.pattern.nnz(),

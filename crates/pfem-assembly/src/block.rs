@@ -172,6 +172,24 @@ impl QuasiDefinite {
         signs: Option<&[i8]>,
         work: &mut SolverWork,
     ) -> Result<(), String> {
+        // faer can panic inside a numeric factorisation (see
+        // `solver.rs`): a failed set-up here (the solve falls back), never a
+        // panic of the run.
+        let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            self.factorise_inner(r, signs, work)
+        }));
+        done.unwrap_or_else(|_| {
+            self.symbolic = None;
+            Err("the factorisation panicked".into())
+        })
+    }
+
+    fn factorise_inner(
+        &mut self,
+        r: &Csr,
+        signs: Option<&[i8]>,
+        work: &mut SolverWork,
+    ) -> Result<(), String> {
         // Symmetric: its CSR arrays are its CSC arrays.
         let sym = SymbolicSparseColMatRef::new_checked(r.nrows, r.ncols, &r.ptr, None, &r.idx);
         let a = SparseColMatRef::new(sym, &r.val);

@@ -27,6 +27,14 @@ pub enum AssemblyError {
         /// The unknown.
         dof: usize,
     },
+    /// The assembled matrix holds a NaN or an infinity (an overflowing
+    /// step, `Δt 𝒦` beyond `f64`): no solver is handed it.
+    #[error("the assembled matrix is not finite (stored entry {entry})")]
+    NonFiniteMatrix {
+        /// Index of the first such stored entry (of the matrix, then of
+        /// the split form's `C`).
+        entry: usize,
+    },
     /// The mesh and the data handed to assembly do not fit together.
     #[error("inconsistent assembly input: {what}")]
     MeshMismatch {

@@ -505,7 +505,20 @@ impl<K: Kind> Direct<K> {
         };
         let (par, ws, num) = (self.par, &mut self.ws, &mut self.numeric);
         self.work.factorizations += 1;
-        K::factorise(sym, num, a, par, ws).map_err(|e| fail(format!("{e}{}", K::HINT)))?;
+        // faer 0.24 can panic inside a numeric factorisation (an index of −1
+        // in its Cholesky, met by the scene fuzzer on a finite matrix):
+        // that is a failed factorisation here, never a panic of the run.
+        let factored = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            K::factorise(sym, num, a, par, ws)
+        }));
+        match factored {
+            Ok(r) => r.map_err(|e| fail(format!("{e}{}", K::HINT)))?,
+            Err(_) => {
+                self.symbolic = None;
+                self.numeric = K::Numeric::default();
+                return Err(fail(format!("the factorisation panicked{}", K::HINT)));
+            }
+        }
         x.copy_from_slice(b);
         let mut err = None;
         let mut apply = |r: &mut [f64]| {

@@ -248,3 +248,27 @@ fn random_command_lines_end_cleanly() {
     );
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// Found by `mutated_scene_files_never_panic` (2 December 2026): the
+/// hydrostatic tank with `max_dt = 1e300` took a first step of 10³⁰⁰ s,
+/// whose `Δt K` overflowed the pressure matrix to infinity, and faer's
+/// Cholesky panicked on it (an index of −1). A step whose system is not
+/// finite is now an error the step control answers, never a panic.
+#[test]
+fn an_enormous_time_step_is_an_error_or_a_run_never_a_panic() {
+    let (name, text) = scenes()
+        .into_iter()
+        .find(|(n, _)| n.ends_with("hydrostatic_2d.toml"))
+        .unwrap();
+    let text = text.replace("max_dt = 5e-3", "max_dt = 1e300");
+    assert!(text.contains("1e300"), "the scene's max_dt line changed");
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        match SceneFile::parse(&text, &name).and_then(|f| f.build()) {
+            Err(e) => format!("file error: {}", kind_of(&format!("{e:?}"))),
+            Ok(LoadedScene::Two(s, _)) => outcome(s, Box::new(Delaunay2::default())),
+            Ok(LoadedScene::Three(s, _)) => outcome(s, Box::new(Delaunay3::default())),
+        }
+    }));
+    let outcome = result.expect("a panic");
+    println!("max_dt = 1e300: {outcome}");
+}
