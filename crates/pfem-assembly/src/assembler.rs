@@ -127,10 +127,11 @@ pub struct StepMesh<'a> {
     pub surface_cuts: SurfaceCuts<'a>,
 }
 
-/// Fluid elements that join free-surface particles to a wall or a solid
+/// Fluid elements that join free-surface particles to a solid
 /// above their water line: each is integrated only over its part below the
 /// plane normal to `up` through the mean height of its free-surface nodes
-/// (`pfem_core::below_water_line`), at every iterate. Its mass, viscous
+/// (`pfem_core::below_water_line`), taken at `xⁿ` so that the part is
+/// material within the step. Its mass, viscous
 /// stiffness, nodal volume `M̂` and pressure rows `G` (eqs. 56, 58) are the
 /// integrals of the element's own linear shape functions over that part,
 /// so a hydrostatic pressure balances its weight wherever the wall's nodes
@@ -230,13 +231,11 @@ where
     clo_vol: Vec<f64>,
     /// Surface cuts ([`StepMesh::surface_cuts`]): per element its cut
     /// (NONE when whole), the cuts, `up`, and per cut the share below the
-    /// water line with its centroid's barycentric coordinates at the
-    /// iterate and at `t_n`.
+    /// water line with its centroid's barycentric coordinates at `t_n`.
     cut_of: Vec<u32>,
     cuts: Vec<(u32, u8)>,
     cut_up: [f64; 3],
     cut_share: Vec<(f64, [f64; MAX_NV])>,
-    cut_share_n: Vec<(f64, [f64; MAX_NV])>,
     // Per-iteration values.
     values: Vec<f64>,
     rhs: Vec<f64>,
@@ -404,7 +403,7 @@ where
     #[inline]
     fn share(&self, e: usize) -> f64 {
         match self.cut_of.get(e) {
-            Some(&c) if c != NONE => self.cut_share_n[c as usize].0,
+            Some(&c) if c != NONE => self.cut_share[c as usize].0,
             _ => 1.0,
         }
     }
@@ -705,20 +704,17 @@ where
             .flatten();
         self.states = states;
         self.unified = unified;
+        // The cut parts at `xⁿ`: material within the step (the affine map
+        // of each element keeps shares and barycentric centroids).
         self.cut_share.clear();
-        self.cut_share_n.clear();
         let up = Vector::<D>::from_fn(|k, _| self.cut_up[k]);
         for &(e, mask) in &self.cuts {
-            let mut x = [Point::<D>::zeros(); MAX_NV];
             let mut xn = [Point::<D>::zeros(); MAX_NV];
             for a in 0..nv {
                 let p = self.particle_of[self.elem_sys[e as usize * nv + a] as usize] as usize;
-                x[a] = input.x[p];
                 xn[a] = input.x_n[p];
             }
             self.cut_share
-                .push(below_water_line::<D>(&x[..nv], mask, &up));
-            self.cut_share_n
                 .push(below_water_line::<D>(&xn[..nv], mask, &up));
         }
         if let Some((e, inverted)) = bad {
@@ -749,7 +745,7 @@ where
             let unified = &self.unified;
             let elem_vol = &self.elem_vol;
             let elem_fluid = &self.elem_fluid;
-            let (cut_of, cut_share) = (&self.cut_of, &self.cut_share_n);
+            let (cut_of, cut_share) = (&self.cut_of, &self.cut_share);
             self.local[..(c1 - c0) * stride]
                 .par_chunks_mut(stride)
                 .enumerate()
@@ -783,7 +779,7 @@ where
                     // Lumped: ∫ ρ W_a over the element (or its cut part).
                     self.mass[el[a] as usize] += match cut {
                         Some(c) => {
-                            let (share, l) = self.cut_share_n[c as usize];
+                            let (share, l) = self.cut_share[c as usize];
                             m * share * l[a]
                         }
                         None => m / nv as f64,
@@ -967,7 +963,7 @@ where
                 // ∫ W_a over the element (or its cut part).
                 let wv = match cut {
                     Some(c) => {
-                        let (share, l) = self.cut_share_n[c as usize];
+                        let (share, l) = self.cut_share[c as usize];
                         st.volume * share * l[a]
                     }
                     None => st.volume / nv as f64,
