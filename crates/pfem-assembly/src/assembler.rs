@@ -382,6 +382,7 @@ where
     fn set_cuts(&mut self, ne: usize, cuts: SurfaceCuts<'_>) -> Result<(), AssemblyError> {
         self.cut_of.clear();
         self.cuts.clear();
+        self.cut_share.clear();
         if cuts.elements.is_empty() {
             return Ok(());
         }
@@ -399,13 +400,10 @@ where
         Ok(())
     }
 
-    /// The share of element `e` integrated at the iterate (1 unless cut).
+    /// The share of element `e` that is integrated (1 unless cut).
     #[inline]
     fn share(&self, e: usize) -> f64 {
-        match self.cut_of.get(e) {
-            Some(&c) if c != NONE => self.cut_share[c as usize].0,
-            _ => 1.0,
-        }
+        cut_part(&self.cut_of, &self.cut_share, e).map_or(1.0, |(share, _)| share)
     }
 
     fn prepare_new(
@@ -704,11 +702,11 @@ where
             .flatten();
         self.states = states;
         self.unified = unified;
-        // The cut parts at `xⁿ`: material within the step (the affine map
-        // of each element keeps shares and barycentric centroids).
-        self.cut_share.clear();
+        // The cut parts at `xⁿ`, once per step (`prepare` clears them):
+        // material within the step (the affine map of each element keeps
+        // shares and barycentric centroids).
         let up = Vector::<D>::from_fn(|k, _| self.cut_up[k]);
-        for &(e, mask) in &self.cuts {
+        for &(e, mask) in self.cuts.iter().skip(self.cut_share.len()) {
             let mut xn = [Point::<D>::zeros(); MAX_NV];
             for a in 0..nv {
                 let p = self.particle_of[self.elem_sys[e as usize * nv + a] as usize] as usize;
@@ -753,8 +751,7 @@ where
                     let e = c0 + i;
                     let (k, f) = buf.split_at_mut(n_local * n_local);
                     element_stiffness::<D>(&states[e], &unified[e], elem_vol[e], k);
-                    if let Some(&c) = cut_of.get(e).filter(|&&c| c != NONE) {
-                        let share = cut_share[c as usize].0;
+                    if let Some((share, _)) = cut_part(cut_of, cut_share, e) {
                         k.iter_mut().for_each(|v| *v *= share);
                     }
                     f.iter_mut().for_each(|v| *v = 0.0);
@@ -773,17 +770,15 @@ where
                 let buf = &self.local[(e - c0) * stride..(e - c0 + 1) * stride];
                 let el = &self.elem_sys[e * nv..(e + 1) * nv];
                 let rho = input.materials[self.elem_material[e] as usize].density();
-                let m = rho * self.states[e].volume_n;
-                let cut = self.cut_of.get(e).copied().filter(|&c| c != NONE);
                 for a in 0..nv {
                     // Lumped: ∫ ρ W_a over the element (or its cut part).
-                    self.mass[el[a] as usize] += match cut {
-                        Some(c) => {
-                            let (share, l) = self.cut_share[c as usize];
-                            m * share * l[a]
-                        }
-                        None => m / nv as f64,
-                    };
+                    self.mass[el[a] as usize] += shape_integral::<D>(
+                        &self.cut_of,
+                        &self.cut_share,
+                        e,
+                        a,
+                        rho * self.states[e].volume_n,
+                    );
                     for k in 0..D {
                         sink.rhs(el[a], k, buf[n_local * n_local + a * D + k]);
                     }
@@ -958,16 +953,8 @@ where
                 continue;
             }
             let st = &self.states[e];
-            let cut = self.cut_of.get(e).copied().filter(|&c| c != NONE);
             for a in 0..nv {
-                // ∫ W_a over the element (or its cut part).
-                let wv = match cut {
-                    Some(c) => {
-                        let (share, l) = self.cut_share[c as usize];
-                        st.volume * share * l[a]
-                    }
-                    None => st.volume / nv as f64,
-                };
+                let wv = shape_integral::<D>(&self.cut_of, &self.cut_share, e, a, st.volume);
                 let na = self.elem_sys[e * nv + a] as usize;
                 self.vol_hat[na] += wv;
                 self.kappa_hat[na] += wv * self.unified[e].kappa;
@@ -1140,6 +1127,37 @@ where
                 out[i] += self.w[slot] * p;
             }
         }
+    }
+}
+
+/// The cut part of element `e` (share, barycentric centroid), if it is cut.
+#[inline]
+fn cut_part(
+    cut_of: &[u32],
+    cut_share: &[(f64, [f64; MAX_NV])],
+    e: usize,
+) -> Option<(f64, [f64; MAX_NV])> {
+    match cut_of.get(e) {
+        Some(&c) if c != NONE => cut_share.get(c as usize).copied(),
+        _ => None,
+    }
+}
+
+/// `∫ W_a` over element `e` (or its cut part) of measure `volume`.
+#[inline]
+fn shape_integral<const D: usize>(
+    cut_of: &[u32],
+    cut_share: &[(f64, [f64; MAX_NV])],
+    e: usize,
+    a: usize,
+    volume: f64,
+) -> f64
+where
+    Const<D>: Dim,
+{
+    match cut_part(cut_of, cut_share, e) {
+        Some((share, l)) => volume * share * l[a],
+        None => volume / <Const<D> as Dim>::NV as f64,
     }
 }
 

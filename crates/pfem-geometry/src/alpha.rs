@@ -383,7 +383,7 @@ fn drop_dry_bridges<const D: usize>(
     up: &Vector<D>,
     cut: bool,
     decided: &mut [(f64, u8)],
-) -> (bool, Vec<Vector<D>>, Vec<(u32, u8)>)
+) -> (bool, Vec<Vector<D>>, Vec<(u32, u8, f64)>)
 where
     Const<D>: Dim,
 {
@@ -433,7 +433,7 @@ where
         return (false, normal, Vec::new());
     }
     let mut any = false;
-    let mut cuts = Vec::new();
+    let mut cuts: Vec<(u32, u8, f64)> = Vec::new();
     for s in 0..ns {
         if decided[s].1 != KEPT {
             continue;
@@ -479,7 +479,7 @@ where
         {
             let (frac, _) = pfem_core::below_water_line::<D>(&p[..nv], mask, up);
             if frac > 0.0 {
-                cuts.push((s as u32, mask));
+                cuts.push((s as u32, mask, frac));
             } else {
                 decided[s].1 = DROPPED;
                 any = true;
@@ -887,14 +887,6 @@ where
             &mut out.pocket_weights,
         );
     }
-    // The measure below the water line of each cut simplex.
-    let mut share = vec![1.0; if cuts.is_empty() { 0 } else { ns }];
-    if let Some(up) = up {
-        for &(s, mask) in &cuts {
-            let p = gather::<D>(points, delaunay.simplex(s as usize));
-            share[s as usize] = pfem_core::below_water_line::<D>(&p[..nv], mask, &up).0;
-        }
-    }
     // Delaunay simplex → mesh simplex (SEALED across a sealed void).
     let mut new_index = vec![NO_NEIGHBOR; ns];
     for (s, &(m, v)) in decided.iter().enumerate() {
@@ -902,7 +894,7 @@ where
         out.kept.push(keep);
         out.candidate_measure += m;
         if keep {
-            out.kept_measure += m * share.get(s).copied().unwrap_or(1.0);
+            out.kept_measure += m;
             new_index[s] = out.source.len() as u32;
             out.source.push(s as u32);
         } else if sealed.get(s) == Some(&true) {
@@ -910,11 +902,13 @@ where
             out.closures.extend_from_slice(delaunay.simplex(s));
         }
     }
-    // Cuts of simplices that stayed kept (a cut is never dropped later).
-    for &(s, mask) in &cuts {
+    // Cuts of simplices that stayed kept (a cut is never dropped later);
+    // the kept measure counts their part below the water line.
+    for &(s, mask, frac) in &cuts {
         let m = new_index[s as usize];
         if m != NO_NEIGHBOR && m != SEALED {
             out.surface_cuts.push((m, mask));
+            out.kept_measure -= (1.0 - frac) * decided[s as usize].0;
         }
     }
     let mesh = &mut out.mesh;
