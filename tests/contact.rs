@@ -266,11 +266,14 @@ fn energy(sim: &Simulation<2>, rho: f64, young: f64, nu: f64) -> (f64, f64) {
 
 /// An elastic disk thrown at a floor at 1 m/s (no gravity, no friction,
 /// the undamped trapezoidal rule, a contact stiffness ten times the disk's
-/// P-wave modulus with the default small dashpot on unresolved chatter)
-/// bounces back without passing through it and keeps its energy. Without
-/// the dashpot the chatter inverted an element at this stiffness; at the
-/// default stiffness (the disk's modulus) the disk closed 23 % of the gap.
-/// (Ten times the default on the resting block of the first test took
+/// P-wave modulus and no contact dashpot) bounces back without passing
+/// through it and keeps its energy. The disk (`Geometry::Ball` for a
+/// solid) is sampled on rings: measured 1.2 % of the gap closed, energy
+/// +0.28 %, in contact for 19.8 ms (with the default dashpot 1.1 % and
+/// +0.23 %). As a lattice it met the floor with one particle: it needed the
+/// dashpot (2.5 %, +0.2 %; without, the chatter inverted an element), and
+/// at the default stiffness (the disk's modulus) it closed 23 % of the
+/// gap, against 9.4 % on rings. (Ten times the default on the resting block of the first test took
 /// 17 184 steps, 5 507 rejected by Picard, against 250.)
 #[test]
 fn an_elastic_disk_bounces_off_a_floor_and_keeps_its_energy() {
@@ -303,7 +306,8 @@ fn an_elastic_disk_bounces_off_a_floor_and_keeps_its_energy() {
         )
         .with_velocity(Vector::<2>::new(0.0, -1.0))
         // Ten times the default (the disk's P-wave modulus 1.35 MPa).
-        .contact_stiffness(1.35e7);
+        .contact_stiffness(1.35e7)
+        .contact_damping(0.0);
     let params = StepParams {
         scheme: Scheme::Newmark,
         ..StepParams::default()

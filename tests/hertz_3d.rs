@@ -4,8 +4,9 @@
 //! floor) within 20 %, it does not close more than 5 % of the gap to the
 //! floor's particles, and it leaves with its energy within 5 %.
 //!
-//! The ball is sampled on shells (`shell_ball`) and the contact stiffness
-//! is 30 times the default. Measured (2 December 2026, R = 8 h, 1 m/s):
+//! The ball is sampled on shells (`Geometry::Ball` for a solid,
+//! `pfem::lattice::shell_points`) and the contact stiffness is 30
+//! times the default. Measured (2 December 2026, R = 8 h, 1 m/s):
 //!
 //! | ball | `K_c` | contact (Hertz 15.41 ms) | gap closed | rebound |
 //! |---|---|---|---|---|
@@ -20,44 +21,36 @@
 //! load until the disk comes within reach, and the point load crushes the
 //! ball's own elements round it (a barrier law `K_c (g₀/g − 1)` in place
 //! of the linear penalty did not stop it: it is the ball's mesh that
-//! gives). Known gap: solid balls and cylinders from `Geometry::Ball` and
-//! `Geometry::Cylinder` are lattices.
+//! gives). Solid balls are therefore sampled on shells; a lattice ball from
+//! `Geometry::Ball` passed through the floor before
+//! (`a_solid_ball_does_not_pass_through_a_floor`). Solid cylinders
+//! (`Geometry::Cylinder`) are still lattices.
 //!
 //! `cargo test --release --test hertz_3d -- --ignored --nocapture` (2 min)
 
 use pfem::constitutive::Hypoelastic;
 use pfem::prelude::*;
 
-/// A ball sampled on concentric shells `h` apart (Fibonacci points at
-/// spacing about `h` on each), so that its surface is round at the
-/// particle scale: a lattice ball's lowest particle stands alone a
-/// spacing below a flat disk of its next layer, and the contact is then a
-/// point load until the disk touches.
-fn shell_ball(c: Point<3>, r: f64, h: f64) -> Vec<Point<3>> {
-    let mut pts = vec![c];
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let shells = (r / h).round() as usize;
-    for k in 0..shells {
-        let rk = r - k as f64 * h;
-        let n = ((4.0 * std::f64::consts::PI * rk * rk) / (h * h))
-            .round()
-            .max(4.0) as usize;
-        for i in 0..n {
-            let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let s = (1.0 - y * y).sqrt();
-            let phi = golden * i as f64 + k as f64;
-            pts.push(c + Vector::<3>::new(s * phi.cos(), y, s * phi.sin()) * rk);
-        }
-    }
-    pts
+/// What [`throw`] measured.
+struct Bounce {
+    /// Contact duration and Hertz's (s).
+    duration: Option<f64>,
+    hertz: f64,
+    /// The lowest any ball particle came, over the spacing (the floor's top
+    /// row is at 0).
+    deepest: f64,
+    /// Mean vertical velocity of the ball at the end (m/s).
+    vy: f64,
 }
 
-#[test]
-#[ignore = "2 minutes: cargo test --release --test hertz_3d -- --ignored --nocapture"]
-fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
-    let (h, r, rho, young, nu, v0) = (0.00625, 0.05, 1000.0, 1e6, 0.3, 1.0);
+/// A ball of radius `r` (particle spacing `h`, `Geometry::Ball`) thrown at
+/// a rigid floor at 1 m/s from two spacings above it, with contact
+/// stiffness `k_c` (`None`: the default), to 0.03 s.
+fn throw(h: f64, r: f64, k_c: Option<f64>) -> Bounce {
+    let (rho, young, nu, v0) = (1000.0, 1e6, 0.3, 1.0);
     let e_star = young / (1.0 - nu * nu);
-    let scene = Scene::<3>::new("ball")
+    let floor = 1.5 * r;
+    let mut scene = Scene::<3>::new("ball")
         .settings(RunSettings {
             end_time: 0.03,
             max_dt: 2e-4,
@@ -67,8 +60,8 @@ fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
         .wall(
             "floor",
             Geometry::Box {
-                min: Point::<3>::new(-0.075, -h, -0.075),
-                max: Point::<3>::new(0.075, 0.0, 0.075),
+                min: Point::<3>::new(-floor, -h, -floor),
+                max: Point::<3>::new(floor, 0.0, floor),
             },
             h,
             WallMotion::Fixed,
@@ -76,14 +69,18 @@ fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
         .solid(
             "ball",
             Box::new(Hypoelastic::new(rho, young, nu).unwrap()),
-            Geometry::Particles(shell_ball(Point::<3>::new(0.0, r + 2.0 * h, 0.0), r, h)),
+            Geometry::Ball {
+                center: Point::<3>::new(0.0, r + 2.0 * h, 0.0),
+                radius: r,
+            },
             h,
             None,
         )
         .with_velocity(Vector::<3>::new(0.0, -v0, 0.0))
-        .contact_damping(0.0)
-        // 30 times the default (the ball's P-wave modulus, 1.35 MPa).
-        .contact_stiffness(4.05e7);
+        .contact_damping(0.0);
+    if let Some(k) = k_c {
+        scene = scene.contact_stiffness(k);
+    }
     let params = StepParams {
         scheme: Scheme::Newmark,
         ..StepParams::default()
@@ -103,9 +100,6 @@ fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
         .sum();
     let m = rho * volume;
     let hertz = 2.868 * (m * m / (r * e_star * e_star * v0)).powf(0.2);
-    let mean_vy = |s: &Simulation<3>| {
-        ball.iter().map(|&i| s.particles().v()[i][1]).sum::<f64>() / ball.len() as f64
-    };
     let (mut t_on, mut t_off) = (None, None);
     let mut deepest = f64::INFINITY;
     while s.time() < s.end_time() - 1e-12 {
@@ -121,10 +115,11 @@ fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
             t_off = Some(s.time() - s.dt());
         }
     }
-    let vy = mean_vy(&s);
+    let vy = ball.iter().map(|&i| s.particles().v()[i][1]).sum::<f64>() / ball.len() as f64;
     let duration = t_off.zip(t_on).map(|(b, a)| b - a);
     println!(
-        "ball: {} particles, {} steps ({} rejected); m {m:.4} kg; contact {:?} s against Hertz {hertz:.5} s; deepest point {:.3} h above the floor's top row; rebound {vy:.4} m/s (kinetic energy ratio {:.3})",
+        "ball R = {:.1} h, K_c {k_c:?}: {} particles, {} steps ({} rejected); m {m:.4} kg; contact {:?} s against Hertz {hertz:.5} s; deepest point {:.3} h above the floor's top row; rebound {vy:.4} m/s (kinetic energy ratio {:.3})",
+        r / h,
         ball.len(),
         s.steps(),
         s.rejected(),
@@ -132,16 +127,45 @@ fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
         deepest / h,
         (vy / v0).powi(2)
     );
-    let duration = duration.expect("the ball did not leave the floor");
+    Bounce {
+        duration,
+        hertz,
+        deepest: deepest / h,
+        vy,
+    }
+}
+
+#[test]
+#[ignore = "2 minutes: cargo test --release --test hertz_3d -- --ignored --nocapture"]
+fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
+    // 30 times the default (the ball's P-wave modulus, 1.35 MPa).
+    let b = throw(0.00625, 0.05, Some(4.05e7));
+    let duration = b.duration.expect("the ball did not leave the floor");
     assert!(
-        (duration / hertz - 1.0).abs() < 0.2,
-        "{duration} against {hertz}"
+        (duration / b.hertz - 1.0).abs() < 0.2,
+        "{duration} against {}",
+        b.hertz
     );
-    assert!(deepest > 0.95 * h, "closed the gap to {deepest} m");
+    assert!(b.deepest > 0.95, "closed the gap to {} h", b.deepest);
     // The rigid motion's kinetic energy after the bounce against before.
-    let energy = (vy / v0).powi(2);
+    let energy = b.vy.powi(2);
     assert!(
         (energy - 1.0).abs() < 0.05,
-        "rebound {vy} m/s: energy ratio {energy}"
+        "rebound {} m/s: energy ratio {energy}",
+        b.vy
     );
+}
+
+/// The bug this fixed: a solid `Geometry::Ball` was a lattice, and at the
+/// default contact stiffness a ball R = 8 h thrown at 1 m/s passed through
+/// the floor (its lowest particle 3.7 h below the floor's top row) after
+/// its lowest particle alone met the floor and crushed the elements round
+/// it. Sampled on shells a smaller ball (R = 4 h, quicker) bounces at the
+/// default stiffness and stays above the floor.
+#[test]
+fn a_solid_ball_does_not_pass_through_a_floor() {
+    let b = throw(0.0125, 0.05, None);
+    assert!(b.duration.is_some(), "the ball did not leave the floor");
+    assert!(b.vy > 0.5, "rebound {} m/s", b.vy);
+    assert!(b.deepest > 0.5, "the ball came to {} h", b.deepest);
 }

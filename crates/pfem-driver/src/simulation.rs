@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use pfem_constitutive::{Material, MaterialKind};
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
-use pfem_geometry::{alpha_shape_into, AlphaShapeParams, Tessellation, Tessellator};
+use pfem_geometry::{alpha_shape_cutting_into, AlphaShapeParams, Tessellation, Tessellator};
 use pfem_time::{CourantController, Integrator, StepInput, StepParams};
 
 use crate::checkpoint::{Checkpoint, CheckpointError, Decoder, Encoder, SIMULATION, TIMINGS};
@@ -206,17 +206,19 @@ pub struct Options {
     /// but moved the column-on-cylinder's largest force from 13.7 N to
     /// 8.7 N, so it is not the default. In `[0, 0.5)`.
     pub min_quality_3d: f64,
-    /// Cut the dry bridges against solids at the water line instead of
-    /// keeping or dropping them whole (deviation 7;
-    /// `pfem_geometry::AlphaShapeParams::cut_dry_bridges`): for floating
-    /// bodies. Default false. Measured (issue 19): a block half as dense
-    /// as water, its rows half a spacing off the water's, keeps its draft
-    /// to +0.19 % over 5 s with the water at rest with it, where without
-    /// it the water never comes to rest and a roll grows after 1.2 s until
-    /// the block sinks (`tests/floating.rs`). Not the default: in the
-    /// dam break on an elastic obstacle the force on the obstacle spiked to
-    /// 10.4 kN/m for one step (572 N/m without), and the cylinder under a
-    /// 3D water column deflected 56.6 mm at its top instead of 62.3 mm.
+    /// Cut the dry bridges against free solids (no clamp, no weld) at the
+    /// water line instead of keeping or dropping them whole (deviation 7;
+    /// `pfem_geometry::AlphaShapeParams::cut_dry_bridges`,
+    /// `pfem_geometry::alpha_shape_cutting_into`): for floating bodies.
+    /// Default true. Measured (issue 19): a block half as dense as water,
+    /// its rows half a spacing off the water's, keeps its draft to +0.19 %
+    /// over 5 s with the water at rest with it, where without it the water
+    /// never comes to rest and a roll grows after 1.2 s until the block
+    /// sinks (`tests/floating.rs`). Clamped structures keep the
+    /// half-spacing rule, as walls do: cut there too, the force on the
+    /// elastic obstacle of the 2D dam break spiked to 10.4 kN/m for one step
+    /// (572 N/m without), and the cylinder under a 3D water column
+    /// deflected 56.6 mm at its top instead of 62.3 mm.
     pub cut_dry_bridges: bool,
     /// Memory budget (bytes): a scene whose estimate
     /// ([`pfem_scene::Scene::estimate`]) is above it is refused before a
@@ -233,7 +235,7 @@ impl Default for Options {
             close_sealed_voids: true,
             count_wall_pockets: true,
             min_quality_3d: pfem_geometry::MIN_SHAPE_QUALITY,
-            cut_dry_bridges: false,
+            cut_dry_bridges: true,
             memory_budget: pfem_scene::default_memory_budget(),
         }
     }
@@ -284,6 +286,10 @@ where
     output_interval: Option<f64>,
     controller: CourantController,
     alpha: AlphaShapeParams,
+    /// Per particle (walls and solids, the first of the particles, whose
+    /// indices hold for the run): a dry bridge may be cut against it, it
+    /// belongs to a free solid ([`Options::cut_dry_bridges`]).
+    cut_against: Vec<bool>,
     stepper: Stepper<D>,
     contact: ContactSetup<D>,
 }
@@ -372,6 +378,15 @@ where
         } = built;
         let can_touch = cloud.solid_can_touch();
         let particles = Particles::from_cloud(cloud);
+        // Walls and solids come first and keep their indices.
+        let cut_against: Vec<bool> = particles
+            .kind()
+            .iter()
+            .zip(particles.body())
+            .take_while(|(k, _)| **k != ParticleKind::Fluid)
+            .map(|(k, &b)| *k == ParticleKind::Solid && free_solids[b as usize])
+            .collect();
+        let cut_dry_bridges = options.cut_dry_bridges && cut_against.contains(&true);
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);
         let has_solid = particles.kind().contains(&ParticleKind::Solid);
         let contact = free_solids.iter().any(|&f| f) && can_touch;
@@ -450,9 +465,10 @@ where
                     [u[0], u[1], if D == 3 { u[D - 1] } else { 0.0 }]
                 }),
                 min_quality_3d: options.min_quality_3d,
-                cut_dry_bridges: options.cut_dry_bridges,
+                cut_dry_bridges,
                 ..AlphaShapeParams::with_alpha(settings.alpha)
             },
+            cut_against,
             stepper: Stepper {
                 tessellator,
                 integrator: Integrator::new(params),
@@ -525,12 +541,13 @@ where
             .tessellate(x, &mut self.stepper.tess)
             .map_err(RunError::Geometry)?;
         let mut shape = self.elements.take_shape();
-        alpha_shape_into(
+        alpha_shape_cutting_into(
             x,
             self.particles.kind(),
             self.particles.spacing(),
             &self.stepper.tess,
             &self.alpha,
+            Some(&self.cut_against),
             &mut shape,
         )
         .map_err(RunError::Geometry)?;

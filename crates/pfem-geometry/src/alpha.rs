@@ -24,7 +24,9 @@ pub struct AlphaShapeParams {
     /// part below the plane normal to [`Self::up`] through its free-surface
     /// fluid nodes ([`AlphaShape::surface_cuts`]). Default `false` (the
     /// rule: drop when a wall or solid node lies more than half a spacing
-    /// above and outside); for floating bodies. See `drop_dry_bridges`.
+    /// above and outside); for floating bodies, and then against the
+    /// particles [`alpha_shape_cutting_into`] is given (the driver gives
+    /// its free solids'). See `drop_dry_bridges`.
     pub cut_dry_bridges: bool,
     /// The unit vector opposite to gravity (its first `D` components are
     /// used), which says where "above the water line" is; `None` (the
@@ -360,7 +362,8 @@ const WATER_LINE_COS: f64 = std::f64::consts::FRAC_1_SQRT_2;
 /// the square column's front error rose from 4.1 % to 5.9 % and the
 /// obstacle's peak force from 524 to 954 N/m.)
 ///
-/// With `cut` ([`AlphaShapeParams::cut_dry_bridges`]), a simplex with a
+/// With `cut` ([`AlphaShapeParams::cut_dry_bridges`], with the particles
+/// to cut against, `None` for every solid one), a simplex with a
 /// *solid* node above the water line of its free-surface fluid nodes (the
 /// plane normal to `up` through their mean height) is not judged by that
 /// rule but cut there: it stays, listed in the returned cuts with the mask
@@ -381,7 +384,7 @@ fn drop_dry_bridges<const D: usize>(
     delaunay: &Tessellation,
     sealed: &[bool],
     up: &Vector<D>,
-    cut: bool,
+    cut: Option<Option<&[bool]>>,
     decided: &mut [(f64, u8)],
 ) -> (bool, Vec<Vector<D>>, Vec<(u32, u8, f64)>)
 where
@@ -472,10 +475,13 @@ where
             let n = normal[simplex[a] as usize];
             n.dot(up) >= WATER_LINE_COS * n.norm()
         });
-        if cut
+        let against = |v: usize| {
+            kinds[v] == ParticleKind::Solid
+                && cut.is_some_and(|c| c.is_none_or(|c| c.get(v) == Some(&true)))
+        };
+        if cut.is_some()
             && facing_up
-            && (0..nv)
-                .any(|b| kinds[simplex[b] as usize] == ParticleKind::Solid && p[b].dot(up) > level)
+            && (0..nv).any(|b| against(simplex[b] as usize) && p[b].dot(up) > level)
         {
             let (frac, _) = pfem_core::below_water_line::<D>(&p[..nv], mask, up);
             if frac > 0.0 {
@@ -800,6 +806,27 @@ pub fn alpha_shape_into<const D: usize>(
 where
     Const<D>: Dim,
 {
+    alpha_shape_cutting_into(points, kinds, spacing, delaunay, params, None, out)
+}
+
+/// [`alpha_shape_into`], with the solid particles a dry bridge may be cut
+/// against ([`AlphaShapeParams::cut_dry_bridges`]): particle `i` when
+/// `cut_against[i]` (particles past the slice's end never); `None` cuts
+/// against every solid particle. The driver passes its free solids' particles:
+/// a clamped structure keeps the half-spacing rule, as walls do.
+#[allow(clippy::too_many_arguments)] // the alpha shape's arrays, passed through
+pub fn alpha_shape_cutting_into<const D: usize>(
+    points: &[Point<D>],
+    kinds: &[ParticleKind],
+    spacing: &[f64],
+    delaunay: &Tessellation,
+    params: &AlphaShapeParams,
+    cut_against: Option<&[bool]>,
+    out: &mut AlphaShape,
+) -> Result<(), GeometryError>
+where
+    Const<D>: Dim,
+{
     params.validate()?;
     check_particles(points, kinds, spacing)?;
     check_tessellation::<D>(delaunay, points.len())?;
@@ -849,7 +876,7 @@ where
             delaunay,
             &sealed,
             &up,
-            params.cut_dry_bridges,
+            params.cut_dry_bridges.then_some(cut_against),
             &mut decided,
         ),
         None => (false, Vec::new(), Vec::new()),

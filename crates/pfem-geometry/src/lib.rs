@@ -43,8 +43,8 @@ pub mod quality;
 pub mod tessellation;
 
 pub use alpha::{
-    alpha_shape, alpha_shape_into, AlphaShape, AlphaShapeParams, MIN_ELEMENT_QUALITY_3D,
-    MIN_SHAPE_QUALITY,
+    alpha_shape, alpha_shape_cutting_into, alpha_shape_into, AlphaShape, AlphaShapeParams,
+    MIN_ELEMENT_QUALITY_3D, MIN_SHAPE_QUALITY,
 };
 pub use classify::{
     classify, classify_into, BoundaryFacet, Classification, Component, FacetKind, NodeTag,

@@ -456,6 +456,83 @@ fn dry_bridges_above_the_water_line_are_dropped() {
     }
 }
 
+/// Surface cuts (issue 19): beside a solid column whose rows lie half a
+/// spacing off the water's, the simplex between the last surface particle
+/// and the solid above the water line is cut at the water line when the
+/// solid may be cut against (every solid particle, or those the caller
+/// lists: the driver lists its free solids'), and judged by the
+/// half-spacing rule otherwise.
+#[test]
+fn dry_bridges_are_cut_against_the_solids_listed() {
+    use pfem_geometry::alpha_shape_cutting_into;
+    let h = 1.0;
+    let mut p = Vec::new();
+    let mut k = Vec::new();
+    for i in -1..7 {
+        p.push(Point::<2>::new(i as f64 * h, 0.0));
+        k.push(ParticleKind::Wall);
+    }
+    // The solid column x = 5, y = 0.5..5.5 (its rows between the water's).
+    for j in 0..6 {
+        p.push(Point::<2>::new(5.0 * h, (j as f64 + 0.5) * h));
+        k.push(ParticleKind::Solid);
+    }
+    // Water: columns x = 0..4, rows y = 1..3 (surface at y = 3).
+    for i in 0..5 {
+        for j in 1..4 {
+            p.push(Point::<2>::new(i as f64 * h, j as f64 * h));
+            k.push(ParticleKind::Fluid);
+        }
+    }
+    let spacing = vec![h; p.len()];
+    let mut t = Tessellation::default();
+    Delaunay2::default().tessellate(&p, &mut t).unwrap();
+    let params = AlphaShapeParams {
+        up: Some([0.0, 1.0, 0.0]),
+        cut_dry_bridges: true,
+        ..AlphaShapeParams::default()
+    };
+    let shape = |against: Option<&[bool]>| {
+        let mut a = AlphaShape::default();
+        alpha_shape_cutting_into(&p, &k, &spacing, &t, &params, against, &mut a).unwrap();
+        a
+    };
+    let every = shape(None);
+    assert!(!every.surface_cuts.is_empty());
+    // Each cut joins the surface particle (4, 3) to the column.
+    for &(m, _) in &every.surface_cuts {
+        let s = &every.mesh.simplices[3 * m as usize..3 * m as usize + 3];
+        assert!(s
+            .iter()
+            .any(|&v| p[v as usize] == Point::<2>::new(4.0, 3.0)));
+        assert!(s.iter().any(|&v| k[v as usize] == ParticleKind::Solid));
+    }
+    // The column listed (walls and solids come first; fluids past the
+    // slice's end are never cut against): the same cuts.
+    let listed: Vec<bool> = k[..14].iter().map(|&x| x == ParticleKind::Solid).collect();
+    let free = shape(Some(&listed));
+    assert_eq!(free.surface_cuts, every.surface_cuts);
+    assert_eq!(free.mesh, every.mesh);
+    // Not listed (a clamped structure): no cut, the rule decides, and the
+    // measure is whole simplices.
+    let clamped = shape(Some(&[false; 14]));
+    assert!(clamped.surface_cuts.is_empty());
+    let rule = alpha_shape(
+        &p,
+        &k,
+        &spacing,
+        &t,
+        &AlphaShapeParams {
+            cut_dry_bridges: false,
+            ..params
+        },
+    )
+    .unwrap();
+    assert_eq!(clamped.mesh, rule.mesh);
+    assert_eq!(clamped.kept_measure, rule.kept_measure);
+    assert!(every.kept_measure != rule.kept_measure);
+}
+
 /// Wall pockets (3D): a lattice corner where a floor meets a side wall (two
 /// wall layers each, fluid above and beside). The cells along the concave
 /// edge hold six wall nodes and two fluid ones; round-off decides how each

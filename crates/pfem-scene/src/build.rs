@@ -232,6 +232,11 @@ where
             body_names[bi] = b.name.clone();
             let pts = match &b.geometry {
                 Geometry::Box { min, max } => lattice::box_points::<D>(min, max, b.spacing),
+                // Solids and walls round at the particle scale (contact);
+                // fluids on the lattice.
+                Geometry::Ball { center, radius } if b.kind != ParticleKind::Fluid => {
+                    lattice::shell_points::<D>(center, *radius, b.spacing)
+                }
                 Geometry::Ball { center, radius } => {
                     lattice::ball_points::<D>(center, *radius, b.spacing)
                 }

@@ -132,6 +132,54 @@ where
     out
 }
 
+/// A disk (2D) or ball (3D) sampled on concentric rings or shells, from
+/// the surface inwards, about `h` apart radially (`radius / round(radius /
+/// h)`) and about `h` apart along each (rings: equal angles, every other
+/// ring turned by half a step; shells: Fibonacci points), plus the centre.
+/// Its surface is round at the particle scale, unlike a lattice's, whose
+/// lowest particle stands alone a spacing below a flat disk of the next
+/// layer: a solid ball from a lattice met a floor with that one particle
+/// and its elements round it were crushed (issue 19). [`crate::Scene::build`]
+/// uses it for the balls of solids and walls; fluids take the lattice
+/// ([`ball_points`]), which the remeshing forgets anyway.
+pub fn shell_points<const D: usize>(center: &Point<D>, radius: f64, h: f64) -> Vec<Point<D>>
+where
+    Const<D>: Dim,
+{
+    use std::f64::consts::PI;
+    let shells = (radius / h).round().max(1.0) as usize;
+    let dr = radius / shells as f64;
+    let golden = PI * (3.0 - 5f64.sqrt());
+    let mut out = vec![*center];
+    for k in 0..shells {
+        let rk = radius - k as f64 * dr;
+        if D == 2 {
+            let n = (2.0 * PI * rk / h).round().max(3.0) as usize;
+            let turn = if k % 2 == 1 { 0.5 } else { 0.0 };
+            for i in 0..n {
+                let phi = 2.0 * PI * (i as f64 + turn) / n as f64;
+                let mut p = *center;
+                p[0] += rk * phi.cos();
+                p[1] += rk * phi.sin();
+                out.push(p);
+            }
+        } else {
+            let n = (4.0 * PI * rk * rk / (h * h)).round().max(4.0) as usize;
+            for i in 0..n {
+                let y = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let s = (1.0 - y * y).sqrt();
+                let phi = golden * i as f64 + k as f64;
+                let mut p = *center;
+                p[0] += rk * s * phi.cos();
+                p[1] += rk * y;
+                p[D - 1] += rk * s * phi.sin();
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
 /// Lattice nodes of a cylinder along coordinate `axis` (3D): disks of
 /// lattice nodes (spacing `h`, centred on the axis) within `radius`, at
 /// `base + k · height / n` along the axis, `k = 0..=n`, `n = round(height / h)`
@@ -267,6 +315,51 @@ mod tests {
             })
             .sum();
         assert!((vol - 0.125).abs() < 1e-12);
+    }
+
+    /// The rings and shells lie on the surface and inside, about a spacing
+    /// apart: nearest neighbours between 0.6 h and 1.4 h, and the ball's
+    /// lowest particles are many, not one below a flat layer.
+    #[test]
+    fn shells_are_round_and_about_a_spacing_apart() {
+        fn check<const D: usize>(r: f64, h: f64)
+        where
+            Const<D>: Dim,
+        {
+            let c = Point::<D>::from_element(0.3);
+            let p = shell_points::<D>(&c, r, h);
+            for (i, a) in p.iter().enumerate() {
+                assert!((a - c).norm() <= r * (1.0 + 1e-12));
+                let nearest = p
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != i)
+                    .map(|(_, b)| (a - b).norm())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(nearest > 0.6 * h && nearest < 1.4 * h, "{D}D: {nearest}");
+            }
+            // Within a tenth of a spacing of the lowest point, several
+            // particles (a lattice ball with r = 8 h has one, its next
+            // layer a spacing higher).
+            let low = p.iter().map(|q| q[1]).fold(f64::INFINITY, f64::min);
+            assert!((low - (c[1] - r)).abs() < 0.1 * h);
+            let near = p.iter().filter(|q| q[1] < low + 0.1 * h).count();
+            assert!(near >= 3, "{D}D: {near} particles at the bottom");
+            // The count is about the ball's measure over h^D (the outer
+            // shell holds a whole layer's particles for half a layer's
+            // measure: 3D r = 8 h +27 %).
+            let measure = if D == 2 {
+                std::f64::consts::PI * r * r
+            } else {
+                4.0 / 3.0 * std::f64::consts::PI * r * r * r
+            };
+            let ratio = p.len() as f64 * h.powi(D as i32) / measure;
+            assert!((0.8..1.35).contains(&ratio), "{D}D: {ratio}");
+        }
+        check::<2>(0.1, 0.01);
+        check::<2>(0.105, 0.01);
+        check::<3>(0.05, 0.00625);
+        check::<3>(0.047, 0.00625);
     }
 
     #[test]

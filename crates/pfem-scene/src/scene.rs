@@ -22,7 +22,9 @@ where
         /// Upper corner (m).
         max: Point<D>,
     },
-    /// A disk (2D) or ball (3D): the lattice nodes inside it.
+    /// A disk (2D) or ball (3D): for a fluid the lattice nodes inside it;
+    /// for a solid or a wall concentric rings or shells a spacing apart
+    /// ([`crate::lattice::shell_points`]), round at the particle scale.
     Ball {
         /// Centre (m).
         center: Point<D>,

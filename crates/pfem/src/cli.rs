@@ -253,7 +253,7 @@ Options common to the bundled examples and `pfem run`:
   --no-vtu              no VTU frames
   --scheme S            bossak (default), newmark or euler
   --picard-tol X        Picard tolerance (default 1e-6)
-  --solver S            direct (default), lu, cholesky or cg
+  --solver S            block (default), direct, lu, cholesky or cg
   --volume-correction B fraction of the volume error restored per step, in [0, 1] (default 1)
   --memory-budget GB    refuse scenes estimated above this (default: 80 % of the machine's memory)
   --max-wall-time S     stop the run after S seconds of wall time (outputs are kept)
