@@ -4,10 +4,13 @@
 //! half its height, and the water around it meets the 3D rest bounds of
 //! water at rest (issue 13: largest speed ≤ 5·10⁻³ √(gH), pressure within
 //! 2 % RMS of ρ g (H − y)). The block's rows lie half a spacing off the
-//! water's, as in `tests/floating.rs`.
+//! water's, as in `tests/floating.rs`. Measured (2 December 2026, 5 964
+//! particles, 400 steps): draft +0.31 %, largest water speed 4.7·10⁻³
+//! √(gH) over the whole run, pressure 0.36 % RMS (with a stress-free start
+//! of the block: +0.28 %, 4.4·10⁻³ after the first 0.1 s, 0.29 %).
 //!
 //! `cargo test --release --test floating_3d -- --ignored --nocapture`
-//! (about 5 minutes on 2 cores).
+//! (about 3 minutes on 2 cores).
 
 use pfem::cases::rest_figures;
 use pfem::cases3d::tank3d;
@@ -15,12 +18,9 @@ use pfem::constitutive::Hypoelastic;
 use pfem::prelude::*;
 
 const G: f64 = 9.81;
-/// The release of the stress-free block shakes the water next to it for
-/// a few steps (see `tests/floating.rs`); the bounds hold from here on.
-const RELEASE: f64 = 0.1;
 
 #[test]
-#[ignore = "about 5 minutes: cargo test --release --test floating_3d -- --ignored --nocapture"]
+#[ignore = "about 3 minutes: cargo test --release --test floating_3d -- --ignored --nocapture"]
 fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
     let h = 0.025;
     let (length, width, depth) = (0.6, 0.4, 0.2);
@@ -99,16 +99,12 @@ fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
     };
     let v0 = sim.fluid_volume();
     let (mut sum, mut count) = (0.0, 0);
-    let (mut vmax, mut start): (f64, f64) = (0.0, 0.0);
+    let mut vmax: f64 = 0.0;
     let mut next = 0.0;
     while sim.time() < sim.end_time() - 1e-12 {
         sim.step().unwrap();
         let f = rest_figures(&sim, depth);
-        if sim.time() < RELEASE {
-            start = start.max(f.max_speed);
-        } else {
-            vmax = vmax.max(f.max_speed);
-        }
+        vmax = vmax.max(f.max_speed);
         if sim.time() >= next {
             next += 0.25;
             println!(
@@ -128,7 +124,7 @@ fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
     let pressure = rest_figures(&sim, depth).pressure_rms;
     let dv = sim.fluid_volume() / v0 - 1.0;
     println!(
-        "3D floating block: {} particles, {} steps ({} rejected); draft over the last 0.5 s {mean:.5} m against {draft} m ({:+.2} %); water after {RELEASE} s: largest speed {vmax:.2e} √(gH) ({start:.2e} before), pressure {:.3} % RMS off ρ g (H − y), volume {:+.4} %",
+        "3D floating block: {} particles, {} steps ({} rejected); draft over the last 0.5 s {mean:.5} m against {draft} m ({:+.2} %); water: largest speed {vmax:.2e} √(gH), pressure {:.3} % RMS off ρ g (H − y), volume {:+.4} %",
         sim.particles().len(),
         sim.steps(),
         sim.rejected(),
