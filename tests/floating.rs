@@ -4,7 +4,7 @@
 //! the water around it meets the rest bounds of water at rest (issue 13:
 //! largest speed ≤ 2·10⁻³ √(gH), RMS ≤ 5·10⁻⁴ √(gH), pressure within 1 %
 //! RMS of ρ g (H − y), volume within 0.1 %).
-//! Floating bodies need `Options::cut_dry_bridges` (off by default; it cuts
+//! Floating bodies need `Options::cut_dry_bridges` (on by default; it cuts
 //! against free solids only; ARCHITECTURE.md, deviation 7).
 //! `cargo test --release --test floating -- --nocapture` (20 s)
 
@@ -44,7 +44,7 @@ fn a_block_half_as_dense_as_water_floats_at_half_its_height() {
     assert!(f.volume.abs() <= 1e-3, "volume {}", f.volume);
 }
 
-/// The control: with the default options (no surface cuts) the water
+/// The control: without surface cuts the water
 /// beside the block never comes to rest (largest speed measured 6.9·10⁻²
 /// √(gH) over 2 s, 35 times the bound) and the block sinks (mean draft over
 /// 1.5–2 s +5.4 %; +16 % and a roll with the stress-free start).
@@ -137,8 +137,8 @@ fn float(cut: bool, end_time: f64) -> Figures {
         scene,
         Box::new(Delaunay2::default()),
         StepParams::default(),
-        // Dry bridges against free solids cut at the water line (an
-        // option; ARCHITECTURE.md, deviation 7) or kept or dropped whole.
+        // Dry bridges against free solids cut at the water line (the
+        // default; ARCHITECTURE.md, deviation 7) or kept or dropped whole.
         Options {
             cut_dry_bridges: cut,
             ..Options::default()

@@ -70,18 +70,10 @@ fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
         h,
         None,
     );
-    // Floating bodies: dry bridges against the free block cut at the
-    // water line (off by default; ARCHITECTURE.md, deviation 7).
-    let mut sim = Simulation::with_options(
-        scene,
-        Box::new(Delaunay3::default()),
-        StepParams::default(),
-        Options {
-            cut_dry_bridges: true,
-            ..Options::default()
-        },
-    )
-    .unwrap();
+    // The defaults: dry bridges against the free block are cut at the
+    // water line (`Options::cut_dry_bridges`; ARCHITECTURE.md, deviation 7).
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
     let block = sim.body_particles("block").unwrap();
     let water_p = sim.body_particles("water").unwrap();
     let bottom = |s: &Simulation<3>| {

@@ -209,20 +209,16 @@ pub struct Options {
     /// Cut the dry bridges against free solids (no clamp, no weld) at the
     /// water line instead of keeping or dropping them whole (deviation 7;
     /// `pfem_geometry::AlphaShapeParams::cut_dry_bridges`,
-    /// `pfem_geometry::alpha_shape_cutting_into`): for bodies floating in
-    /// water at rest or in gentle flows. Default false. Measured (issue
-    /// 19): a block half as dense as water, its rows half a spacing off the
-    /// water's, keeps its draft to +0.19 % over 5 s with the water at rest
-    /// with it, where without it the water never comes to rest and a roll
-    /// grows after 1.2 s until the block sinks (`tests/floating.rs`). Not
-    /// the default: a dam-break surge (1.3 m/s) meeting a small free block
-    /// was stopped by it as by a wall (run-up 9 cm against a 1.1 cm block,
-    /// the block pressed into the floor at 140 times its weight) where
-    /// without the cuts it carries the block to the end wall. Clamped
-    /// structures are never cut, as walls are not: cut too, the force on the
-    /// elastic obstacle of the 2D dam break spiked to 10.4 kN/m for one step
-    /// (572 N/m without), and the cylinder under a 3D water column
-    /// deflected 56.6 mm at its top instead of 62.3 mm.
+    /// `pfem_geometry::alpha_shape_cutting_into`): for floating bodies.
+    /// Default true. Measured (issue 19): a block half as dense as water,
+    /// its rows half a spacing off the water's, keeps its draft to 0.00 %
+    /// over 5 s with the water at rest with it, where without it the water
+    /// never comes to rest and the block sinks (+5.4 %,
+    /// `tests/floating.rs`). Clamped structures are never cut, as walls are
+    /// not: cut too, the force on the elastic obstacle of the 2D dam break
+    /// spiked to 10.4 kN/m for one step (572 N/m without), and the cylinder
+    /// under a 3D water column deflected 56.6 mm at its top instead of
+    /// 62.3 mm.
     pub cut_dry_bridges: bool,
     /// Memory budget (bytes): a scene whose estimate
     /// ([`pfem_scene::Scene::estimate`]) is above it is refused before a
@@ -250,7 +246,7 @@ impl Default for Options {
             close_sealed_voids: true,
             count_wall_pockets: true,
             min_quality_3d: pfem_geometry::MIN_SHAPE_QUALITY,
-            cut_dry_bridges: false,
+            cut_dry_bridges: true,
             memory_budget: pfem_scene::default_memory_budget(),
             free_solids_start_rigid: true,
         }
