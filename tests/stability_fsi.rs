@@ -217,7 +217,9 @@ fn hard_cases_keep_fluid_volume_within_one_percent() {
 /// default surface cuts 0.96, 0.92, 22.4, 0.97, 0.97 h short of the wall;
 /// without them 0.96, 0.97, 0.96, 49.9, 0.97 h (a last-bit change of the
 /// initial accelerations alone turned a 0.97 h run into a 50.8 h one for
-/// a smaller block). 51 s on 2 cores:
+/// a smaller block). The water's pressure at the block swings by
+/// ±10⁶ Pa and its force on it by ±100 N/m from step to step in the
+/// impact (docs/benchmarks.md). 51 s on 2 cores:
 /// `cargo test --release --test stability_fsi -- --ignored dam_break_carries`
 #[test]
 #[ignore = "51 s: cargo test --release --test stability_fsi -- --ignored dam_break_carries"]
