@@ -527,17 +527,23 @@ where
             let assembler = self.stepper.integrator.assembler();
             let kind = self.particles.kind();
             let body = self.particles.body();
-            for (b, _) in self.contact.free.iter().enumerate().filter(|(_, f)| **f) {
-                let members: Vec<(usize, f64)> = (0..kind.len())
-                    .take_while(|&i| kind[i] != ParticleKind::Fluid)
-                    .filter(|&i| body[i] as usize == b)
-                    .filter_map(|i| {
-                        let m = assembler.mass()[assembler.system_node(i)?];
-                        (m > 0.0).then_some((i, m))
-                    })
-                    .collect();
-                rigid_part::<D>(&members, &state.x, &mut state.a);
-                for &(i, _) in &members {
+            // (particle, mass) per free body, in one pass over the walls
+            // and solids (they come first).
+            let mut members: Vec<Vec<(usize, f64)>> = vec![Vec::new(); self.contact.free.len()];
+            for i in (0..kind.len()).take_while(|&i| kind[i] != ParticleKind::Fluid) {
+                let b = body[i] as usize;
+                if !self.contact.free[b] {
+                    continue;
+                }
+                if let Some(m) = assembler.system_node(i).map(|s| assembler.mass()[s]) {
+                    if m > 0.0 {
+                        members[b].push((i, m));
+                    }
+                }
+            }
+            for members in members.iter().filter(|m| !m.is_empty()) {
+                rigid_part::<D>(members, &state.x, &mut state.a);
+                for &(i, _) in members {
                     for k in 0..D {
                         if self.particles.constraints().is_fixed(i, k) {
                             state.a[i][k] = 0.0;

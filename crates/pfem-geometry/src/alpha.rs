@@ -437,6 +437,12 @@ where
     }
     let mut any = false;
     let mut cuts: Vec<(u32, u8, f64)> = Vec::new();
+    // The solid particles a bridge may be cut against: none without `cut`,
+    // every one with `Some(None)`, those listed with `Some(Some(list))`.
+    let against = |v: usize| {
+        kinds[v] == ParticleKind::Solid
+            && cut.is_some_and(|c| c.is_none_or(|c| c.get(v) == Some(&true)))
+    };
     for s in 0..ns {
         if decided[s].1 != KEPT {
             continue;
@@ -475,10 +481,6 @@ where
             let n = normal[simplex[a] as usize];
             n.dot(up) >= WATER_LINE_COS * n.norm()
         });
-        let against = |v: usize| {
-            kinds[v] == ParticleKind::Solid
-                && cut.is_some_and(|c| c.is_none_or(|c| c.get(v) == Some(&true)))
-        };
         if cut.is_some()
             && facing_up
             && (0..nv).any(|b| against(simplex[b] as usize) && p[b].dot(up) > level)
