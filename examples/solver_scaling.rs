@@ -7,8 +7,12 @@
 //! ```text
 //! cargo run --release --example solver_scaling -- \
 //!     [--case dam2d|column3d|all] [--sizes 20,40,80] [--steps 10] \
-//!     [--solvers direct,block] [--end-time T]
+//!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] [--end-time T]
 //! ```
+//! `amg` is the block solver with multigrid on the pressure
+//! (`PressureSolve::Multigrid`); `--stabilisation A` runs every solver on
+//! the stabilised system (`StepParams::pressure_stabilisation`, default 0);
+//! `--bulk K` sets the 2D water's bulk modulus (Pa, default 2.2e9).
 //! `--sizes` are spacings as fractions of the column width (a/n); defaults
 //! 20,40,80 (2D) and 10,14,18 (3D). Prints, per run: particles, unknowns,
 //! seconds per accepted step and per stage (remesh, assemble, solve, the
@@ -56,7 +60,12 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
     Ok(match name {
         "direct" => Box::new(pfem::assembly::DirectSolver::default()),
         "block" => Box::new(pfem::assembly::BlockSolver::default()),
-        other => return Err(format!("unknown solver {other} (direct, block)").into()),
+        "amg" => {
+            let mut b = pfem::assembly::BlockSolver::default();
+            b.pressure = pfem::assembly::PressureSolve::Multigrid;
+            Box::new(b)
+        }
+        other => return Err(format!("unknown solver {other} (direct, block, amg)").into()),
     })
 }
 
@@ -112,6 +121,14 @@ fn run() -> Res<()> {
             .and_then(|i| args.get(i + 1).cloned())
     };
     let steps: u64 = opt("steps").map(|s| s.parse()).transpose()?.unwrap_or(10);
+    // Pressure stabilisation factor (StepParams::pressure_stabilisation).
+    let stab = opt("stabilisation").unwrap_or_else(|| "0".into());
+    // The 2D water's bulk modulus (Pa).
+    let bulk = opt("bulk").unwrap_or_else(|| "2.2e9".into());
+    let params = StepParams {
+        pressure_stabilisation: stab.parse()?,
+        ..StepParams::default()
+    };
     // Child: one case, one size, one solver.
     let export = opt("export");
     if let Some(spec) = opt("one") {
@@ -124,11 +141,14 @@ fn run() -> Res<()> {
             "dam2d" => {
                 let mut c = DamBreak::default();
                 c.spacing = c.width / n;
-                let sim = Simulation::new(
-                    c.scene(),
-                    Box::new(Delaunay2::default()),
-                    StepParams::default(),
+                let water = pfem::constitutive::Newtonian::water();
+                let fluid = pfem::constitutive::Newtonian::new(
+                    water.density(),
+                    water.viscosity(),
+                    bulk.parse()?,
                 )?;
+                let sim =
+                    Simulation::new(c.scene_with(fluid), Box::new(Delaunay2::default()), params)?;
                 one(sim, solver_name, steps, export)
             }
             "column3d" => {
@@ -137,11 +157,7 @@ fn run() -> Res<()> {
                     ..Default::default()
                 };
                 c.spacing = c.width / n;
-                let mut sim = Simulation::new(
-                    c.scene(),
-                    Box::new(Delaunay3::default()),
-                    StepParams::default(),
-                )?;
+                let mut sim = Simulation::new(c.scene(), Box::new(Delaunay3::default()), params)?;
                 pfem::cases3d::slip_sides(&mut sim);
                 one(sim, solver_name, steps, export)
             }
@@ -188,6 +204,10 @@ fn run() -> Res<()> {
                         &format!("{case}:{n}:{s}"),
                         "--steps",
                         &steps.to_string(),
+                        "--stabilisation",
+                        &stab,
+                        "--bulk",
+                        &bulk,
                     ])
                     .output()?;
                 let text = String::from_utf8_lossy(&out.stdout);

@@ -259,6 +259,20 @@ where
     c_val: Vec<f64>,
     /// System node coordinates of the last assembly, `D` per node.
     coords: Vec<f64>,
+    /// Pressure stabilisation factor `α` of `τ` (0: off;
+    /// [`Assembler::set_pressure_stabilisation`]).
+    stabilisation: f64,
+    /// Stabilised split form: `L̃` (CSR over the rows of `C`), the offset
+    /// `o` of the second row, the fixed velocities' part `c₀` of `C V`.
+    l_ptr: Vec<usize>,
+    l_idx: Vec<usize>,
+    l_val: Vec<f64>,
+    c_offset: Vec<f64>,
+    c_fixed: Vec<f64>,
+    /// `(𝒦/M̂)^{1/2}` per row of `C`.
+    c_scale: Vec<f64>,
+    /// The factor of `I + L̃` ([`Assembler::stabilised_pressure_increments`]).
+    l_factor: crate::block::QuasiDefinite,
 }
 
 /// Work an [`Assembler`] has done.
@@ -318,6 +332,41 @@ where
         self.split
     }
 
+    /// Pressure stabilisation (ARCHITECTURE.md deviation 12): with
+    /// `alpha > 0` the nodal pressure of the fluid solves the stabilised
+    /// continuity equation
+    ///
+    /// `(M̂/𝒦) Δp + τ L Δp = −G V − τ (L pⁿ − P π)`,
+    ///
+    /// `L_ab = Σₑ τₑ ∫ ∇W_a·∇W_b` over the fluid elements with the
+    /// intrinsic time `τₑ = α / (c ρ + 8 μ / hₑ²)` (`c` the scheme's mass
+    /// factor, about `2/Δt`; `hₑ = (D! Vₑ)^{1/D}`), and `π` the lumped nodal
+    /// projection of `grad pⁿ`, so that the term vanishes for a pressure
+    /// linear in space (hydrostatics) and the scheme stays consistent (an
+    /// orthogonal-subscale, time-lagged projection). The system is then
+    /// the saddle-point form of [`SplitSystem::stabilisation`]; it needs the
+    /// split assembly, which this turns on. `0` (the default) is the paper's
+    /// `Δp = −(𝒦/M̂) G V`. Takes effect at the next [`Assembler::prepare`].
+    pub fn set_pressure_stabilisation(&mut self, alpha: f64) {
+        let alpha = if alpha.is_finite() && alpha > 0.0 {
+            alpha
+        } else {
+            0.0
+        };
+        if alpha != self.stabilisation {
+            self.stabilisation = alpha;
+            if alpha > 0.0 {
+                self.set_split(true);
+            }
+            self.last_mesh.3 = usize::MAX;
+        }
+    }
+
+    /// Whether the pressure is stabilised (and so the assembly split).
+    pub fn is_stabilised(&self) -> bool {
+        self.split && self.stabilisation > 0.0
+    }
+
     /// The last assembled system in split form, `(A_v + Cᵀ C) V = f`, or
     /// `None` when the assembler is not split ([`Assembler::set_split`]).
     pub fn split_system(&self) -> Option<SplitSystem<'_>> {
@@ -332,6 +381,14 @@ where
             block_size: D,
             coords: &self.coords,
             rhs: &self.rhs,
+            stabilisation: self
+                .is_stabilised()
+                .then_some(crate::solver::Stabilisation {
+                    l_ptr: &self.l_ptr,
+                    l_idx: &self.l_idx,
+                    l_val: &self.l_val,
+                    offset: &self.c_offset,
+                }),
         })
     }
 
@@ -608,6 +665,13 @@ where
                 self.c_ptr.push(self.c_idx.len());
             }
             self.c_val.resize(self.c_idx.len(), 0.0);
+            let m = self.c_node.len();
+            self.c_fixed.clear();
+            self.c_fixed.resize(m, 0.0);
+            self.c_scale.clear();
+            self.c_scale.resize(m, 0.0);
+            self.c_offset.clear();
+            self.c_offset.resize(m, 0.0);
         }
         for a in 0..ns {
             if self.split {
@@ -859,6 +923,12 @@ where
                         }
                     }
                 }
+                if self.stabilisation > 0.0 {
+                    // Kept apart: it goes through `(I + L̃)⁻¹` (the offset).
+                    self.c_fixed[r] = sc * fixed;
+                    self.c_scale[r] = sc;
+                    continue;
+                }
                 if fixed != 0.0 {
                     for si in s..e {
                         let i = self.patch_nodes[si];
@@ -923,6 +993,9 @@ where
                 }
             }
         }
+        if self.is_stabilised() {
+            self.stabilise(input)?;
+        }
         if let Some(i) = self.rhs.iter().position(|v| !v.is_finite()) {
             return Err(AssemblyError::NonFiniteSystem { dof: i });
         }
@@ -934,6 +1007,159 @@ where
             dofs: self.pattern.dofs(),
             nnz: self.pattern.nnz(),
         })
+    }
+
+    /// The stabilisation of the split form at the iterate (see
+    /// [`Assembler::set_pressure_stabilisation`]): `L̃ = S τ L S` and the
+    /// offset `o = −(c₀ + S τ (L pⁿ − P π))`, `S = (𝒦/M̂)^{1/2}`, over the
+    /// fluid elements (a cut one by its part's measure; closures carry
+    /// none).
+    fn stabilise(&mut self, input: &AssemblyInput<'_, D>) -> Result<(), AssemblyError> {
+        let nv = <Const<D> as Dim>::NV;
+        let ns = self.particle_of.len();
+        let m = self.c_node.len();
+        let mut fact = 1.0;
+        for k in 2..=D {
+            fact *= k as f64;
+        }
+        // Per fluid element: τ V and grad pⁿ; nodal projection π.
+        let mut pi = vec![Vector::<D>::zeros(); ns];
+        let mut weight = vec![0.0; ns];
+        let mut elem: Vec<(usize, f64, Vector<D>)> = Vec::new();
+        for e in 0..self.n_elements {
+            if !self.elem_fluid[e] {
+                continue;
+            }
+            let st = &self.states[e];
+            let vol = st.volume * self.share(e);
+            if vol <= 0.0 {
+                continue;
+            }
+            let mat = &input.materials[self.elem_material[e] as usize];
+            let h2 = (fact * st.volume).powf(2.0 / D as f64);
+            let tau = self.stabilisation
+                / (input.inertia.mass_factor * mat.density() + 8.0 * self.unified[e].mu / h2);
+            let mut gp = Vector::<D>::zeros();
+            for a in 0..nv {
+                let part = self.particle_of[self.elem_sys[e * nv + a] as usize] as usize;
+                gp += st.grads[a] * input.pressure_n[part];
+            }
+            for a in 0..nv {
+                let na = self.elem_sys[e * nv + a] as usize;
+                pi[na] += gp * (vol / nv as f64);
+                weight[na] += vol / nv as f64;
+            }
+            elem.push((e, tau * vol, gp));
+        }
+        for (p, w) in pi.iter_mut().zip(&weight) {
+            if *w > 0.0 {
+                *p /= *w;
+            }
+        }
+        let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(elem.len() * nv * nv + m);
+        let mut r = vec![0.0; m];
+        for &(e, tv, gp) in &elem {
+            let st = &self.states[e];
+            let el = &self.elem_sys[e * nv..(e + 1) * nv];
+            let mut pbar = Vector::<D>::zeros();
+            for &a in el {
+                pbar += pi[a as usize];
+            }
+            pbar /= nv as f64;
+            let jump = gp - pbar;
+            for a in 0..nv {
+                let ra = self.c_row[el[a] as usize];
+                if ra == NONE {
+                    continue;
+                }
+                let ra = ra as usize;
+                let sa = self.c_scale[ra];
+                r[ra] += sa * tv * st.grads[a].dot(&jump);
+                for b in 0..nv {
+                    let rb = self.c_row[el[b] as usize];
+                    if rb == NONE {
+                        continue;
+                    }
+                    let rb = rb as usize;
+                    let v = sa * self.c_scale[rb] * tv * st.grads[a].dot(&st.grads[b]);
+                    t.push((ra, rb, v));
+                }
+            }
+        }
+        // The diagonal of every row, so that `I + L̃` has one.
+        for ra in 0..m {
+            t.push((ra, ra, 0.0));
+        }
+        let l = crate::amg::Csr::try_from_triplets(m, m, &t).map_err(|_| {
+            AssemblyError::MeshMismatch {
+                what: "the pressure stabilisation refers to a node without a pressure row",
+            }
+        })?;
+        self.l_ptr = l.ptr;
+        self.l_idx = l.idx;
+        self.l_val = l.val;
+        for ((o, c0), r) in self.c_offset.iter_mut().zip(&self.c_fixed).zip(&r) {
+            *o = -(c0 + r);
+        }
+        if let Some(entry) = self
+            .l_val
+            .iter()
+            .chain(&self.c_offset)
+            .position(|v| !v.is_finite())
+        {
+            return Err(AssemblyError::NonFiniteMatrix { entry });
+        }
+        Ok(())
+    }
+
+    /// The stabilised pressure increment `Δp_a = −S_a q_a`,
+    /// `q = (I + L̃)⁻¹ (C V − o)`, at every node with a pressure row, for the
+    /// velocity `v` (indexed by particle) on the geometry of the last
+    /// assembly: `(particle, Δp)` pairs in `out`. `Ok(false)` (and `out`
+    /// empty) when the pressure is not stabilised
+    /// ([`Assembler::nodal_volumetric_rates`] then gives eq. 62).
+    pub fn stabilised_pressure_increments(
+        &mut self,
+        v: &[Vector<D>],
+        out: &mut Vec<(u32, f64)>,
+    ) -> Result<bool, crate::SolveError> {
+        out.clear();
+        if !self.is_stabilised() {
+            return Ok(false);
+        }
+        let m = self.c_node.len();
+        let mut q = vec![0.0; m];
+        for (r, qr) in q.iter_mut().enumerate() {
+            let mut cv = 0.0;
+            for p in self.c_ptr[r]..self.c_ptr[r + 1] {
+                let dof = self.c_idx[p];
+                let part = self.particle_of[dof / D] as usize;
+                cv += self.c_val[p] * v[part][dof % D];
+            }
+            *qr = cv - self.c_offset[r];
+        }
+        let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(self.l_idx.len());
+        for r in 0..m {
+            for p in self.l_ptr[r]..self.l_ptr[r + 1] {
+                let j = self.l_idx[p];
+                t.push((r, j, self.l_val[p] + if j == r { 1.0 } else { 0.0 }));
+            }
+        }
+        let fail = |detail: String| crate::SolveError::Factorization {
+            solver: "pressure stabilisation",
+            detail,
+        };
+        let il = crate::amg::Csr::try_from_triplets(m, m, &t).map_err(|e| fail(e.to_string()))?;
+        let mut work = crate::solver::SolverWork::default();
+        self.l_factor
+            .factorise(&il, None, &mut work)
+            .map_err(fail)?;
+        self.l_factor.solve_in_place(&mut q).map_err(fail)?;
+        for (r, qr) in q.iter().enumerate() {
+            let part = self.particle_of[self.c_node[r] as usize];
+            out.push((part, -self.c_scale[r] * qr));
+        }
+        Ok(true)
     }
 
     /// Nodal weights `w_{a,j} = Σ_{e∋a,j} Vₑ/(D+1) grad W_j` (the rows of

@@ -112,6 +112,9 @@ pub struct BlockSolver {
     /// generation (the Picard iterates of one step).
     pub reuse_setup: bool,
     setup: Option<Setup>,
+    /// The factor of the stabilised saddle-point system
+    /// ([`solve_saddle`]), kept for its symbolic analysis.
+    saddle: QuasiDefinite,
     direct: DirectSolver,
     work: SolverWork,
     stats: BlockStats,
@@ -153,7 +156,7 @@ enum VelocityPrec {
 /// fill-reducing order is stable for such matrices), with its symbolic
 /// analysis kept while the pattern stays the same.
 #[derive(Default)]
-struct QuasiDefinite {
+pub(crate) struct QuasiDefinite {
     symbolic: Option<(Vec<usize>, Vec<usize>, SymbolicCholesky<usize>)>,
     values: Vec<f64>,
     ws: Workspace,
@@ -161,12 +164,20 @@ struct QuasiDefinite {
     definite: bool,
 }
 
+impl std::fmt::Debug for QuasiDefinite {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("QuasiDefinite")
+            .field("factored", &self.symbolic.is_some())
+            .finish()
+    }
+}
+
 impl QuasiDefinite {
     /// Factors the symmetric `r` (CSR of both triangles); `signs` gives the
     /// expected sign of each pivot (+1 velocity, −1 pressure), `None` for
     /// a positive definite `r` (Cholesky, faster). Counts a new symbolic
     /// analysis in `work`.
-    fn factorise(
+    pub(crate) fn factorise(
         &mut self,
         r: &Csr,
         signs: Option<&[i8]>,
@@ -253,7 +264,7 @@ impl QuasiDefinite {
         .map_err(|e| format!("{e:?}"))
     }
 
-    fn solve_in_place(&mut self, x: &mut [f64]) -> Result<(), String> {
+    pub(crate) fn solve_in_place(&mut self, x: &mut [f64]) -> Result<(), String> {
         let Some((_, _, sc)) = self.symbolic.as_ref() else {
             return Err("not factored".into());
         };
@@ -280,6 +291,135 @@ impl QuasiDefinite {
 }
 
 const NONE: usize = usize::MAX;
+
+/// The saddle-point matrix of a stabilised [`SplitSystem`],
+/// `K = [A_v Cᵀ; C −(I + L̃)]` (CSR of both triangles, symmetric
+/// quasi-definite), and its right-hand side `[f; o]`.
+fn saddle(sys: &SplitSystem<'_>) -> Result<(Csr, Vec<f64>), SolveError> {
+    let a = sys.a_v;
+    let n = a.nrows();
+    let m = sys.c_rows();
+    let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(
+        a.compute_nnz() + 2 * sys.c_idx.len() + m + sys.stabilisation.map_or(0, |s| s.l_idx.len()),
+    );
+    for j in 0..a.ncols() {
+        for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+            t.push((i, j, *v));
+        }
+    }
+    for r in 0..m {
+        for p in sys.c_ptr[r]..sys.c_ptr[r + 1] {
+            let j = sys.c_idx[p];
+            t.push((n + r, j, sys.c_val[p]));
+            t.push((j, n + r, sys.c_val[p]));
+        }
+        t.push((n + r, n + r, -1.0));
+    }
+    let mut rhs = Vec::with_capacity(n + m);
+    rhs.extend_from_slice(sys.rhs);
+    match sys.stabilisation {
+        Some(st) => {
+            for r in 0..m {
+                for p in st.l_ptr[r]..st.l_ptr[r + 1] {
+                    t.push((n + r, n + st.l_idx[p], -st.l_val[p]));
+                }
+            }
+            rhs.extend_from_slice(st.offset);
+        }
+        None => rhs.resize(n + m, 0.0),
+    }
+    let k = Csr::try_from_triplets(n + m, n + m, &t).map_err(|e| SolveError::Factorization {
+        solver: SADDLE,
+        detail: format!("cannot form the saddle-point matrix: {e}"),
+    })?;
+    Ok((k, rhs))
+}
+
+const SADDLE: &str = "saddle-point LDLT";
+
+/// The saddle-point form `K [V; q] = [f; o]` of a split system,
+/// `K = [A_v Cᵀ; C −(I + L̃)]` (`L̃ = 0`, `o = 0` without stabilisation), as
+/// a faer matrix (both triangles) and its right-hand side: what
+/// [`crate::MatrixExport`] writes for a stabilised system.
+pub fn saddle_system(
+    sys: &SplitSystem<'_>,
+) -> Result<(faer::sparse::SparseColMat<usize, f64>, Vec<f64>), SolveError> {
+    let (k, b) = saddle(sys)?;
+    let n = k.nrows;
+    // Symmetric: the CSR arrays are the CSC arrays.
+    let sym = faer::sparse::SymbolicSparseColMat::new_checked(n, n, k.ptr, None, k.idx);
+    Ok((faer::sparse::SparseColMat::new(sym, k.val), b))
+}
+
+/// Solves a stabilised [`SplitSystem`] (or an unstabilised one, in its
+/// saddle-point form) by one sparse `L D Lᵀ` of `K = [A_v Cᵀ; C −(I + L̃)]`
+/// (quasi-definite, so any fill-reducing order is stable) with passes of
+/// refinement; the residual reported is `‖[f; o] − K [V; q]‖ / ‖[f; o]‖`.
+/// `x` receives `V`. What the default [`LinearSolver::solve_split`] does
+/// with a stabilised system.
+pub fn solve_saddle(sys: &SplitSystem<'_>, x: &mut [f64]) -> Result<SolveReport, SolveError> {
+    let mut factor = QuasiDefinite::default();
+    let mut work = SolverWork::default();
+    solve_saddle_with(sys, &mut factor, &mut work, x)
+}
+
+fn solve_saddle_with(
+    sys: &SplitSystem<'_>,
+    factor: &mut QuasiDefinite,
+    work: &mut SolverWork,
+    x: &mut [f64],
+) -> Result<SolveReport, SolveError> {
+    crate::solver::check_finite(sys.rhs)?;
+    let n = sys.a_v.nrows();
+    let (k, b) = saddle(sys)?;
+    crate::solver::check_finite(&b)?;
+    let signs: Vec<i8> = (0..k.nrows).map(|i| if i < n { 1 } else { -1 }).collect();
+    factor
+        .factorise(&k, Some(&signs), work)
+        .map_err(|detail| SolveError::Factorization {
+            solver: SADDLE,
+            detail,
+        })?;
+    work.factorizations += 1;
+    let den = dot(&b, &b).sqrt();
+    let rel = |num: f64| if den > 0.0 { num / den } else { num };
+    let mut y = b.clone();
+    factor
+        .solve_in_place(&mut y)
+        .map_err(|detail| SolveError::Factorization {
+            solver: SADDLE,
+            detail,
+        })?;
+    let mut r = vec![0.0; b.len()];
+    let mut residual = f64::INFINITY;
+    for pass in 0..3 {
+        k.spmv(&y, &mut r);
+        r.iter_mut().zip(&b).for_each(|(r, b)| *r = b - *r);
+        let new = rel(dot(&r, &r).sqrt());
+        if new.is_nan() || new >= residual {
+            break;
+        }
+        residual = new;
+        if residual <= 1e-13 || pass == 2 {
+            break;
+        }
+        factor
+            .solve_in_place(&mut r)
+            .map_err(|detail| SolveError::Factorization {
+                solver: SADDLE,
+                detail,
+            })?;
+        y.iter_mut().zip(&r).for_each(|(y, d)| *y += d);
+    }
+    if let Some(index) = y.iter().position(|v| !v.is_finite()) {
+        return Err(SolveError::NonFinite { index });
+    }
+    x.copy_from_slice(&y[..n]);
+    Ok(SolveReport {
+        residual,
+        iterations: 1,
+    })
+}
 
 /// The preconditioner `M = Ã + Cᵀ C` (module docs), `Ã` the velocity
 /// block with the rows of its *stiff* nodes (solids: off-diagonal weight
@@ -499,6 +639,7 @@ impl Default for BlockSolver {
             amg: AmgOptions::default(),
             reuse_setup: false,
             setup: None,
+            saddle: QuasiDefinite::default(),
             direct: DirectSolver::default(),
             work: SolverWork::default(),
             stats: BlockStats::default(),
@@ -579,7 +720,25 @@ impl BlockSolver {
         for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
             *v *= inv[j];
         }
-        let s = add_identity(&cd.matmul(&ct));
+        let mut s = add_identity(&cd.matmul(&ct));
+        if let Some(st) = sys.stabilisation {
+            // Ŝ = I + L̃ + C Â⁻¹ Cᵀ.
+            let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(s.nnz() + st.l_idx.len());
+            for r in 0..s.nrows {
+                for p in s.ptr[r]..s.ptr[r + 1] {
+                    t.push((r, s.idx[p], s.val[p]));
+                }
+                for p in st.l_ptr[r]..st.l_ptr[r + 1] {
+                    t.push((r, st.l_idx[p], st.l_val[p]));
+                }
+            }
+            s = Csr::try_from_triplets(s.nrows, s.ncols, &t).map_err(|e| {
+                SolveError::Factorization {
+                    solver: NAME,
+                    detail: format!("pressure matrix: {e}"),
+                }
+            })?;
+        }
         let prec = match self.pressure {
             PressureSolve::Cholesky => {
                 // The factor of the last set-up gives its storage and, for
@@ -726,9 +885,22 @@ impl LinearSolver for BlockSolver {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
-        match self.iterate(sys, generation, x) {
+        if sys.stabilisation.is_some() && self.pressure == PressureSolve::Cholesky {
+            self.stats.solves += 1;
+            return solve_saddle_with(sys, &mut self.saddle, &mut self.work, x);
+        }
+        let done = if sys.stabilisation.is_some() {
+            self.iterate_stabilised(sys, generation, x)
+        } else {
+            self.iterate(sys, generation, x)
+        };
+        match done {
             Ok(r) => Ok(r),
             Err(e @ SolveError::NonFinite { .. }) => Err(e),
+            Err(_) if sys.stabilisation.is_some() => {
+                self.stats.fallbacks += 1;
+                solve_saddle_with(sys, &mut self.saddle, &mut self.work, x)
+            }
             Err(_) => {
                 self.stats.fallbacks += 1;
                 let a = sys.to_matrix()?;
@@ -743,6 +915,138 @@ impl LinearSolver for BlockSolver {
 }
 
 impl BlockSolver {
+    /// MINRES on the stabilised saddle-point system
+    /// `[A_v Cᵀ; C −(I + L̃)] [V; q] = [f; o]` with the block-diagonal
+    /// preconditioner `diag(Â_v, Ŝ)`, `Ŝ = I + L̃ + C Â⁻¹ Cᵀ` by one
+    /// V-cycle of smoothed aggregation; passes of refinement on the whole
+    /// residual. The residual reported is the saddle-point system's.
+    fn iterate_stabilised(
+        &mut self,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+        x: &mut [f64],
+    ) -> Result<SolveReport, SolveError> {
+        let Some(st) = sys.stabilisation else {
+            return self.iterate(sys, generation, x);
+        };
+        crate::solver::check_finite(sys.rhs)?;
+        crate::solver::check_finite(st.offset)?;
+        let t0 = Instant::now();
+        let a = Csr::from_faer_csc(sys.a_v);
+        let n = a.nrows;
+        let m = sys.c_rows();
+        let c = Csr {
+            nrows: m,
+            ncols: n,
+            ptr: sys.c_ptr.to_vec(),
+            idx: sys.c_idx.to_vec(),
+            val: sys.c_val.to_vec(),
+        };
+        let l = Csr {
+            nrows: m,
+            ncols: m,
+            ptr: st.l_ptr.to_vec(),
+            idx: st.l_idx.to_vec(),
+            val: st.l_val.to_vec(),
+        };
+        let setup = self.build(&a, &c, sys, generation)?;
+        self.work.factorizations += 1;
+        self.stats.setups += 1;
+        let t1 = Instant::now();
+        self.stats.setup_seconds += (t1 - t0).as_secs_f64();
+        let Prec::Blocks { velocity, schur } = &setup.prec else {
+            return Err(SolveError::Factorization {
+                solver: NAME,
+                detail: "the stabilised iteration needs the block preconditioner".into(),
+            });
+        };
+        let ct = c.transpose();
+        let apply_k = |y: &[f64], out: &mut [f64], tmp: &mut [f64]| {
+            let (yv, yq) = y.split_at(n);
+            let (ov, oq) = out.split_at_mut(n);
+            a.spmv(yv, ov);
+            ct.spmv(yq, tmp);
+            ov.iter_mut().zip(tmp.iter()).for_each(|(o, t)| *o += t);
+            c.spmv(yv, oq);
+            oq.iter_mut().zip(yq).for_each(|(o, q)| *o -= q);
+            l.spmv_add(-1.0, yq, oq);
+        };
+        let apply_p = |r: &[f64], z: &mut [f64]| {
+            let (rv, rq) = r.split_at(n);
+            let (zv, zq) = z.split_at_mut(n);
+            match &**velocity {
+                VelocityPrec::Jacobi(inv) => zv
+                    .iter_mut()
+                    .zip(rv)
+                    .zip(inv)
+                    .for_each(|((z, r), d)| *z = r * d),
+                VelocityPrec::Amg(amg) => amg.apply(rv, zv),
+            }
+            schur.apply(rq, zq);
+        };
+        let nt = n + m;
+        let mut b = Vec::with_capacity(nt);
+        b.extend_from_slice(sys.rhs);
+        b.extend_from_slice(st.offset);
+        let den = dot(&b, &b).sqrt();
+        let mut y = vec![0.0; nt];
+        y[..n].copy_from_slice(x);
+        let mut tmp = vec![0.0; n];
+        let mut r = vec![0.0; nt];
+        let mut d = vec![0.0; nt];
+        let residual_of = |y: &[f64], r: &mut [f64], tmp: &mut [f64]| {
+            apply_k(y, r, tmp);
+            r.iter_mut().zip(&b).for_each(|(r, b)| *r = b - *r);
+            let num = dot(r, r).sqrt();
+            if den > 0.0 {
+                num / den
+            } else {
+                num
+            }
+        };
+        let mut residual = residual_of(&y, &mut r, &mut tmp);
+        let mut iterations = 0;
+        while residual > self.target && iterations < self.max_iterations {
+            d.iter_mut().for_each(|v| *v = 0.0);
+            let it = minres(
+                &apply_k,
+                &apply_p,
+                &r,
+                &mut d,
+                &mut tmp,
+                self.tolerance,
+                self.max_iterations - iterations,
+            );
+            iterations += it.max(1);
+            y.iter_mut().zip(&d).for_each(|(y, d)| *y += d);
+            let new = residual_of(&y, &mut r, &mut tmp);
+            if new.is_nan() || new >= residual {
+                residual = new;
+                break;
+            }
+            residual = new;
+        }
+        self.setup = Some(setup);
+        self.stats.iterate_seconds += t1.elapsed().as_secs_f64();
+        self.stats.solves += 1;
+        self.stats.iterations += iterations as u64;
+        self.work.iterations += iterations as u64;
+        self.stats.max_iterations = self.stats.max_iterations.max(iterations);
+        if residual.is_nan() || residual > self.residual_limit || y.iter().any(|v| !v.is_finite()) {
+            self.setup = None;
+            return Err(SolveError::NoConvergence {
+                solver: NAME,
+                iterations,
+                residual,
+            });
+        }
+        x.copy_from_slice(&y[..n]);
+        Ok(SolveReport {
+            residual,
+            iterations,
+        })
+    }
+
     fn iterate(
         &mut self,
         sys: &SplitSystem<'_>,

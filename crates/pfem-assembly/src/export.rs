@@ -129,8 +129,13 @@ impl LinearSolver for MatrixExport {
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
         if self.seen == self.at {
-            let a = sys.to_matrix()?;
-            self.write(a.as_ref(), sys.rhs);
+            if sys.stabilisation.is_some() {
+                let (k, b) = crate::block::saddle_system(sys)?;
+                self.write(k.as_ref(), &b);
+            } else {
+                let a = sys.to_matrix()?;
+                self.write(a.as_ref(), sys.rhs);
+            }
         }
         self.seen += 1;
         self.inner.solve_split(sys, generation, x)

@@ -105,6 +105,9 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
+        if sys.stabilisation.is_some() {
+            return crate::block::solve_saddle(sys, x);
+        }
         let a = sys.to_matrix()?;
         self.solve(a.as_ref(), generation.wrapping_add(1 << 62), sys.rhs, x)
     }
@@ -133,6 +136,30 @@ pub struct SplitSystem<'a> {
     pub coords: &'a [f64],
     /// Right-hand side `f`.
     pub rhs: &'a [f64],
+    /// The pressure stabilisation, when the assembly has one
+    /// ([`Stabilisation`]): the system is then the saddle-point form
+    /// `[A_v Cᵀ; C −(I + L̃)] [V; q] = [f; o]`, which no longer eliminates
+    /// to a sparse matrix.
+    pub stabilisation: Option<Stabilisation<'a>>,
+}
+
+/// The pressure-stabilisation part of a [`SplitSystem`] (the
+/// assembler's `pressure_stabilisation`, ARCHITECTURE.md deviation 12):
+/// `L̃ = S τ L S`, the scaled pressure Laplacian (`L_ab = Σₑ τₑ ∫ ∇W_a·∇W_b`,
+/// `S = (𝒦/M̂)^{1/2}` per row of `C`), symmetric positive semidefinite, and
+/// the offset `o` of the second row, `C V − (I + L̃) q = o`, so that
+/// `q = (I + L̃)⁻¹ (C V − o)` and the eliminated system is
+/// `(A_v + Cᵀ (I + L̃)⁻¹ C) V = f + Cᵀ (I + L̃)⁻¹ o`.
+#[derive(Debug, Clone, Copy)]
+pub struct Stabilisation<'a> {
+    /// Row pointers of `L̃` (CSR, square of [`SplitSystem::c_rows`]).
+    pub l_ptr: &'a [usize],
+    /// Column indices of `L̃` (sorted per row).
+    pub l_idx: &'a [usize],
+    /// Values of `L̃`.
+    pub l_val: &'a [f64],
+    /// Offset `o`, one per row of `C`.
+    pub offset: &'a [f64],
 }
 
 impl SplitSystem<'_> {
@@ -171,7 +198,16 @@ impl SplitSystem<'_> {
 
     /// The whole matrix `A_v + Cᵀ C` (CSC), as the assembler would have
     /// built it unsplit.
+    /// A stabilised system ([`SplitSystem::stabilisation`]) has no sparse
+    /// eliminated matrix: an error (its saddle-point matrix is
+    /// [`crate::block::saddle_system`]).
     pub fn to_matrix(&self) -> Result<faer::sparse::SparseColMat<usize, f64>, SolveError> {
+        if self.stabilisation.is_some() {
+            return Err(SolveError::Factorization {
+                solver: "split system",
+                detail: "a stabilised system has no sparse eliminated matrix".into(),
+            });
+        }
         let a = self.a_v;
         let mut t: Vec<faer::sparse::Triplet<usize, usize, f64>> = Vec::new();
         for j in 0..a.ncols() {

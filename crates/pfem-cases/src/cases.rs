@@ -95,6 +95,12 @@ fn tank(scene: Scene<2>, x0: f64, x1: f64, walls: &[(f64, f64, f64)], h: f64) ->
 impl DamBreak {
     /// The scene.
     pub fn scene(&self) -> Scene<2> {
+        self.scene_with(Newtonian::water())
+    }
+
+    /// The scene with another fluid than water (issue 18 measures the
+    /// solver's dependence on the bulk modulus with it).
+    pub fn scene_with(&self, fluid: Newtonian) -> Scene<2> {
         let a = self.width;
         let h = self.spacing;
         let height = self.aspect * a;
@@ -117,7 +123,7 @@ impl DamBreak {
         );
         s.fluid(
             "water",
-            Box::new(Newtonian::water()),
+            Box::new(fluid),
             Geometry::Box {
                 min: Point::<2>::new(0.0, 0.0),
                 max: Point::<2>::new(a, height),

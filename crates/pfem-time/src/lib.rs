@@ -222,6 +222,13 @@ pub struct StepParams {
     /// rejected steps): the stiff volumetric term changes enough with the
     /// geometry that the frozen matrix is a poor preconditioner.
     pub reuse_factorization: bool,
+    /// Pressure stabilisation factor `α` (0: off, the paper's nodal
+    /// pressure): the fluid's nodal pressure solves the continuity
+    /// equation with an orthogonal-subscale pressure Laplacian of
+    /// intrinsic time `τ = α / (c ρ + 8 μ / h²)`
+    /// (`pfem_assembly::Assembler::set_pressure_stabilisation`;
+    /// ARCHITECTURE.md deviation 12). Default 0.
+    pub pressure_stabilisation: f64,
 }
 
 impl Default for StepParams {
@@ -235,6 +242,7 @@ impl Default for StepParams {
             min_dt: 1e-9,
             volumetric: VolumetricTreatment::NodalAveraged,
             reuse_factorization: false,
+            pressure_stabilisation: 0.0,
         }
     }
 }
@@ -455,7 +463,7 @@ where
         let n = state.len();
         let dt = 1e-12; // rate terms scale with Δt: take the limit Δt → 0
                         // The steps' own split, so that their first one keeps this pattern.
-        self.assembler.set_split(self.solver.wants_split(n * D));
+        self.configure_assembly(n);
         self.assembler
             .prepare(n, input.mesh, input.materials)
             .map_err(|source| StepError::Assembly {
@@ -558,6 +566,17 @@ where
         }
     }
 
+    /// The split form and the pressure stabilisation of the assembly for
+    /// `n` particles: split when the solver wants it or the pressure is
+    /// stabilised (which needs it).
+    fn configure_assembly(&mut self, n: usize) {
+        let stabilised = self.params.pressure_stabilisation > 0.0;
+        self.assembler
+            .set_split(stabilised || self.solver.wants_split(n * D));
+        self.assembler
+            .set_pressure_stabilisation(self.params.pressure_stabilisation);
+    }
+
     /// One attempt of a step of size `dt` (§6). Leaves `state` and
     /// `history` unchanged on failure.
     #[allow(clippy::needless_range_loop)] // loops index several parallel arrays
@@ -600,7 +619,7 @@ where
             dt,
             ..Default::default()
         };
-        self.assembler.set_split(self.solver.wants_split(n * D));
+        self.configure_assembly(n);
         self.assembler
             .prepare(n, input.mesh, input.materials)
             .map_err(|source| StepError::Assembly { time, dt, source })?;
@@ -754,6 +773,13 @@ where
             });
         }
         let tu = std::time::Instant::now();
+        // The stabilised pressure increments, before anything is updated
+        // (their solve may fail).
+        let mut increments = Vec::new();
+        let stabilised_increments = self
+            .assembler
+            .stabilised_pressure_increments(&self.v_it, &mut increments)
+            .map_err(|source| StepError::Solve { time, dt, source })?;
         // Final geometry must stay valid; solid kinematics at the converged
         // state for the stress update (eq. 63).
         let nv = <Const<D> as Dim>::NV;
@@ -794,15 +820,22 @@ where
         for (e, h) in new_history {
             history[e] = h;
         }
-        // Fluid pressure on nodes (eq. 62).
-        self.assembler
-            .nodal_volumetric_rates(&self.v_it, &mut self.rates);
+        // Fluid pressure on nodes (eq. 62, or its stabilised form).
         let mut touched = vec![false; n];
-        for r in &self.rates {
-            let p = r.particle as usize;
-            let mat = &input.materials[r.material as usize];
-            state.pressure[p] = mat.update_pressure(state.pressure[p], r.rate, dt); // eq. 62
-            touched[p] = true;
+        if stabilised_increments {
+            for &(p, dp) in &increments {
+                state.pressure[p as usize] += dp;
+                touched[p as usize] = true;
+            }
+        } else {
+            self.assembler
+                .nodal_volumetric_rates(&self.v_it, &mut self.rates);
+            for r in &self.rates {
+                let p = r.particle as usize;
+                let mat = &input.materials[r.material as usize];
+                state.pressure[p] = mat.update_pressure(state.pressure[p], r.rate, dt); // eq. 62
+                touched[p] = true;
+            }
         }
         for p in 0..n {
             if !touched[p] && self.assembler.system_node(p).is_none() {

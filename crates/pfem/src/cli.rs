@@ -118,6 +118,16 @@ impl Args {
             }
         }
         p.picard_tolerance = self.number("picard-tol", p.picard_tolerance)?;
+        if let Some(v) = self.options.get("pressure-stabilisation") {
+            p.pressure_stabilisation = match v.parse::<f64>() {
+                Ok(x) if x >= 0.0 && x.is_finite() => x,
+                _ => {
+                    return Err(ArgsError(format!(
+                        "--pressure-stabilisation must be a number ≥ 0, got `{v}`"
+                    )))
+                }
+            };
+        }
         Ok(p)
     }
 
@@ -135,9 +145,14 @@ impl Args {
             Some("cholesky") => Box::new(SparseCholesky::default()),
             Some("cg") => Box::new(ConjugateGradient::default()),
             None | Some("block") => Box::new(BlockSolver::default()),
+            Some("block-amg") => {
+                let mut b = BlockSolver::default();
+                b.pressure = pfem_assembly::PressureSolve::Multigrid;
+                Box::new(b)
+            }
             Some(other) => {
                 return Err(ArgsError(format!(
-                    "--solver must be block, direct, lu, cholesky or cg, got `{other}`"
+                    "--solver must be block, block-amg, direct, lu, cholesky or cg, got `{other}`"
                 )))
             }
         })
@@ -221,7 +236,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --solver --volume-correction --memory-budget --max-wall-time --threads{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -232,9 +247,10 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 7] = [
+const COMMON: [&str; 8] = [
     "scheme",
     "picard-tol",
+    "pressure-stabilisation",
     "solver",
     "volume-correction",
     "memory-budget",
@@ -253,7 +269,9 @@ Options common to the bundled examples and `pfem run`:
   --no-vtu              no VTU frames
   --scheme S            bossak (default), newmark or euler
   --picard-tol X        Picard tolerance (default 1e-6)
-  --solver S            block (default), direct, lu, cholesky or cg
+  --solver S            block (default), block-amg (multigrid), direct, lu, cholesky or cg
+  --pressure-stabilisation A
+                        pressure stabilisation factor of τ (default 0: off)
   --volume-correction B fraction of the volume error restored per step, in [0, 1] (default 1)
   --memory-budget GB    refuse scenes estimated above this (default: 80 % of the machine's memory)
   --max-wall-time S     stop the run after S seconds of wall time (outputs are kept)
