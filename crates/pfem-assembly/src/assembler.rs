@@ -388,6 +388,7 @@ where
                     l_idx: &self.l_idx,
                     l_val: &self.l_val,
                     offset: &self.c_offset,
+                    alpha: self.stabilisation,
                 }),
         })
     }

@@ -34,9 +34,20 @@
 //!   nodal pressure's spurious modes (fields with zero mean on every
 //!   element, which `Cᵀ` does not see) are near-null vectors of `Ŝ` that
 //!   aggregation does not capture (measured on the 2D dam break at a/20:
-//!   143 iterations of multigrid-preconditioned CG on `Ŝ` alone). A
-//!   pressure stabilisation term would remove them; until then it is not
-//!   the default.
+//!   143 iterations of multigrid-preconditioned CG on `Ŝ` alone), so
+//!   without stabilisation it is not the default. With the pressure
+//!   stabilisation (`Assembler::set_pressure_stabilisation`,
+//!   [`SplitSystem::stabilisation`]) they are gone: MINRES runs on `[A_v Cᵀ; C −(I + L̃)]` with `Ŝ` grown by
+//!   `L̃`, warm-started from the last Picard iterate's `q` and keeping the
+//!   multigrid set-up across the iterates of a step
+//!   ([`BlockSolver::stabilised_reuse`]), and its iterations stay nearly
+//!   flat in size and in the bulk modulus
+//!   (`crates/pfem-assembly/tests/split_system.rs`).
+//!
+//! A stabilised system has no sparse eliminated matrix: with
+//! [`PressureSolve::Cholesky`] (and in every other solver's default
+//! `solve_split`) it is solved by one sparse `L D Lᵀ` of its saddle-point
+//! form ([`solve_saddle`]).
 
 use std::time::Instant;
 
@@ -111,10 +122,17 @@ pub struct BlockSolver {
     /// Keep the preconditioners across solves with the same pattern
     /// generation (the Picard iterates of one step).
     pub reuse_setup: bool,
+    /// The stabilised multigrid path: keep the multigrid set-up across
+    /// solves with the same pattern generation (the Picard iterates of a
+    /// step).
+    pub stabilised_reuse: bool,
     setup: Option<Setup>,
     /// The factor of the stabilised saddle-point system
     /// ([`solve_saddle`]), kept for its symbolic analysis.
     saddle: QuasiDefinite,
+    /// The stabilised iteration's last `q` and the pattern generation it
+    /// belongs to: the next Picard iterate's initial guess.
+    last_q: (u64, Vec<f64>),
     direct: DirectSolver,
     work: SolverWork,
     stats: BlockStats,
@@ -638,8 +656,10 @@ impl Default for BlockSolver {
             dominance_limit: 0.5,
             amg: AmgOptions::default(),
             reuse_setup: false,
+            stabilised_reuse: true,
             setup: None,
             saddle: QuasiDefinite::default(),
+            last_q: (u64::MAX, Vec::new()),
             direct: DirectSolver::default(),
             work: SolverWork::default(),
             stats: BlockStats::default(),
@@ -949,9 +969,23 @@ impl BlockSolver {
             idx: st.l_idx.to_vec(),
             val: st.l_val.to_vec(),
         };
-        let setup = self.build(&a, &c, sys, generation)?;
-        self.work.factorizations += 1;
-        self.stats.setups += 1;
+        let keep = self.stabilised_reuse
+            && self
+                .setup
+                .as_ref()
+                .is_some_and(|s| s.generation == generation && s.n == n && s.m == m);
+        let setup = match self.setup.take() {
+            Some(s) if keep => {
+                self.work.resolves += 1;
+                s
+            }
+            _ => {
+                let s = self.build(&a, &c, sys, generation)?;
+                self.work.factorizations += 1;
+                self.stats.setups += 1;
+                s
+            }
+        };
         let t1 = Instant::now();
         self.stats.setup_seconds += (t1 - t0).as_secs_f64();
         let Prec::Blocks { velocity, schur } = &setup.prec else {
@@ -991,6 +1025,10 @@ impl BlockSolver {
         let den = dot(&b, &b).sqrt();
         let mut y = vec![0.0; nt];
         y[..n].copy_from_slice(x);
+        // The last Picard iterate's `q` on the same pattern.
+        if self.last_q.0 == generation && self.last_q.1.len() == m {
+            y[n..].copy_from_slice(&self.last_q.1);
+        }
         let mut tmp = vec![0.0; n];
         let mut r = vec![0.0; nt];
         let mut d = vec![0.0; nt];
@@ -1041,6 +1079,7 @@ impl BlockSolver {
             });
         }
         x.copy_from_slice(&y[..n]);
+        self.last_q = (generation, y[n..].to_vec());
         Ok(SolveReport {
             residual,
             iterations,

@@ -373,6 +373,11 @@ where
             });
         }
         scene.validate_within(options.memory_budget)?;
+        // The scene's pressure stabilisation, unless the program set one.
+        let mut params = params;
+        if params.pressure_stabilisation == 0.0 {
+            params.pressure_stabilisation = scene.pressure_stabilisation;
+        }
         let built = scene.build(tessellator.as_mut())?;
         let pfem_scene::Built {
             name,
@@ -869,6 +874,13 @@ where
     /// Why a hook stopped the run, if one did.
     pub fn stopped(&self) -> Option<&str> {
         self.stop.as_deref()
+    }
+
+    /// The time-integration parameters in use (those given to
+    /// [`Simulation::new`], with the scene's pressure stabilisation when
+    /// they set none).
+    pub fn step_params(&self) -> StepParams {
+        self.stepper.integrator.params
     }
 
     /// Replaces the linear solver (default: [`pfem_assembly::BlockSolver`];

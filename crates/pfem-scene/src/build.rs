@@ -192,6 +192,7 @@ where
             gravity,
             settings,
             contact,
+            pressure_stabilisation: _,
         } = scene;
         let mut free_solids = vec![false; bodies.len()];
         let mut particles = Cloud::<D>::default();

@@ -313,6 +313,11 @@ where
     pub settings: RunSettings,
     /// Contact between free solids and walls or other solids.
     pub contact: ContactSettings,
+    /// The pressure stabilisation factor this scene asks for (0: none;
+    /// `pfem_time::StepParams::pressure_stabilisation`, ARCHITECTURE.md
+    /// deviation 12). The driver applies it unless the program's
+    /// `StepParams` sets one.
+    pub pressure_stabilisation: f64,
 }
 
 /// Contact settings ([`Scene::friction`], [`Scene::contact_stiffness`]).
@@ -358,7 +363,16 @@ where
             gravity: None,
             settings: RunSettings::default(),
             contact: ContactSettings::default(),
+            pressure_stabilisation: 0.0,
         }
+    }
+
+    /// Asks for the pressure stabilisation with factor `alpha` (≥ 0; see
+    /// [`Scene::pressure_stabilisation`]): violent impacts on light
+    /// bodies, where the paper's nodal pressure swings from step to step.
+    pub fn pressure_stabilisation(mut self, alpha: f64) -> Self {
+        self.pressure_stabilisation = alpha;
+        self
     }
 
     /// Coulomb friction `mu` (≥ 0) between bodies `a` and `b` in contact.
@@ -597,6 +611,13 @@ where
                     value: v,
                 });
             }
+        }
+        let ps = self.pressure_stabilisation;
+        if !(ps >= 0.0 && ps.is_finite()) {
+            return Err(SceneError::InvalidSetting {
+                setting: "pressure_stabilisation",
+                value: ps,
+            });
         }
         if !(ALPHA_RANGE.0..=ALPHA_RANGE.1).contains(&s.alpha) {
             return Err(SceneError::OutOfRange {

@@ -69,7 +69,7 @@
 //! | `dimension` | `2` or `3` |
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
-//! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`] |
+//! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`]; `pressure_stabilisation` (factor α ≥ 0, default 0: [`Scene::pressure_stabilisation`]) |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }`, `table = [[t, dx, dy], …]` or `rotation = { center, axis (3D), rate, amplitude, period, ramp }`, angles in rad), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
 //! | `[contact]` | `stiffness` (Pa), `damping`, `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`: contact of free solids (no clamp) with walls and other solids |
@@ -150,6 +150,8 @@ pub struct RunSpec {
     pub output_interval: Option<f64>,
     /// Alpha of the alpha shape.
     pub alpha: Option<f64>,
+    /// Pressure stabilisation factor ([`Scene::pressure_stabilisation`]).
+    pub pressure_stabilisation: Option<f64>,
 }
 
 /// What a body is made of.
@@ -634,7 +636,9 @@ impl SceneFile {
                 ),
             ));
         }
-        let mut scene = Scene::<D>::new(self.scene_name()).settings(self.settings());
+        let mut scene = Scene::<D>::new(self.scene_name())
+            .settings(self.settings())
+            .pressure_stabilisation(self.run.pressure_stabilisation.unwrap_or(0.0));
         if let Some(g) = &self.gravity {
             scene = scene.gravity(self.vector::<D>(g, "gravity")?);
         }

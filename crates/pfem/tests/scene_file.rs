@@ -282,6 +282,42 @@ fn non_positive_end_time_is_a_typed_error() {
     }
 }
 
+/// `[run] pressure_stabilisation` reaches the scene and the run (unless
+/// the program sets one); a negative one is refused.
+#[test]
+fn a_scene_asks_for_the_pressure_stabilisation() {
+    let LoadedScene::Two(scene, _) =
+        build(&puddle("", "pressure_stabilisation = 0.5", WATER)).unwrap()
+    else {
+        panic!("a 2D scene")
+    };
+    assert_eq!(scene.pressure_stabilisation, 0.5);
+    let sim = simulation(scene);
+    assert_eq!(sim.step_params().pressure_stabilisation, 0.5);
+    let LoadedScene::Two(scene, _) =
+        build(&puddle("", "pressure_stabilisation = 0.5", WATER)).unwrap()
+    else {
+        panic!("a 2D scene")
+    };
+    let own = StepParams {
+        pressure_stabilisation: 2.0,
+        ..StepParams::default()
+    };
+    let sim = Simulation::new(scene, Box::new(Delaunay2::default()), own).unwrap();
+    assert_eq!(sim.step_params().pressure_stabilisation, 2.0);
+    let err = build(&puddle("", "pressure_stabilisation = -1.0", WATER)).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            SceneError::InvalidSetting {
+                setting: "pressure_stabilisation",
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+}
+
 #[test]
 fn invalid_material_and_misplaced_keys_name_their_line() {
     let water = WATER.replace("density = 1000.0", "density = -1.0");
