@@ -952,16 +952,8 @@ impl BlockSolver {
         crate::solver::check_finite(sys.rhs)?;
         crate::solver::check_finite(st.offset)?;
         let t0 = Instant::now();
-        let a = Csr::from_faer_csc(sys.a_v);
-        let n = a.nrows;
-        let m = sys.c_rows();
-        let c = Csr {
-            nrows: m,
-            ncols: n,
-            ptr: sys.c_ptr.to_vec(),
-            idx: sys.c_idx.to_vec(),
-            val: sys.c_val.to_vec(),
-        };
+        let (a, c) = blocks_of(sys);
+        let (n, m) = (a.nrows, c.nrows);
         let l = Csr {
             nrows: m,
             ncols: m,
@@ -996,28 +988,9 @@ impl BlockSolver {
         };
         let ct = c.transpose();
         let apply_k = |y: &[f64], out: &mut [f64], tmp: &mut [f64]| {
-            let (yv, yq) = y.split_at(n);
-            let (ov, oq) = out.split_at_mut(n);
-            a.spmv(yv, ov);
-            ct.spmv(yq, tmp);
-            ov.iter_mut().zip(tmp.iter()).for_each(|(o, t)| *o += t);
-            c.spmv(yv, oq);
-            oq.iter_mut().zip(yq).for_each(|(o, q)| *o -= q);
-            l.spmv_add(-1.0, yq, oq);
+            apply_saddle(&a, &c, &ct, Some(&l), y, out, tmp);
         };
-        let apply_p = |r: &[f64], z: &mut [f64]| {
-            let (rv, rq) = r.split_at(n);
-            let (zv, zq) = z.split_at_mut(n);
-            match &**velocity {
-                VelocityPrec::Jacobi(inv) => zv
-                    .iter_mut()
-                    .zip(rv)
-                    .zip(inv)
-                    .for_each(|((z, r), d)| *z = r * d),
-                VelocityPrec::Amg(amg) => amg.apply(rv, zv),
-            }
-            schur.apply(rq, zq);
-        };
+        let apply_p = |r: &[f64], z: &mut [f64]| apply_blocks(velocity, schur, n, r, z);
         let nt = n + m;
         let mut b = Vec::with_capacity(nt);
         b.extend_from_slice(sys.rhs);
@@ -1065,12 +1038,31 @@ impl BlockSolver {
             residual = new;
         }
         self.setup = Some(setup);
+        self.finish(t1, iterations, residual, &y)?;
+        x.copy_from_slice(&y[..n]);
+        self.last_q = (generation, y[n..].to_vec());
+        Ok(SolveReport {
+            residual,
+            iterations,
+        })
+    }
+
+    /// Books an iteration that started its work at `t1`, and refuses it
+    /// when it did not converge (`y` the solution it returns).
+    fn finish(
+        &mut self,
+        t1: Instant,
+        iterations: usize,
+        residual: f64,
+        y: &[f64],
+    ) -> Result<(), SolveError> {
         self.stats.iterate_seconds += t1.elapsed().as_secs_f64();
         self.stats.solves += 1;
         self.stats.iterations += iterations as u64;
         self.work.iterations += iterations as u64;
         self.stats.max_iterations = self.stats.max_iterations.max(iterations);
         if residual.is_nan() || residual > self.residual_limit || y.iter().any(|v| !v.is_finite()) {
+            // A stale set-up may be what failed: the next call builds anew.
             self.setup = None;
             return Err(SolveError::NoConvergence {
                 solver: NAME,
@@ -1078,12 +1070,7 @@ impl BlockSolver {
                 residual,
             });
         }
-        x.copy_from_slice(&y[..n]);
-        self.last_q = (generation, y[n..].to_vec());
-        Ok(SolveReport {
-            residual,
-            iterations,
-        })
+        Ok(())
     }
 
     fn iterate(
@@ -1094,16 +1081,8 @@ impl BlockSolver {
     ) -> Result<SolveReport, SolveError> {
         crate::solver::check_finite(sys.rhs)?;
         let t0 = Instant::now();
-        let a = Csr::from_faer_csc(sys.a_v);
-        let n = a.nrows;
-        let m = sys.c_rows();
-        let c = Csr {
-            nrows: m,
-            ncols: n,
-            ptr: sys.c_ptr.to_vec(),
-            idx: sys.c_idx.to_vec(),
-            val: sys.c_val.to_vec(),
-        };
+        let (a, c) = blocks_of(sys);
+        let (n, m) = (a.nrows, c.nrows);
         let keep = self.reuse_setup
             && self
                 .setup
@@ -1181,29 +1160,10 @@ impl BlockSolver {
             }
             Prec::Blocks { velocity, schur } => {
                 let ct = c.transpose();
-                // y = [V; q], K y = [A V + Cᵀ q; C V − q].
                 let apply_k = |y: &[f64], out: &mut [f64], tmp: &mut [f64]| {
-                    let (yv, yq) = y.split_at(n);
-                    let (ov, oq) = out.split_at_mut(n);
-                    a.spmv(yv, ov);
-                    ct.spmv(yq, tmp);
-                    ov.iter_mut().zip(tmp.iter()).for_each(|(o, t)| *o += t);
-                    c.spmv(yv, oq);
-                    oq.iter_mut().zip(yq).for_each(|(o, q)| *o -= q);
+                    apply_saddle(&a, &c, &ct, None, y, out, tmp);
                 };
-                let apply_p = |r: &[f64], z: &mut [f64]| {
-                    let (rv, rq) = r.split_at(n);
-                    let (zv, zq) = z.split_at_mut(n);
-                    match &**velocity {
-                        VelocityPrec::Jacobi(inv) => zv
-                            .iter_mut()
-                            .zip(rv)
-                            .zip(inv)
-                            .for_each(|((z, r), d)| *z = r * d),
-                        VelocityPrec::Amg(amg) => amg.apply(rv, zv),
-                    }
-                    schur.apply(rq, zq);
-                };
+                let apply_p = |r: &[f64], z: &mut [f64]| apply_blocks(velocity, schur, n, r, z);
                 let nt = n + m;
                 let mut y = vec![0.0; nt];
                 let mut tmp = vec![0.0; n];
@@ -1239,25 +1199,65 @@ impl BlockSolver {
                 }
             }
         }
-        self.stats.iterate_seconds += t1.elapsed().as_secs_f64();
-        self.stats.solves += 1;
-        self.stats.iterations += iterations as u64;
-        self.work.iterations += iterations as u64;
-        self.stats.max_iterations = self.stats.max_iterations.max(iterations);
-        if residual.is_nan() || residual > self.residual_limit || x.iter().any(|v| !v.is_finite()) {
-            // A stale set-up may be what failed: the next call builds anew.
-            self.setup = None;
-            return Err(SolveError::NoConvergence {
-                solver: NAME,
-                iterations,
-                residual,
-            });
-        }
+        self.finish(t1, iterations, residual, x)?;
         Ok(SolveReport {
             residual,
             iterations,
         })
     }
+}
+
+/// `A_v` and `C` of a split system as CSR matrices.
+fn blocks_of(sys: &SplitSystem<'_>) -> (Csr, Csr) {
+    let a = Csr::from_faer_csc(sys.a_v);
+    let c = Csr {
+        nrows: sys.c_rows(),
+        ncols: a.nrows,
+        ptr: sys.c_ptr.to_vec(),
+        idx: sys.c_idx.to_vec(),
+        val: sys.c_val.to_vec(),
+    };
+    (a, c)
+}
+
+/// `out ← K y` for `y = [V; q]`, `K = [A Cᵀ; C −(I + L̃)]` (`L̃ = 0` when
+/// `l` is `None`); `tmp` is scratch of the velocity size.
+fn apply_saddle(
+    a: &Csr,
+    c: &Csr,
+    ct: &Csr,
+    l: Option<&Csr>,
+    y: &[f64],
+    out: &mut [f64],
+    tmp: &mut [f64],
+) {
+    let n = a.nrows;
+    let (yv, yq) = y.split_at(n);
+    let (ov, oq) = out.split_at_mut(n);
+    a.spmv(yv, ov);
+    ct.spmv(yq, tmp);
+    ov.iter_mut().zip(tmp.iter()).for_each(|(o, t)| *o += t);
+    c.spmv(yv, oq);
+    oq.iter_mut().zip(yq).for_each(|(o, q)| *o -= q);
+    if let Some(l) = l {
+        l.spmv_add(-1.0, yq, oq);
+    }
+}
+
+/// `z ← diag(Â_v, Ŝ)⁻¹ r` approximately: the velocity block's Jacobi or
+/// V-cycle, one V-cycle on the pressure block (`n` velocity dofs first).
+fn apply_blocks(velocity: &VelocityPrec, schur: &Amg, n: usize, r: &[f64], z: &mut [f64]) {
+    let (rv, rq) = r.split_at(n);
+    let (zv, zq) = z.split_at_mut(n);
+    match velocity {
+        VelocityPrec::Jacobi(inv) => zv
+            .iter_mut()
+            .zip(rv)
+            .zip(inv)
+            .for_each(|((z, r), d)| *z = r * d),
+        VelocityPrec::Amg(amg) => amg.apply(rv, zv),
+    }
+    schur.apply(rq, zq);
 }
 
 /// Preconditioned MINRES (Paige & Saunders; the three-term form of Elman,
