@@ -262,15 +262,19 @@ where
     /// Pressure stabilisation factor `α` of `τ` (0: off;
     /// [`Assembler::set_pressure_stabilisation`]).
     stabilisation: f64,
-    /// Stabilised split form: `L̃` (CSR over the rows of `C`), the offset
-    /// `o` of the second row, the fixed velocities' part `c₀` of `C V`.
+    /// Stabilised split form: `L̃` (CSR over the rows of `C`, laid out as
+    /// the nodal patches, so that an element's `elem_slots` index its
+    /// values; built with the pattern), the offset `o` of the second row,
+    /// the fixed velocities' part `c₀` of `C V`.
     l_ptr: Vec<usize>,
     l_idx: Vec<usize>,
     l_val: Vec<f64>,
     c_offset: Vec<f64>,
     c_fixed: Vec<f64>,
-    /// `(𝒦/M̂)^{1/2}` per row of `C`.
-    c_scale: Vec<f64>,
+    /// Scratch of the stabilisation: nodal projection of `grad pⁿ` and its
+    /// weights.
+    stab_pi: Vec<Vector<D>>,
+    stab_weight: Vec<f64>,
     /// The factor of `I + L̃` ([`Assembler::stabilised_pressure_increments`]).
     l_factor: crate::block::QuasiDefinite,
 }
@@ -388,7 +392,6 @@ where
                     l_idx: &self.l_idx,
                     l_val: &self.l_val,
                     offset: &self.c_offset,
-                    alpha: self.stabilisation,
                 }),
         })
     }
@@ -669,10 +672,22 @@ where
             let m = self.c_node.len();
             self.c_fixed.clear();
             self.c_fixed.resize(m, 0.0);
-            self.c_scale.clear();
-            self.c_scale.resize(m, 0.0);
             self.c_offset.clear();
             self.c_offset.resize(m, 0.0);
+            // `L̃` couples a node to its patch: the patches' layout, with
+            // the rows of `C` for columns (a patch node always has one).
+            self.l_ptr.clear();
+            self.l_ptr
+                .extend(self.c_node.iter().map(|&a| self.patch_ptr[a as usize]));
+            self.l_ptr.push(self.patch_ptr[ns]);
+            self.l_idx.clear();
+            self.l_idx.extend(
+                self.patch_nodes
+                    .iter()
+                    .map(|&b| self.c_row[b as usize] as usize),
+            );
+            self.l_val.clear();
+            self.l_val.resize(self.l_idx.len(), 0.0);
         }
         for a in 0..ns {
             if self.split {
@@ -927,7 +942,6 @@ where
                 if self.stabilisation > 0.0 {
                     // Kept apart: it goes through `(I + L̃)⁻¹` (the offset).
                     self.c_fixed[r] = sc * fixed;
-                    self.c_scale[r] = sc;
                     continue;
                 }
                 if fixed != 0.0 {
@@ -1018,14 +1032,18 @@ where
     fn stabilise(&mut self, input: &AssemblyInput<'_, D>) -> Result<(), AssemblyError> {
         let nv = <Const<D> as Dim>::NV;
         let ns = self.particle_of.len();
-        let m = self.c_node.len();
         let mut fact = 1.0;
         for k in 2..=D {
             fact *= k as f64;
         }
+        let scale: Vec<f64> = (0..ns).map(|a| self.nodal_scale(a)).collect();
         // Per fluid element: τ V and grad pⁿ; nodal projection π.
-        let mut pi = vec![Vector::<D>::zeros(); ns];
-        let mut weight = vec![0.0; ns];
+        let mut pi = std::mem::take(&mut self.stab_pi);
+        let mut weight = std::mem::take(&mut self.stab_weight);
+        pi.clear();
+        pi.resize(ns, Vector::<D>::zeros());
+        weight.clear();
+        weight.resize(ns, 0.0);
         let mut elem: Vec<(usize, f64, Vector<D>)> = Vec::new();
         for e in 0..self.n_elements {
             if !self.elem_fluid[e] {
@@ -1057,8 +1075,9 @@ where
                 *p /= *w;
             }
         }
-        let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(elem.len() * nv * nv + m);
-        let mut r = vec![0.0; m];
+        // `L̃` into the pattern's slots, `S τ (L pⁿ − P π)` per row.
+        self.l_val.iter_mut().for_each(|v| *v = 0.0);
+        self.c_offset.iter_mut().for_each(|v| *v = 0.0);
         for &(e, tv, gp) in &elem {
             let st = &self.states[e];
             let el = &self.elem_sys[e * nv..(e + 1) * nv];
@@ -1069,38 +1088,21 @@ where
             pbar /= nv as f64;
             let jump = gp - pbar;
             for a in 0..nv {
-                let ra = self.c_row[el[a] as usize];
-                if ra == NONE {
-                    continue;
-                }
-                let ra = ra as usize;
-                let sa = self.c_scale[ra];
-                r[ra] += sa * tv * st.grads[a].dot(&jump);
+                let na = el[a] as usize;
+                let sa = scale[na];
+                self.c_offset[self.c_row[na] as usize] += sa * tv * st.grads[a].dot(&jump);
                 for b in 0..nv {
-                    let rb = self.c_row[el[b] as usize];
-                    if rb == NONE {
-                        continue;
-                    }
-                    let rb = rb as usize;
-                    let v = sa * self.c_scale[rb] * tv * st.grads[a].dot(&st.grads[b]);
-                    t.push((ra, rb, v));
+                    let slot = self.elem_slots[e * nv * nv + a * nv + b] as usize;
+                    self.l_val[slot] +=
+                        sa * scale[el[b] as usize] * tv * st.grads[a].dot(&st.grads[b]);
                 }
             }
         }
-        // The diagonal of every row, so that `I + L̃` has one.
-        for ra in 0..m {
-            t.push((ra, ra, 0.0));
-        }
-        let l = crate::amg::Csr::try_from_triplets(m, m, &t).map_err(|_| {
-            AssemblyError::MeshMismatch {
-                what: "the pressure stabilisation refers to a node without a pressure row",
-            }
-        })?;
-        self.l_ptr = l.ptr;
-        self.l_idx = l.idx;
-        self.l_val = l.val;
-        for ((o, c0), r) in self.c_offset.iter_mut().zip(&self.c_fixed).zip(&r) {
-            *o = -(c0 + r);
+        self.stab_pi = pi;
+        self.stab_weight = weight;
+        // o = −(c₀ + r).
+        for (o, c0) in self.c_offset.iter_mut().zip(&self.c_fixed) {
+            *o = -(c0 + *o);
         }
         if let Some(entry) = self
             .l_val
@@ -1111,6 +1113,16 @@ where
             return Err(AssemblyError::NonFiniteMatrix { entry });
         }
         Ok(())
+    }
+
+    /// `(𝒦/M̂)^{1/2}` of system node `a` (the scale of its row of `C`; 0
+    /// without the nodal volumetric term).
+    fn nodal_scale(&self, a: usize) -> f64 {
+        if self.treatment == VolumetricTreatment::NodalAveraged && self.vol_hat[a] > 0.0 {
+            (self.kappa_hat[a] / self.vol_hat[a]).sqrt()
+        } else {
+            0.0
+        }
     }
 
     /// The stabilised pressure increment `Δp_a = −S_a q_a`,
@@ -1139,18 +1151,26 @@ where
             }
             *qr = cv - self.c_offset[r];
         }
-        let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(self.l_idx.len());
+        // I + L̃ on `L̃`'s pattern (every row holds its diagonal).
+        let mut val = self.l_val.clone();
         for r in 0..m {
             for p in self.l_ptr[r]..self.l_ptr[r + 1] {
-                let j = self.l_idx[p];
-                t.push((r, j, self.l_val[p] + if j == r { 1.0 } else { 0.0 }));
+                if self.l_idx[p] == r {
+                    val[p] += 1.0;
+                }
             }
         }
+        let il = crate::amg::Csr {
+            nrows: m,
+            ncols: m,
+            ptr: self.l_ptr.clone(),
+            idx: self.l_idx.clone(),
+            val,
+        };
         let fail = |detail: String| crate::SolveError::Factorization {
             solver: "pressure stabilisation",
             detail,
         };
-        let il = crate::amg::Csr::try_from_triplets(m, m, &t).map_err(|e| fail(e.to_string()))?;
         let mut work = crate::solver::SolverWork::default();
         self.l_factor
             .factorise(&il, None, &mut work)
@@ -1158,7 +1178,7 @@ where
         self.l_factor.solve_in_place(&mut q).map_err(fail)?;
         for (r, qr) in q.iter().enumerate() {
             let part = self.particle_of[self.c_node[r] as usize];
-            out.push((part, -self.c_scale[r] * qr));
+            out.push((part, -self.nodal_scale(self.c_node[r] as usize) * qr));
         }
         Ok(true)
     }

@@ -1040,7 +1040,9 @@ impl BlockSolver {
         self.setup = Some(setup);
         self.finish(t1, iterations, residual, &y)?;
         x.copy_from_slice(&y[..n]);
-        self.last_q = (generation, y[n..].to_vec());
+        self.last_q.0 = generation;
+        self.last_q.1.clear();
+        self.last_q.1.extend_from_slice(&y[n..]);
         Ok(SolveReport {
             residual,
             iterations,

@@ -160,8 +160,6 @@ pub struct Stabilisation<'a> {
     pub l_val: &'a [f64],
     /// Offset `o`, one per row of `C`.
     pub offset: &'a [f64],
-    /// The factor `α` of `τ` that `L̃` was built with.
-    pub alpha: f64,
 }
 
 impl SplitSystem<'_> {
