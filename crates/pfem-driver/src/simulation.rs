@@ -58,13 +58,15 @@ pub struct Stages {
 pub struct StageStats {
     /// Remeshing: calls and seconds.
     pub remesh: (u64, f64),
-    /// Free-surface detection and its `p = 0` condition: calls and seconds.
+    /// Free-surface detection: the alpha shape (§8) and the fluid elements
+    /// and boundary it gives, calls and seconds. A part of `remesh`.
     pub free_surface: (u64, f64),
     /// Assembly: calls (steps) and seconds.
     pub assemble: (u64, f64),
     /// Linear solves: calls (steps) and seconds.
     pub solve: (u64, f64),
-    /// History and state update: calls and seconds.
+    /// History and state update, and the step's bookkeeping (volume
+    /// ledger, Courant bound, finite check): calls and seconds.
     pub update: (u64, f64),
     /// Observers (output): calls and seconds.
     pub observe: (u64, f64),
@@ -591,6 +593,7 @@ where
             .tessellator
             .tessellate(x, &mut self.stepper.tess)
             .map_err(RunError::Geometry)?;
+        let ts = Instant::now();
         let mut shape = self.elements.take_shape();
         alpha_shape_cutting_into(
             x,
@@ -610,6 +613,8 @@ where
                 .map(|&p| material[p as usize])
                 .unwrap_or(NO_MATERIAL)
         });
+        self.stats.free_surface.0 += 1;
+        self.stats.free_surface.1 += ts.elapsed().as_secs_f64();
         if self.stages.contact {
             // Contact elements: simplices joining a free solid to a wall
             // or another solid, no fluid between (pfem_geometry::contact).
@@ -758,13 +763,19 @@ where
         }
         // The fluid volume at the end of the last step is `volume_now`; it is
         // measured once after remeshing and once after the solution.
+        // The step's bookkeeping (volume ledger, Courant bound, finite
+        // check) is booked under `update`.
+        let mut book = 0.0;
         if self.clock.steps > 0 {
             self.remesh()?;
+            let tb = Instant::now();
             let after = self.fluid_volume();
             self.volume.remeshing += after - self.volume_now;
             self.volume_now = after;
+            book += tb.elapsed().as_secs_f64();
         }
         self.run_hooks(HookPoint::AfterRemesh)?;
+        let tb = Instant::now();
         // Courant bound per particle, on its own spacing: Δt ≤ C min_i h_i/|v_i|,
         // passed to the controller as (h, v) = (min_i h_i/|v_i|, 1). It keeps
         // particles from crossing elements between remeshings: a scene that
@@ -783,6 +794,7 @@ where
             dt = (self.end_time - self.clock.time).max(self.controller.dt_min);
         }
         self.clock.dt = dt;
+        book += tb.elapsed().as_secs_f64();
         self.run_hooks(HookPoint::BeforeSolve)?;
         let (mesh, history) = self.elements.step_mesh();
         let (state, constraints) = self.particles.state_and_constraints();
@@ -816,10 +828,13 @@ where
         if self.stages.solid_stress {
             self.stats.stress_updates += 1;
         }
+        let tb = Instant::now();
         let end = self.fluid_volume();
         self.volume.solution += end - self.volume_now;
         self.volume_now = end;
+        book += tb.elapsed().as_secs_f64();
         self.run_hooks(HookPoint::AfterStep)?;
+        let tb = Instant::now();
         if let Some(i) = self
             .particles
             .x()
@@ -831,6 +846,7 @@ where
                 particle: i,
             });
         }
+        self.stats.update.1 += book + tb.elapsed().as_secs_f64();
         Ok(())
     }
 

@@ -453,6 +453,10 @@ where
     pub fn summary(&self, sim: &Simulation<D>) -> RunSummary {
         let mut wall = BTreeMap::new();
         wall.insert("remesh".to_string(), sim.stats().remesh.1);
+        wall.insert(
+            "remesh_free_surface".to_string(),
+            sim.stats().free_surface.1,
+        );
         wall.insert("assemble".to_string(), sim.stats().assemble.1);
         wall.insert("solve".to_string(), sim.stats().solve.1);
         wall.insert("update".to_string(), sim.stats().update.1);
