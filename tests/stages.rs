@@ -38,6 +38,7 @@ fn a_solid_only_scene_never_remeshes_nor_updates_pressure() {
     assert!(!sim.stages().remesh && !sim.stages().pressure && !sim.stages().free_surface);
     assert!(sim.stages().solid_stress && sim.stages().body_force);
     assert_eq!(sim.stats().remesh, (0, 0.0), "no time at all in remeshing");
+    assert_eq!(sim.stats().free_surface, (0, 0.0));
     assert_eq!(sim.stats().pressure_updates, 0);
     assert_eq!(sim.stats().stress_updates, sim.steps());
     // The beam sags under its weight.
@@ -79,6 +80,11 @@ fn a_fluid_scene_without_gravity_assembles_no_body_force_and_has_no_solid_stage(
     assert_eq!(sim.stats().pressure_updates, sim.steps());
     // Remeshed once at set-up and once per step after the first.
     assert_eq!(sim.stats().remesh.0, sim.steps());
+    // The free-surface detection is timed at every remeshing, as a part of
+    // it (the stage's timer was once never written).
+    assert_eq!(sim.stats().free_surface.0, sim.stats().remesh.0);
+    assert!(sim.stats().free_surface.1 > 0.0);
+    assert!(sim.stats().free_surface.1 <= sim.stats().remesh.1);
     // A drop in free flight keeps its velocity.
     let mean = sim
         .particles()
@@ -194,6 +200,9 @@ fn rejected_attempts_are_counted_and_timed() {
     scene.settings.max_dt = 0.05;
     scene.settings.courant = 50.0;
     scene.settings.output_interval = None;
+    // The stages include the set-up's first remeshing: the wall time
+    // starts before it.
+    let t0 = std::time::Instant::now();
     let mut sim =
         Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
     let out = StandardOutput::new(
@@ -202,7 +211,6 @@ fn rejected_attempts_are_counted_and_timed() {
         vec![],
         true,
     );
-    let t0 = std::time::Instant::now();
     sim.run(&mut []).unwrap();
     let wall = t0.elapsed().as_secs_f64();
     assert!(sim.rejected() > 0, "the case should reject some attempts");
