@@ -160,7 +160,9 @@ impl Args {
 
     /// A simulation of `scene` with the time scheme, linear solver and mass
     /// correction these arguments choose (`--scheme`, `--picard-tol`,
-    /// `--solver`, `--volume-correction BETA`, 0 to turn it off).
+    /// `--solver`, `--volume-correction BETA`, 0 to turn it off), and the
+    /// largest step and 3D quality floor (`--max-dt`, `--min-quality-3d`)
+    /// when given.
     pub fn simulation<const D: usize>(
         &self,
         scene: crate::Scene<D>,
@@ -181,6 +183,11 @@ impl Args {
             };
         }
         options.memory_budget = self.memory_budget()?;
+        if let Some(q) = self.min_quality_3d()? {
+            options.min_quality_3d = q;
+        }
+        let mut scene = scene;
+        scene.settings.max_dt = self.number("max-dt", scene.settings.max_dt)?;
         let mut sim =
             crate::Simulation::with_options(scene, tessellator, self.step_params()?, options)?;
         sim.set_solver(self.solver()?);
@@ -189,6 +196,20 @@ impl Args {
             sim.add_hook(Box::new(crate::hooks::WallClockLimit::new(limit)));
         }
         Ok(sim)
+    }
+
+    /// The 3D quality floor `--min-quality-3d Q` (`Options::min_quality_3d`,
+    /// in `[0, 0.5)`), if given.
+    pub fn min_quality_3d(&self) -> Result<Option<f64>, ArgsError> {
+        let Some(v) = self.options.get("min-quality-3d") else {
+            return Ok(None);
+        };
+        match v.parse::<f64>() {
+            Ok(q) if (0.0..0.5).contains(&q) => Ok(Some(q)),
+            _ => Err(ArgsError(format!(
+                "--min-quality-3d must be a number in [0, 0.5), got `{v}`"
+            ))),
+        }
     }
 
     /// The memory budget (bytes): `--memory-budget GB`, or 80 % of the
@@ -202,11 +223,14 @@ impl Args {
 
     /// Parses every common option as a run would (`--scheme`,
     /// `--picard-tol`, `--solver`, `--volume-correction`,
-    /// `--memory-budget`, `--max-wall-time`, `--threads`), without running.
+    /// `--memory-budget`, `--max-wall-time`, `--threads`, `--max-dt`,
+    /// `--min-quality-3d`), without running.
     pub fn validate_options(&self) -> Result<(), ArgsError> {
         self.step_params()?;
         self.solver()?;
         self.memory_budget()?;
+        self.min_quality_3d()?;
+        self.number("max-dt", 1.0)?;
         if let Some(v) = self.options.get("volume-correction") {
             match v.parse::<f64>() {
                 Ok(b) if (0.0..=1.0).contains(&b) => {}
@@ -236,7 +260,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -247,7 +271,7 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 8] = [
+const COMMON: [&str; 10] = [
     "scheme",
     "picard-tol",
     "pressure-stabilisation",
@@ -256,6 +280,8 @@ const COMMON: [&str; 8] = [
     "memory-budget",
     "max-wall-time",
     "threads",
+    "max-dt",
+    "min-quality-3d",
 ];
 
 /// The common options, for `--help`.
@@ -275,6 +301,8 @@ Options common to the bundled examples and `pfem run`:
   --volume-correction B fraction of the volume error restored per step, in [0, 1] (default 1)
   --memory-budget GB    refuse scenes estimated above this (default: 80 % of the machine's memory)
   --max-wall-time S     stop the run after S seconds of wall time (outputs are kept)
+  --max-dt S            largest time step (s; default: the scene's)
+  --min-quality-3d Q    3D quality floor of fluid tetrahedra, in [0, 0.5) (default 1e-3)
   --threads N           worker threads (default: one per core)
   --version             print the version
   --help, -h            this help
@@ -316,5 +344,40 @@ mod tests {
         assert!(a.reject_unknown(&[]).is_err());
         assert!(Args::parse(["--spacing", "-1"].map(String::from)).is_err());
         assert!(Args::parse(["--out"].map(String::from)).is_err());
+    }
+
+    /// `--max-dt` and `--min-quality-3d` reach the simulation; bad values
+    /// are refused before it is built.
+    #[test]
+    fn the_largest_step_and_the_quality_floor_are_options() {
+        let scene = || {
+            crate::cases::DamBreak {
+                spacing: 0.05715 / 4.0,
+                ..Default::default()
+            }
+            .scene()
+        };
+        let args = |v: &[&str]| Args::parse(v.iter().map(|s| s.to_string())).unwrap();
+        let a = args(&["--max-dt", "0.0004", "--min-quality-3d", "0.06"]);
+        assert!(a.reject_unknown(&[]).is_ok());
+        assert!(a.validate_options().is_ok());
+        assert_eq!(a.min_quality_3d().unwrap(), Some(0.06));
+        let sim = a
+            .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
+            .unwrap();
+        // Before the first step the clock holds the largest step.
+        assert_eq!(sim.dt(), 0.0004);
+        for bad in [
+            &["--max-dt", "0"][..],
+            &["--max-dt", "nan"],
+            &["--min-quality-3d", "0.5"],
+            &["--min-quality-3d", "-0.1"],
+        ] {
+            let a = args(bad);
+            assert!(a.validate_options().is_err(), "{bad:?}");
+            assert!(a
+                .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
+                .is_err());
+        }
     }
 }
