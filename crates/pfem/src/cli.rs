@@ -118,15 +118,12 @@ impl Args {
             }
         }
         p.picard_tolerance = self.number("picard-tol", p.picard_tolerance)?;
-        if let Some(v) = self.options.get("pressure-stabilisation") {
-            p.pressure_stabilisation = match v.parse::<f64>() {
-                Ok(x) if x >= 0.0 && x.is_finite() => x,
-                _ => {
-                    return Err(ArgsError(format!(
-                        "--pressure-stabilisation must be a number ≥ 0, got `{v}`"
-                    )))
-                }
-            };
+        if let Some(x) = self.bounded(
+            "pressure-stabilisation",
+            |x| x >= 0.0 && x.is_finite(),
+            "a number ≥ 0",
+        )? {
+            p.pressure_stabilisation = x;
         }
         Ok(p)
     }
@@ -172,15 +169,8 @@ impl Args {
         pfem_core::Const<D>: pfem_core::Dim,
     {
         let mut options = crate::Options::default();
-        if let Some(v) = self.options.get("volume-correction") {
-            options.volume_correction = match v.parse::<f64>() {
-                Ok(b) if (0.0..=1.0).contains(&b) => b,
-                _ => {
-                    return Err(Box::new(ArgsError(format!(
-                        "--volume-correction must be a number in [0, 1], got `{v}`"
-                    ))))
-                }
-            };
+        if let Some(b) = self.volume_correction()? {
+            options.volume_correction = b;
         }
         options.memory_budget = self.memory_budget()?;
         if let Some(q) = self.min_quality_3d()? {
@@ -201,14 +191,37 @@ impl Args {
     /// The 3D quality floor `--min-quality-3d Q` (`Options::min_quality_3d`,
     /// in `[0, 0.5)`), if given.
     pub fn min_quality_3d(&self) -> Result<Option<f64>, ArgsError> {
-        let Some(v) = self.options.get("min-quality-3d") else {
+        self.bounded(
+            "min-quality-3d",
+            |q| (0.0..0.5).contains(&q),
+            "a number in [0, 0.5)",
+        )
+    }
+
+    /// The volume correction `--volume-correction BETA`, in `[0, 1]`, if
+    /// given.
+    pub fn volume_correction(&self) -> Result<Option<f64>, ArgsError> {
+        self.bounded(
+            "volume-correction",
+            |b| (0.0..=1.0).contains(&b),
+            "a number in [0, 1]",
+        )
+    }
+
+    /// The number option `--name`, if given, when `ok` accepts it; else
+    /// "--name must be `what`, got …".
+    fn bounded(
+        &self,
+        name: &str,
+        ok: impl Fn(f64) -> bool,
+        what: &str,
+    ) -> Result<Option<f64>, ArgsError> {
+        let Some(v) = self.options.get(name) else {
             return Ok(None);
         };
         match v.parse::<f64>() {
-            Ok(q) if (0.0..0.5).contains(&q) => Ok(Some(q)),
-            _ => Err(ArgsError(format!(
-                "--min-quality-3d must be a number in [0, 0.5), got `{v}`"
-            ))),
+            Ok(x) if ok(x) => Ok(Some(x)),
+            _ => Err(ArgsError(format!("--{name} must be {what}, got `{v}`"))),
         }
     }
 
@@ -231,16 +244,7 @@ impl Args {
         self.memory_budget()?;
         self.min_quality_3d()?;
         self.number("max-dt", 1.0)?;
-        if let Some(v) = self.options.get("volume-correction") {
-            match v.parse::<f64>() {
-                Ok(b) if (0.0..=1.0).contains(&b) => {}
-                _ => {
-                    return Err(ArgsError(format!(
-                        "--volume-correction must be a number in [0, 1], got `{v}`"
-                    )))
-                }
-            }
-        }
+        self.volume_correction()?;
         if let Some(v) = self.options.get("max-wall-time") {
             parse_positive("max-wall-time", v)?;
         }
