@@ -262,6 +262,14 @@ where
     /// Pressure stabilisation factor `α` of `τ` (0: off;
     /// [`Assembler::set_pressure_stabilisation`]).
     stabilisation: f64,
+    /// Quality below which a fluid element is integrated on its geometry
+    /// at `tⁿ` ([`Assembler::set_sliver_quality`]; 0: never).
+    sliver_quality: f64,
+    /// Per element: integrated on its geometry at `tⁿ` in the last
+    /// assembly, and then its signed measure and `V grad W` at the
+    /// iterate, which its volumetric terms use.
+    frozen: Vec<bool>,
+    frozen_w: Vec<(f64, [Vector<D>; MAX_NV])>,
     /// Stabilised split form: `L̃` (CSR over the rows of `C`, laid out as
     /// the nodal patches, so that an element's `elem_slots` index its
     /// values; built with the pattern), the offset `o` of the second row,
@@ -329,6 +337,30 @@ where
             self.split = on;
             self.last_mesh.3 = usize::MAX;
         }
+    }
+
+    /// Slivers (ARCHITECTURE.md deviation 13): a fluid element whose
+    /// quality `measure / R^D` at `tⁿ` (`R` its circumradius; 0.51 for the
+    /// regular tetrahedron, 1.30 for the equilateral triangle) is below
+    /// `q` is integrated on its geometry at `tⁿ` (`F = I`, its gradients,
+    /// measure and unified triple there) instead of the iterate's, so that
+    /// a motion flattening it through zero (which a nearly flat
+    /// tetrahedron's tiny height makes likely) cannot invert the
+    /// assembly. Its volumetric terms (its rows of `G` and its share of
+    /// `M̂`, eq. 56) stay the iterate's, from `V grad W` and the signed `V`,
+    /// which are finite through zero volume (as for closures): the nodal
+    /// volumetric strain rate stays exact for affine motions (the patch
+    /// test) and the water's stiffness sees the volume it conserves. The
+    /// next remeshing replaces the element. `0` (or not finite) turns it
+    /// off. Takes effect at the next [`Assembler::assemble`].
+    pub fn set_sliver_quality(&mut self, q: f64) {
+        self.sliver_quality = if q.is_finite() && q > 0.0 { q } else { 0.0 };
+    }
+
+    /// Whether element `e` was integrated on its geometry at `tⁿ` in the
+    /// last assembly ([`Assembler::set_sliver_quality`]).
+    pub fn is_frozen(&self, e: usize) -> bool {
+        self.frozen.get(e).copied().unwrap_or(false)
     }
 
     /// Whether the nodal volumetric term is kept apart.
@@ -741,11 +773,17 @@ where
                 sigma_hat_zz: 0.0,
             },
         );
+        let mut frozen = std::mem::take(&mut self.frozen);
+        frozen.resize(ne, false);
+        let mut frozen_w = std::mem::take(&mut self.frozen_w);
+        frozen_w.resize(ne, (0.0, [Vector::<D>::zeros(); MAX_NV]));
+        let (elem_fluid, sliver_quality) = (&self.elem_fluid, self.sliver_quality);
         let bad = states
             .par_iter_mut()
             .zip(unified.par_iter_mut())
+            .zip(frozen.par_iter_mut().zip(frozen_w.par_iter_mut()))
             .enumerate()
-            .map(|(e, (st, un))| {
+            .map(|(e, ((st, un), (fr, fw)))| {
                 let mut x = [Point::<D>::zeros(); MAX_NV];
                 let mut xn = [Point::<D>::zeros(); MAX_NV];
                 let mut v = [Vector::<D>::zeros(); MAX_NV];
@@ -754,6 +792,15 @@ where
                     x[a] = input.x[p];
                     xn[a] = input.x_n[p];
                     v[a] = input.v[p];
+                }
+                *fr = sliver_quality > 0.0
+                    && elem_fluid[e]
+                    && crate::kernels::shape_quality::<D>(&xn[..nv]) < sliver_quality;
+                if *fr {
+                    // Its volumetric terms at the iterate (finite through
+                    // inversion), the rest at `tⁿ`.
+                    fw.0 = weighted_shape_gradients::<D>(&x[..nv], &mut fw.1[..nv]);
+                    x = xn;
                 }
                 match element_state::<D>(
                     &x[..nv],
@@ -782,6 +829,8 @@ where
             .flatten();
         self.states = states;
         self.unified = unified;
+        self.frozen = frozen;
+        self.frozen_w = frozen_w;
         // The cut parts at `xⁿ`, once per step (`prepare` clears them):
         // material within the step (the affine map of each element keeps
         // shares and barycentric centroids).
@@ -1200,14 +1249,27 @@ where
                 continue;
             }
             let st = &self.states[e];
+            let frozen = self.frozen.get(e).copied().unwrap_or(false);
             for a in 0..nv {
-                let wv = shape_integral::<D>(&self.cut_of, &self.cut_share, e, a, st.volume);
                 let na = self.elem_sys[e * nv + a] as usize;
+                // A sliver kept in shape (deviation 13): `V grad W` and the
+                // signed `V` of the iterate, as for closures.
+                let (wv, frac) = if frozen {
+                    let frac = shape_integral::<D>(&self.cut_of, &self.cut_share, e, a, 1.0);
+                    (frac * self.frozen_w[e].0, frac)
+                } else {
+                    let wv = shape_integral::<D>(&self.cut_of, &self.cut_share, e, a, st.volume);
+                    (wv, 0.0)
+                };
                 self.vol_hat[na] += wv;
                 self.kappa_hat[na] += wv * self.unified[e].kappa;
                 for b in 0..nv {
                     let slot = self.elem_slots[e * nv * nv + a * nv + b] as usize;
-                    self.w[slot] += st.grads[b] * wv;
+                    self.w[slot] += if frozen {
+                        self.frozen_w[e].1[b] * frac
+                    } else {
+                        st.grads[b] * wv
+                    };
                 }
             }
         }

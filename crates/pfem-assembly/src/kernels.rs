@@ -25,6 +25,22 @@ pub struct ElementState<const D: usize> {
     pub kin: Kinematics<D>,
 }
 
+/// Shape quality `measure / R^D` of a simplex (`R` its circumradius):
+/// 0.51 for the regular tetrahedron, 1.30 for the equilateral triangle,
+/// 0 when flat or degenerate. The measure the alpha shape tests slivers
+/// with.
+pub fn shape_quality<const D: usize>(x: &[Point<D>]) -> f64
+where
+    Const<D>: Dim,
+{
+    let nv = <Const<D> as Dim>::NV;
+    let m = pfem_core::simplex_measure::<D>(&x[..nv]);
+    match pfem_core::circumsphere::<D>(&x[..nv]) {
+        Some((_, r)) if m.is_finite() && m > 0.0 && r > 0.0 => m / r.powi(D as i32),
+        _ => 0.0,
+    }
+}
+
 /// Computes the element's gradients, measures and kinematics: the
 /// incremental deformation gradient `F = ∂x/∂Xⁿ` (eq. 8, Updated Lagrangian
 /// reference `t_n`), `J = det F` (eq. 7) and `D = sym grad_x V` (eqs. 17–18).

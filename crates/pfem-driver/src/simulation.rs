@@ -375,6 +375,12 @@ where
                 value: options.min_quality_3d,
             });
         }
+        if !(0.0..0.5).contains(&params.sliver_quality_3d) {
+            return Err(SceneError::InvalidSetting {
+                setting: "sliver_quality_3d",
+                value: params.sliver_quality_3d,
+            });
+        }
         scene.validate_within(options.memory_budget)?;
         // The scene's pressure stabilisation, unless the program set one.
         let mut params = params;

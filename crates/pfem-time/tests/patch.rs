@@ -97,7 +97,7 @@ where
         let rep = integ
             .advance(t, dt, &mut state, &mut history, &input)
             .unwrap();
-        assert_eq!(rep.rejections, 0);
+        assert_eq!(rep.rejections, 0, "{rep:?}");
         t += rep.dt;
     }
     let vscale = exact.iter().fold(0.0f64, |m, v| m.max(v.norm()));

@@ -125,6 +125,13 @@ impl Args {
         )? {
             p.pressure_stabilisation = x;
         }
+        if let Some(q) = self.bounded(
+            "sliver-quality-3d",
+            |q| (0.0..0.5).contains(&q),
+            "a number in [0, 0.5)",
+        )? {
+            p.sliver_quality_3d = q;
+        }
         Ok(p)
     }
 
@@ -264,7 +271,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -275,7 +282,7 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 10] = [
+const COMMON: [&str; 11] = [
     "scheme",
     "picard-tol",
     "pressure-stabilisation",
@@ -286,6 +293,7 @@ const COMMON: [&str; 10] = [
     "threads",
     "max-dt",
     "min-quality-3d",
+    "sliver-quality-3d",
 ];
 
 /// The common options, for `--help`.
@@ -307,6 +315,7 @@ Options common to the bundled examples and `pfem run`:
   --max-wall-time S     stop the run after S seconds of wall time (outputs are kept)
   --max-dt S            largest time step (s; default: the scene's)
   --min-quality-3d Q    3D quality floor of fluid tetrahedra, in [0, 0.5) (default 1e-3)
+  --sliver-quality-3d Q fluid tetrahedra below this quality keep their start-of-step shape, in [0, 0.5) (default 0.06; 0: off)
   --threads N           worker threads (default: one per core)
   --version             print the version
   --help, -h            this help
@@ -350,7 +359,7 @@ mod tests {
         assert!(Args::parse(["--out"].map(String::from)).is_err());
     }
 
-    /// `--max-dt` and `--min-quality-3d` reach the simulation; bad values
+    /// `--max-dt`, `--min-quality-3d` and `--sliver-quality-3d` reach the simulation; bad values
     /// are refused before it is built.
     #[test]
     fn the_largest_step_and_the_quality_floor_are_options() {
@@ -362,10 +371,18 @@ mod tests {
             .scene()
         };
         let args = |v: &[&str]| Args::parse(v.iter().map(|s| s.to_string())).unwrap();
-        let a = args(&["--max-dt", "0.0004", "--min-quality-3d", "0.06"]);
+        let a = args(&[
+            "--max-dt",
+            "0.0004",
+            "--min-quality-3d",
+            "0.06",
+            "--sliver-quality-3d",
+            "0.01",
+        ]);
         assert!(a.reject_unknown(&[]).is_ok());
         assert!(a.validate_options().is_ok());
         assert_eq!(a.min_quality_3d().unwrap(), Some(0.06));
+        assert_eq!(a.step_params().unwrap().sliver_quality_3d, 0.01);
         let sim = a
             .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
             .unwrap();
@@ -376,6 +393,8 @@ mod tests {
             &["--max-dt", "nan"],
             &["--min-quality-3d", "0.5"],
             &["--min-quality-3d", "-0.1"],
+            &["--sliver-quality-3d", "0.5"],
+            &["--sliver-quality-3d", "-1"],
         ] {
             let a = args(bad);
             assert!(a.validate_options().is_err(), "{bad:?}");

@@ -1,0 +1,119 @@
+//! Slivers keep their start-of-step shape (`Assembler::set_sliver_quality`,
+//! ARCHITECTURE.md deviation 13): a nearly flat fluid tetrahedron whose
+//! iterate passes through zero volume is assembled on its geometry at `tⁿ`
+//! instead of failing the assembly, except for its volumetric terms, which
+//! follow the iterate through the inversion, so that the nodal volumetric
+//! strain rate of a uniform expansion stays exact; a well-shaped element
+//! follows the iterate.
+
+use pfem_assembly::{
+    Assembler, AssemblyError, AssemblyInput, Constraints, Inertia, StepMesh, VolumetricTreatment,
+};
+use pfem_constitutive::{History, Material, Newtonian};
+use pfem_core::{Point, Vector};
+
+/// Node 2 lifts the square 0-1-2-3 by `EPS`: tetrahedron 0 (0, 1, 3, 2)
+/// is a sliver (quality about 0.005); tetrahedra 1 (0, 3, 1, 4) below and
+/// 2 (1, 2, 3, 5) above are well shaped.
+const EPS: f64 = 0.02;
+
+fn start() -> Vec<Point<3>> {
+    vec![
+        Point::<3>::new(0.0, 0.0, 0.0),
+        Point::<3>::new(1.0, 0.0, 0.0),
+        Point::<3>::new(1.0, 1.0, EPS),
+        Point::<3>::new(0.0, 1.0, 0.0),
+        Point::<3>::new(0.3, 0.3, -0.9),
+        Point::<3>::new(0.7, 0.7, 0.9),
+    ]
+}
+
+const TETS: [u32; 12] = [0, 1, 3, 2, 0, 3, 1, 4, 1, 2, 3, 5];
+
+/// Assembles at the iterate `x` (start `xⁿ` = [`start`]) with the sliver
+/// threshold `q`.
+fn assemble(x: &[Point<3>], q: f64) -> (Assembler<3>, Result<(), AssemblyError>) {
+    let xn = start();
+    let n = xn.len();
+    let materials: Vec<Box<dyn Material<3>>> = vec![Box::new(Newtonian::water())];
+    let dt = 1e-3;
+    let mut asm = Assembler::<3>::new(VolumetricTreatment::NodalAveraged);
+    asm.set_sliver_quality(q);
+    asm.prepare(
+        n,
+        StepMesh {
+            elements: &TETS,
+            element_material: &[0, 0, 0],
+            closures: &[],
+            surface_cuts: Default::default(),
+        },
+        &materials,
+    )
+    .unwrap();
+    let v: Vec<Vector<3>> = x.iter().zip(&xn).map(|(a, b)| (a - b) / dt).collect();
+    let r = asm
+        .assemble(&AssemblyInput {
+            x,
+            x_n: &xn,
+            v: &v,
+            v_n: &vec![Vector::<3>::zeros(); n],
+            a_n: &vec![Vector::<3>::zeros(); n],
+            pressure_n: &vec![0.0; n],
+            element_history: &[History::default(); 3],
+            materials: &materials,
+            constraints: &Constraints::<3>::free(n),
+            body_force: Some(Vector::<3>::new(0.0, 0.0, -9.81)),
+            dt,
+            inertia: Inertia {
+                mass_factor: 2.0 / dt,
+                acceleration_factor: 1.0,
+                displacement_weight: 0.5 * dt,
+            },
+        })
+        .map(|_| ());
+    (asm, r)
+}
+
+#[test]
+fn a_sliver_that_inverts_within_the_step_keeps_its_start_shape() {
+    let quality = |t: &[u32]| {
+        pfem_assembly::kernels::shape_quality::<3>(
+            &t.iter().map(|&i| start()[i as usize]).collect::<Vec<_>>(),
+        )
+    };
+    let q = quality(&TETS[..4]);
+    assert!(q > 0.0 && q < 0.01, "sliver quality {q}");
+    for t in TETS[4..].chunks(4) {
+        assert!(quality(t) > 0.1, "{t:?}: quality {}", quality(t));
+    }
+    // The iterate pushes node 2 through the plane of 0, 1, 3 and moves
+    // node 4 a little.
+    let mut x = start();
+    x[2].z = -EPS;
+    x[4].z -= 0.01;
+    // Without the threshold the sliver inverts the assembly.
+    let (_, off) = assemble(&x, 0.0);
+    assert!(matches!(
+        off,
+        Err(AssemblyError::InvertedElement { element: 0, .. })
+    ));
+    // With it, only the sliver keeps its start shape.
+    let (asm, on) = assemble(&x, 0.06);
+    on.unwrap();
+    assert!(asm.is_frozen(0) && !asm.is_frozen(1) && !asm.is_frozen(2));
+    // Its volumetric terms are the iterate's: a uniform expansion
+    // `v = x` has the nodal volumetric strain rate 3 at every node, node 2
+    // (whose patch holds the inverted sliver) included.
+    let mut rates = Vec::new();
+    let v: Vec<Vector<3>> = x.clone();
+    asm.nodal_volumetric_rates(&v, &mut rates);
+    assert_eq!(rates.len(), 6);
+    for r in &rates {
+        assert!(
+            (r.rate - 3.0).abs() < 1e-12,
+            "node {}: {}",
+            r.particle,
+            r.rate
+        );
+    }
+}
