@@ -207,7 +207,10 @@ pub struct Options {
     /// column's rejected attempts (142 of 450 steps to 0.3 s → 0 of 144)
     /// but changes the column-on-cylinder's top displacement (50.96
     /// against 61.15 mm with 0.4 ms steps, and more scatter over step
-    /// sizes), so it is not the default. In `[0, 0.5)`.
+    /// sizes), so it is not the default; keeping those tetrahedra in
+    /// their start-of-step shape instead
+    /// (`pfem_time::StepParams::sliver_quality_3d`, the default) removes
+    /// the rejections without leaving them out. In `[0, 0.5)`.
     pub min_quality_3d: f64,
     /// Cut the dry bridges against free solids (no clamp, no weld) at the
     /// water line instead of keeping or dropping them whole (deviation 7;
