@@ -219,13 +219,10 @@ const QUASI_2D_T: f64 = 3.2;
 /// example's default resolution (a/20): the dam break as a slab one
 /// spacing deep with slip side planes follows the 2D front to
 /// T = t √(2g/a) = 3.2, RMS of the relative front difference below 5 %.
-/// Measured 2.76 % (docs/benchmarks.md); about 100 s in release on 2 cores.
-///
-/// ```text
-/// cargo test --release --test three_d -- --ignored --nocapture quasi_2d
-/// ```
+/// Measured 2.02 % (2.76 % before ARCHITECTURE.md deviation 13;
+/// docs/benchmarks.md); about 20 s in release on 2 cores (about 100 s
+/// before deviation 13, when it was an ignored test).
 #[test]
-#[ignore = "long (about 100 s in release): cargo test --release --test three_d -- --ignored quasi_2d"]
 fn quasi_2d_dam_break_follows_the_2d_front() {
     let (_, _, rel) = dam_break_2d_vs_slab(QUASI_2D_T / (2.0 * G / 0.05715f64).sqrt(), 20.0);
     assert!(rel < 0.05, "fronts differ by {:.2}% (RMS)", 100.0 * rel);
