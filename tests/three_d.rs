@@ -357,27 +357,22 @@ fn poor_tetrahedra_do_not_reject_attempts_of_the_3d_water_column() {
         assert!((front / f - 1.0).abs() < 0.03, "{front} vs {f}");
     }
     // The options are checked.
-    let case = || pfem::cases3d::WaterColumn3d::default().scene();
-    let bad = Options {
+    let bad_floor = Options {
         min_quality_3d: 0.6,
         ..Options::default()
     };
-    assert!(Simulation::with_options(
-        case(),
-        Box::new(Delaunay3::default()),
-        StepParams::default(),
-        bad
-    )
-    .is_err());
-    let bad = StepParams {
+    let bad_sliver = StepParams {
         sliver_quality_3d: 0.5,
         ..StepParams::default()
     };
-    assert!(Simulation::with_options(
-        case(),
-        Box::new(Delaunay3::default()),
-        bad,
-        Options::default()
-    )
-    .is_err());
+    for (params, options) in [
+        (StepParams::default(), bad_floor),
+        (bad_sliver, Options::default()),
+    ] {
+        let scene = pfem::cases3d::WaterColumn3d::default().scene();
+        assert!(
+            Simulation::with_options(scene, Box::new(Delaunay3::default()), params, options)
+                .is_err()
+        );
+    }
 }

@@ -265,9 +265,10 @@ where
     /// Quality below which a fluid element is integrated on its geometry
     /// at `tⁿ` ([`Assembler::set_sliver_quality`]; 0: never).
     sliver_quality: f64,
-    /// Per element: integrated on its geometry at `tⁿ` in the last
-    /// assembly, and then its signed measure and `V grad W` at the
-    /// iterate, which its volumetric terms use.
+    /// Per element: integrated on its geometry at `tⁿ`, decided at the
+    /// step's first assembly (`prepare` and `set_sliver_quality` clear
+    /// it), and then its signed measure and `V grad W` at the iterate,
+    /// which its volumetric terms use.
     frozen: Vec<bool>,
     frozen_w: Vec<(f64, [Vector<D>; MAX_NV])>,
     /// Stabilised split form: `L̃` (CSR over the rows of `C`, laid out as
@@ -354,7 +355,11 @@ where
     /// next remeshing replaces the element. `0` (or not finite) turns it
     /// off. Takes effect at the next [`Assembler::assemble`].
     pub fn set_sliver_quality(&mut self, q: f64) {
-        self.sliver_quality = if q.is_finite() && q > 0.0 { q } else { 0.0 };
+        let q = if q.is_finite() && q > 0.0 { q } else { 0.0 };
+        if q != self.sliver_quality {
+            self.sliver_quality = q;
+            self.frozen.clear();
+        }
     }
 
     /// Whether element `e` was integrated on its geometry at `tⁿ` in the
@@ -439,6 +444,9 @@ where
         materials: &[Box<dyn Material<D>>],
     ) -> Result<(), AssemblyError> {
         self.work.prepares += 1;
+        // Which elements are slivers depends on `xⁿ` only: decided again
+        // at the first assembly of this step.
+        self.frozen.clear();
         self.set_cuts(
             mesh.elements.len() / <Const<D> as Dim>::NV,
             mesh.surface_cuts,
@@ -774,6 +782,7 @@ where
             },
         );
         let mut frozen = std::mem::take(&mut self.frozen);
+        let decide = frozen.len() != ne;
         frozen.resize(ne, false);
         let mut frozen_w = std::mem::take(&mut self.frozen_w);
         frozen_w.resize(ne, (0.0, [Vector::<D>::zeros(); MAX_NV]));
@@ -793,9 +802,11 @@ where
                     xn[a] = input.x_n[p];
                     v[a] = input.v[p];
                 }
-                *fr = sliver_quality > 0.0
-                    && elem_fluid[e]
-                    && crate::kernels::shape_quality::<D>(&xn[..nv]) < sliver_quality;
+                if decide {
+                    *fr = sliver_quality > 0.0
+                        && elem_fluid[e]
+                        && crate::kernels::shape_quality::<D>(&xn[..nv]) < sliver_quality;
+                }
                 if *fr {
                     // Its volumetric terms at the iterate (finite through
                     // inversion), the rest at `tⁿ`.
