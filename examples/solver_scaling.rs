@@ -10,7 +10,10 @@
 //!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] [--end-time T]
 //! ```
 //! `amg` is the block solver with multigrid on the pressure
-//! (`PressureSolve::Multigrid`); `--stabilisation A` runs every solver on
+//! (`PressureSolve::Multigrid`); `petsc`, with `--features petsc`, is
+//! `pfem::petsc::PetscSolver` (options in `PFEM_PETSC_OPTIONS`), and
+//! `cholmod` the whole system factored by CHOLMOD through PETSc, beside
+//! `direct` (faer's Cholesky of the same matrix); `--stabilisation A` runs every solver on
 //! the stabilised system (`StepParams::pressure_stabilisation`, default 0);
 //! `--bulk K` sets the 2D water's bulk modulus (Pa, default 2.2e9).
 //! `--sizes` are spacings as fractions of the column width (a/n); defaults
@@ -65,7 +68,23 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
             b.pressure = pfem::assembly::PressureSolve::Multigrid;
             Box::new(b)
         }
-        other => return Err(format!("unknown solver {other} (direct, block, amg)").into()),
+        #[cfg(feature = "petsc")]
+        "petsc" => Box::new(pfem::petsc::PetscSolver::default()),
+        // The whole system by CHOLMOD (through PETSc), beside `direct`
+        // (faer's Cholesky of the same matrix).
+        #[cfg(feature = "petsc")]
+        "cholmod" => {
+            let mut p =
+                pfem::petsc::PetscSolver::with_options("-pfem_pc_factor_mat_solver_type cholmod");
+            p.split = false;
+            Box::new(p)
+        }
+        other => {
+            return Err(format!(
+                "unknown solver {other} (direct, block, amg; petsc, cholmod with --features petsc)"
+            )
+            .into())
+        }
     })
 }
 

@@ -154,9 +154,18 @@ impl Args {
                 b.pressure = pfem_assembly::PressureSolve::Multigrid;
                 Box::new(b)
             }
+            #[cfg(feature = "petsc")]
+            Some("petsc") => Box::new(pfem_petsc::PetscSolver::default()),
+            #[cfg(not(feature = "petsc"))]
+            Some("petsc") => {
+                return Err(ArgsError(
+                    "--solver petsc needs pfem built with the `petsc` feature (and PETSc installed)"
+                        .into(),
+                ))
+            }
             Some(other) => {
                 return Err(ArgsError(format!(
-                    "--solver must be block, block-amg, direct, lu, cholesky or cg, got `{other}`"
+                    "--solver must be block, block-amg, direct, lu, cholesky, cg or petsc, got `{other}`"
                 )))
             }
         })
@@ -307,7 +316,9 @@ Options common to the bundled examples and `pfem run`:
   --no-vtu              no VTU frames
   --scheme S            bossak (default), newmark or euler
   --picard-tol X        Picard tolerance (default 1e-6)
-  --solver S            block (default), block-amg (multigrid), direct, lu, cholesky or cg
+  --solver S            block (default), block-amg (multigrid), direct, lu, cholesky, cg
+                        or petsc (built with the `petsc` feature; PETSc options in
+                        PFEM_PETSC_OPTIONS, prefix -pfem_)
   --pressure-stabilisation A
                         pressure stabilisation factor of τ (default 0: off)
   --volume-correction B fraction of the volume error restored per step, in [0, 1] (default 1)
@@ -357,6 +368,25 @@ mod tests {
         assert!(a.reject_unknown(&[]).is_err());
         assert!(Args::parse(["--spacing", "-1"].map(String::from)).is_err());
         assert!(Args::parse(["--out"].map(String::from)).is_err());
+    }
+
+    /// `--solver petsc` builds PETSc's solver with the `petsc` feature and
+    /// says what is missing without it.
+    #[test]
+    fn the_petsc_solver_needs_its_feature() {
+        let a = Args::parse(["--solver", "petsc"].map(String::from)).unwrap();
+        match a.solver() {
+            Ok(s) => {
+                assert!(cfg!(feature = "petsc"));
+                assert_eq!(s.name(), "petsc");
+            }
+            Err(e) => {
+                assert!(!cfg!(feature = "petsc"));
+                assert!(e.to_string().contains("`petsc` feature"), "{e}");
+            }
+        }
+        let bad = Args::parse(["--solver", "pets"].map(String::from)).unwrap();
+        assert!(bad.solver().is_err());
     }
 
     /// `--max-dt`, `--min-quality-3d` and `--sliver-quality-3d` reach the simulation; bad values

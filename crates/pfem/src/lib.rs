@@ -55,6 +55,9 @@ pub use pfem_driver as driver;
 pub use pfem_geometry as geometry;
 pub use pfem_io as io;
 pub use pfem_io::Loads;
+/// The PETSc backend (`petsc` feature): [`petsc::PetscSolver`].
+#[cfg(feature = "petsc")]
+pub use pfem_petsc as petsc;
 pub use pfem_scene::SceneError;
 pub use pfem_time as time;
 pub use scene::{Body, Clamp, Geometry, RunSettings, Scene, WallMotion};
