@@ -375,13 +375,11 @@ mod tests {
     #[test]
     fn the_petsc_solver_needs_its_feature() {
         let a = Args::parse(["--solver", "petsc"].map(String::from)).unwrap();
+        let built = cfg!(feature = "petsc");
         match a.solver() {
-            Ok(s) => {
-                assert!(cfg!(feature = "petsc"));
-                assert_eq!(s.name(), "petsc");
-            }
+            Ok(s) => assert_eq!((built, s.name()), (true, "petsc")),
             Err(e) => {
-                assert!(!cfg!(feature = "petsc"));
+                assert!(!built);
                 assert!(e.to_string().contains("`petsc` feature"), "{e}");
             }
         }
