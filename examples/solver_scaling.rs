@@ -9,7 +9,9 @@
 //!     [--case dam2d|column3d|all] [--sizes 20,40,80] [--steps 10] \
 //!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] [--end-time T]
 //! ```
-//! `amg` is the block solver with multigrid on the pressure
+//! `block-reuse` keeps the block solver's set-up across a step's Picard
+//! iterates (`BlockSolver::reuse_setup`); `amg` is the block solver with
+//! multigrid on the pressure
 //! (`PressureSolve::Multigrid`); `petsc`, with `--features petsc`, is
 //! `pfem::petsc::PetscSolver` (options in `PFEM_PETSC_OPTIONS`), and
 //! `cholmod` the whole system factored by CHOLMOD through PETSc, beside
@@ -63,6 +65,11 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
     Ok(match name {
         "direct" => Box::new(pfem::assembly::DirectSolver::default()),
         "block" => Box::new(pfem::assembly::BlockSolver::default()),
+        "block-reuse" => {
+            let mut b = pfem::assembly::BlockSolver::default();
+            b.reuse_setup = true;
+            Box::new(b)
+        }
         "amg" => {
             let mut b = pfem::assembly::BlockSolver::default();
             b.pressure = pfem::assembly::PressureSolve::Multigrid;
@@ -81,7 +88,7 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
         }
         other => {
             return Err(format!(
-                "unknown solver {other} (direct, block, amg; petsc, cholmod with --features petsc)"
+                "unknown solver {other} (direct, block, block-reuse, amg; petsc, cholmod with --features petsc)"
             )
             .into())
         }

@@ -734,31 +734,6 @@ impl BlockSolver {
             });
         }
         let inv: Vec<f64> = diag.iter().map(|v| 1.0 / v).collect();
-        // Ŝ = I + C Â⁻¹ Cᵀ.
-        let ct = c.transpose();
-        let mut cd = c.clone();
-        for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
-            *v *= inv[j];
-        }
-        let mut s = add_identity(&cd.matmul(&ct));
-        if let Some(st) = sys.stabilisation {
-            // Ŝ = I + L̃ + C Â⁻¹ Cᵀ.
-            let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(s.nnz() + st.l_idx.len());
-            for r in 0..s.nrows {
-                for p in s.ptr[r]..s.ptr[r + 1] {
-                    t.push((r, s.idx[p], s.val[p]));
-                }
-                for p in st.l_ptr[r]..st.l_ptr[r + 1] {
-                    t.push((r, st.l_idx[p], st.l_val[p]));
-                }
-            }
-            s = Csr::try_from_triplets(s.nrows, s.ncols, &t).map_err(|e| {
-                SolveError::Factorization {
-                    solver: NAME,
-                    detail: format!("pressure matrix: {e}"),
-                }
-            })?;
-        }
         let prec = match self.pressure {
             PressureSolve::Cholesky => {
                 // The factor of the last set-up gives its storage and, for
@@ -781,6 +756,33 @@ impl BlockSolver {
                 Prec::Woodbury(Box::new(w))
             }
             PressureSolve::Multigrid => {
+                // Ŝ = I + C Â⁻¹ Cᵀ (the Cholesky path forms its own, with
+                // the stiff dofs left out, in `Woodbury::new`).
+                let ct = c.transpose();
+                let mut cd = c.clone();
+                for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
+                    *v *= inv[j];
+                }
+                let mut s = add_identity(&cd.matmul(&ct));
+                if let Some(st) = sys.stabilisation {
+                    // Ŝ = I + L̃ + C Â⁻¹ Cᵀ.
+                    let mut t: Vec<(usize, usize, f64)> =
+                        Vec::with_capacity(s.nnz() + st.l_idx.len());
+                    for r in 0..s.nrows {
+                        for p in s.ptr[r]..s.ptr[r + 1] {
+                            t.push((r, s.idx[p], s.val[p]));
+                        }
+                        for p in st.l_ptr[r]..st.l_ptr[r + 1] {
+                            t.push((r, st.l_idx[p], st.l_val[p]));
+                        }
+                    }
+                    s = Csr::try_from_triplets(s.nrows, s.ncols, &t).map_err(|e| {
+                        SolveError::Factorization {
+                            solver: NAME,
+                            detail: format!("pressure matrix: {e}"),
+                        }
+                    })?;
+                }
                 let amg_err = |what: &str, e: crate::amg::AmgError| SolveError::Factorization {
                     solver: NAME,
                     detail: format!("{what} multigrid: {e}"),
