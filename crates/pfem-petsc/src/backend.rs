@@ -17,7 +17,7 @@ const NAME: &str = "petsc";
 /// solver's own options ([`PetscSolver::with_options`],
 /// `PFEM_PETSC_OPTIONS`), which override both.
 pub const DEFAULT_OPTIONS: &str = "-pfem_ksp_type fgmres -pfem_ksp_rtol 1e-10 \
--pfem_ksp_atol 1e-300 -pfem_ksp_max_it 500 -pfem_ksp_gmres_restart 100 \
+-pfem_ksp_atol 1e-300 -pfem_ksp_divtol 1e30 -pfem_ksp_max_it 500 -pfem_ksp_gmres_restart 100 \
 -pfem_pc_fieldsplit_type schur -pfem_pc_fieldsplit_schur_fact_type full \
 -pfem_pc_fieldsplit_schur_precondition selfp \
 -pfem_fieldsplit_v_ksp_type preonly -pfem_fieldsplit_p_ksp_type preonly";
@@ -246,7 +246,10 @@ pub struct PetscSolver {
     pub refinements: usize,
     stats: PetscStats,
     work: SolverWork,
-    last_q: Vec<f64>,
+    /// The last solve's `q` and the pattern generation it belongs to: the
+    /// next Picard iterate's initial guess (a `q` of another mesh would be
+    /// a guess far worse than none).
+    last_q: (u64, Vec<f64>),
 }
 
 impl Default for PetscSolver {
@@ -271,7 +274,7 @@ impl PetscSolver {
             dominance_limit: 0.5,
             stats: PetscStats::default(),
             work: SolverWork::default(),
-            last_q: Vec::new(),
+            last_q: (0, Vec::new()),
         }
     }
 
@@ -407,7 +410,7 @@ impl LinearSolver for PetscSolver {
     fn solve_split(
         &mut self,
         sys: &SplitSystem<'_>,
-        _generation: u64,
+        generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
         if let Some(i) = sys.rhs.iter().position(|v| !v.is_finite()) {
@@ -429,8 +432,8 @@ impl LinearSolver for PetscSolver {
         // Warm start: this iterate's V, and the last q of the same size
         // (the stabilised system's q is not C V) or else C V.
         let mut y = x.to_vec();
-        if sys.stabilisation.is_some() && self.last_q.len() == m {
-            y.extend_from_slice(&self.last_q);
+        if sys.stabilisation.is_some() && self.last_q.0 == generation && self.last_q.1.len() == m {
+            y.extend_from_slice(&self.last_q.1);
         } else {
             y.extend(c_times(sys, x));
         }
@@ -495,8 +498,9 @@ impl LinearSolver for PetscSolver {
             );
         }
         x.copy_from_slice(&y[..n]);
-        self.last_q.clear();
-        self.last_q.extend_from_slice(&y[n..]);
+        self.last_q.0 = generation;
+        self.last_q.1.clear();
+        self.last_q.1.extend_from_slice(&y[n..]);
         Ok(SolveReport {
             residual,
             iterations: out.iterations,
