@@ -291,7 +291,7 @@ impl PetscSolver {
     /// - pressure: with the stabilisation, hypre's BoomerAMG (GAMG when
     ///   PETSc has no hypre); without it, PETSc's sparse Cholesky of the
     ///   Schur approximation, since the paper's equal-order pressure has
-    ///   spurious modes that no aggregation captures (211–309 KSP
+    ///   spurious modes that no aggregation captures (about 200–300 KSP
     ///   iterations per solve with either multigrid).
     pub fn blocks(&self, sys: &SplitSystem<'_>) -> String {
         let a = sys.a_v;
