@@ -733,7 +733,6 @@ impl BlockSolver {
                 detail: format!("velocity block has diagonal {} at dof {i}", diag[i]),
             });
         }
-        let inv: Vec<f64> = diag.iter().map(|v| 1.0 / v).collect();
         let prec = match self.pressure {
             PressureSolve::Cholesky => {
                 // The factor of the last set-up gives its storage and, for
@@ -756,6 +755,7 @@ impl BlockSolver {
                 Prec::Woodbury(Box::new(w))
             }
             PressureSolve::Multigrid => {
+                let inv: Vec<f64> = diag.iter().map(|v| 1.0 / v).collect();
                 // Ŝ = I + C Â⁻¹ Cᵀ (the Cholesky path forms its own, with
                 // the stiff dofs left out, in `Woodbury::new`).
                 let ct = c.transpose();

@@ -270,7 +270,10 @@ fn spmv_sub(a: SparseColMatRef<'_, usize, f64>, x: &[f64], r: &mut [f64]) {
     }
 }
 
-pub(crate) fn check_finite(b: &[f64]) -> Result<(), SolveError> {
+/// `Ok` when every entry of `b` is finite, else [`SolveError::NonFinite`]
+/// with the first offending index: the check every solver makes of its
+/// right-hand side.
+pub fn check_finite(b: &[f64]) -> Result<(), SolveError> {
     match b.iter().position(|v| !v.is_finite()) {
         Some(i) => Err(SolveError::NonFinite { index: i }),
         None => Ok(()),

@@ -4,7 +4,7 @@ use std::ffi::{c_char, c_int, CStr, CString};
 use std::sync::Mutex;
 
 use faer::sparse::SparseColMatRef;
-use pfem_assembly::solver::relative_residual;
+use pfem_assembly::solver::{check_finite, relative_residual};
 use pfem_assembly::{LinearSolver, SolveError, SolveReport, SolverWork, SplitSystem};
 
 const NAME: &str = "petsc";
@@ -372,9 +372,7 @@ impl LinearSolver for PetscSolver {
         b: &[f64],
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
-        if let Some(i) = b.iter().position(|v| !v.is_finite()) {
-            return Err(SolveError::NonFinite { index: i });
-        }
+        check_finite(b)?;
         let fail = |detail: String| SolveError::Factorization {
             solver: NAME,
             detail,
@@ -413,9 +411,7 @@ impl LinearSolver for PetscSolver {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
-        if let Some(i) = sys.rhs.iter().position(|v| !v.is_finite()) {
-            return Err(SolveError::NonFinite { index: i });
-        }
+        check_finite(sys.rhs)?;
         let n = sys.a_v.nrows();
         let m = sys.c_rows();
         // K = [A_v Cᵀ; C −(I + L̃)] (symmetric, both triangles) and [f; o].
@@ -442,9 +438,11 @@ impl LinearSolver for PetscSolver {
         let run = |y: &mut Vec<f64>, stats: &mut PetscStats| -> Result<(f64, Outcome), String> {
             let mut ksp = Ksp::new(&ptr, &idx, &val, n, sys.block_size, &options)?;
             let mut out = ksp.solve(&b_neg, y, true)?;
-            let mut residual = measure(sys, k, &b, y);
+            // r: the residual of the current y, kept as the next
+            // correction's right-hand side.
             let mut r = vec![0.0; n + m];
             let mut d = vec![0.0; n + m];
+            let mut residual = residual_into(sys, k, &b, y, &mut r);
             for _ in 0..self.refinements {
                 if residual <= self.target || out.reason < 0 {
                     break;
@@ -452,7 +450,6 @@ impl LinearSolver for PetscSolver {
                 // The correction's right-hand side: the eliminated residual
                 // with a zero second row (eliminating gives (A_v + CᵀC) δV
                 // = r), or the saddle-point residual of K' when stabilised.
-                residual_of(sys, k, &b, y, &mut r);
                 r[n..].iter_mut().for_each(|v| *v = -*v);
                 let more = ksp.solve(&r, &mut d, false)?;
                 out.iterations += more.iterations;
@@ -460,7 +457,7 @@ impl LinearSolver for PetscSolver {
                 let before = y.clone();
                 y.iter_mut().zip(&d).for_each(|(y, d)| *y += d);
                 stats.refinements += 1;
-                let new = measure(sys, k, &b, y);
+                let new = residual_into(sys, k, &b, y, &mut r);
                 if new.is_nan() || new >= residual {
                     // At the floor that round-off allows: keep the better.
                     y.copy_from_slice(&before);
@@ -508,37 +505,20 @@ impl LinearSolver for PetscSolver {
     }
 }
 
-/// The residual that matters for `y = [V; q]`: of the eliminated system,
-/// `‖f − (A_v + Cᵀ C) V‖ / ‖f‖`, for the paper's pressure (`q` is
-/// discarded); of the saddle-point system `K y = b` for the stabilised one
+/// The residual that matters for `y = [V; q]`, written to `r`, and its
+/// relative norm: of the eliminated system, `r = [f − (A_v + Cᵀ C) V; 0]`
+/// over `‖f‖`, for the paper's pressure (`q` is discarded); of the
+/// saddle-point system, `r = b − K y` over `‖b‖`, for the stabilised one
 /// (which has no sparse eliminated form).
-fn measure(sys: &SplitSystem<'_>, k: SparseColMatRef<'_, usize, f64>, b: &[f64], y: &[f64]) -> f64 {
-    let mut r = vec![0.0; y.len()];
-    residual_of(sys, k, b, y, &mut r);
-    let num = r.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let den = if sys.stabilisation.is_none() {
-        sys.rhs.iter().map(|f| f * f).sum::<f64>().sqrt()
-    } else {
-        b.iter().map(|f| f * f).sum::<f64>().sqrt()
-    };
-    if den > 0.0 {
-        num / den
-    } else {
-        num
-    }
-}
-
-/// `r = [f − (A_v + CᵀC) V; 0]` (paper's pressure) or `r = b − K y`
-/// (stabilised).
-fn residual_of(
+fn residual_into(
     sys: &SplitSystem<'_>,
     k: SparseColMatRef<'_, usize, f64>,
     b: &[f64],
     y: &[f64],
     r: &mut [f64],
-) {
+) -> f64 {
     let n = sys.a_v.nrows();
-    if sys.stabilisation.is_none() {
+    let den = if sys.stabilisation.is_none() {
         let mut scratch = Vec::new();
         sys.apply(&y[..n], &mut r[..n], &mut scratch);
         r[..n]
@@ -546,7 +526,15 @@ fn residual_of(
             .zip(sys.rhs)
             .for_each(|(r, f)| *r = f - *r);
         r[n..].iter_mut().for_each(|v| *v = 0.0);
+        sys.rhs.iter().map(|f| f * f).sum::<f64>().sqrt()
     } else {
         pfem_assembly::solver::residual(k, b, y, r);
+        b.iter().map(|f| f * f).sum::<f64>().sqrt()
+    };
+    let num = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if den > 0.0 {
+        num / den
+    } else {
+        num
     }
 }
