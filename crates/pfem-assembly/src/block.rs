@@ -127,6 +127,9 @@ pub struct BlockSolver {
     /// step).
     pub stabilised_reuse: bool,
     setup: Option<Setup>,
+    /// The pattern of `Ŝ_F = I + C Â⁻¹ Cᵀ` for the current mesh, so that
+    /// each Picard iterate only refills its values.
+    product: Option<SchurProduct>,
     /// The factor of the stabilised saddle-point system
     /// ([`solve_saddle`]), kept for its symbolic analysis.
     saddle: QuasiDefinite,
@@ -469,17 +472,34 @@ struct Woodbury {
 }
 
 impl Woodbury {
+    /// The set-up from the split system itself: `A_v` is read in its CSC
+    /// form (no CSR copy), and `Ŝ_F` is refilled on `product`'s pattern,
+    /// which is built once per mesh `generation`.
     fn new(
-        a: &Csr,
-        c: &Csr,
-        block: usize,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+        product: &mut Option<SchurProduct>,
         limit: f64,
         factor: QuasiDefinite,
         work: &mut SolverWork,
     ) -> Result<(Self, usize), SolveError> {
-        let n = a.nrows;
-        let m = c.nrows;
-        let diag = a.diagonal();
+        let a = sys.a_v;
+        let n = a.nrows();
+        let m = sys.c_rows();
+        // Diagonal and off-diagonal weight of each row. `A_v`'s columns are
+        // visited in increasing order, so each row's sum runs over its
+        // columns in increasing order.
+        let mut diag = vec![0.0; n];
+        let mut off = vec![0.0; n];
+        for j in 0..a.ncols() {
+            for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                if i == j {
+                    diag[j] += v;
+                } else {
+                    off[i] += v.abs();
+                }
+            }
+        }
         if let Some(i) = diag.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
             return Err(SolveError::Factorization {
                 solver: NAME,
@@ -488,10 +508,10 @@ impl Woodbury {
         }
         // Stiff nodes: a row whose off-diagonal weight passes the limit
         // makes its node's dofs stiff.
-        let block = block.max(1);
+        let block = sys.block_size.max(1);
         let mut stiff_node = vec![false; n.div_ceil(block)];
         for i in 0..n {
-            if off_diagonal(a, i) > limit * diag[i] {
+            if off[i] > limit * diag[i] {
                 stiff_node[i / block] = true;
             }
         }
@@ -507,27 +527,39 @@ impl Woodbury {
         let inv: Vec<f64> = (0..n)
             .map(|i| if pos[i] == NONE { 1.0 / diag[i] } else { 0.0 })
             .collect();
-        let ct = c.transpose();
-        // Ŝ_F = I + C_F Â_F⁻¹ C_Fᵀ (the S columns weigh 0 in `inv`).
-        let mut cd = c.clone();
-        for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
-            *v *= inv[j];
+        let c = Csr {
+            nrows: m,
+            ncols: n,
+            ptr: sys.c_ptr.to_vec(),
+            idx: sys.c_idx.to_vec(),
+            val: sys.c_val.to_vec(),
+        };
+        if !product.as_ref().is_some_and(|p| p.fits(generation, &c)) {
+            *product = Some(SchurProduct::new(generation, &c));
         }
-        let sf = add_identity(&cd.matmul(&ct));
+        let Some(plan) = product.as_ref() else {
+            return Err(SolveError::Factorization {
+                solver: NAME,
+                detail: "no pattern for the pressure matrix".into(),
+            });
+        };
+        let ct = plan.transpose_of(&c);
         let mut factor = factor;
         let fail = |detail: String| SolveError::Factorization {
             solver: NAME,
             detail: format!("reduced system: {detail}"),
         };
         if ns == 0 {
-            // No stiff rows: `Ŝ_F s = C_F Â_F⁻¹ r_F`, positive definite.
+            // No stiff rows: `Ŝ_F s = C_F Â_F⁻¹ r_F`, positive definite;
+            // its upper triangle is all the factorisation reads.
+            let sf = plan.product(&c, &ct, &inv, true);
             factor.factorise(&sf, None, work).map_err(fail)?;
             return Ok((
                 Self {
                     inv,
                     pos,
                     stiff,
-                    c: c.clone(),
+                    c,
                     ct,
                     factor,
                     red: vec![0.0; m],
@@ -537,13 +569,17 @@ impl Woodbury {
                 0,
             ));
         }
+        // Ŝ_F = I + C_F Â_F⁻¹ C_Fᵀ (the S columns weigh 0 in `inv`).
+        let sf = plan.product(&c, &ct, &inv, false);
         // The reduced matrix, both triangles.
         let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(sf.nnz() + 2 * c.nnz());
-        for &i in &stiff {
-            for p in a.ptr[i]..a.ptr[i + 1] {
-                let j = a.idx[p];
-                if pos[j] != NONE {
-                    t.push((pos[i], pos[j], a.val[p]));
+        for j in 0..a.ncols() {
+            if pos[j] == NONE {
+                continue;
+            }
+            for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                if pos[i] != NONE {
+                    t.push((pos[i], pos[j], v));
                 }
             }
         }
@@ -570,7 +606,7 @@ impl Woodbury {
                 inv,
                 pos,
                 stiff,
-                c: c.clone(),
+                c,
                 ct,
                 factor,
                 red: vec![0.0; ns + m],
@@ -619,6 +655,163 @@ impl Woodbury {
     }
 }
 
+/// The pattern of `Ŝ = I + C D Cᵀ` (`D` diagonal) for one mesh, and of
+/// `Cᵀ`: built once per pattern generation, so that each Picard iterate
+/// only refills values (Gustavson's product with the pattern known: no
+/// sorting, no allocation per row).
+struct SchurProduct {
+    generation: u64,
+    /// `C`'s pattern, to check that a later `C` is the same.
+    c_ptr: Vec<usize>,
+    c_idx: Vec<usize>,
+    /// `Cᵀ`'s pattern and, for each of its entries, the entry of `C` it
+    /// copies.
+    ct_ptr: Vec<usize>,
+    ct_idx: Vec<usize>,
+    ct_src: Vec<usize>,
+    /// `Ŝ`'s pattern (sorted rows, the diagonal always present), whole and
+    /// upper triangle.
+    full: (Vec<usize>, Vec<usize>),
+    upper: (Vec<usize>, Vec<usize>),
+}
+
+impl std::fmt::Debug for SchurProduct {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SchurProduct")
+            .field("generation", &self.generation)
+            .field("rows", &self.c_ptr.len().saturating_sub(1))
+            .field("nnz", &self.full.1.len())
+            .finish()
+    }
+}
+
+impl SchurProduct {
+    fn new(generation: u64, c: &Csr) -> Self {
+        let (m, n) = (c.nrows, c.ncols);
+        let mut ct_ptr = vec![0usize; n + 1];
+        for &j in &c.idx {
+            ct_ptr[j + 1] += 1;
+        }
+        for j in 0..n {
+            ct_ptr[j + 1] += ct_ptr[j];
+        }
+        let mut next = ct_ptr.clone();
+        let mut ct_idx = vec![0usize; c.nnz()];
+        let mut ct_src = vec![0usize; c.nnz()];
+        for i in 0..m {
+            for k in c.ptr[i]..c.ptr[i + 1] {
+                let j = c.idx[k];
+                ct_idx[next[j]] = i;
+                ct_src[next[j]] = k;
+                next[j] += 1;
+            }
+        }
+        let mut marker = vec![usize::MAX; m];
+        let mut cols = Vec::new();
+        let mut full = (vec![0usize], Vec::new());
+        let mut upper = (vec![0usize], Vec::new());
+        for i in 0..m {
+            cols.clear();
+            marker[i] = i;
+            cols.push(i);
+            for &k in &c.idx[c.ptr[i]..c.ptr[i + 1]] {
+                for &j in &ct_idx[ct_ptr[k]..ct_ptr[k + 1]] {
+                    if marker[j] != i {
+                        marker[j] = i;
+                        cols.push(j);
+                    }
+                }
+            }
+            cols.sort_unstable();
+            full.1.extend_from_slice(&cols);
+            full.0.push(full.1.len());
+            upper.1.extend(cols.iter().copied().filter(|&j| j >= i));
+            upper.0.push(upper.1.len());
+        }
+        Self {
+            generation,
+            c_ptr: c.ptr.clone(),
+            c_idx: c.idx.clone(),
+            ct_ptr,
+            ct_idx,
+            ct_src,
+            full,
+            upper,
+        }
+    }
+
+    /// Whether this pattern is `c`'s.
+    fn fits(&self, generation: u64, c: &Csr) -> bool {
+        self.generation == generation && self.c_ptr == c.ptr && self.c_idx == c.idx
+    }
+
+    /// `Cᵀ` with `c`'s values.
+    fn transpose_of(&self, c: &Csr) -> Csr {
+        Csr {
+            nrows: c.ncols,
+            ncols: c.nrows,
+            ptr: self.ct_ptr.clone(),
+            idx: self.ct_idx.clone(),
+            val: self.ct_src.iter().map(|&k| c.val[k]).collect(),
+        }
+    }
+
+    /// `I + C diag(d) Cᵀ`, whole or its upper triangle; `ct` is
+    /// [`SchurProduct::transpose_of`]`(c)`. Each entry sums its terms in the
+    /// order of `C`'s row, as [`Csr::matmul`] does.
+    fn product(&self, c: &Csr, ct: &Csr, d: &[f64], upper: bool) -> Csr {
+        let (ptr, idx) = if upper { &self.upper } else { &self.full };
+        let m = c.nrows;
+        let mut val = vec![0.0; idx.len()];
+        // Row ranges of about equal work, each filling its own slice.
+        let chunks = if m > 4096 {
+            (rayon::current_num_threads() * 4).max(1)
+        } else {
+            1
+        };
+        let rows = m.div_ceil(chunks).max(1);
+        let mut parts = Vec::with_capacity(chunks);
+        let mut rest = val.as_mut_slice();
+        let mut r0 = 0;
+        while r0 < m {
+            let r1 = (r0 + rows).min(m);
+            let (head, tail) = rest.split_at_mut(ptr[r1] - ptr[r0]);
+            parts.push((r0, r1, head));
+            rest = tail;
+            r0 = r1;
+        }
+        parts.into_par_iter().for_each(|(r0, r1, out)| {
+            let mut acc = vec![0.0f64; m];
+            let base = ptr[r0];
+            for i in r0..r1 {
+                for ka in c.ptr[i]..c.ptr[i + 1] {
+                    let k = c.idx[ka];
+                    let a = c.val[ka] * d[k];
+                    for kb in ct.ptr[k]..ct.ptr[k + 1] {
+                        let j = ct.idx[kb];
+                        if upper && j < i {
+                            continue;
+                        }
+                        acc[j] += a * ct.val[kb];
+                    }
+                }
+                for p in ptr[i]..ptr[i + 1] {
+                    let j = idx[p];
+                    out[p - base] = if j == i { acc[j] + 1.0 } else { acc[j] };
+                    acc[j] = 0.0;
+                }
+            }
+        });
+        Csr {
+            nrows: m,
+            ncols: m,
+            ptr: ptr.clone(),
+            idx: idx.clone(),
+            val,
+        }
+    }
+}
+
 enum Prec {
     Woodbury(Box<Woodbury>),
     Blocks {
@@ -658,6 +851,7 @@ impl Default for BlockSolver {
             reuse_setup: false,
             stabilised_reuse: true,
             setup: None,
+            product: None,
             saddle: QuasiDefinite::default(),
             last_q: (u64::MAX, Vec::new()),
             direct: DirectSolver::default(),
@@ -718,23 +912,17 @@ impl BlockSolver {
         self.stats
     }
 
+    /// The preconditioner for `sys`: the Cholesky path reads the split
+    /// system itself, the multigrid path its blocks as CSR (`blocks`,
+    /// [`blocks_of`]).
     fn build(
         &mut self,
-        a: &Csr,
-        c: &Csr,
+        blocks: Option<&(Csr, Csr)>,
         sys: &SplitSystem<'_>,
         generation: u64,
     ) -> Result<Setup, SolveError> {
-        let n = a.nrows;
-        let diag = a.diagonal();
-        if let Some(i) = diag.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
-            return Err(SolveError::Factorization {
-                solver: NAME,
-                detail: format!("velocity block has diagonal {} at dof {i}", diag[i]),
-            });
-        }
-        let prec = match self.pressure {
-            PressureSolve::Cholesky => {
+        let prec = match (self.pressure, blocks) {
+            (PressureSolve::Cholesky, _) => {
                 // The factor of the last set-up gives its storage and, for
                 // the same pattern, its symbolic analysis.
                 let factor = match self.setup.take().map(|s| s.prec) {
@@ -742,9 +930,9 @@ impl BlockSolver {
                     _ => QuasiDefinite::default(),
                 };
                 let (w, ns) = Woodbury::new(
-                    a,
-                    c,
-                    sys.block_size,
+                    sys,
+                    generation,
+                    &mut self.product,
                     self.dominance_limit,
                     factor,
                     &mut self.work,
@@ -754,7 +942,21 @@ impl BlockSolver {
                 }
                 Prec::Woodbury(Box::new(w))
             }
-            PressureSolve::Multigrid => {
+            (PressureSolve::Multigrid, None) => {
+                return Err(SolveError::Factorization {
+                    solver: NAME,
+                    detail: "the multigrid set-up needs the blocks as CSR".into(),
+                })
+            }
+            (PressureSolve::Multigrid, Some((a, c))) => {
+                let n = a.nrows;
+                let diag = a.diagonal();
+                if let Some(i) = diag.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
+                    return Err(SolveError::Factorization {
+                        solver: NAME,
+                        detail: format!("velocity block has diagonal {} at dof {i}", diag[i]),
+                    });
+                }
                 let inv: Vec<f64> = diag.iter().map(|v| 1.0 / v).collect();
                 // Ŝ = I + C Â⁻¹ Cᵀ (the Cholesky path forms its own, with
                 // the stiff dofs left out, in `Woodbury::new`).
@@ -823,8 +1025,8 @@ impl BlockSolver {
         };
         Ok(Setup {
             generation,
-            n,
-            m: c.nrows,
+            n: sys.a_v.nrows(),
+            m: sys.c_rows(),
             prec,
         })
     }
@@ -954,7 +1156,8 @@ impl BlockSolver {
         crate::solver::check_finite(sys.rhs)?;
         crate::solver::check_finite(st.offset)?;
         let t0 = Instant::now();
-        let (a, c) = blocks_of(sys);
+        let blocks = blocks_of(sys);
+        let (a, c) = (&blocks.0, &blocks.1);
         let (n, m) = (a.nrows, c.nrows);
         let l = Csr {
             nrows: m,
@@ -974,7 +1177,7 @@ impl BlockSolver {
                 s
             }
             _ => {
-                let s = self.build(&a, &c, sys, generation)?;
+                let s = self.build(Some(&blocks), sys, generation)?;
                 self.work.factorizations += 1;
                 self.stats.setups += 1;
                 s
@@ -990,7 +1193,7 @@ impl BlockSolver {
         };
         let ct = c.transpose();
         let apply_k = |y: &[f64], out: &mut [f64], tmp: &mut [f64]| {
-            apply_saddle(&a, &c, &ct, Some(&l), y, out, tmp);
+            apply_saddle(a, c, &ct, Some(&l), y, out, tmp);
         };
         let apply_p = |r: &[f64], z: &mut [f64]| apply_blocks(velocity, schur, n, r, z);
         let nt = n + m;
@@ -1085,15 +1288,17 @@ impl BlockSolver {
     ) -> Result<SolveReport, SolveError> {
         crate::solver::check_finite(sys.rhs)?;
         let t0 = Instant::now();
-        let (a, c) = blocks_of(sys);
-        let (n, m) = (a.nrows, c.nrows);
+        // The CSR blocks only for the multigrid path; the Cholesky path
+        // reads the split system.
+        let blocks = (self.pressure == PressureSolve::Multigrid).then(|| blocks_of(sys));
+        let (n, m) = (sys.a_v.nrows(), sys.c_rows());
         let keep = self.reuse_setup
             && self
                 .setup
                 .as_ref()
                 .is_some_and(|s| s.generation == generation && s.n == n && s.m == m);
         if !keep {
-            let s = self.build(&a, &c, sys, generation)?;
+            let s = self.build(blocks.as_ref(), sys, generation)?;
             self.setup = Some(s);
             self.work.factorizations += 1;
             self.stats.setups += 1;
@@ -1163,9 +1368,15 @@ impl BlockSolver {
                 }
             }
             Prec::Blocks { velocity, schur } => {
+                let Some((a, c)) = blocks.as_ref() else {
+                    return Err(SolveError::Factorization {
+                        solver: NAME,
+                        detail: "the multigrid iteration needs the blocks as CSR".into(),
+                    });
+                };
                 let ct = c.transpose();
                 let apply_k = |y: &[f64], out: &mut [f64], tmp: &mut [f64]| {
-                    apply_saddle(&a, &c, &ct, None, y, out, tmp);
+                    apply_saddle(a, c, &ct, None, y, out, tmp);
                 };
                 let apply_p = |r: &[f64], z: &mut [f64]| apply_blocks(velocity, schur, n, r, z);
                 let nt = n + m;
@@ -1344,4 +1555,75 @@ fn minres(
         }
     }
     max_iter
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `C` of `rows` rows (rows are filled in parallel chunks above
+    /// 4 096) with a few scattered entries per row, and a positive
+    /// diagonal `d`.
+    fn sample(rows: usize, cols: usize, seed: u64) -> (Csr, Vec<f64>) {
+        let mut state = seed;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as usize
+        };
+        let mut t = Vec::new();
+        for r in 0..rows {
+            // Row 7 stays empty (a fluid node with no element).
+            if r == 7 {
+                continue;
+            }
+            for _ in 0..4 {
+                let j = (r * cols / rows + next() % 9) % cols;
+                t.push((r, j, (next() % 1000) as f64 / 250.0 - 2.0));
+            }
+        }
+        let d = (0..cols)
+            .map(|_| 0.5 + (next() % 100) as f64 / 50.0)
+            .collect();
+        (Csr::from_triplets(rows, cols, &t), d)
+    }
+
+    /// The product on a kept pattern equals the general sparse product
+    /// `I + (C D) Cᵀ` bit for bit, whole and as its upper triangle, and
+    /// stays right when `C`'s values change on the same pattern.
+    #[test]
+    fn the_kept_product_pattern_gives_the_general_product() {
+        for rows in [300, 5000] {
+            let (mut c, d) = sample(rows, rows * 3, 11);
+            let plan = SchurProduct::new(4, &c);
+            for round in 0..2 {
+                if round == 1 {
+                    c.val.iter_mut().for_each(|v| *v = *v * 1.5 - 0.25);
+                }
+                assert!(plan.fits(4, &c));
+                assert!(!plan.fits(5, &c));
+                let ct = plan.transpose_of(&c);
+                assert_eq!(ct, c.transpose());
+                let mut cd = c.clone();
+                for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
+                    *v *= d[j];
+                }
+                let want = add_identity(&cd.matmul(&c.transpose()));
+                let full = plan.product(&c, &ct, &d, false);
+                assert_eq!(full, want);
+                let upper = plan.product(&c, &ct, &d, true);
+                for i in 0..rows {
+                    let row: Vec<(usize, f64)> = (want.ptr[i]..want.ptr[i + 1])
+                        .filter(|&p| want.idx[p] >= i)
+                        .map(|p| (want.idx[p], want.val[p]))
+                        .collect();
+                    let got: Vec<(usize, f64)> = (upper.ptr[i]..upper.ptr[i + 1])
+                        .map(|p| (upper.idx[p], upper.val[p]))
+                        .collect();
+                    assert_eq!(got, row, "row {i}");
+                }
+            }
+        }
+    }
 }
