@@ -877,6 +877,7 @@ where
         // parallel chunks, scattered serially through precomputed indices.
         let stride = n_local * n_local + n_local;
         self.local.resize(CHUNK * stride, 0.0);
+        let node_parts = node_parts(&self.pattern.adj_ptr, rayon::current_num_threads());
         for c0 in (0..ne).step_by(CHUNK) {
             let c1 = (c0 + CHUNK).min(ne);
             let states = &self.states;
@@ -899,40 +900,96 @@ where
                         element_history_force::<D>(&states[e], &unified[e].sigma_hat, f);
                     }
                 });
-            let mut sink = Sink {
-                pattern: &self.pattern,
-                particle_of: &self.particle_of,
-                constraints: input.constraints,
-                values: &mut self.values,
-                rhs: &mut self.rhs,
-            };
-            for e in c0..c1 {
-                let buf = &self.local[(e - c0) * stride..(e - c0 + 1) * stride];
-                let el = &self.elem_sys[e * nv..(e + 1) * nv];
-                let rho = input.materials[self.elem_material[e] as usize].density();
-                for a in 0..nv {
-                    // Lumped: ∫ ρ W_a over the element (or its cut part).
-                    self.mass[el[a] as usize] += shape_integral::<D>(
-                        &self.cut_of,
-                        &self.cut_share,
-                        e,
-                        a,
-                        rho * self.states[e].volume_n,
-                    );
-                    for k in 0..D {
-                        sink.rhs(el[a], k, buf[n_local * n_local + a * D + k]);
-                    }
-                    for b in 0..nv {
-                        let p = self.elem_blocks[e * nv * nv + a * nv + b];
-                        for k in 0..D {
-                            for l in 0..D {
-                                let val = buf[(a * D + k) * n_local + b * D + l];
-                                sink.entry(p, el[a], k, el[b], l, val);
+            // Scattered in parallel: each part owns a range of nodes (the
+            // columns of `values`, the rows of `rhs` and `mass` that belong
+            // to them) and visits every element of the chunk in order, so
+            // each entry sums its terms in the order of a serial pass.
+            let cols = |n: usize| self.pattern.adj_ptr[n] * D * D;
+            let mut parts = Vec::with_capacity(node_parts.len());
+            let (mut values, mut rhs, mut mass) = (
+                self.values.as_mut_slice(),
+                self.rhs.as_mut_slice(),
+                self.mass.as_mut_slice(),
+            );
+            for w in node_parts.windows(2) {
+                let (n0, n1) = (w[0], w[1]);
+                let (v, vr) = values.split_at_mut(cols(n1) - cols(n0));
+                let (r, rr) = rhs.split_at_mut((n1 - n0) * D);
+                let (m, mr) = mass.split_at_mut(n1 - n0);
+                (values, rhs, mass) = (vr, rr, mr);
+                parts.push(ScatterPart {
+                    nodes: n0..n1,
+                    value0: cols(n0),
+                    values: v,
+                    rhs: r,
+                    mass: m,
+                });
+            }
+            let (local, elem_sys, elem_blocks) = (&self.local, &self.elem_sys, &self.elem_blocks);
+            let (elem_material, states) = (&self.elem_material, &self.states);
+            let (cut_of, cut_share) = (&self.cut_of, &self.cut_share);
+            let (pattern, particle_of) = (&self.pattern, &self.particle_of);
+            let constraints = input.constraints;
+            parts.into_par_iter().for_each(|part| {
+                let ScatterPart {
+                    nodes,
+                    value0,
+                    values,
+                    rhs,
+                    mass,
+                } = part;
+                let own = |n: u32| nodes.contains(&(n as usize));
+                for e in c0..c1 {
+                    let buf = &local[(e - c0) * stride..(e - c0 + 1) * stride];
+                    let el = &elem_sys[e * nv..(e + 1) * nv];
+                    let rho = input.materials[elem_material[e] as usize].density();
+                    for a in 0..nv {
+                        let i = el[a];
+                        let own_i = own(i);
+                        let pi = particle_of[i as usize] as usize;
+                        let ri = (i as usize).wrapping_sub(nodes.start);
+                        if own_i {
+                            // Lumped: ∫ ρ W_a over the element (or its cut part).
+                            mass[ri] += shape_integral::<D>(
+                                cut_of,
+                                cut_share,
+                                e,
+                                a,
+                                rho * states[e].volume_n,
+                            );
+                            for k in 0..D {
+                                if !constraints.is_fixed(pi, k) {
+                                    rhs[ri * D + k] += buf[n_local * n_local + a * D + k];
+                                }
+                            }
+                        }
+                        for b in 0..nv {
+                            let j = el[b];
+                            let own_j = own(j);
+                            if !own_i && !own_j {
+                                continue;
+                            }
+                            let p = elem_blocks[e * nv * nv + a * nv + b];
+                            let pj = particle_of[j as usize] as usize;
+                            for k in 0..D {
+                                if constraints.is_fixed(pi, k) {
+                                    continue;
+                                }
+                                for l in 0..D {
+                                    let val = buf[(a * D + k) * n_local + b * D + l];
+                                    if constraints.is_fixed(pj, l) {
+                                        if own_i {
+                                            rhs[ri * D + k] -= val * constraints.velocity[pj][l];
+                                        }
+                                    } else if own_j {
+                                        values[pattern.value_index(p, j, k, l) - value0] += val;
+                                    }
+                                }
                             }
                         }
                     }
                 }
-            }
+            });
         }
         if self.split {
             self.coords.clear();
@@ -1484,6 +1541,37 @@ where
 /// Where assembled entries go: applies the velocity constraints (identity
 /// rows for prescribed dofs, their columns moved to the right-hand side so
 /// the system stays symmetric).
+/// What one part of the parallel scatter of element matrices owns: its
+/// nodes' columns of the matrix values (`values[0]` is entry `value0`),
+/// and their rows of the right-hand side and of the lumped mass.
+struct ScatterPart<'s> {
+    nodes: std::ops::Range<usize>,
+    value0: usize,
+    values: &'s mut [f64],
+    rhs: &'s mut [f64],
+    mass: &'s mut [f64],
+}
+
+/// Boundaries of `parts` node ranges with about equal numbers of matrix
+/// entries (`adj_ptr`, the node adjacency's row pointers), from 0 to the
+/// node count.
+fn node_parts(adj_ptr: &[usize], parts: usize) -> Vec<usize> {
+    let n = adj_ptr.len().saturating_sub(1);
+    let total = adj_ptr.last().copied().unwrap_or(0);
+    let parts = parts.clamp(1, n.max(1));
+    let mut out = vec![0];
+    for t in 1..parts {
+        let b = adj_ptr.partition_point(|&v| v < total * t / parts).min(n);
+        if b > out[out.len() - 1] {
+            out.push(b);
+        }
+    }
+    if out[out.len() - 1] < n || out.len() == 1 {
+        out.push(n);
+    }
+    out
+}
+
 struct Sink<'s, const D: usize>
 where
     Const<D>: Dim,
