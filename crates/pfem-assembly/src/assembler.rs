@@ -874,7 +874,7 @@ where
         self.mass.clear();
         self.mass.resize(ns, 0.0);
         // 2. Element stiffness and solid history force: computed in
-        // parallel chunks, scattered serially through precomputed indices.
+        // parallel chunks, scattered through precomputed indices.
         let stride = n_local * n_local + n_local;
         self.local.resize(CHUNK * stride, 0.0);
         let node_parts = node_parts(&self.pattern.adj_ptr, rayon::current_num_threads());
@@ -1538,9 +1538,6 @@ where
     }
 }
 
-/// Where assembled entries go: applies the velocity constraints (identity
-/// rows for prescribed dofs, their columns moved to the right-hand side so
-/// the system stays symmetric).
 /// What one part of the parallel scatter of element matrices owns: its
 /// nodes' columns of the matrix values (`values[0]` is entry `value0`),
 /// and their rows of the right-hand side and of the lumped mass.
@@ -1572,6 +1569,10 @@ fn node_parts(adj_ptr: &[usize], parts: usize) -> Vec<usize> {
     out
 }
 
+/// Where assembled entries go: applies the velocity constraints (identity
+/// rows for prescribed dofs, their columns moved to the right-hand side so
+/// the system stays symmetric). The element scatter applies the same
+/// rules part by part ([`ScatterPart`]).
 struct Sink<'s, const D: usize>
 where
     Const<D>: Dim,

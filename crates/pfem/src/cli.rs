@@ -103,8 +103,10 @@ impl Args {
         }
     }
 
-    /// Time-integration parameters from `--scheme newmark|bossak|euler` and
-    /// `--picard-tol TOL` (defaults: Bossak with α_B = −0.3, tolerance 1e-6).
+    /// Time-integration parameters from `--scheme newmark|bossak|euler`,
+    /// `--picard-tol TOL` and `--picard-stop change|estimate`
+    /// (`StepParams::picard_error_estimate`; defaults: Bossak with
+    /// α_B = −0.3, tolerance 1e-6, `change`).
     pub fn step_params(&self) -> Result<pfem_time::StepParams, ArgsError> {
         let mut p = pfem_time::StepParams::default();
         match self.options.get("scheme").map(String::as_str) {
@@ -118,6 +120,15 @@ impl Args {
             }
         }
         p.picard_tolerance = self.number("picard-tol", p.picard_tolerance)?;
+        match self.options.get("picard-stop").map(String::as_str) {
+            None | Some("change") => p.picard_error_estimate = false,
+            Some("estimate") => p.picard_error_estimate = true,
+            Some(other) => {
+                return Err(ArgsError(format!(
+                    "--picard-stop must be change or estimate, got `{other}`"
+                )))
+            }
+        }
         if let Some(x) = self.bounded(
             "pressure-stabilisation",
             |x| x >= 0.0 && x.is_finite(),
@@ -274,13 +285,13 @@ impl Args {
         Ok(())
     }
 
-    /// Fails on options not in `known` (besides the common `scheme`,
-    /// `picard-tol`, `solver` and `volume-correction`).
+    /// Fails on options not in `known` (besides the common ones,
+    /// `COMMON`).
     pub fn reject_unknown(&self, known: &[&str]) -> Result<(), ArgsError> {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -291,9 +302,10 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 11] = [
+const COMMON: [&str; 12] = [
     "scheme",
     "picard-tol",
+    "picard-stop",
     "pressure-stabilisation",
     "solver",
     "volume-correction",
@@ -411,6 +423,10 @@ mod tests {
         assert!(a.validate_options().is_ok());
         assert_eq!(a.min_quality_3d().unwrap(), Some(0.06));
         assert_eq!(a.step_params().unwrap().sliver_quality_3d, 0.01);
+        assert!(!a.step_params().unwrap().picard_error_estimate);
+        let e = args(&["--picard-stop", "estimate"]);
+        assert!(e.reject_unknown(&[]).is_ok());
+        assert!(e.step_params().unwrap().picard_error_estimate);
         let sim = a
             .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
             .unwrap();
@@ -423,6 +439,7 @@ mod tests {
             &["--min-quality-3d", "-0.1"],
             &["--sliver-quality-3d", "0.5"],
             &["--sliver-quality-3d", "-1"],
+            &["--picard-stop", "never"],
         ] {
             let a = args(bad);
             assert!(a.validate_options().is_err(), "{bad:?}");
