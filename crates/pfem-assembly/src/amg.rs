@@ -199,6 +199,33 @@ pub struct Csr {
     pub val: Vec<f64>,
 }
 
+/// `y = A x` for the CSR arrays of `A` (`y.len()` rows), as
+/// [`Csr::spmv`]: in parallel row chunks above 20 000 rows, each row
+/// summed in order.
+pub(crate) fn spmv_parts(ptr: &[usize], idx: &[usize], val: &[f64], x: &[f64], y: &mut [f64]) {
+    let row = |i: usize| -> f64 {
+        let mut s = 0.0;
+        for k in ptr[i]..ptr[i + 1] {
+            s += val[k] * x[idx[k]];
+        }
+        s
+    };
+    if y.len() > PAR_ROWS {
+        y.par_chunks_mut(SPMV_CHUNK)
+            .enumerate()
+            .for_each(|(c, ys)| {
+                let base = c * SPMV_CHUNK;
+                for (j, yi) in ys.iter_mut().enumerate() {
+                    *yi = row(base + j);
+                }
+            });
+    } else {
+        for (i, yi) in y.iter_mut().enumerate() {
+            *yi = row(i);
+        }
+    }
+}
+
 impl Csr {
     /// Builds a matrix from `(row, col, value)` triplets, summing duplicates.
     /// Columns within each row are sorted.
@@ -337,20 +364,7 @@ impl Csr {
     pub fn spmv(&self, x: &[f64], y: &mut [f64]) {
         assert_eq!(x.len(), self.ncols, "spmv: x has wrong length");
         assert_eq!(y.len(), self.nrows, "spmv: y has wrong length");
-        if self.nrows > PAR_ROWS {
-            y.par_chunks_mut(SPMV_CHUNK)
-                .enumerate()
-                .for_each(|(c, ys)| {
-                    let base = c * SPMV_CHUNK;
-                    for (j, yi) in ys.iter_mut().enumerate() {
-                        *yi = self.row_dot(base + j, x);
-                    }
-                });
-        } else {
-            for (i, yi) in y.iter_mut().enumerate() {
-                *yi = self.row_dot(i, x);
-            }
-        }
+        spmv_parts(&self.ptr, &self.idx, &self.val, x, y);
     }
 
     /// `y += alpha A x`. Parallel like [`Csr::spmv`].

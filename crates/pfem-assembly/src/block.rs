@@ -60,7 +60,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Par, Side};
 
-use crate::amg::{Amg, AmgOptions, Csr};
+use crate::amg::{spmv_parts, Amg, AmgOptions, Csr};
 use crate::solver::{
     DirectSolver, LinearSolver, SolveReport, SolverWork, SplitSystem, Workspace,
     DEFAULT_PARALLELISM,
@@ -127,9 +127,6 @@ pub struct BlockSolver {
     /// step).
     pub stabilised_reuse: bool,
     setup: Option<Setup>,
-    /// The pattern of `Ŝ_F = I + C Â⁻¹ Cᵀ` for the current mesh, so that
-    /// each Picard iterate only refills its values.
-    product: Option<SchurProduct>,
     /// The factor of the stabilised saddle-point system
     /// ([`solve_saddle`]), kept for its symbolic analysis.
     saddle: QuasiDefinite,
@@ -204,11 +201,26 @@ impl QuasiDefinite {
         signs: Option<&[i8]>,
         work: &mut SolverWork,
     ) -> Result<(), String> {
+        self.factorise_parts(r.nrows, &r.ptr, &r.idx, &r.val, signs, work)
+    }
+
+    /// [`QuasiDefinite::factorise`] of the `n × n` matrix with the CSR
+    /// arrays `ptr`, `idx`, `val` (both triangles, or the upper one: the
+    /// factorisation reads only that).
+    pub(crate) fn factorise_parts(
+        &mut self,
+        n: usize,
+        ptr: &[usize],
+        idx: &[usize],
+        val: &[f64],
+        signs: Option<&[i8]>,
+        work: &mut SolverWork,
+    ) -> Result<(), String> {
         // faer can panic inside a numeric factorisation (see
         // `solver.rs`): a failed set-up here (the solve falls back), never a
         // panic of the run.
         let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            self.factorise_inner(r, signs, work)
+            self.factorise_inner(n, ptr, idx, val, signs, work)
         }));
         done.unwrap_or_else(|_| {
             self.symbolic = None;
@@ -218,17 +230,20 @@ impl QuasiDefinite {
 
     fn factorise_inner(
         &mut self,
-        r: &Csr,
+        n: usize,
+        ptr: &[usize],
+        idx: &[usize],
+        val: &[f64],
         signs: Option<&[i8]>,
         work: &mut SolverWork,
     ) -> Result<(), String> {
         // Symmetric: its CSR arrays are its CSC arrays.
-        let sym = SymbolicSparseColMatRef::new_checked(r.nrows, r.ncols, &r.ptr, None, &r.idx);
-        let a = SparseColMatRef::new(sym, &r.val);
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, ptr, None, idx);
+        let a = SparseColMatRef::new(sym, val);
         let same = self
             .symbolic
             .as_ref()
-            .is_some_and(|(p, i, _)| p == &r.ptr && i == &r.idx);
+            .is_some_and(|(p, i, _)| p == ptr && i == idx);
         if !same {
             self.symbolic = None;
             let sc = factorize_symbolic_cholesky(
@@ -238,7 +253,7 @@ impl QuasiDefinite {
                 Default::default(),
             )
             .map_err(|e| format!("{e:?}"))?;
-            self.symbolic = Some((r.ptr.clone(), r.idx.clone(), sc));
+            self.symbolic = Some((ptr.to_vec(), idx.to_vec(), sc));
             work.symbolic_analyses += 1;
         }
         let Some((_, _, sc)) = self.symbolic.as_ref() else {
@@ -462,8 +477,13 @@ struct Woodbury {
     pos: Vec<usize>,
     /// `S` dofs.
     stiff: Vec<usize>,
-    c: Csr,
-    ct: Csr,
+    /// The patterns of `C`, `Cᵀ` and `Ŝ_F` for the mesh, kept across
+    /// set-ups while the mesh is the same.
+    plan: SchurProduct,
+    /// Values of `C`, of `Cᵀ` and of `Ŝ_F` on `plan`'s patterns.
+    c_val: Vec<f64>,
+    ct_val: Vec<f64>,
+    s_val: Vec<f64>,
     factor: QuasiDefinite,
     /// Scratch: reduced right-hand side, `C`'s rows, dofs.
     red: Vec<f64>,
@@ -473,16 +493,16 @@ struct Woodbury {
 
 impl Woodbury {
     /// The set-up from the split system itself: `A_v` is read in its CSC
-    /// form (no CSR copy), and `Ŝ_F` is refilled on `product`'s pattern,
-    /// which is built once per mesh `generation`.
+    /// form (no CSR copy), and `Ŝ_F` is refilled on the patterns of the
+    /// `old` set-up (with its factor's symbolic analysis and its storage)
+    /// while the mesh `generation` and `C`'s pattern are the same.
     fn new(
         sys: &SplitSystem<'_>,
         generation: u64,
-        product: &mut Option<SchurProduct>,
+        old: Option<Box<Woodbury>>,
         limit: f64,
-        factor: QuasiDefinite,
         work: &mut SolverWork,
-    ) -> Result<(Self, usize), SolveError> {
+    ) -> Result<(Box<Self>, usize), SolveError> {
         let a = sys.a_v;
         let n = a.nrows();
         let m = sys.c_rows();
@@ -527,92 +547,80 @@ impl Woodbury {
         let inv: Vec<f64> = (0..n)
             .map(|i| if pos[i] == NONE { 1.0 / diag[i] } else { 0.0 })
             .collect();
-        let c = Csr {
-            nrows: m,
-            ncols: n,
-            ptr: sys.c_ptr.to_vec(),
-            idx: sys.c_idx.to_vec(),
-            val: sys.c_val.to_vec(),
+        let (plan, mut factor, mut ct_val, mut s_val) = match old {
+            Some(w) if w.plan.fits(generation, sys.c_ptr, sys.c_idx) => {
+                let w = *w;
+                (w.plan, w.factor, w.ct_val, w.s_val)
+            }
+            old => (
+                SchurProduct::new(generation, sys.c_ptr, sys.c_idx, n),
+                old.map(|w| w.factor).unwrap_or_default(),
+                Vec::new(),
+                Vec::new(),
+            ),
         };
-        if !product.as_ref().is_some_and(|p| p.fits(generation, &c)) {
-            *product = Some(SchurProduct::new(generation, &c));
-        }
-        let Some(plan) = product.as_ref() else {
-            return Err(SolveError::Factorization {
-                solver: NAME,
-                detail: "no pattern for the pressure matrix".into(),
-            });
-        };
-        let ct = plan.transpose_of(&c);
-        let mut factor = factor;
+        let c_val = sys.c_val.to_vec();
+        plan.transpose_values(&c_val, &mut ct_val);
         let fail = |detail: String| SolveError::Factorization {
             solver: NAME,
             detail: format!("reduced system: {detail}"),
         };
+        // Ŝ_F = I + C_F Â_F⁻¹ C_Fᵀ (the S columns weigh 0 in `inv`); with no
+        // stiff rows `Ŝ_F s = C_F Â_F⁻¹ r_F`, positive definite, and its
+        // upper triangle is all the factorisation reads.
+        plan.product(&c_val, &ct_val, &inv, ns == 0, &mut s_val);
         if ns == 0 {
-            // No stiff rows: `Ŝ_F s = C_F Â_F⁻¹ r_F`, positive definite;
-            // its upper triangle is all the factorisation reads.
-            let sf = plan.product(&c, &ct, &inv, true);
-            factor.factorise(&sf, None, work).map_err(fail)?;
-            return Ok((
-                Self {
-                    inv,
-                    pos,
-                    stiff,
-                    c,
-                    ct,
-                    factor,
-                    red: vec![0.0; m],
-                    t: vec![0.0; m],
-                    u: vec![0.0; n],
-                },
-                0,
-            ));
-        }
-        // Ŝ_F = I + C_F Â_F⁻¹ C_Fᵀ (the S columns weigh 0 in `inv`).
-        let sf = plan.product(&c, &ct, &inv, false);
-        // The reduced matrix, both triangles.
-        let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(sf.nnz() + 2 * c.nnz());
-        for j in 0..a.ncols() {
-            if pos[j] == NONE {
-                continue;
-            }
-            for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
-                if pos[i] != NONE {
-                    t.push((pos[i], pos[j], v));
+            let (ptr, idx) = &plan.upper;
+            factor
+                .factorise_parts(m, ptr, idx, &s_val, None, work)
+                .map_err(fail)?;
+        } else {
+            // The reduced matrix, both triangles.
+            let (ptr, idx) = &plan.full;
+            let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(idx.len() + 2 * c_val.len());
+            for j in 0..a.ncols() {
+                if pos[j] == NONE {
+                    continue;
+                }
+                for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                    if pos[i] != NONE {
+                        t.push((pos[i], pos[j], v));
+                    }
                 }
             }
-        }
-        for r in 0..m {
-            for p in c.ptr[r]..c.ptr[r + 1] {
-                let j = c.idx[p];
-                if pos[j] != NONE && c.val[p] != 0.0 {
-                    t.push((ns + r, pos[j], c.val[p]));
-                    t.push((pos[j], ns + r, c.val[p]));
+            for r in 0..m {
+                for p in sys.c_ptr[r]..sys.c_ptr[r + 1] {
+                    let j = sys.c_idx[p];
+                    if pos[j] != NONE && c_val[p] != 0.0 {
+                        t.push((ns + r, pos[j], c_val[p]));
+                        t.push((pos[j], ns + r, c_val[p]));
+                    }
+                }
+                for p in ptr[r]..ptr[r + 1] {
+                    t.push((ns + r, ns + idx[p], -s_val[p]));
                 }
             }
-            for p in sf.ptr[r]..sf.ptr[r + 1] {
-                t.push((ns + r, ns + sf.idx[p], -sf.val[p]));
-            }
+            let reduced =
+                Csr::try_from_triplets(ns + m, ns + m, &t).map_err(|e| fail(e.to_string()))?;
+            let signs: Vec<i8> = (0..ns + m).map(|k| if k < ns { 1 } else { -1 }).collect();
+            factor
+                .factorise(&reduced, Some(&signs), work)
+                .map_err(fail)?;
         }
-        let reduced =
-            Csr::try_from_triplets(ns + m, ns + m, &t).map_err(|e| fail(e.to_string()))?;
-        let signs: Vec<i8> = (0..ns + m).map(|k| if k < ns { 1 } else { -1 }).collect();
-        factor
-            .factorise(&reduced, Some(&signs), work)
-            .map_err(fail)?;
         Ok((
-            Self {
+            Box::new(Self {
                 inv,
                 pos,
                 stiff,
-                c,
-                ct,
+                plan,
+                c_val,
+                ct_val,
+                s_val,
                 factor,
                 red: vec![0.0; ns + m],
                 t: vec![0.0; m],
                 u: vec![0.0; n],
-            },
+            }),
             ns,
         ))
     }
@@ -626,7 +634,8 @@ impl Woodbury {
             .zip(r)
             .zip(&self.inv)
             .for_each(|((u, r), d)| *u = r * d);
-        self.c.spmv(&self.u, &mut self.t);
+        let plan = &self.plan;
+        spmv_parts(&plan.c_ptr, &plan.c_idx, &self.c_val, &self.u, &mut self.t);
         for (k, &i) in self.stiff.iter().enumerate() {
             self.red[k] = r[i];
         }
@@ -643,7 +652,7 @@ impl Woodbury {
                 detail,
             })?;
         // z_F = Â_F⁻¹ (r_F − C_Fᵀ s), z_S from the reduced solve.
-        self.ct.spmv(&self.red[ns..], z);
+        spmv_parts(&plan.ct_ptr, &plan.ct_idx, &self.ct_val, &self.red[ns..], z);
         for i in 0..z.len() {
             z[i] = if self.pos[i] == NONE {
                 self.u[i] - self.inv[i] * z[i]
@@ -655,13 +664,13 @@ impl Woodbury {
     }
 }
 
-/// The pattern of `Ŝ = I + C D Cᵀ` (`D` diagonal) for one mesh, and of
-/// `Cᵀ`: built once per pattern generation, so that each Picard iterate
-/// only refills values (Gustavson's product with the pattern known: no
-/// sorting, no allocation per row).
+/// The patterns of `C`, of `Cᵀ` and of `Ŝ = I + C D Cᵀ` (`D` diagonal)
+/// for one mesh: built once per pattern generation, so that each Picard
+/// iterate only refills values (Gustavson's product with the pattern
+/// known: no sorting, no allocation per row).
 struct SchurProduct {
     generation: u64,
-    /// `C`'s pattern, to check that a later `C` is the same.
+    /// `C`'s pattern (CSR).
     c_ptr: Vec<usize>,
     c_idx: Vec<usize>,
     /// `Cᵀ`'s pattern and, for each of its entries, the entry of `C` it
@@ -686,21 +695,22 @@ impl std::fmt::Debug for SchurProduct {
 }
 
 impl SchurProduct {
-    fn new(generation: u64, c: &Csr) -> Self {
-        let (m, n) = (c.nrows, c.ncols);
+    /// The patterns for `C` (CSR `c_ptr`, `c_idx`, `n` columns).
+    fn new(generation: u64, c_ptr: &[usize], c_idx: &[usize], n: usize) -> Self {
+        let m = c_ptr.len().saturating_sub(1);
         let mut ct_ptr = vec![0usize; n + 1];
-        for &j in &c.idx {
+        for &j in c_idx {
             ct_ptr[j + 1] += 1;
         }
         for j in 0..n {
             ct_ptr[j + 1] += ct_ptr[j];
         }
         let mut next = ct_ptr.clone();
-        let mut ct_idx = vec![0usize; c.nnz()];
-        let mut ct_src = vec![0usize; c.nnz()];
+        let mut ct_idx = vec![0usize; c_idx.len()];
+        let mut ct_src = vec![0usize; c_idx.len()];
         for i in 0..m {
-            for k in c.ptr[i]..c.ptr[i + 1] {
-                let j = c.idx[k];
+            for k in c_ptr[i]..c_ptr[i + 1] {
+                let j = c_idx[k];
                 ct_idx[next[j]] = i;
                 ct_src[next[j]] = k;
                 next[j] += 1;
@@ -714,7 +724,7 @@ impl SchurProduct {
             cols.clear();
             marker[i] = i;
             cols.push(i);
-            for &k in &c.idx[c.ptr[i]..c.ptr[i + 1]] {
+            for &k in &c_idx[c_ptr[i]..c_ptr[i + 1]] {
                 for &j in &ct_idx[ct_ptr[k]..ct_ptr[k + 1]] {
                     if marker[j] != i {
                         marker[j] = i;
@@ -730,8 +740,8 @@ impl SchurProduct {
         }
         Self {
             generation,
-            c_ptr: c.ptr.clone(),
-            c_idx: c.idx.clone(),
+            c_ptr: c_ptr.to_vec(),
+            c_idx: c_idx.to_vec(),
             ct_ptr,
             ct_idx,
             ct_src,
@@ -740,29 +750,27 @@ impl SchurProduct {
         }
     }
 
-    /// Whether this pattern is `c`'s.
-    fn fits(&self, generation: u64, c: &Csr) -> bool {
-        self.generation == generation && self.c_ptr == c.ptr && self.c_idx == c.idx
+    /// Whether these are the patterns of a `C` with `c_ptr`, `c_idx`.
+    fn fits(&self, generation: u64, c_ptr: &[usize], c_idx: &[usize]) -> bool {
+        self.generation == generation && self.c_ptr == c_ptr && self.c_idx == c_idx
     }
 
-    /// `Cᵀ` with `c`'s values.
-    fn transpose_of(&self, c: &Csr) -> Csr {
-        Csr {
-            nrows: c.ncols,
-            ncols: c.nrows,
-            ptr: self.ct_ptr.clone(),
-            idx: self.ct_idx.clone(),
-            val: self.ct_src.iter().map(|&k| c.val[k]).collect(),
-        }
+    /// `Cᵀ`'s values from `C`'s, into `out`.
+    fn transpose_values(&self, c_val: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(self.ct_src.iter().map(|&k| c_val[k]));
     }
 
-    /// `I + C diag(d) Cᵀ`, whole or its upper triangle; `ct` is
-    /// [`SchurProduct::transpose_of`]`(c)`. Each entry sums its terms in the
+    /// The values of `I + C diag(d) Cᵀ` on the whole pattern or on its
+    /// upper triangle, into `out`; `ct_val` from
+    /// [`SchurProduct::transpose_values`]. Each entry sums its terms in the
     /// order of `C`'s row, as [`Csr::matmul`] does.
-    fn product(&self, c: &Csr, ct: &Csr, d: &[f64], upper: bool) -> Csr {
+    fn product(&self, c_val: &[f64], ct_val: &[f64], d: &[f64], upper: bool, out: &mut Vec<f64>) {
         let (ptr, idx) = if upper { &self.upper } else { &self.full };
-        let m = c.nrows;
-        let mut val = vec![0.0; idx.len()];
+        let (c_ptr, c_idx, ct_ptr, ct_idx) = (&self.c_ptr, &self.c_idx, &self.ct_ptr, &self.ct_idx);
+        let m = ptr.len() - 1;
+        out.clear();
+        out.resize(idx.len(), 0.0);
         // Row ranges of about equal work, each filling its own slice.
         let chunks = if m > 4096 {
             (rayon::current_num_threads() * 4).max(1)
@@ -771,7 +779,7 @@ impl SchurProduct {
         };
         let rows = m.div_ceil(chunks).max(1);
         let mut parts = Vec::with_capacity(chunks);
-        let mut rest = val.as_mut_slice();
+        let mut rest = out.as_mut_slice();
         let mut r0 = 0;
         while r0 < m {
             let r1 = (r0 + rows).min(m);
@@ -784,15 +792,15 @@ impl SchurProduct {
             let mut acc = vec![0.0f64; m];
             let base = ptr[r0];
             for i in r0..r1 {
-                for ka in c.ptr[i]..c.ptr[i + 1] {
-                    let k = c.idx[ka];
-                    let a = c.val[ka] * d[k];
-                    for kb in ct.ptr[k]..ct.ptr[k + 1] {
-                        let j = ct.idx[kb];
+                for ka in c_ptr[i]..c_ptr[i + 1] {
+                    let k = c_idx[ka];
+                    let a = c_val[ka] * d[k];
+                    for kb in ct_ptr[k]..ct_ptr[k + 1] {
+                        let j = ct_idx[kb];
                         if upper && j < i {
                             continue;
                         }
-                        acc[j] += a * ct.val[kb];
+                        acc[j] += a * ct_val[kb];
                     }
                 }
                 for p in ptr[i]..ptr[i + 1] {
@@ -802,13 +810,6 @@ impl SchurProduct {
                 }
             }
         });
-        Csr {
-            nrows: m,
-            ncols: m,
-            ptr: ptr.clone(),
-            idx: idx.clone(),
-            val,
-        }
     }
 }
 
@@ -851,7 +852,6 @@ impl Default for BlockSolver {
             reuse_setup: false,
             stabilised_reuse: true,
             setup: None,
-            product: None,
             saddle: QuasiDefinite::default(),
             last_q: (u64::MAX, Vec::new()),
             direct: DirectSolver::default(),
@@ -923,24 +923,18 @@ impl BlockSolver {
     ) -> Result<Setup, SolveError> {
         let prec = match (self.pressure, blocks) {
             (PressureSolve::Cholesky, _) => {
-                // The factor of the last set-up gives its storage and, for
-                // the same pattern, its symbolic analysis.
-                let factor = match self.setup.take().map(|s| s.prec) {
-                    Some(Prec::Woodbury(w)) => w.factor,
-                    _ => QuasiDefinite::default(),
+                // The last set-up gives its storage and, for the same
+                // mesh, its patterns and its symbolic analysis.
+                let old = match self.setup.take().map(|s| s.prec) {
+                    Some(Prec::Woodbury(w)) => Some(w),
+                    _ => None,
                 };
-                let (w, ns) = Woodbury::new(
-                    sys,
-                    generation,
-                    &mut self.product,
-                    self.dominance_limit,
-                    factor,
-                    &mut self.work,
-                )?;
+                let (w, ns) =
+                    Woodbury::new(sys, generation, old, self.dominance_limit, &mut self.work)?;
                 if ns > 0 {
                     self.stats.stiff_setups += 1;
                 }
-                Prec::Woodbury(Box::new(w))
+                Prec::Woodbury(w)
             }
             (PressureSolve::Multigrid, None) => {
                 return Err(SolveError::Factorization {
@@ -1596,23 +1590,42 @@ mod tests {
     fn the_kept_product_pattern_gives_the_general_product() {
         for rows in [300, 5000] {
             let (mut c, d) = sample(rows, rows * 3, 11);
-            let plan = SchurProduct::new(4, &c);
+            let plan = SchurProduct::new(4, &c.ptr, &c.idx, c.ncols);
+            let (mut ct_val, mut val) = (Vec::new(), Vec::new());
             for round in 0..2 {
                 if round == 1 {
                     c.val.iter_mut().for_each(|v| *v = *v * 1.5 - 0.25);
                 }
-                assert!(plan.fits(4, &c));
-                assert!(!plan.fits(5, &c));
-                let ct = plan.transpose_of(&c);
-                assert_eq!(ct, c.transpose());
+                assert!(plan.fits(4, &c.ptr, &c.idx));
+                assert!(!plan.fits(5, &c.ptr, &c.idx));
+                plan.transpose_values(&c.val, &mut ct_val);
+                let ct = c.transpose();
+                assert_eq!(
+                    (&plan.ct_ptr, &plan.ct_idx, &ct_val),
+                    (&ct.ptr, &ct.idx, &ct.val)
+                );
                 let mut cd = c.clone();
                 for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
                     *v *= d[j];
                 }
-                let want = add_identity(&cd.matmul(&c.transpose()));
-                let full = plan.product(&c, &ct, &d, false);
+                let want = add_identity(&cd.matmul(&ct));
+                plan.product(&c.val, &ct_val, &d, false, &mut val);
+                let full = Csr {
+                    nrows: rows,
+                    ncols: rows,
+                    ptr: plan.full.0.clone(),
+                    idx: plan.full.1.clone(),
+                    val: val.clone(),
+                };
                 assert_eq!(full, want);
-                let upper = plan.product(&c, &ct, &d, true);
+                plan.product(&c.val, &ct_val, &d, true, &mut val);
+                let upper = Csr {
+                    nrows: rows,
+                    ncols: rows,
+                    ptr: plan.upper.0.clone(),
+                    idx: plan.upper.1.clone(),
+                    val: val.clone(),
+                };
                 for i in 0..rows {
                     let row: Vec<(usize, f64)> = (want.ptr[i]..want.ptr[i + 1])
                         .filter(|&p| want.idx[p] >= i)
