@@ -265,6 +265,10 @@ where
     /// Quality below which a fluid element is integrated on its geometry
     /// at `tⁿ` ([`Assembler::set_sliver_quality`]; 0: never).
     sliver_quality: f64,
+    /// Also integrate on its geometry at `tⁿ` a fluid element whose
+    /// quality at the step's predicted end is below `sliver_quality`
+    /// ([`Assembler::set_sliver_prediction`]).
+    sliver_prediction: bool,
     /// Per element: integrated on its geometry at `tⁿ`, decided at the
     /// step's first assembly (`prepare` and `set_sliver_quality` clear
     /// it), and then its signed measure and `V grad W` at the iterate,
@@ -358,6 +362,22 @@ where
         let q = if q.is_finite() && q > 0.0 { q } else { 0.0 };
         if q != self.sliver_quality {
             self.sliver_quality = q;
+            self.frozen.clear();
+        }
+    }
+
+    /// Slivers foreseen (ARCHITECTURE.md deviation 13): with `on`, a fluid
+    /// element is also treated as a sliver ([`Assembler::set_sliver_quality`])
+    /// when its quality at the step's predicted end, the particles moved
+    /// to `xⁿ + Δt vⁿ + ½ Δt² aⁿ`, is below the sliver quality (an
+    /// element predicted to invert has quality 0). Those are the elements
+    /// that otherwise invert within the step and reject it: a tetrahedron
+    /// of fair shape at `tⁿ` that the flow squeezes flat. Decided, as the
+    /// slivers are, at the step's first assembly. Default off here;
+    /// `pfem_time::StepParams::sliver_prediction_3d` turns it on.
+    pub fn set_sliver_prediction(&mut self, on: bool) {
+        if on != self.sliver_prediction {
+            self.sliver_prediction = on;
             self.frozen.clear();
         }
     }
@@ -787,6 +807,7 @@ where
         let mut frozen_w = std::mem::take(&mut self.frozen_w);
         frozen_w.resize(ne, (0.0, [Vector::<D>::zeros(); MAX_NV]));
         let (elem_fluid, sliver_quality) = (&self.elem_fluid, self.sliver_quality);
+        let predict = self.sliver_prediction;
         let bad = states
             .par_iter_mut()
             .zip(unified.par_iter_mut())
@@ -805,7 +826,18 @@ where
                 if decide {
                     *fr = sliver_quality > 0.0
                         && elem_fluid[e]
-                        && crate::kernels::shape_quality::<D>(&xn[..nv]) < sliver_quality;
+                        && (crate::kernels::shape_quality::<D>(&xn[..nv]) < sliver_quality
+                            || (predict && {
+                                // The constant-acceleration prediction of
+                                // the step's end (deviation 13).
+                                let (dt, mut xp) = (input.dt, xn);
+                                for a in 0..nv {
+                                    let p = particle_of[elem_sys[e * nv + a] as usize] as usize;
+                                    xp[a] =
+                                        xn[a] + input.v_n[p] * dt + input.a_n[p] * (0.5 * dt * dt);
+                                }
+                                crate::kernels::shape_quality::<D>(&xp[..nv]) < sliver_quality
+                            }));
                 }
                 if *fr {
                     // Its volumetric terms at the iterate (finite through

@@ -9,7 +9,9 @@
 //! stiffness) is nearly its diagonal `Â` for water, and `C` has one row per
 //! fluid node. Two ways are offered ([`PressureSolve`]):
 //!
-//! - **[`PressureSolve::Cholesky`]** (default): conjugate gradient on `A`
+//! - **[`PressureSolve::Cholesky`]** (what [`PressureSolve::Auto`], the
+//!   default, chooses for the paper's unstabilised pressure and for small
+//!   stabilised systems): conjugate gradient on `A`
 //!   itself, preconditioned by `M = Â + Cᵀ C` applied exactly through the
 //!   Woodbury identity
 //!
@@ -78,6 +80,12 @@ pub enum PressureSolve {
     /// One V-cycle of smoothed aggregation, inside MINRES on the
     /// saddle-point form.
     Multigrid,
+    /// By size: a stabilised system with at least
+    /// [`BlockSolver::multigrid_from`] pressure rows by
+    /// [`PressureSolve::Multigrid`], every other system by
+    /// [`PressureSolve::Cholesky`] (the paper's unstabilised pressure
+    /// defeats the multigrid, module docs).
+    Auto,
 }
 
 /// The preconditioner of the velocity block `A_v`.
@@ -110,6 +118,15 @@ pub struct BlockSolver {
     pub residual_limit: f64,
     /// Iteration limit.
     pub max_iterations: usize,
+    /// [`PressureSolve::Auto`]: the smallest stabilised system (in
+    /// pressure rows, one per fluid node) solved by multigrid, in 2D and
+    /// in 3D (the direct factor fills faster in 3D, so multigrid pays
+    /// from fewer rows).
+    pub multigrid_from: [usize; 2],
+    /// Systems of fewer unknowns (velocity dofs) are assembled whole and
+    /// factored by the direct solver ([`LinearSolver::wants_split`]);
+    /// stabilised systems are always split.
+    pub split_from: usize,
     /// [`PressureSolve::Multigrid`]: how the velocity block is
     /// preconditioned.
     pub velocity: VelocityBlock,
@@ -845,7 +862,9 @@ impl Default for BlockSolver {
             tolerance: 1e-6,
             residual_limit: 1e-7,
             max_iterations: 2000,
-            pressure: PressureSolve::Cholesky,
+            pressure: PressureSolve::Auto,
+            multigrid_from: MULTIGRID_FROM,
+            split_from: SPLIT_FROM,
             velocity: VelocityBlock::Auto,
             dominance_limit: 0.5,
             amg: AmgOptions::default(),
@@ -862,6 +881,16 @@ impl Default for BlockSolver {
 }
 
 const NAME: &str = "block-split iterative";
+
+/// Default [`BlockSolver::multigrid_from`] (pressure rows, 2D and 3D):
+/// where multigrid overtakes the stabilised system's `L D Lᵀ`, measured
+/// on the stabilised 2D dam break and 3D water column
+/// (`docs/benchmarks.md`, session 18).
+pub const MULTIGRID_FROM: [usize; 2] = [100_000, 4_000];
+
+/// Default [`BlockSolver::split_from`] (unknowns): measured in
+/// `docs/benchmarks.md` (session 18).
+pub const SPLIT_FROM: usize = 0;
 
 /// Parallel dot product above a size where it pays.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -912,17 +941,33 @@ impl BlockSolver {
         self.stats
     }
 
+    /// The pressure solve used for `sys`: [`PressureSolve::Auto`]
+    /// resolved by its kind and size.
+    pub fn pressure_for(&self, sys: &SplitSystem<'_>) -> PressureSolve {
+        match self.pressure {
+            PressureSolve::Auto
+                if sys.stabilisation.is_some()
+                    && sys.c_rows() >= self.multigrid_from[usize::from(sys.block_size == 3)] =>
+            {
+                PressureSolve::Multigrid
+            }
+            PressureSolve::Auto => PressureSolve::Cholesky,
+            p => p,
+        }
+    }
+
     /// The preconditioner for `sys`: the Cholesky path reads the split
     /// system itself, the multigrid path its blocks as CSR (`blocks`,
     /// [`blocks_of`]).
     fn build(
         &mut self,
+        pressure: PressureSolve,
         blocks: Option<&(Csr, Csr)>,
         sys: &SplitSystem<'_>,
         generation: u64,
     ) -> Result<Setup, SolveError> {
-        let prec = match (self.pressure, blocks) {
-            (PressureSolve::Cholesky, _) => {
+        let prec = match (pressure, blocks) {
+            (PressureSolve::Cholesky | PressureSolve::Auto, _) => {
                 // The last set-up gives its storage and, for the same
                 // mesh, its patterns and its symbolic analysis.
                 let old = match self.setup.take().map(|s| s.prec) {
@@ -1091,8 +1136,8 @@ impl LinearSolver for BlockSolver {
         self.direct.solve(a, generation, b, x)
     }
 
-    fn wants_split(&self, _dofs: usize) -> bool {
-        true
+    fn wants_split(&self, dofs: usize) -> bool {
+        dofs >= self.split_from
     }
 
     /// The iteration; when it cannot set up or does not converge, the
@@ -1103,14 +1148,15 @@ impl LinearSolver for BlockSolver {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
-        if sys.stabilisation.is_some() && self.pressure == PressureSolve::Cholesky {
+        let pressure = self.pressure_for(sys);
+        if sys.stabilisation.is_some() && pressure == PressureSolve::Cholesky {
             self.stats.solves += 1;
             return solve_saddle_with(sys, &mut self.saddle, &mut self.work, x);
         }
         let done = if sys.stabilisation.is_some() {
             self.iterate_stabilised(sys, generation, x)
         } else {
-            self.iterate(sys, generation, x)
+            self.iterate(sys, pressure, generation, x)
         };
         match done {
             Ok(r) => Ok(r),
@@ -1145,7 +1191,7 @@ impl BlockSolver {
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
         let Some(st) = sys.stabilisation else {
-            return self.iterate(sys, generation, x);
+            return self.iterate(sys, PressureSolve::Cholesky, generation, x);
         };
         crate::solver::check_finite(sys.rhs)?;
         crate::solver::check_finite(st.offset)?;
@@ -1171,7 +1217,7 @@ impl BlockSolver {
                 s
             }
             _ => {
-                let s = self.build(Some(&blocks), sys, generation)?;
+                let s = self.build(PressureSolve::Multigrid, Some(&blocks), sys, generation)?;
                 self.work.factorizations += 1;
                 self.stats.setups += 1;
                 s
@@ -1277,6 +1323,7 @@ impl BlockSolver {
     fn iterate(
         &mut self,
         sys: &SplitSystem<'_>,
+        pressure: PressureSolve,
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
@@ -1284,7 +1331,7 @@ impl BlockSolver {
         let t0 = Instant::now();
         // The CSR blocks only for the multigrid path; the Cholesky path
         // reads the split system.
-        let blocks = (self.pressure == PressureSolve::Multigrid).then(|| blocks_of(sys));
+        let blocks = (pressure == PressureSolve::Multigrid).then(|| blocks_of(sys));
         let (n, m) = (sys.a_v.nrows(), sys.c_rows());
         let keep = self.reuse_setup
             && self
@@ -1292,7 +1339,7 @@ impl BlockSolver {
                 .as_ref()
                 .is_some_and(|s| s.generation == generation && s.n == n && s.m == m);
         if !keep {
-            let s = self.build(blocks.as_ref(), sys, generation)?;
+            let s = self.build(pressure, blocks.as_ref(), sys, generation)?;
             self.setup = Some(s);
             self.work.factorizations += 1;
             self.stats.setups += 1;

@@ -19,7 +19,9 @@ pub use assembler::{
     Assembler, AssemblerWork, AssemblyInfo, AssemblyInput, Constraints, Inertia, NodalRate,
     StepMesh, SurfaceCuts,
 };
-pub use block::{BlockSolver, BlockStats, PressureSolve, VelocityBlock};
+pub use block::{
+    BlockSolver, BlockStats, PressureSolve, VelocityBlock, MULTIGRID_FROM, SPLIT_FROM,
+};
 pub use error::{AssemblyError, SolveError};
 pub use export::MatrixExport;
 pub use faer::Par;

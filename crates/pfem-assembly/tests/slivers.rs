@@ -4,7 +4,8 @@
 //! instead of failing the assembly, except for its volumetric terms, which
 //! follow the iterate through the inversion, so that the nodal volumetric
 //! strain rate of a uniform expansion stays exact; a well-shaped element
-//! follows the iterate.
+//! follows the iterate, unless its motion at `tⁿ` predicts it flat or
+//! inverted at the step's end (`Assembler::set_sliver_prediction`).
 
 use pfem_assembly::{
     Assembler, AssemblyError, AssemblyInput, Constraints, Inertia, StepMesh, VolumetricTreatment,
@@ -31,14 +32,26 @@ fn start() -> Vec<Point<3>> {
 const TETS: [u32; 12] = [0, 1, 3, 2, 0, 3, 1, 4, 1, 2, 3, 5];
 
 /// Assembles at the iterate `x` (start `xⁿ` = [`start`]) with the sliver
-/// threshold `q`.
+/// threshold `q`, at rest at `tⁿ`.
 fn assemble(x: &[Point<3>], q: f64) -> (Assembler<3>, Result<(), AssemblyError>) {
+    assemble_moving(x, q, false, &vec![Vector::<3>::zeros(); x.len()])
+}
+
+/// [`assemble`] with the velocities `v_n` at `tⁿ` and the sliver
+/// prediction on or off.
+fn assemble_moving(
+    x: &[Point<3>],
+    q: f64,
+    predict: bool,
+    v_n: &[Vector<3>],
+) -> (Assembler<3>, Result<(), AssemblyError>) {
     let xn = start();
     let n = xn.len();
     let materials: Vec<Box<dyn Material<3>>> = vec![Box::new(Newtonian::water())];
     let dt = 1e-3;
     let mut asm = Assembler::<3>::new(VolumetricTreatment::NodalAveraged);
     asm.set_sliver_quality(q);
+    asm.set_sliver_prediction(predict);
     asm.prepare(
         n,
         StepMesh {
@@ -56,7 +69,7 @@ fn assemble(x: &[Point<3>], q: f64) -> (Assembler<3>, Result<(), AssemblyError>)
             x,
             x_n: &xn,
             v: &v,
-            v_n: &vec![Vector::<3>::zeros(); n],
+            v_n,
             a_n: &vec![Vector::<3>::zeros(); n],
             pressure_n: &vec![0.0; n],
             element_history: &[History::default(); 3],
@@ -116,4 +129,42 @@ fn a_sliver_that_inverts_within_the_step_keeps_its_start_shape() {
             r.rate
         );
     }
+}
+
+/// A well-shaped tetrahedron that the motion at `tⁿ` flattens within the
+/// step (issue 18, item 3: the rejected attempts of the column on a
+/// cylinder at a/14 were such elements, quality 0.06–0.18 at `tⁿ`): with
+/// the prediction it is treated as a sliver from the step's first
+/// assembly, and the iterate that inverts it no longer fails the
+/// assembly.
+#[test]
+fn a_tetrahedron_foreseen_flat_keeps_its_start_shape() {
+    let quality = pfem_assembly::kernels::shape_quality::<3>(
+        &TETS[8..]
+            .iter()
+            .map(|&i| start()[i as usize])
+            .collect::<Vec<_>>(),
+    );
+    assert!(quality > 0.1, "tetrahedron 2: quality {quality}");
+    // Node 5, the apex of tetrahedron 2, falls through the plane of 1, 2,
+    // 3 within the step: predicted at z = -0.1 at its end, and the iterate
+    // puts it there.
+    let dt = 1e-3;
+    let mut v_n = vec![Vector::<3>::zeros(); 6];
+    v_n[5].z = -1.0 / dt;
+    let mut x = start();
+    x[5].z = -0.1;
+    let (_, off) = assemble_moving(&x, 0.06, false, &v_n);
+    assert!(matches!(
+        off,
+        Err(AssemblyError::InvertedElement { element: 2, .. })
+    ));
+    let (asm, on) = assemble_moving(&x, 0.06, true, &v_n);
+    on.unwrap();
+    // The sliver 0 as before, and tetrahedron 2 foreseen; 1 follows the
+    // iterate.
+    assert!(asm.is_frozen(0) && !asm.is_frozen(1) && asm.is_frozen(2));
+    // Nothing moving at tⁿ: the prediction adds nothing.
+    let (asm, _) = assemble_moving(&start(), 0.06, true, &[Vector::<3>::zeros(); 6]);
+    assert!(asm.is_frozen(0) && !asm.is_frozen(1) && !asm.is_frozen(2));
 }

@@ -412,6 +412,47 @@ fn multigrid_solves_the_stabilised_system() {
     assert!(d <= 1e-6, "{d:e}");
 }
 
+/// Issue 18: the default pressure solve chooses by kind and size
+/// (`PressureSolve::Auto`): the stabilised system by its `L D Lᵀ` below
+/// `BlockSolver::multigrid_from` pressure rows and by multigrid from
+/// there on, the paper's unstabilised one always by the Cholesky of `Ŝ`.
+#[test]
+fn the_default_pressure_solve_chooses_by_size() {
+    let t = tank(12);
+    let asm = assembled_with(&t, true, 1.0);
+    let sys = asm.split_system().unwrap();
+    let rows = sys.c_rows();
+    let n = asm.dofs();
+    let mut small = BlockSolver::default();
+    assert_eq!(small.pressure, PressureSolve::Auto);
+    assert_eq!(small.multigrid_from, pfem_assembly::MULTIGRID_FROM);
+    small.multigrid_from = [rows + 1; 2];
+    assert_eq!(small.pressure_for(&sys), PressureSolve::Cholesky);
+    let mut x0 = vec![0.0; n];
+    small.solve_split(&sys, 1, &mut x0).unwrap();
+    assert_eq!(
+        small.stats().iterations,
+        0,
+        "the saddle-point factorisation"
+    );
+    let mut large = BlockSolver::default();
+    large.multigrid_from = [rows; 2];
+    assert_eq!(large.pressure_for(&sys), PressureSolve::Multigrid);
+    let mut x1 = vec![0.0; n];
+    large.solve_split(&sys, 1, &mut x1).unwrap();
+    assert!(large.stats().iterations > 0, "MINRES");
+    assert_eq!(large.stats().fallbacks, 0);
+    assert!(rel_diff(&x0, &x1) <= 1e-6);
+    // Unstabilised, whatever its size: the Cholesky of `Ŝ`.
+    let plain = assembled(&t, true);
+    let sys = plain.split_system().unwrap();
+    assert!(sys.stabilisation.is_none());
+    assert_eq!(large.pressure_for(&sys), PressureSolve::Cholesky);
+    // The split path is chosen at every size by default (measured faster
+    // down to 216 particles).
+    assert!(BlockSolver::default().wants_split(1));
+}
+
 /// Issue 18: with the stabilisation, MINRES with one multigrid V-cycle on
 /// the pressure block converges in a number of iterations that neither the
 /// size nor the bulk modulus moves much; without it, the count grows with

@@ -143,6 +143,15 @@ impl Args {
         )? {
             p.sliver_quality_3d = q;
         }
+        match self.options.get("sliver-prediction").map(String::as_str) {
+            None | Some("on") => {}
+            Some("off") => p.sliver_prediction_3d = false,
+            Some(other) => {
+                return Err(ArgsError(format!(
+                    "--sliver-prediction must be on or off, got `{other}`"
+                )))
+            }
+        }
         Ok(p)
     }
 
@@ -291,7 +300,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-prediction{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -302,7 +311,7 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 12] = [
+const COMMON: [&str; 13] = [
     "scheme",
     "picard-tol",
     "picard-stop",
@@ -315,6 +324,7 @@ const COMMON: [&str; 12] = [
     "max-dt",
     "min-quality-3d",
     "sliver-quality-3d",
+    "sliver-prediction",
 ];
 
 /// The common options, for `--help`.
@@ -339,6 +349,7 @@ Options common to the bundled examples and `pfem run`:
   --max-dt S            largest time step (s; default: the scene's)
   --min-quality-3d Q    3D quality floor of fluid tetrahedra, in [0, 0.5) (default 1e-3)
   --sliver-quality-3d Q fluid tetrahedra below this quality keep their start-of-step shape, in [0, 0.5) (default 0.06; 0: off)
+  --sliver-prediction on|off  also those whose predicted end-of-step quality is below it (default on)
   --threads N           worker threads (default: one per core)
   --version             print the version
   --help, -h            this help
@@ -427,6 +438,11 @@ mod tests {
         let e = args(&["--picard-stop", "estimate"]);
         assert!(e.reject_unknown(&[]).is_ok());
         assert!(e.step_params().unwrap().picard_error_estimate);
+        assert!(a.step_params().unwrap().sliver_prediction_3d);
+        let off = args(&["--sliver-prediction", "off"]);
+        assert!(off.reject_unknown(&[]).is_ok());
+        assert!(!off.step_params().unwrap().sliver_prediction_3d);
+        assert!(args(&["--sliver-prediction", "no"]).step_params().is_err());
         let sim = a
             .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
             .unwrap();
