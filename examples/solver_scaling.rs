@@ -9,6 +9,8 @@
 //!     [--case dam2d|column3d|all] [--sizes 20,40,80] [--steps 10] \
 //!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] [--end-time T]
 //! ```
+//! `block` is the default `BlockSolver` (it chooses its pressure solve by
+//! size); `block-ldlt` keeps it on the Cholesky path whatever the size;
 //! `block-reuse` keeps the block solver's set-up across a step's Picard
 //! iterates (`BlockSolver::reuse_setup`); `amg` is the block solver with
 //! multigrid on the pressure
@@ -68,6 +70,13 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
         "block-reuse" => {
             let mut b = pfem::assembly::BlockSolver::default();
             b.reuse_setup = true;
+            Box::new(b)
+        }
+        // The Cholesky path whatever the size (a stabilised system: its
+        // saddle point's `L D Lᵀ`), as `block` was before it chose by size.
+        "block-ldlt" => {
+            let mut b = pfem::assembly::BlockSolver::default();
+            b.pressure = pfem::assembly::PressureSolve::Cholesky;
             Box::new(b)
         }
         "amg" => {

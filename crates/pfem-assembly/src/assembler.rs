@@ -270,8 +270,8 @@ where
     /// ([`Assembler::set_sliver_prediction`]).
     sliver_prediction: bool,
     /// Per element: integrated on its geometry at `tⁿ`, decided at the
-    /// step's first assembly (`prepare` and `set_sliver_quality` clear
-    /// it), and then its signed measure and `V grad W` at the iterate,
+    /// step's first assembly (`prepare`, `set_sliver_quality` and
+    /// `set_sliver_prediction` clear it), and then its signed measure and `V grad W` at the iterate,
     /// which its volumetric terms use.
     frozen: Vec<bool>,
     frozen_w: Vec<(f64, [Vector<D>; MAX_NV])>,
@@ -464,8 +464,9 @@ where
         materials: &[Box<dyn Material<D>>],
     ) -> Result<(), AssemblyError> {
         self.work.prepares += 1;
-        // Which elements are slivers depends on `xⁿ` only: decided again
-        // at the first assembly of this step.
+        // Which elements are slivers depends on `xⁿ` (and, foreseen, on
+        // `vⁿ`, `aⁿ` and `Δt`): decided again at the first assembly of
+        // this attempt.
         self.frozen.clear();
         self.set_cuts(
             mesh.elements.len() / <Const<D> as Dim>::NV,
@@ -780,7 +781,12 @@ where
         let nv = <Const<D> as Dim>::NV;
         let ne = self.n_elements;
         let n_local = nv * D;
-        if input.x.len() != self.n_particles || input.element_history.len() != ne {
+        let n = self.n_particles;
+        if [input.x, input.x_n].iter().any(|a| a.len() != n)
+            || [input.v, input.v_n, input.a_n].iter().any(|a| a.len() != n)
+            || input.pressure_n.len() != n
+            || input.element_history.len() != ne
+        {
             return Err(AssemblyError::MeshMismatch {
                 what: "assembly input does not match the prepared mesh",
             });

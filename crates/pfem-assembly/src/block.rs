@@ -47,9 +47,10 @@
 //!   (`crates/pfem-assembly/tests/split_system.rs`).
 //!
 //! A stabilised system has no sparse eliminated matrix: with
-//! [`PressureSolve::Cholesky`] (and in every other solver's default
-//! `solve_split`) it is solved by one sparse `L D Lᵀ` of its saddle-point
-//! form ([`solve_saddle`]).
+//! [`PressureSolve::Cholesky`], with [`PressureSolve::Auto`] below
+//! [`BlockSolver::multigrid_from`] pressure rows, and in every other
+//! solver's default `solve_split`, it is solved by one sparse `L D Lᵀ` of
+//! its saddle-point form ([`solve_saddle`]).
 
 use std::time::Instant;
 
@@ -75,7 +76,6 @@ use crate::SolveError;
 pub enum PressureSolve {
     /// Sparse Cholesky of `Ŝ`, inside conjugate gradient on the
     /// eliminated system.
-    #[default]
     Cholesky,
     /// One V-cycle of smoothed aggregation, inside MINRES on the
     /// saddle-point form.
@@ -85,6 +85,7 @@ pub enum PressureSolve {
     /// [`PressureSolve::Multigrid`], every other system by
     /// [`PressureSolve::Cholesky`] (the paper's unstabilised pressure
     /// defeats the multigrid, module docs).
+    #[default]
     Auto,
 }
 
@@ -1150,8 +1151,14 @@ impl LinearSolver for BlockSolver {
     ) -> Result<SolveReport, SolveError> {
         let pressure = self.pressure_for(sys);
         if sys.stabilisation.is_some() && pressure == PressureSolve::Cholesky {
+            // A run whose size crossed `multigrid_from` keeps one path's
+            // storage only.
+            self.setup = None;
             self.stats.solves += 1;
             return solve_saddle_with(sys, &mut self.saddle, &mut self.work, x);
+        }
+        if sys.stabilisation.is_some() {
+            self.saddle = QuasiDefinite::default();
         }
         let done = if sys.stabilisation.is_some() {
             self.iterate_stabilised(sys, generation, x)
@@ -1191,7 +1198,8 @@ impl BlockSolver {
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
         let Some(st) = sys.stabilisation else {
-            return self.iterate(sys, PressureSolve::Cholesky, generation, x);
+            let pressure = self.pressure_for(sys);
+            return self.iterate(sys, pressure, generation, x);
         };
         crate::solver::check_finite(sys.rhs)?;
         crate::solver::check_finite(st.offset)?;

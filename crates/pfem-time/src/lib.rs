@@ -249,7 +249,8 @@ pub struct StepParams {
     /// replaces the sliver, which may end the step flat or inverted. 2D
     /// Delaunay triangulations have no slivers (they maximise the smallest
     /// angle), so 2D is left as the paper has it. Default
-    /// [`SLIVER_QUALITY_3D`]; 0 turns it off (an inverted sliver then
+    /// [`SLIVER_QUALITY_3D`]; 0 turns it off, and with it
+    /// [`StepParams::sliver_prediction_3d`] (an inverted sliver then
     /// rejects the attempt, as any inverted element does).
     pub sliver_quality_3d: f64,
     /// Slivers foreseen (deviation 13), 3D only: also treat as a sliver a
