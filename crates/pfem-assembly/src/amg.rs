@@ -203,25 +203,33 @@ pub struct Csr {
 /// [`Csr::spmv`]: in parallel row chunks above 20 000 rows, each row
 /// summed in order.
 pub(crate) fn spmv_parts(ptr: &[usize], idx: &[usize], val: &[f64], x: &[f64], y: &mut [f64]) {
-    let row = |i: usize| -> f64 {
-        let mut s = 0.0;
-        for k in ptr[i]..ptr[i + 1] {
-            s += val[k] * x[idx[k]];
-        }
-        s
-    };
+    for_each_row(y, |i, yi| *yi = row_dot_parts(ptr, idx, val, i, x));
+}
+
+/// Row `i` of `A` (CSR arrays) times `x`, summed in order.
+fn row_dot_parts(ptr: &[usize], idx: &[usize], val: &[f64], i: usize, x: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for k in ptr[i]..ptr[i + 1] {
+        s += val[k] * x[idx[k]];
+    }
+    s
+}
+
+/// Calls `f(i, &mut y[i])` for every row: in parallel chunks of
+/// `SPMV_CHUNK` rows above `PAR_ROWS` rows, in order otherwise.
+fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
     if y.len() > PAR_ROWS {
         y.par_chunks_mut(SPMV_CHUNK)
             .enumerate()
             .for_each(|(c, ys)| {
                 let base = c * SPMV_CHUNK;
                 for (j, yi) in ys.iter_mut().enumerate() {
-                    *yi = row(base + j);
+                    f(base + j, yi);
                 }
             });
     } else {
         for (i, yi) in y.iter_mut().enumerate() {
-            *yi = row(i);
+            f(i, yi);
         }
     }
 }
@@ -349,11 +357,7 @@ impl Csr {
 
     #[inline]
     fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
-        let mut s = 0.0;
-        for k in self.ptr[i]..self.ptr[i + 1] {
-            s += self.val[k] * x[self.idx[k]];
-        }
-        s
+        row_dot_parts(&self.ptr, &self.idx, &self.val, i, x)
     }
 
     /// `y = A x`. Runs in parallel (rayon, row chunks) when the matrix has
@@ -374,20 +378,7 @@ impl Csr {
     pub fn spmv_add(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
         assert_eq!(x.len(), self.ncols, "spmv_add: x has wrong length");
         assert_eq!(y.len(), self.nrows, "spmv_add: y has wrong length");
-        if self.nrows > PAR_ROWS {
-            y.par_chunks_mut(SPMV_CHUNK)
-                .enumerate()
-                .for_each(|(c, ys)| {
-                    let base = c * SPMV_CHUNK;
-                    for (j, yi) in ys.iter_mut().enumerate() {
-                        *yi += alpha * self.row_dot(base + j, x);
-                    }
-                });
-        } else {
-            for (i, yi) in y.iter_mut().enumerate() {
-                *yi += alpha * self.row_dot(i, x);
-            }
-        }
+        for_each_row(y, |i, yi| *yi += alpha * self.row_dot(i, x));
     }
 
     /// Returns `A^T` (columns sorted within each row).

@@ -823,8 +823,10 @@ where
                 let mut x = [Point::<D>::zeros(); MAX_NV];
                 let mut xn = [Point::<D>::zeros(); MAX_NV];
                 let mut v = [Vector::<D>::zeros(); MAX_NV];
+                let mut parts = [0usize; MAX_NV];
                 for a in 0..nv {
                     let p = particle_of[elem_sys[e * nv + a] as usize] as usize;
+                    parts[a] = p;
                     x[a] = input.x[p];
                     xn[a] = input.x_n[p];
                     v[a] = input.v[p];
@@ -837,10 +839,8 @@ where
                                 // The constant-acceleration prediction of
                                 // the step's end (deviation 13).
                                 let (dt, mut xp) = (input.dt, xn);
-                                for a in 0..nv {
-                                    let p = particle_of[elem_sys[e * nv + a] as usize] as usize;
-                                    xp[a] =
-                                        xn[a] + input.v_n[p] * dt + input.a_n[p] * (0.5 * dt * dt);
+                                for (xp, &p) in xp.iter_mut().zip(&parts[..nv]) {
+                                    *xp = *xp + input.v_n[p] * dt + input.a_n[p] * (0.5 * dt * dt);
                                 }
                                 crate::kernels::shape_quality::<D>(&xp[..nv]) < sliver_quality
                             }));

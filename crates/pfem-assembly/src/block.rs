@@ -565,19 +565,21 @@ impl Woodbury {
         let inv: Vec<f64> = (0..n)
             .map(|i| if pos[i] == NONE { 1.0 / diag[i] } else { 0.0 })
             .collect();
-        let (plan, mut factor, mut ct_val, mut s_val) = match old {
+        let (plan, mut factor, mut c_val, mut ct_val, mut s_val) = match old {
             Some(w) if w.plan.fits(generation, sys.c_ptr, sys.c_idx) => {
                 let w = *w;
-                (w.plan, w.factor, w.ct_val, w.s_val)
+                (w.plan, w.factor, w.c_val, w.ct_val, w.s_val)
             }
             old => (
                 SchurProduct::new(generation, sys.c_ptr, sys.c_idx, n),
                 old.map(|w| w.factor).unwrap_or_default(),
                 Vec::new(),
                 Vec::new(),
+                Vec::new(),
             ),
         };
-        let c_val = sys.c_val.to_vec();
+        c_val.clear();
+        c_val.extend_from_slice(sys.c_val);
         plan.transpose_values(&c_val, &mut ct_val);
         let fail = |detail: String| SolveError::Factorization {
             solver: NAME,
@@ -1150,17 +1152,15 @@ impl LinearSolver for BlockSolver {
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
         let pressure = self.pressure_for(sys);
+        // A stabilised run whose size crossed `multigrid_from` keeps one
+        // path's storage only.
         if sys.stabilisation.is_some() && pressure == PressureSolve::Cholesky {
-            // A run whose size crossed `multigrid_from` keeps one path's
-            // storage only.
             self.setup = None;
             self.stats.solves += 1;
             return solve_saddle_with(sys, &mut self.saddle, &mut self.work, x);
         }
-        if sys.stabilisation.is_some() {
-            self.saddle = QuasiDefinite::default();
-        }
         let done = if sys.stabilisation.is_some() {
+            self.saddle = QuasiDefinite::default();
             self.iterate_stabilised(sys, generation, x)
         } else {
             self.iterate(sys, pressure, generation, x)
