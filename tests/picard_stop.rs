@@ -1,7 +1,9 @@
-//! Stopping the Picard loop on its estimated error
-//! (`StepParams::picard_error_estimate`, issue 18: fewer solves per step)
-//! saves iterations and keeps the answer: the 2D dam break at a/10 to
-//! 0.1 s against the default stop on the last change.
+//! Fewer Picard iterations per step (issue 18, item 2), same answers:
+//! stopping the loop on its estimated error
+//! (`StepParams::picard_error_estimate`), the 2D dam break at a/10 to
+//! 0.1 s against the default stop on the last change; and starting it
+//! from the step's predicted end (`StepParams::predict_first_iterate`),
+//! exact for a free fall.
 //! `cargo test --release --test picard_stop -- --nocapture`
 
 use pfem::cases::DamBreak;
@@ -9,12 +11,15 @@ use pfem::prelude::*;
 
 /// Front (m), fluid volume (m³), steps, Picard iterations (assemblies).
 fn dam_break(estimate: bool) -> (f64, f64, u64, u64) {
-    let mut c = DamBreak::default();
-    c.spacing = c.width / 10.0;
-    let params = StepParams {
+    dam_break_with(StepParams {
         picard_error_estimate: estimate,
         ..Default::default()
-    };
+    })
+}
+
+fn dam_break_with(params: StepParams) -> (f64, f64, u64, u64) {
+    let mut c = DamBreak::default();
+    c.spacing = c.width / 10.0;
     let mut sim = Simulation::new(c.scene(), Box::new(Delaunay2::default()), params).unwrap();
     sim.set_end_time(0.1).unwrap();
     sim.run(&mut []).unwrap();
@@ -41,6 +46,87 @@ fn the_error_estimate_stops_earlier_with_the_same_answer() {
     );
     // At least half an iteration per step fewer (measured: about one).
     assert!(per(i1, s1) < per(i0, s0) - 0.5, "{i0}/{s0} vs {i1}/{s1}");
+    assert!((f1 / f0 - 1.0).abs() < 1e-3, "front {f0} vs {f1}");
+    assert!((v1 / v0 - 1.0).abs() < 1e-4, "volume {v0} vs {v1}");
+}
+
+/// A water block in free fall, stress free (pressure zeroed, initial
+/// acceleration `g`): the predicted first iterate is the step's answer,
+/// so each step takes one Picard iterate; from the start of the step it
+/// takes at least two. Returns (iterations, steps, centroid's fall
+/// against `g t²/2`, relative).
+fn free_fall(predict: bool) -> (u64, u64, f64) {
+    const G: f64 = 9.81;
+    let scene = Scene::<2>::new("free_fall_2d")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.05,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.1, 0.1),
+            },
+            0.01,
+        );
+    let params = StepParams {
+        predict_first_iterate: predict,
+        ..Default::default()
+    };
+    let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), params).unwrap();
+    for i in 0..sim.particles().len() {
+        sim.particles_mut().pressure_mut()[i] = 0.0;
+        sim.particles_mut().a_mut()[i] = Vector::<2>::new(0.0, -G);
+    }
+    let water = sim.body_particles("water").unwrap();
+    let cy = |s: &Simulation<2>| {
+        water.iter().map(|&i| s.particles().x()[i].y).sum::<f64>() / water.len() as f64
+    };
+    let y0 = cy(&sim);
+    sim.run(&mut []).unwrap();
+    let exact = 0.5 * G * sim.time() * sim.time();
+    (
+        sim.stats().assemble.0,
+        sim.steps(),
+        (y0 - cy(&sim)) / exact - 1.0,
+    )
+}
+
+#[test]
+fn a_predicted_first_iterate_is_exact_in_free_fall() {
+    let (i1, s1, e1) = free_fall(true);
+    let (i0, s0, e0) = free_fall(false);
+    println!("free fall: predicted {i1} iterates in {s1} steps ({e1:+.1e}); start {i0} in {s0} ({e0:+.1e})");
+    assert_eq!(i1, s1, "one iterate per step");
+    assert!(i0 >= 2 * s0, "{i0} iterates in {s0} steps");
+    assert!(e1.abs() < 1e-6 && e0.abs() < 1e-6, "fall {e1} / {e0}");
+}
+
+#[test]
+fn a_predicted_first_iterate_saves_iterations_with_the_same_answer() {
+    let run = |predict| {
+        dam_break_with(StepParams {
+            predict_first_iterate: predict,
+            ..Default::default()
+        })
+    };
+    let (f0, v0, s0, i0) = run(false);
+    let (f1, v1, s1, i1) = run(true);
+    let per = |i: u64, s: u64| i as f64 / s as f64;
+    println!(
+        "start: front {f0:.5} m, {s0} steps, {:.2} iterations per step; \
+         predicted: front {f1:.5} m ({:+.2e}), {s1} steps, {:.2} per step; volume {:+.2e}",
+        per(i0, s0),
+        f1 / f0 - 1.0,
+        per(i1, s1),
+        v1 / v0 - 1.0
+    );
+    assert!(per(i1, s1) < per(i0, s0) - 0.2, "{i0}/{s0} vs {i1}/{s1}");
     assert!((f1 / f0 - 1.0).abs() < 1e-3, "front {f0} vs {f1}");
     assert!((v1 / v0 - 1.0).abs() < 1e-4, "volume {v0} vs {v1}");
 }

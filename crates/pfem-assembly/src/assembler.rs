@@ -374,7 +374,7 @@ where
     /// that otherwise invert within the step and reject it: a tetrahedron
     /// of fair shape at `tⁿ` that the flow squeezes flat. Decided, as the
     /// slivers are, at the step's first assembly. Default off here;
-    /// `pfem_time::StepParams::sliver_prediction_3d` turns it on.
+    /// `pfem_time::StepParams::sliver_prediction` turns it on.
     pub fn set_sliver_prediction(&mut self, on: bool) {
         if on != self.sliver_prediction {
             self.sliver_prediction = on;

@@ -168,3 +168,112 @@ fn a_tetrahedron_foreseen_flat_keeps_its_start_shape() {
     let (asm, _) = assemble_moving(&start(), 0.06, true, &[Vector::<3>::zeros(); 6]);
     assert!(asm.is_frozen(0) && !asm.is_frozen(1) && !asm.is_frozen(2));
 }
+
+/// Two triangles on the edge 1-2: triangle 0 (0, 1, 2) well shaped,
+/// triangle 1 (1, 3, 2) nearly flat (node 3 a hundredth of the edge off
+/// it, quality about 0.04).
+fn start_2d() -> Vec<Point<2>> {
+    vec![
+        Point::<2>::new(0.0, 0.0),
+        Point::<2>::new(1.0, 0.0),
+        Point::<2>::new(0.0, 1.0),
+        Point::<2>::new(0.5 + 0.01, 0.5 + 0.01),
+    ]
+}
+
+const TRIS: [u32; 6] = [0, 1, 2, 1, 3, 2];
+
+/// The 2D analogue of [`assemble_moving`]: assembles at the iterate `x`
+/// (start [`start_2d`]) with the velocities `v_n` at `tⁿ`.
+fn assemble_2d(
+    x: &[Point<2>],
+    q: f64,
+    predict: bool,
+    v_n: &[Vector<2>],
+) -> (Assembler<2>, Result<(), AssemblyError>) {
+    let xn = start_2d();
+    let n = xn.len();
+    let materials: Vec<Box<dyn Material<2>>> = vec![Box::new(Newtonian::water())];
+    let dt = 1e-3;
+    let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
+    asm.set_sliver_quality(q);
+    asm.set_sliver_prediction(predict);
+    asm.prepare(
+        n,
+        StepMesh {
+            elements: &TRIS,
+            element_material: &[0, 0],
+            closures: &[],
+            surface_cuts: Default::default(),
+        },
+        &materials,
+    )
+    .unwrap();
+    let v: Vec<Vector<2>> = x.iter().zip(&xn).map(|(a, b)| (a - b) / dt).collect();
+    let r = asm
+        .assemble(&AssemblyInput {
+            x,
+            x_n: &xn,
+            v: &v,
+            v_n,
+            a_n: &vec![Vector::<2>::zeros(); n],
+            pressure_n: &vec![0.0; n],
+            element_history: &[History::default(); 2],
+            materials: &materials,
+            constraints: &Constraints::<2>::free(n),
+            body_force: Some(Vector::<2>::new(0.0, -9.81)),
+            dt,
+            inertia: Inertia {
+                mass_factor: 2.0 / dt,
+                acceleration_factor: 1.0,
+                displacement_weight: 0.5 * dt,
+            },
+        })
+        .map(|_| ());
+    (asm, r)
+}
+
+/// Deviation 13 in 2D (session 19): the 2D dam break rejected 15 % of its
+/// attempts for inverted triangles. A flat triangle whose iterate inverts
+/// keeps its start shape; a fair one that the motion at `tⁿ` pushes
+/// through its opposite edge is foreseen.
+#[test]
+fn a_triangle_flat_or_foreseen_flat_keeps_its_start_shape() {
+    let q = |t: &[u32]| {
+        pfem_assembly::kernels::shape_quality::<2>(
+            &t.iter()
+                .map(|&i| start_2d()[i as usize])
+                .collect::<Vec<_>>(),
+        )
+    };
+    assert!(q(&TRIS[..3]) > 0.9, "triangle 0: {}", q(&TRIS[..3]));
+    assert!(q(&TRIS[3..]) < 0.05, "triangle 1: {}", q(&TRIS[3..]));
+    // Node 3 crosses the edge 1-2 (triangle 1 inverts): failed without the
+    // rule, kept in shape with it.
+    let mut x = start_2d();
+    x[3] = Point::<2>::new(0.49, 0.49);
+    let still = vec![Vector::<2>::zeros(); 4];
+    let (_, off) = assemble_2d(&x, 0.0, false, &still);
+    assert!(matches!(
+        off,
+        Err(AssemblyError::InvertedElement { element: 1, .. })
+    ));
+    let (asm, on) = assemble_2d(&x, 0.05, false, &still);
+    on.unwrap();
+    assert!(!asm.is_frozen(0) && asm.is_frozen(1));
+    // Node 0 moving at tⁿ towards the far side of edge 1-2: triangle 0,
+    // fair at tⁿ, is foreseen inverted and kept in shape too.
+    let dt = 1e-3;
+    let mut v_n = still.clone();
+    v_n[0] = Vector::<2>::new(0.8, 0.8) / dt;
+    let mut x = start_2d();
+    x[0] = Point::<2>::new(0.8, 0.8);
+    let (_, off) = assemble_2d(&x, 0.05, false, &v_n);
+    assert!(matches!(
+        off,
+        Err(AssemblyError::InvertedElement { element: 0, .. })
+    ));
+    let (asm, on) = assemble_2d(&x, 0.05, true, &v_n);
+    on.unwrap();
+    assert!(asm.is_frozen(0) && asm.is_frozen(1));
+}

@@ -384,6 +384,12 @@ where
                 value: params.sliver_quality_3d,
             });
         }
+        if !(0.0..1.0).contains(&params.sliver_quality_2d) {
+            return Err(SceneError::InvalidSetting {
+                setting: "sliver_quality_2d",
+                value: params.sliver_quality_2d,
+            });
+        }
         scene.validate_within(options.memory_budget)?;
         // The scene's pressure stabilisation, unless the program set one.
         let mut params = params;
@@ -963,6 +969,16 @@ where
     /// The stages this scene runs.
     pub fn stages(&self) -> Stages {
         self.stages
+    }
+
+    /// Whether element `e` (an index into [`crate::Elements::all`]) was kept in
+    /// its start-of-step shape through the last step: a fluid sliver, or
+    /// an element foreseen flat (ARCHITECTURE.md deviation 13). Such an
+    /// element may end the step flat or inverted; the next remeshing
+    /// replaces it. Every other element ends a step with a positive
+    /// measure (the step is rejected otherwise).
+    pub fn kept_in_shape(&self, e: usize) -> bool {
+        self.stepper.integrator.assembler().is_frozen(e)
     }
 
     /// Stage timings and counters.

@@ -143,12 +143,28 @@ impl Args {
         )? {
             p.sliver_quality_3d = q;
         }
+        if let Some(q) = self.bounded(
+            "sliver-quality-2d",
+            |q| (0.0..1.0).contains(&q),
+            "a number in [0, 1)",
+        )? {
+            p.sliver_quality_2d = q;
+        }
         match self.options.get("sliver-prediction").map(String::as_str) {
             None | Some("on") => {}
-            Some("off") => p.sliver_prediction_3d = false,
+            Some("off") => p.sliver_prediction = false,
             Some(other) => {
                 return Err(ArgsError(format!(
                     "--sliver-prediction must be on or off, got `{other}`"
+                )))
+            }
+        }
+        match self.options.get("first-iterate").map(String::as_str) {
+            None | Some("start") => p.predict_first_iterate = false,
+            Some("predicted") => p.predict_first_iterate = true,
+            Some(other) => {
+                return Err(ArgsError(format!(
+                    "--first-iterate must be start or predicted, got `{other}`"
                 )))
             }
         }
@@ -300,7 +316,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-prediction{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-quality-2d --sliver-prediction --first-iterate{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -311,7 +327,7 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 13] = [
+const COMMON: [&str; 15] = [
     "scheme",
     "picard-tol",
     "picard-stop",
@@ -324,7 +340,9 @@ const COMMON: [&str; 13] = [
     "max-dt",
     "min-quality-3d",
     "sliver-quality-3d",
+    "sliver-quality-2d",
     "sliver-prediction",
+    "first-iterate",
 ];
 
 /// The common options, for `--help`.
@@ -349,7 +367,11 @@ Options common to the bundled examples and `pfem run`:
   --max-dt S            largest time step (s; default: the scene's)
   --min-quality-3d Q    3D quality floor of fluid tetrahedra, in [0, 0.5) (default 1e-3)
   --sliver-quality-3d Q fluid tetrahedra below this quality keep their start-of-step shape, in [0, 0.5) (default 0.06; 0: off)
+  --sliver-quality-2d Q the same for 2D triangles, in [0, 1) (default 0: off; 0.05 measured)
   --sliver-prediction on|off  also those whose predicted end-of-step quality is below it (default on)
+  --first-iterate start|predicted
+                        Picard's first iterate: the start of the step (default) or
+                        the fluid's constant-acceleration prediction
   --threads N           worker threads (default: one per core)
   --version             print the version
   --help, -h            this help
@@ -438,11 +460,21 @@ mod tests {
         let e = args(&["--picard-stop", "estimate"]);
         assert!(e.reject_unknown(&[]).is_ok());
         assert!(e.step_params().unwrap().picard_error_estimate);
-        assert!(a.step_params().unwrap().sliver_prediction_3d);
+        assert!(a.step_params().unwrap().sliver_prediction);
         let off = args(&["--sliver-prediction", "off"]);
         assert!(off.reject_unknown(&[]).is_ok());
-        assert!(!off.step_params().unwrap().sliver_prediction_3d);
+        assert!(!off.step_params().unwrap().sliver_prediction);
         assert!(args(&["--sliver-prediction", "no"]).step_params().is_err());
+        let q2 = args(&["--sliver-quality-2d", "0.1"]);
+        assert!(q2.reject_unknown(&[]).is_ok());
+        assert_eq!(q2.step_params().unwrap().sliver_quality_2d, 0.1);
+        assert!(args(&["--sliver-quality-2d", "1.2"]).step_params().is_err());
+        assert_eq!(a.step_params().unwrap().sliver_quality_2d, 0.0);
+        assert!(!a.step_params().unwrap().predict_first_iterate);
+        let fi = args(&["--first-iterate", "predicted"]);
+        assert!(fi.reject_unknown(&[]).is_ok());
+        assert!(fi.step_params().unwrap().predict_first_iterate);
+        assert!(args(&["--first-iterate", "end"]).step_params().is_err());
         let sim = a
             .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
             .unwrap();
