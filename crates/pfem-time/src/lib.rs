@@ -257,8 +257,12 @@ pub struct StepParams {
     /// isosceles one). A 2D Delaunay triangulation maximises the smallest
     /// angle, but particles on a free surface can be nearly collinear,
     /// and the flow can squeeze a fair triangle flat within a step: the
-    /// 2D dam break rejected 15 % of its attempts for inverted triangles
-    /// without it. Default [`SLIVER_QUALITY_2D`]; 0 turns it off.
+    /// 2D dam break rejects 15 % of its attempts for inverted triangles.
+    /// Default 0, off; [`SLIVER_QUALITY_2D`] is the measured threshold to
+    /// opt in with: the 2D examples then take 11–26 % fewer steps, but
+    /// the square column's surge front (`dam_break_2d --aspect 1`) falls
+    /// back mid-run and its error against Martin & Moyce grows from
+    /// 3.85 % to 11.57 % (`docs/benchmarks.md`, session 19).
     pub sliver_quality_2d: f64,
     /// Slivers foreseen (deviation 13): also treat as a sliver a fluid
     /// element whose quality at the step's predicted end
@@ -297,7 +301,8 @@ pub struct StepParams {
 /// between 10⁻³ and 0.06 at the start of the step (median 4·10⁻³).
 pub const SLIVER_QUALITY_3D: f64 = 0.06;
 
-/// Default [`StepParams::sliver_quality_2d`]: with the prediction on, the
+/// The threshold to opt in with for [`StepParams::sliver_quality_2d`]
+/// (default off): with the prediction on, the
 /// 2D dam break's rejected attempts (0.4 s) were 4, 4, 2, 1 and 2 for
 /// thresholds 0.01, 0.02, 0.05, 0.1 and 0.2 (104 with neither rule), in
 /// 545, 531, 527, 531 and 545 steps: 0.05 takes the fewest, 4 % of the
@@ -318,7 +323,7 @@ impl Default for StepParams {
             reuse_factorization: false,
             pressure_stabilisation: 0.0,
             sliver_quality_3d: SLIVER_QUALITY_3D,
-            sliver_quality_2d: SLIVER_QUALITY_2D,
+            sliver_quality_2d: 0.0,
             sliver_prediction: true,
             predict_first_iterate: false,
         }
