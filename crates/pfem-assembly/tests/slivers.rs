@@ -11,7 +11,7 @@ use pfem_assembly::{
     Assembler, AssemblyError, AssemblyInput, Constraints, Inertia, StepMesh, VolumetricTreatment,
 };
 use pfem_constitutive::{History, Hypoelastic, Material, Newtonian};
-use pfem_core::{Point, Vector};
+use pfem_core::{Const, Dim, Point, Vector};
 
 /// Node 2 lifts the square 0-1-2-3 by `EPS`: tetrahedron 0 (0, 1, 3, 2)
 /// is a sliver (quality about 0.005); tetrahedra 1 (0, 3, 1, 4) below and
@@ -45,37 +45,71 @@ fn assemble_moving(
     predict: bool,
     v_n: &[Vector<3>],
 ) -> (Assembler<3>, Result<(), AssemblyError>) {
-    let xn = start();
-    let n = xn.len();
     let materials: Vec<Box<dyn Material<3>>> = vec![Box::new(Newtonian::water())];
+    let mesh = Mesh {
+        xn: &start(),
+        elements: &TETS,
+        element_material: &[0, 0, 0],
+        materials: &materials,
+    };
+    assemble_mesh(&mesh, x, q, predict, v_n)
+}
+
+/// A step's mesh at `tⁿ`: positions, connectivity, materials.
+struct Mesh<'a, const D: usize>
+where
+    Const<D>: Dim,
+{
+    xn: &'a [Point<D>],
+    elements: &'a [u32],
+    element_material: &'a [u16],
+    materials: &'a [Box<dyn Material<D>>],
+}
+
+/// Assembles `mesh` at the iterate `x` (the velocity that takes `xⁿ`
+/// there in `Δt` = 1 ms) with the sliver threshold `q`, the prediction on
+/// or off, and the velocities `v_n` at `tⁿ`.
+fn assemble_mesh<const D: usize>(
+    mesh: &Mesh<'_, D>,
+    x: &[Point<D>],
+    q: f64,
+    predict: bool,
+    v_n: &[Vector<D>],
+) -> (Assembler<D>, Result<(), AssemblyError>)
+where
+    Const<D>: Dim,
+{
+    let n = mesh.xn.len();
     let dt = 1e-3;
-    let mut asm = Assembler::<3>::new(VolumetricTreatment::NodalAveraged);
+    let mut asm = Assembler::<D>::new(VolumetricTreatment::NodalAveraged);
     asm.set_sliver_quality(q);
     asm.set_sliver_prediction(predict);
     asm.prepare(
         n,
         StepMesh {
-            elements: &TETS,
-            element_material: &[0, 0, 0],
+            elements: mesh.elements,
+            element_material: mesh.element_material,
             closures: &[],
             surface_cuts: Default::default(),
         },
-        &materials,
+        mesh.materials,
     )
     .unwrap();
-    let v: Vec<Vector<3>> = x.iter().zip(&xn).map(|(a, b)| (a - b) / dt).collect();
+    let v: Vec<Vector<D>> = x.iter().zip(mesh.xn).map(|(a, b)| (a - b) / dt).collect();
+    let mut g = Vector::<D>::zeros();
+    g[D - 1] = -9.81;
     let r = asm
         .assemble(&AssemblyInput {
             x,
-            x_n: &xn,
+            x_n: mesh.xn,
             v: &v,
             v_n,
-            a_n: &vec![Vector::<3>::zeros(); n],
+            a_n: &vec![Vector::<D>::zeros(); n],
             pressure_n: &vec![0.0; n],
-            element_history: &[History::default(); 3],
-            materials: &materials,
-            constraints: &Constraints::<3>::free(n),
-            body_force: Some(Vector::<3>::new(0.0, 0.0, -9.81)),
+            element_history: &vec![History::default(); mesh.element_material.len()],
+            materials: mesh.materials,
+            constraints: &Constraints::<D>::free(n),
+            body_force: Some(g),
             dt,
             inertia: Inertia {
                 mass_factor: 2.0 / dt,
@@ -183,54 +217,21 @@ fn start_2d() -> Vec<Point<2>> {
 
 const TRIS: [u32; 6] = [0, 1, 2, 1, 3, 2];
 
-/// The 2D analogue of [`assemble_moving`]: assembles at the iterate `x`
-/// (start [`start_2d`]) with the velocities `v_n` at `tⁿ`.
+/// The 2D analogue of [`assemble_moving`] (start [`start_2d`]).
 fn assemble_2d(
     x: &[Point<2>],
     q: f64,
     predict: bool,
     v_n: &[Vector<2>],
 ) -> (Assembler<2>, Result<(), AssemblyError>) {
-    let xn = start_2d();
-    let n = xn.len();
     let materials: Vec<Box<dyn Material<2>>> = vec![Box::new(Newtonian::water())];
-    let dt = 1e-3;
-    let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
-    asm.set_sliver_quality(q);
-    asm.set_sliver_prediction(predict);
-    asm.prepare(
-        n,
-        StepMesh {
-            elements: &TRIS,
-            element_material: &[0, 0],
-            closures: &[],
-            surface_cuts: Default::default(),
-        },
-        &materials,
-    )
-    .unwrap();
-    let v: Vec<Vector<2>> = x.iter().zip(&xn).map(|(a, b)| (a - b) / dt).collect();
-    let r = asm
-        .assemble(&AssemblyInput {
-            x,
-            x_n: &xn,
-            v: &v,
-            v_n,
-            a_n: &vec![Vector::<2>::zeros(); n],
-            pressure_n: &vec![0.0; n],
-            element_history: &[History::default(); 2],
-            materials: &materials,
-            constraints: &Constraints::<2>::free(n),
-            body_force: Some(Vector::<2>::new(0.0, -9.81)),
-            dt,
-            inertia: Inertia {
-                mass_factor: 2.0 / dt,
-                acceleration_factor: 1.0,
-                displacement_weight: 0.5 * dt,
-            },
-        })
-        .map(|_| ());
-    (asm, r)
+    let mesh = Mesh {
+        xn: &start_2d(),
+        elements: &TRIS,
+        element_material: &[0, 0],
+        materials: &materials,
+    };
+    assemble_mesh(&mesh, x, q, predict, v_n)
 }
 
 /// Deviation 13 in 2D (session 19): the 2D dam break rejected 15 % of its
@@ -295,49 +296,20 @@ fn a_flat_triangle_touching_a_solid_is_not_kept_in_shape() {
         Box::new(Newtonian::water()),
         Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
     ];
-    let dt = 1e-3;
     let assemble = |solid: bool| {
-        let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
-        asm.set_sliver_quality(0.05);
-        asm.prepare(
-            n,
-            StepMesh {
-                elements: &elements,
-                element_material: &[0, 0, if solid { 1 } else { 0 }],
-                closures: &[],
-                surface_cuts: Default::default(),
-            },
-            &materials,
-        )
-        .unwrap();
         // Node 3 crosses the edge 1-2 (triangle 1 inverts), dragging the
         // third triangle along.
         let mut x = xn.clone();
         for p in [3, 4, 5] {
             x[p] -= Vector::<2>::new(0.02, 0.02);
         }
-        let v: Vec<Vector<2>> = x.iter().zip(&xn).map(|(a, b)| (a - b) / dt).collect();
-        let r = asm
-            .assemble(&AssemblyInput {
-                x: &x,
-                x_n: &xn,
-                v: &v,
-                v_n: &vec![Vector::<2>::zeros(); n],
-                a_n: &vec![Vector::<2>::zeros(); n],
-                pressure_n: &vec![0.0; n],
-                element_history: &[History::default(); 3],
-                materials: &materials,
-                constraints: &Constraints::<2>::free(n),
-                body_force: Some(Vector::<2>::new(0.0, -9.81)),
-                dt,
-                inertia: Inertia {
-                    mass_factor: 2.0 / dt,
-                    acceleration_factor: 1.0,
-                    displacement_weight: 0.5 * dt,
-                },
-            })
-            .map(|_| ());
-        (asm, r)
+        let mesh = Mesh {
+            xn: &xn,
+            elements: &elements,
+            element_material: &[0, 0, if solid { 1 } else { 0 }],
+            materials: &materials,
+        };
+        assemble_mesh(&mesh, &x, 0.05, false, &vec![Vector::<2>::zeros(); n])
     };
     // All fluid: triangle 1 is kept in shape and the assembly succeeds.
     let (asm, r) = assemble(false);
