@@ -154,10 +154,10 @@ impl Observer<2> for Watch {
 }
 
 /// Fluid and solid elements whose signed area at the current positions is
-/// not positive: (those the step integrated on their current shape,
-/// which the integrator must never accept inverted; those it kept in
-/// their start-of-step shape, slivers and elements foreseen flat, which
-/// may end the step inverted and which the next remeshing replaces:
+/// not positive, counted as (those the step integrated on their current
+/// shape, which the integrator must never accept inverted; those it kept
+/// in their start-of-step shape, slivers and elements foreseen flat, which
+/// may end the step inverted and which the next remeshing replaces,
 /// ARCHITECTURE.md deviation 13).
 pub fn inverted_elements(sim: &Simulation<2>) -> (usize, usize) {
     let measure = |el: &[u32]| {

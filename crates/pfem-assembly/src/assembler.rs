@@ -275,8 +275,8 @@ where
     /// which its volumetric terms use.
     frozen: Vec<bool>,
     frozen_w: Vec<(f64, [Vector<D>; MAX_NV])>,
-    /// Per particle: a node of a solid element (slivers touching one are
-    /// not kept in shape).
+    /// Per particle: a node of a solid element of the mesh
+    /// ([`Assembler::is_solid_particle`]).
     in_solid: Vec<bool>,
     /// Stabilised split form: `L̃` (CSR over the rows of `C`, laid out as
     /// the nodal patches, so that an element's `elem_slots` index its
@@ -396,6 +396,12 @@ where
     /// last assembly ([`Assembler::set_sliver_quality`]).
     pub fn is_frozen(&self, e: usize) -> bool {
         self.frozen.get(e).copied().unwrap_or(false)
+    }
+
+    /// Whether particle `p` is a node of a solid element of the mesh of
+    /// the last [`Assembler::prepare`].
+    pub fn is_solid_particle(&self, p: usize) -> bool {
+        self.in_solid.get(p).copied().unwrap_or(false)
     }
 
     /// Whether the nodal volumetric term is kept apart.
@@ -593,7 +599,13 @@ where
         self.elem_material.extend_from_slice(mesh.element_material);
         self.elem_fluid.clear();
         self.elem_vol.clear();
-        for &m in mesh.element_material {
+        self.in_solid.clear();
+        self.in_solid.resize(n_particles, false);
+        for (&m, el) in mesh
+            .element_material
+            .iter()
+            .zip(mesh.elements.chunks_exact(nv))
+        {
             let mat = materials
                 .get(m as usize)
                 .ok_or(AssemblyError::MeshMismatch {
@@ -601,6 +613,11 @@ where
                 })?;
             let kind = mat.kind();
             self.elem_fluid.push(kind == MaterialKind::Fluid);
+            if kind == MaterialKind::Solid {
+                for &p in el {
+                    self.in_solid[p as usize] = true;
+                }
+            }
             self.elem_vol
                 .push(volumetric_on_element(kind, self.treatment));
         }
@@ -824,21 +841,11 @@ where
         frozen_w.resize(ne, (0.0, [Vector::<D>::zeros(); MAX_NV]));
         let (elem_fluid, sliver_quality) = (&self.elem_fluid, self.sliver_quality);
         let predict = self.sliver_prediction;
-        // 2D: particles of solid elements; an element touching one is
-        // never kept in shape, so that a film of water between two bodies
-        // can be squeezed out (the step is rejected and halved instead).
-        let spare_solids = D == 2;
-        let mut in_solid = std::mem::take(&mut self.in_solid);
-        if decide && sliver_quality > 0.0 && spare_solids {
-            in_solid.clear();
-            in_solid.resize(input.x.len(), false);
-            for e in (0..ne).filter(|&e| !elem_fluid[e]) {
-                for a in 0..nv {
-                    in_solid[particle_of[elem_sys[e * nv + a] as usize] as usize] = true;
-                }
-            }
-        }
-        let touches_solid = |parts: &[usize]| spare_solids && parts.iter().any(|&p| in_solid[p]);
+        // 2D: an element touching a particle of a solid element is never
+        // kept in shape, so that a film of water between two bodies can be
+        // squeezed out (the step is rejected and halved instead).
+        let in_solid = &self.in_solid;
+        let touches_solid = |parts: &[usize]| D == 2 && parts.iter().any(|&p| in_solid[p]);
         let bad = states
             .par_iter_mut()
             .zip(unified.par_iter_mut())
@@ -906,7 +913,6 @@ where
         self.unified = unified;
         self.frozen = frozen;
         self.frozen_w = frozen_w;
-        self.in_solid = in_solid;
         // The cut parts at `xⁿ`, once per step (`prepare` clears them):
         // material within the step (the affine map of each element keeps
         // shares and barycentric centroids).

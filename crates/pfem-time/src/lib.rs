@@ -493,8 +493,6 @@ where
     delta: Vec<f64>,
     x_it: Vec<Point<D>>,
     v_it: Vec<Vector<D>>,
-    /// Per particle: a node of a solid element (this step's mesh).
-    in_solid: Vec<bool>,
     rates: Vec<NodalRate>,
 }
 
@@ -520,7 +518,6 @@ where
             delta: Vec::new(),
             x_it: Vec::new(),
             v_it: Vec::new(),
-            in_solid: Vec::new(),
             rates: Vec::new(),
         }
     }
@@ -750,33 +747,21 @@ where
                 self.v_it[p] = v;
             }
         }
-        // The first iterate is the predicted pair (X⁽⁰⁾, V⁽⁰⁾) or
-        // (`predict_first_iterate` off) the pair (Xⁿ, V⁽⁰⁾) with V⁽⁰⁾ the
-        // velocity for which the scheme leaves a particle at Xⁿ: either
-        // way positions and velocities agree at every iterate: a solid's stress follows the
-        // positions and is linearised in the velocity about that pair
+        // The first iterate is the pair (Xⁿ, V⁽⁰⁾) with V⁽⁰⁾ the velocity for
+        // which the scheme leaves a particle at Xⁿ, or, with
+        // `predict_first_iterate`, the predicted pair for the particles of
+        // no solid element: either way positions and velocities agree at
+        // every iterate. A solid's stress follows the positions and is
+        // linearised in the velocity about that pair
         // (`Kinematics::displacement_weight`). Starting from (Xⁿ, Vⁿ)
         // instead told the solid it had strained by `w D(Vⁿ)`, which a 5 s
-        // quasi-static step of a moving beam could not recover from.
-        // Solids start from Xⁿ: their steps are not bounded by a Courant
-        // number, and a quasi-static step of seconds predicts them metres
-        // away (the Picard loop then stalls: `tests/beam.rs`).
+        // quasi-static step of a moving beam could not recover from; and a
+        // solid's step is not bounded by a Courant number, so a predicted
+        // one lands metres away and the loop stalls (`tests/beam.rs`).
         let predict = self.params.predict_first_iterate;
-        if predict {
-            let nv = <Const<D> as Dim>::NV;
-            self.in_solid.clear();
-            self.in_solid.resize(n, false);
-            for (e, el) in input.mesh.elements.chunks_exact(nv).enumerate() {
-                if !self.assembler.is_fluid_element(e) {
-                    for &p in el {
-                        self.in_solid[p as usize] = true;
-                    }
-                }
-            }
-        }
         for &p in self.assembler.particles() {
             let p = p as usize;
-            if predict && !self.in_solid[p] {
+            if predict && !self.assembler.is_solid_particle(p) {
                 let mut v = state.v[p] + state.a[p] * dt;
                 for k in 0..D {
                     if input.constraints.is_fixed(p, k) {
