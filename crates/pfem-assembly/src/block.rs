@@ -39,12 +39,20 @@
 //!   143 iterations of multigrid-preconditioned CG on `Ŝ` alone), so
 //!   without stabilisation it is not the default. With the pressure
 //!   stabilisation (`Assembler::set_pressure_stabilisation`,
-//!   [`SplitSystem::stabilisation`]) they are gone: MINRES runs on `[A_v Cᵀ; C −(I + L̃)]` with `Ŝ` grown by
-//!   `L̃`, warm-started from the last Picard iterate's `q` and keeping the
-//!   multigrid set-up across the iterates of a step
-//!   ([`BlockSolver::stabilised_reuse`]), and its iterations stay nearly
-//!   flat in size and in the bulk modulus
-//!   (`crates/pfem-assembly/tests/split_system.rs`).
+//!   [`SplitSystem::stabilisation`]) they are gone: the iteration runs on
+//!   `[A_v Cᵀ; C −(I + L̃)]` with `Ŝ` grown by `L̃`, warm-started from the
+//!   last Picard iterate's `q` and keeping the multigrid set-up across the
+//!   iterates of a step ([`BlockSolver::stabilised_reuse`]), and its
+//!   iterations stay nearly flat in size and in the bulk modulus
+//!   (`crates/pfem-assembly/tests/split_system.rs`). By default
+//!   ([`Krylov::Gmres`]) it is GMRES preconditioned on the right by the
+//!   block upper-triangular `[Â_v Cᵀ; 0 −Ŝ]`: with exact blocks that would
+//!   converge in two iterations, where the block-diagonal preconditioner
+//!   leaves MINRES the two eigenvalue clusters near `1` and `(1 ± √5)/2`;
+//!   and right preconditioning minimises the very residual the solve stops
+//!   on. Measured on the running 2D dam break (session 20), 11.6 and 13.4
+//!   iterations per solve at 15k and 109k particles against MINRES's 31.5
+//!   and 36.6, half the solve time.
 //!
 //! A stabilised system has no sparse eliminated matrix: with
 //! [`PressureSolve::Cholesky`], with [`PressureSolve::Auto`] below
@@ -89,6 +97,22 @@ pub enum PressureSolve {
     Auto,
 }
 
+/// The Krylov method of the stabilised multigrid path
+/// ([`PressureSolve::Multigrid`] on a stabilised system).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Krylov {
+    /// Restarted GMRES ([`BlockSolver::restart`]) preconditioned on the
+    /// right by the block upper-triangular `[Â_v Cᵀ; 0 −Ŝ]`; stops on the
+    /// saddle-point residual itself.
+    #[default]
+    Gmres,
+    /// MINRES with the block-diagonal `diag(Â_v, Ŝ)`, in passes of
+    /// refinement each aimed at the target; the symmetric method, a
+    /// short recurrence (no stored basis), about three times the
+    /// iterations.
+    Minres,
+}
+
 /// The preconditioner of the velocity block `A_v`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum VelocityBlock {
@@ -111,8 +135,10 @@ pub struct BlockSolver {
     /// Relative residual `‖f − (A_v + CᵀC) V‖/‖f‖` of the eliminated
     /// system (the one the direct solver reports) at which the solve stops.
     pub target: f64,
-    /// Reduction of the preconditioned residual at which each MINRES pass
-    /// stops (module docs: passes of refinement on the eliminated system).
+    /// The unstabilised multigrid path: the reduction of the preconditioned
+    /// residual at which each MINRES pass stops (module docs: passes of
+    /// refinement on the eliminated system). The stabilised path's MINRES
+    /// ([`Krylov::Minres`]) aims each pass at the target instead.
     pub tolerance: f64,
     /// The largest relative residual accepted when the iteration limit is
     /// reached first.
@@ -144,6 +170,11 @@ pub struct BlockSolver {
     /// solves with the same pattern generation (the Picard iterates of a
     /// step).
     pub stabilised_reuse: bool,
+    /// The stabilised multigrid path's Krylov method.
+    pub krylov: Krylov,
+    /// [`Krylov::Gmres`]: the basis vectors kept before a restart (each
+    /// the size of the saddle-point system).
+    pub restart: usize,
     setup: Option<Setup>,
     /// The factor of the stabilised saddle-point system
     /// ([`solve_saddle`]), kept for its symbolic analysis.
@@ -161,7 +192,7 @@ pub struct BlockSolver {
 pub struct BlockStats {
     /// Solves.
     pub solves: u64,
-    /// MINRES iterations summed over solves.
+    /// Krylov iterations summed over solves.
     pub iterations: u64,
     /// Largest iteration count of one solve.
     pub max_iterations: usize,
@@ -873,6 +904,8 @@ impl Default for BlockSolver {
             amg: AmgOptions::default(),
             reuse_setup: false,
             stabilised_reuse: true,
+            krylov: Krylov::Gmres,
+            restart: 30,
             setup: None,
             saddle: QuasiDefinite::default(),
             last_q: (u64::MAX, Vec::new()),
@@ -1186,9 +1219,10 @@ impl LinearSolver for BlockSolver {
 }
 
 impl BlockSolver {
-    /// MINRES on the stabilised saddle-point system
-    /// `[A_v Cᵀ; C −(I + L̃)] [V; q] = [f; o]` with the block-diagonal
-    /// preconditioner `diag(Â_v, Ŝ)`, `Ŝ = I + L̃ + C Â⁻¹ Cᵀ` by one
+    /// The stabilised saddle-point system `[A_v Cᵀ; C −(I + L̃)] [V; q] =
+    /// [f; o]` by [`BlockSolver::krylov`]: GMRES with the block
+    /// upper-triangular preconditioner `[Â_v Cᵀ; 0 −Ŝ]` or MINRES with the
+    /// block-diagonal `diag(Â_v, Ŝ)`, `Ŝ = I + L̃ + C Â⁻¹ Cᵀ` by one
     /// V-cycle of smoothed aggregation; passes of refinement on the whole
     /// residual. The residual reported is the saddle-point system's.
     fn iterate_stabilised(
@@ -1270,17 +1304,34 @@ impl BlockSolver {
         };
         let mut residual = residual_of(&y, &mut r, &mut tmp);
         let mut iterations = 0;
+        let apply_t = |r: &[f64], z: &mut [f64], tmp: &mut [f64]| {
+            apply_upper(velocity, schur, &ct, n, r, z, tmp)
+        };
+        let absolute = self.target * if den > 0.0 { den } else { 1.0 };
         while residual > self.target && iterations < self.max_iterations {
             d.iter_mut().for_each(|v| *v = 0.0);
-            let it = minres(
-                &apply_k,
-                &apply_p,
-                &r,
-                &mut d,
-                &mut tmp,
-                self.tolerance,
-                self.max_iterations - iterations,
-            );
+            let left = self.max_iterations - iterations;
+            let it = match self.krylov {
+                Krylov::Gmres => gmres(
+                    &apply_k,
+                    &apply_t,
+                    &r,
+                    &mut d,
+                    &mut tmp,
+                    absolute,
+                    self.restart,
+                    left,
+                ),
+                Krylov::Minres => minres(
+                    &apply_k,
+                    &apply_p,
+                    &r,
+                    &mut d,
+                    &mut tmp,
+                    pass_tolerance(self.target, residual),
+                    left,
+                ),
+            };
             iterations += it.max(1);
             y.iter_mut().zip(&d).for_each(|(y, d)| *y += d);
             let new = residual_of(&y, &mut r, &mut tmp);
@@ -1471,6 +1522,19 @@ impl BlockSolver {
     }
 }
 
+/// The reduction of the preconditioned residual a pass of the stabilised
+/// path's MINRES aims at: the one that would take the relative residual
+/// from `residual` to `target`, no looser than ½. A fixed 10⁻⁶ per pass
+/// overshot the target by two to three orders of magnitude in its last
+/// pass after needing a second pass anyway: aiming at the target took a
+/// third fewer iterations on the 2D dam break (session 20). (The
+/// unstabilised path keeps [`BlockSolver::tolerance`]: aimed passes
+/// stagnated there above the residual limit.) The floor keeps the aim
+/// above what the recurrence resolves.
+fn pass_tolerance(target: f64, residual: f64) -> f64 {
+    (target / residual).clamp(1e-14, 0.5)
+}
+
 /// `A_v` and `C` of a split system as CSR matrices.
 fn blocks_of(sys: &SplitSystem<'_>) -> (Csr, Csr) {
     let a = Csr::from_faer_csc(sys.a_v);
@@ -1522,6 +1586,132 @@ fn apply_blocks(velocity: &VelocityPrec, schur: &Amg, n: usize, r: &[f64], z: &m
         VelocityPrec::Amg(amg) => amg.apply(rv, zv),
     }
     schur.apply(rq, zq);
+}
+
+/// `z ← P⁻¹ r` for the block upper-triangular `P = [Â_v Cᵀ; 0 −Ŝ]`:
+/// `z_q = −Ŝ⁻¹ r_q`, then `z_v = Â_v⁻¹ (r_v − Cᵀ z_q)`, each inverse by
+/// the block's own preconditioner (`tmp` of the velocity size). With
+/// exact blocks `K P⁻¹ = [I 0; C Â_v⁻¹ I]`, so GMRES would need two
+/// iterations.
+fn apply_upper(
+    velocity: &VelocityPrec,
+    schur: &Amg,
+    ct: &Csr,
+    n: usize,
+    r: &[f64],
+    z: &mut [f64],
+    tmp: &mut [f64],
+) {
+    let (rv, rq) = r.split_at(n);
+    let (zv, zq) = z.split_at_mut(n);
+    schur.apply(rq, zq);
+    zq.iter_mut().for_each(|v| *v = -*v);
+    ct.spmv(zq, tmp);
+    tmp.iter_mut().zip(rv).for_each(|(t, r)| *t = r - *t);
+    match velocity {
+        VelocityPrec::Jacobi(inv) => zv
+            .iter_mut()
+            .zip(tmp.iter())
+            .zip(inv)
+            .for_each(|((z, t), d)| *z = t * d),
+        VelocityPrec::Amg(amg) => amg.apply(tmp, zv),
+    }
+}
+
+/// Right-preconditioned restarted GMRES (Saad, alg. 9.5; modified
+/// Gram–Schmidt, Givens rotations): `y` holds the initial guess on entry
+/// and the iterate on return. Stops when the residual `‖b − K y‖`, which
+/// right preconditioning leaves unweighted, falls to `target` (absolute),
+/// or after `max_iter` iterations. Returns the iterations done.
+#[allow(clippy::too_many_arguments)]
+fn gmres(
+    apply_k: Operator<'_>,
+    apply_p: Operator<'_>,
+    b: &[f64],
+    y: &mut [f64],
+    tmp: &mut [f64],
+    target: f64,
+    restart: usize,
+    max_iter: usize,
+) -> usize {
+    let nt = b.len();
+    let restart = restart.max(1);
+    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(restart + 1);
+    let mut h = vec![vec![0.0; restart]; restart + 1];
+    let (mut cs, mut sn) = (vec![0.0; restart], vec![0.0; restart]);
+    let mut g = vec![0.0; restart + 1];
+    let mut z = vec![0.0; nt];
+    let mut w = vec![0.0; nt];
+    let mut done = 0;
+    while done < max_iter {
+        apply_k(y, &mut w, tmp);
+        w.iter_mut().zip(b).for_each(|(w, b)| *w = b - *w);
+        let beta = dot(&w, &w).sqrt();
+        if beta.is_nan() || beta <= target {
+            break;
+        }
+        basis.clear();
+        basis.push(w.iter().map(|v| v / beta).collect());
+        g.iter_mut().for_each(|v| *v = 0.0);
+        g[0] = beta;
+        let mut k = 0;
+        let mut converged = false;
+        while k < restart && done < max_iter {
+            apply_p(&basis[k], &mut z, tmp);
+            apply_k(&z, &mut w, tmp);
+            for (i, v) in basis.iter().enumerate() {
+                let hik = dot(&w, v);
+                h[i][k] = hik;
+                w.iter_mut().zip(v).for_each(|(w, v)| *w -= hik * v);
+            }
+            let norm = dot(&w, &w).sqrt();
+            h[k + 1][k] = norm;
+            for i in 0..k {
+                let t = cs[i] * h[i][k] + sn[i] * h[i + 1][k];
+                h[i + 1][k] = -sn[i] * h[i][k] + cs[i] * h[i + 1][k];
+                h[i][k] = t;
+            }
+            let rho = h[k][k].hypot(h[k + 1][k]);
+            if rho.is_nan() || rho <= 0.0 || rho.is_infinite() {
+                break;
+            }
+            cs[k] = h[k][k] / rho;
+            sn[k] = h[k + 1][k] / rho;
+            h[k][k] = rho;
+            h[k + 1][k] = 0.0;
+            g[k + 1] = -sn[k] * g[k];
+            g[k] *= cs[k];
+            k += 1;
+            done += 1;
+            if g[k].abs() <= target || norm.is_nan() || norm <= 0.0 {
+                converged = true;
+                break;
+            }
+            basis.push(w.iter().map(|v| v / norm).collect());
+        }
+        if k == 0 {
+            break;
+        }
+        // Coefficients of the basis: `H α = g` (upper triangular).
+        let mut alpha = vec![0.0; k];
+        for i in (0..k).rev() {
+            let mut v = g[i];
+            for j in i + 1..k {
+                v -= h[i][j] * alpha[j];
+            }
+            alpha[i] = v / h[i][i];
+        }
+        w.iter_mut().for_each(|v| *v = 0.0);
+        for (v, a) in basis.iter().zip(&alpha) {
+            w.iter_mut().zip(v).for_each(|(w, v)| *w += a * v);
+        }
+        apply_p(&w, &mut z, tmp);
+        y.iter_mut().zip(&z).for_each(|(y, z)| *y += z);
+        if converged {
+            break;
+        }
+    }
+    done
 }
 
 /// Preconditioned MINRES (Paige & Saunders; the three-term form of Elman,
@@ -1692,6 +1882,59 @@ mod tests {
                     assert_eq!(got, row, "row {i}");
                 }
             }
+        }
+    }
+
+    /// GMRES solves a non-symmetric system to its target, with and
+    /// without restarts, from a non-zero start.
+    #[test]
+    fn gmres_solves_a_nonsymmetric_system_through_restarts() {
+        let n = 40;
+        let mut t = Vec::new();
+        for i in 0..n {
+            t.push((i, i, 4.0 + (i % 3) as f64));
+            if i + 1 < n {
+                t.push((i, i + 1, -1.5));
+            }
+            if i >= 2 {
+                t.push((i, i - 2, 0.7));
+            }
+        }
+        let a = Csr::from_triplets(n, n, &t);
+        let exact: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut b = vec![0.0; n];
+        a.spmv(&exact, &mut b);
+        let k = |y: &[f64], out: &mut [f64], _: &mut [f64]| a.spmv(y, out);
+        // Jacobi on the right.
+        let p = |r: &[f64], z: &mut [f64], _: &mut [f64]| {
+            for i in 0..n {
+                z[i] = r[i] / (4.0 + (i % 3) as f64);
+            }
+        };
+        let norm_b = dot(&b, &b).sqrt();
+        for restart in [50, 4] {
+            let mut y = vec![1.0; n];
+            let mut tmp = vec![0.0; n];
+            let it = gmres(&k, &p, &b, &mut y, &mut tmp, 1e-12 * norm_b, restart, 500);
+            let mut r = vec![0.0; n];
+            a.spmv(&y, &mut r);
+            let res = r
+                .iter()
+                .zip(&b)
+                .map(|(r, b)| (b - r) * (b - r))
+                .sum::<f64>()
+                .sqrt();
+            let err = y
+                .iter()
+                .zip(&exact)
+                .map(|(y, e)| (y - e).abs())
+                .fold(0.0, f64::max);
+            assert!(it < 500, "restart {restart}: {it} iterations");
+            assert!(
+                res <= 1.01e-12 * norm_b,
+                "restart {restart}: residual {res:e}"
+            );
+            assert!(err < 1e-10, "restart {restart}: error {err:e}");
         }
     }
 }

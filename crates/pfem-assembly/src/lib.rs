@@ -20,7 +20,7 @@ pub use assembler::{
     StepMesh, SurfaceCuts,
 };
 pub use block::{
-    BlockSolver, BlockStats, PressureSolve, VelocityBlock, MULTIGRID_FROM, SPLIT_FROM,
+    BlockSolver, BlockStats, Krylov, PressureSolve, VelocityBlock, MULTIGRID_FROM, SPLIT_FROM,
 };
 pub use error::{AssemblyError, SolveError};
 pub use export::MatrixExport;

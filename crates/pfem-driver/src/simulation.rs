@@ -177,6 +177,11 @@ pub struct Work {
     pub factorizations: u64,
     /// Krylov iterations of the linear solver (0 for a direct one).
     pub solver_iterations: u64,
+    /// Linear solves, rejected attempts included: factorisations or
+    /// preconditioner set-ups plus the solves that reused one
+    /// (`solver_iterations / linear_solves` is the Krylov iterations per
+    /// solve).
+    pub linear_solves: u64,
 }
 
 /// Driver options chosen at construction ([`Simulation::with_options`]):
@@ -900,6 +905,7 @@ where
             symbolic_analyses: s.symbolic_analyses,
             factorizations: s.factorizations,
             solver_iterations: s.iterations,
+            linear_solves: s.factorizations + s.resolves,
         }
     }
 
