@@ -16,7 +16,8 @@
 //! `block-reuse` keeps the block solver's set-up across a step's Picard
 //! iterates (`BlockSolver::reuse_setup`); `amg` is the block solver with
 //! multigrid on the pressure
-//! (`PressureSolve::Multigrid`); `petsc`, with `--features petsc`, is
+//! (`PressureSolve::Multigrid`), `amg-minres` the same with MINRES
+//! (`Krylov::Minres`); `petsc`, with `--features petsc`, is
 //! `pfem::petsc::PetscSolver` (options in `PFEM_PETSC_OPTIONS`), and
 //! `cholmod` the whole system factored by CHOLMOD through PETSc, beside
 //! `direct` (faer's Cholesky of the same matrix); `--stabilisation A` runs every solver on
@@ -88,6 +89,14 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
             b.pressure = pfem::assembly::PressureSolve::Multigrid;
             Box::new(b)
         }
+        // The stabilised multigrid path with MINRES and the block-diagonal
+        // preconditioner (its Krylov method until session 20).
+        "amg-minres" => {
+            let mut b = pfem::assembly::BlockSolver::default();
+            b.pressure = pfem::assembly::PressureSolve::Multigrid;
+            b.krylov = pfem::assembly::Krylov::Minres;
+            Box::new(b)
+        }
         #[cfg(feature = "petsc")]
         "petsc" => Box::new(pfem::petsc::PetscSolver::default()),
         // The whole system by CHOLMOD (through PETSc), beside `direct`
@@ -101,7 +110,7 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
         }
         other => {
             return Err(format!(
-                "unknown solver {other} (direct, block, block-reuse, amg; petsc, cholmod with --features petsc)"
+                "unknown solver {other} (direct, block, block-reuse, block-ldlt, amg, amg-minres; petsc, cholmod with --features petsc)"
             )
             .into())
         }

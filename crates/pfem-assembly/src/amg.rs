@@ -1811,7 +1811,8 @@ mod tests {
 
     /// Issue 18 asks the Krylov iterations to grow by at most 1.5× from
     /// 10k to 1M unknowns in 2D; the stabilised dam break's MINRES grew
-    /// 2.4× from 15k to 947k particles (session 19). This is the multigrid
+    /// 2.4× from 15k to 947k particles (session 19, a figure inflated by
+    /// rejected attempts; session 20 in docs/benchmarks.md). This is the multigrid
     /// alone on the 5-point Poisson matrix, 16k to 1M unknowns: 9, 10, 11,
     /// 11 iterations (1.22×; 3.3 s in all, release), so the growth is not
     /// the multigrid's own.

@@ -920,9 +920,11 @@ const NAME: &str = "block-split iterative";
 
 /// Default [`BlockSolver::multigrid_from`] (pressure rows, 2D and 3D):
 /// where multigrid overtakes the stabilised system's `L D Lᵀ`, measured
-/// on the stabilised 2D dam break and 3D water column
-/// (`docs/benchmarks.md`, session 18).
-pub const MULTIGRID_FROM: [usize; 2] = [100_000, 4_000];
+/// on the running stabilised 2D dam break and 3D water column
+/// (`docs/benchmarks.md`, session 20: with GMRES, multigrid was faster
+/// from 800 rows in 2D, and in 3D at 343, 1 728, 2 744 and 5 184 rows but
+/// not at 1 000). It was 100 000 and 4 000 with MINRES (session 18).
+pub const MULTIGRID_FROM: [usize; 2] = [1_000, 2_000];
 
 /// Default [`BlockSolver::split_from`] (unknowns): measured in
 /// `docs/benchmarks.md` (session 18).

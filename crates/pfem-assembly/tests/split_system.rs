@@ -387,8 +387,6 @@ fn a_checkerboard_pressure_is_damped() {
     );
 }
 
-/// The multigrid path (MINRES, block preconditioner) solves the stabilised
-/// system as the saddle-point factorisation does.
 /// Both Krylov methods of the multigrid path reach the stabilised
 /// system's direct solution, on a tank whose pressure hierarchy is exact
 /// (one level) and on one with three levels; GMRES in fewer iterations.
