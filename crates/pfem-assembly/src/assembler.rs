@@ -420,7 +420,11 @@ where
     /// factor, about `2/Δt`; `hₑ = (D! Vₑ)^{1/D}`), and `π` the lumped nodal
     /// projection of `grad pⁿ`, so that the term vanishes for a pressure
     /// linear in space (hydrostatics) and the scheme stays consistent (an
-    /// orthogonal-subscale, time-lagged projection). The system is then
+    /// orthogonal-subscale, time-lagged projection). A sliver kept in
+    /// shape ([`Assembler::set_sliver_quality`]) is left out of `L` and `π`:
+    /// on a nearly flat tetrahedron `∫ ∇W_a·∇W_b` grows as the inverse of
+    /// its height with couplings of the wrong sign, which stalled the
+    /// pressure multigrid of a running 3D flow. The system is then
     /// the saddle-point form of [`SplitSystem::stabilisation`]; it needs the
     /// split assembly, which this turns on. `0` (the default) is the paper's
     /// `Δp = −(𝒦/M̂) G V`. Takes effect at the next [`Assembler::prepare`].
@@ -1215,8 +1219,8 @@ where
     /// The stabilisation of the split form at the iterate (see
     /// [`Assembler::set_pressure_stabilisation`]): `L̃ = S τ L S` and the
     /// offset `o = −(c₀ + S τ (L pⁿ − P π))`, `S = (𝒦/M̂)^{1/2}`, over the
-    /// fluid elements (a cut one by its part's measure; closures carry
-    /// none).
+    /// fluid elements (a cut one by its part's measure; closures and
+    /// slivers kept in shape carry none).
     fn stabilise(&mut self, input: &AssemblyInput<'_, D>) -> Result<(), AssemblyError> {
         let nv = <Const<D> as Dim>::NV;
         let ns = self.particle_of.len();
@@ -1240,6 +1244,17 @@ where
             let st = &self.states[e];
             let vol = st.volume * self.share(e);
             if vol <= 0.0 {
+                continue;
+            }
+            // A sliver kept in shape (deviation 13) carries none: on a
+            // nearly flat tetrahedron `τ V ∇W_a·∇W_b` grows as the inverse of
+            // its height, with couplings of the wrong sign (positive
+            // off-diagonals up to 2.6 times the diagonal in the running 3D
+            // column), which stalled the pressure multigrid (43–50 CG
+            // iterations on `Ŝ + L̃` against 10). Left out of `L`, of `π` and
+            // of the offset alike, the term still vanishes for a linear
+            // pressure.
+            if self.frozen.get(e).copied().unwrap_or(false) {
                 continue;
             }
             let mat = &input.materials[self.elem_material[e] as usize];
