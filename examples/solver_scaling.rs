@@ -171,6 +171,14 @@ where
         peak_mb(),
         sim.time(),
     );
+    // The stages the RESULT line leaves out (s per step).
+    println!(
+        "STAGES free_surface {:.4e} update {:.4e} observe {:.4e} hooks {:.4e}",
+        (st.free_surface.1 - st0.free_surface.1) / k,
+        (st.update.1 - st0.update.1) / k,
+        (st.observe.1 - st0.observe.1) / k,
+        (st.hooks.1 - st0.hooks.1) / k,
+    );
     Ok(())
 }
 

@@ -234,6 +234,19 @@ fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
     }
 }
 
+impl Default for Csr {
+    /// The empty `0 × 0` matrix.
+    fn default() -> Self {
+        Csr {
+            nrows: 0,
+            ncols: 0,
+            ptr: vec![0],
+            idx: Vec::new(),
+            val: Vec::new(),
+        }
+    }
+}
+
 impl Csr {
     /// Builds a matrix from `(row, col, value)` triplets, summing duplicates.
     /// Columns within each row are sorted.
