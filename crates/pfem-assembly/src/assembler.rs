@@ -178,9 +178,12 @@ where
     pub inertia: Inertia,
 }
 
-/// Relative residual at which CG stops on `(I + L̃) q = C V − o` for the
-/// stabilised pressure increments (above `block::MULTIGRID_FROM` rows);
-/// the sparse factor it replaces reaches about 10⁻¹⁴.
+/// The 3D stabilised pressure increments, `(I + L̃) q = C V − o`, are
+/// found by multigrid-preconditioned CG from this many rows (the 3D
+/// stabilised system's `block::MULTIGRID_FROM`), by the sparse factor below.
+const INCREMENT_MULTIGRID_FROM: usize = crate::block::MULTIGRID_FROM[1];
+/// Relative residual at which that CG stops; the sparse factor it replaces
+/// reaches about 10⁻¹⁴.
 const INCREMENT_TOLERANCE: f64 = 1e-12;
 /// Iteration limit of that CG (then the factor is used).
 const INCREMENT_MAX_ITERATIONS: usize = 200;
@@ -1381,14 +1384,15 @@ where
             solver: "pressure stabilisation",
             detail,
         };
-        // From the size at which the stabilised system goes to multigrid
-        // (`block::MULTIGRID_FROM`), CG with one V-cycle of smoothed
-        // aggregation per iteration: the sparse factor of `I + L̃`, a
-        // pressure Laplacian, fills as N² in 3D (at 98k particles it took
+        // In 3D from `INCREMENT_MULTIGRID_FROM` rows, CG with one V-cycle of
+        // smoothed aggregation per iteration: the sparse factor of `I + L̃`,
+        // a pressure Laplacian, fills as N² in 3D (at 98k particles it took
         // most of the 2.9 s per step outside the stage timers, session 21).
-        // Below it, or should CG not reach the factor's accuracy, the factor.
+        // Otherwise, or should CG not reach the factor's accuracy, the
+        // factor (in 2D it was the faster at 100k particles: 0.25 against
+        // 0.5 s per step).
         let mut solved = false;
-        if m >= crate::block::MULTIGRID_FROM[D.clamp(2, 3) - 2] {
+        if D == 3 && m >= INCREMENT_MULTIGRID_FROM {
             if let Ok(amg) = crate::amg::Amg::new(&il, None, &crate::amg::AmgOptions::default()) {
                 let mut x = vec![0.0; m];
                 let (_, residual) = crate::amg::pcg(
