@@ -1755,7 +1755,9 @@ fn gmres(
 ) -> usize {
     let nt = b.len();
     let restart = restart.max(1);
-    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(restart + 1);
+    // The basis, vector `i` at `i nt..(i + 1) nt`: one allocation for the
+    // solve, reused by every restart (pages are touched as vectors come).
+    let mut basis: Vec<f64> = Vec::with_capacity((restart + 1) * nt);
     let mut h = vec![vec![0.0; restart]; restart + 1];
     let (mut cs, mut sn) = (vec![0.0; restart], vec![0.0; restart]);
     let mut g = vec![0.0; restart + 1];
@@ -1770,15 +1772,15 @@ fn gmres(
             break;
         }
         basis.clear();
-        basis.push(w.iter().map(|v| v / beta).collect());
+        basis.extend(w.iter().map(|v| v / beta));
         g.iter_mut().for_each(|v| *v = 0.0);
         g[0] = beta;
         let mut k = 0;
         let mut converged = false;
         while k < restart && done < max_iter {
-            apply_p(&basis[k], &mut z, tmp);
+            apply_p(&basis[k * nt..(k + 1) * nt], &mut z, tmp);
             apply_k(&z, &mut w, tmp);
-            for (i, v) in basis.iter().enumerate() {
+            for (i, v) in basis.chunks_exact(nt).enumerate() {
                 let hik = dot(&w, v);
                 h[i][k] = hik;
                 w.iter_mut().zip(v).for_each(|(w, v)| *w -= hik * v);
@@ -1806,7 +1808,7 @@ fn gmres(
                 converged = true;
                 break;
             }
-            basis.push(w.iter().map(|v| v / norm).collect());
+            basis.extend(w.iter().map(|v| v / norm));
         }
         if k == 0 {
             break;
@@ -1821,7 +1823,7 @@ fn gmres(
             alpha[i] = v / h[i][i];
         }
         w.iter_mut().for_each(|v| *v = 0.0);
-        for (v, a) in basis.iter().zip(&alpha) {
+        for (v, a) in basis.chunks_exact(nt).zip(&alpha) {
             w.iter_mut().zip(v).for_each(|(w, v)| *w += a * v);
         }
         apply_p(&w, &mut z, tmp);
