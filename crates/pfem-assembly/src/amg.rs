@@ -234,6 +234,39 @@ fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
     }
 }
 
+/// The structure of the transpose of a compressed matrix of `rows` rows
+/// and `cols` columns (row `i` holds the entries `range(i)` of `idx`), by a
+/// counting sort: row pointers, column indices (sorted within each row)
+/// and, for each entry, the position in `idx` it comes from.
+pub(crate) fn transpose_structure(
+    rows: usize,
+    cols: usize,
+    range: impl Fn(usize) -> std::ops::Range<usize>,
+    idx: &[usize],
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let mut count = vec![0usize; cols + 1];
+    for i in 0..rows {
+        for k in range(i) {
+            count[idx[k] + 1] += 1;
+        }
+    }
+    for j in 0..cols {
+        count[j + 1] += count[j];
+    }
+    let mut next = count.clone();
+    let total = count[cols];
+    let (mut out, mut from) = (vec![0usize; total], vec![0usize; total]);
+    for i in 0..rows {
+        for k in range(i) {
+            let j = idx[k];
+            out[next[j]] = i;
+            from[next[j]] = k;
+            next[j] += 1;
+        }
+    }
+    (count, out, from)
+}
+
 impl Default for Csr {
     /// The empty `0 × 0` matrix.
     fn default() -> Self {
@@ -396,30 +429,18 @@ impl Csr {
 
     /// Returns `A^T` (columns sorted within each row).
     pub fn transpose(&self) -> Csr {
-        let mut count = vec![0usize; self.ncols + 1];
-        for &j in &self.idx {
-            count[j + 1] += 1;
-        }
-        for j in 0..self.ncols {
-            count[j + 1] += count[j];
-        }
-        let mut next = count.clone();
-        let mut idx = vec![0usize; self.nnz()];
-        let mut val = vec![0.0; self.nnz()];
-        for i in 0..self.nrows {
-            for k in self.ptr[i]..self.ptr[i + 1] {
-                let j = self.idx[k];
-                idx[next[j]] = i;
-                val[next[j]] = self.val[k];
-                next[j] += 1;
-            }
-        }
+        let (ptr, idx, from) = transpose_structure(
+            self.nrows,
+            self.ncols,
+            |i| self.ptr[i]..self.ptr[i + 1],
+            &self.idx,
+        );
         Csr {
             nrows: self.ncols,
             ncols: self.nrows,
-            ptr: count,
+            ptr,
             idx,
-            val,
+            val: from.iter().map(|&k| self.val[k]).collect(),
         }
     }
 

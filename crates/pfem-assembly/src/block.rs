@@ -71,7 +71,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Par, Side};
 
-use crate::amg::{spmv_parts, Amg, AmgOptions, Csr};
+use crate::amg::{spmv_parts, transpose_structure, Amg, AmgOptions, Csr};
 use crate::solver::{
     DirectSolver, LinearSolver, SolveReport, SolverWork, SplitSystem, Workspace,
     DEFAULT_PARALLELISM,
@@ -1245,7 +1245,7 @@ impl BlockSolver {
         let t0 = Instant::now();
         let mut blocks = std::mem::take(&mut self.blocks);
         blocks.refresh(sys, generation);
-        let (a, c, ct, l) = (&blocks.ac.0, &blocks.ac.1, &blocks.ct, &blocks.l);
+        let (a, c, ct, l) = (&blocks.a, &blocks.c, &blocks.ct, &blocks.l);
         let (n, m) = (a.nrows, c.nrows);
         let keep = self.stabilised_reuse
             && self
@@ -1394,7 +1394,7 @@ impl BlockSolver {
         if multigrid {
             blocks.refresh(sys, generation);
         }
-        let abc = multigrid.then_some((&blocks.ac.0, &blocks.ac.1, &blocks.ct));
+        let abc = multigrid.then_some((&blocks.a, &blocks.c, &blocks.ct));
         let (n, m) = (sys.a_v.nrows(), sys.c_rows());
         let keep = self.reuse_setup
             && self
@@ -1550,10 +1550,11 @@ struct Blocks {
     generation: Option<u64>,
     /// `A_v`'s column pointers in CSC, to recognise the same pattern.
     a_col_ptr: Vec<usize>,
-    /// `(A_v, C)` as CSR.
-    ac: (Csr, Csr),
     /// `A_v` as CSR, entry `k` from CSC value `a_from[k]`.
+    a: Csr,
     a_from: Vec<usize>,
+    /// `C` as CSR (its own arrays copied).
+    c: Csr,
     /// `Cᵀ`, entry `k` from `C`'s value `ct_from[k]`.
     ct: Csr,
     ct_from: Vec<usize>,
@@ -1573,9 +1574,9 @@ impl Blocks {
         };
         let same = self.generation == Some(generation)
             && self.a_col_ptr == a_v.col_ptr()
-            && self.ac.0.nrows == n
-            && self.ac.1.ptr == sys.c_ptr
-            && self.ac.1.idx == sys.c_idx
+            && self.a.nrows == n
+            && self.c.ptr == sys.c_ptr
+            && self.c.idx == sys.c_idx
             && match sys.stabilisation {
                 Some(st) => {
                     self.l.nrows == sys.c_rows() && self.l.ptr == st.l_ptr && self.l.idx == st.l_idx
@@ -1583,37 +1584,21 @@ impl Blocks {
                 None => self.l.nrows == 0 && self.l.idx.is_empty(),
             };
         if !same {
-            // `A_v`: CSC to CSR by a counting sort that records where each
-            // entry comes from (columns in order, so rows come out sorted).
+            // `A_v`: its CSC arrays are the CSR rows of `A_vᵀ`; transposed,
+            // with where each entry comes from.
             let col_ptr = a_v.col_ptr();
-            let row_idx = a_v.row_idx();
-            let mut count = vec![0usize; n + 1];
-            for j in 0..a_v.ncols() {
-                for k in col_ptr[j]..col_ptr[j] + col_nnz(j) {
-                    count[row_idx[k] + 1] += 1;
-                }
-            }
-            for i in 0..n {
-                count[i + 1] += count[i];
-            }
-            let total = count[n];
-            let mut next = count.clone();
-            let mut idx = vec![0usize; total];
-            let mut from = vec![0usize; total];
-            for j in 0..a_v.ncols() {
-                for k in col_ptr[j]..col_ptr[j] + col_nnz(j) {
-                    let i = row_idx[k];
-                    idx[next[i]] = j;
-                    from[next[i]] = k;
-                    next[i] += 1;
-                }
-            }
+            let (ptr, idx, from) = transpose_structure(
+                a_v.ncols(),
+                n,
+                |j| col_ptr[j]..col_ptr[j] + col_nnz(j),
+                a_v.row_idx(),
+            );
             let a = Csr {
                 nrows: n,
                 ncols: a_v.ncols(),
-                ptr: count,
+                val: vec![0.0; idx.len()],
+                ptr,
                 idx,
-                val: vec![0.0; total],
             };
             let c = Csr {
                 nrows: sys.c_rows(),
@@ -1622,14 +1607,16 @@ impl Blocks {
                 idx: sys.c_idx.to_vec(),
                 val: vec![0.0; sys.c_idx.len()],
             };
-            // `Cᵀ` with the position of each entry in `C`.
-            let positions = Csr {
-                val: (0..c.nnz()).map(|k| k as f64).collect(),
-                ..c.clone()
+            let (ct_ptr, ct_idx, ct_from) =
+                transpose_structure(c.nrows, n, |r| c.ptr[r]..c.ptr[r + 1], &c.idx);
+            self.ct = Csr {
+                nrows: n,
+                ncols: c.nrows,
+                val: vec![0.0; ct_idx.len()],
+                ptr: ct_ptr,
+                idx: ct_idx,
             };
-            let mut ct = positions.transpose();
-            self.ct_from = ct.val.iter().map(|&k| k as usize).collect();
-            ct.val.iter_mut().for_each(|v| *v = 0.0);
+            self.ct_from = ct_from;
             self.l = match sys.stabilisation {
                 Some(st) => Csr {
                     nrows: c.nrows,
@@ -1642,19 +1629,18 @@ impl Blocks {
             };
             self.a_col_ptr = col_ptr.to_vec();
             self.a_from = from;
-            self.ac = (a, c);
-            self.ct = ct;
+            self.a = a;
+            self.c = c;
             self.generation = Some(generation);
         }
         let values = a_v.val();
         let a_from = &self.a_from;
-        self.ac
-            .0
+        self.a
             .val
             .par_chunks_mut(8192)
             .zip(a_from.par_chunks(8192))
             .for_each(|(v, f)| v.iter_mut().zip(f).for_each(|(v, &k)| *v = values[k]));
-        self.ac.1.val.copy_from_slice(sys.c_val);
+        self.c.val.copy_from_slice(sys.c_val);
         let c_val = sys.c_val;
         self.ct
             .val
@@ -2006,8 +1992,8 @@ mod tests {
                 }),
             };
             blocks.refresh(&sys, generation);
-            assert_eq!(blocks.ac.0, Csr::from_faer_csc(a_v), "round {round}");
-            assert_eq!(blocks.ac.1, c, "round {round}");
+            assert_eq!(blocks.a, Csr::from_faer_csc(a_v), "round {round}");
+            assert_eq!(blocks.c, c, "round {round}");
             assert_eq!(blocks.ct, c.transpose(), "round {round}");
             if stabilised {
                 assert_eq!(blocks.l, l, "round {round}");
