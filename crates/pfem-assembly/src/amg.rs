@@ -354,34 +354,20 @@ impl Csr {
             };
             start..end
         };
-        let mut count = vec![0usize; nrows + 1];
-        for j in 0..ncols {
-            for k in range(j) {
-                count[row_idx[k] + 1] += 1;
-            }
-        }
-        for i in 0..nrows {
-            count[i + 1] += count[i];
-        }
-        let total = count[nrows];
-        let mut next = count.clone();
-        let mut pairs = vec![(0usize, 0.0f64); total];
         // Columns are visited in increasing order, so each row's entries come
         // out sorted by column.
-        for j in 0..ncols {
-            for k in range(j) {
-                let i = row_idx[k];
-                pairs[next[i]] = (j, values[k]);
-                next[i] += 1;
-            }
-        }
+        let (count, cols, from) = transpose_structure(ncols, nrows, range, row_idx);
         let mut ptr = Vec::with_capacity(nrows + 1);
-        let mut idx = Vec::with_capacity(total);
-        let mut val = Vec::with_capacity(total);
+        let mut idx = Vec::with_capacity(cols.len());
+        let mut val = Vec::with_capacity(cols.len());
         ptr.push(0);
         for i in 0..nrows {
+            let row = count[i]..count[i + 1];
             push_merged(
-                pairs[count[i]..count[i + 1]].iter().copied(),
+                cols[row.clone()]
+                    .iter()
+                    .zip(&from[row])
+                    .map(|(&j, &k)| (j, values[k])),
                 &mut idx,
                 &mut val,
             );
