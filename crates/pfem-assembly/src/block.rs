@@ -185,6 +185,10 @@ pub struct BlockSolver {
     /// The multigrid path's CSR blocks, kept across the solves of one
     /// pattern generation.
     blocks: Blocks,
+    /// The caller's accuracy ([`LinearSolver::set_accuracy`]): the
+    /// multigrid iterations stop at the looser of it and
+    /// [`BlockSolver::target`] (the Cholesky path keeps its target).
+    accuracy: Option<f64>,
     direct: DirectSolver,
     work: SolverWork,
     stats: BlockStats,
@@ -912,6 +916,7 @@ impl Default for BlockSolver {
             setup: None,
             saddle: QuasiDefinite::default(),
             last_q: (u64::MAX, Vec::new()),
+            accuracy: None,
             blocks: Blocks::default(),
             direct: DirectSolver::default(),
             work: SolverWork::default(),
@@ -1221,9 +1226,20 @@ impl LinearSolver for BlockSolver {
     fn work(&self) -> SolverWork {
         self.work + self.direct.work()
     }
+
+    fn set_accuracy(&mut self, relative_residual: Option<f64>) {
+        self.accuracy = relative_residual.filter(|a| a.is_finite() && *a > 0.0);
+    }
 }
 
 impl BlockSolver {
+    /// The relative residual the iterations stop at: the looser of
+    /// [`BlockSolver::target`] and the caller's accuracy
+    /// ([`LinearSolver::set_accuracy`]).
+    fn target(&self) -> f64 {
+        self.accuracy.map_or(self.target, |a| a.max(self.target))
+    }
+
     /// The stabilised saddle-point system `[A_v Cᵀ; C −(I + L̃)] [V; q] =
     /// [f; o]` by [`BlockSolver::krylov`]: GMRES with the block
     /// upper-triangular preconditioner `[Â_v Cᵀ; 0 −Ŝ]` or MINRES with the
@@ -1305,8 +1321,9 @@ impl BlockSolver {
         let apply_t = |r: &[f64], z: &mut [f64], tmp: &mut [f64]| {
             apply_upper(velocity, schur, ct, n, r, z, tmp)
         };
-        let absolute = self.target * if den > 0.0 { den } else { 1.0 };
-        while residual > self.target && iterations < self.max_iterations {
+        let target = self.target();
+        let absolute = target * if den > 0.0 { den } else { 1.0 };
+        while residual > target && iterations < self.max_iterations {
             d.iter_mut().for_each(|v| *v = 0.0);
             let left = self.max_iterations - iterations;
             let it = match self.krylov {
@@ -1326,7 +1343,7 @@ impl BlockSolver {
                     &r,
                     &mut d,
                     &mut tmp,
-                    pass_tolerance(self.target, residual),
+                    pass_tolerance(target, residual),
                     left,
                 ),
             };
@@ -1341,7 +1358,7 @@ impl BlockSolver {
         }
         self.setup = Some(setup);
         self.blocks = blocks;
-        self.finish(t1, iterations, residual, &y)?;
+        self.finish(t1, iterations, residual, target, &y)?;
         x.copy_from_slice(&y[..n]);
         self.last_q.0 = generation;
         self.last_q.1.clear();
@@ -1353,12 +1370,15 @@ impl BlockSolver {
     }
 
     /// Books an iteration that started its work at `t1`, and refuses it
-    /// when it did not converge (`y` the solution it returns).
+    /// when it did not converge (`y` the solution it returns, `target` the
+    /// residual it aimed at: one looser than the residual limit is
+    /// accepted).
     fn finish(
         &mut self,
         t1: Instant,
         iterations: usize,
         residual: f64,
+        target: f64,
         y: &[f64],
     ) -> Result<(), SolveError> {
         self.stats.iterate_seconds += t1.elapsed().as_secs_f64();
@@ -1366,7 +1386,8 @@ impl BlockSolver {
         self.stats.iterations += iterations as u64;
         self.work.iterations += iterations as u64;
         self.stats.max_iterations = self.stats.max_iterations.max(iterations);
-        if residual.is_nan() || residual > self.residual_limit || y.iter().any(|v| !v.is_finite()) {
+        let limit = self.residual_limit.max(target);
+        if residual.is_nan() || residual > limit || y.iter().any(|v| !v.is_finite()) {
             // A stale set-up may be what failed: the next call builds anew.
             self.setup = None;
             return Err(SolveError::NoConvergence {
@@ -1427,8 +1448,15 @@ impl BlockSolver {
         let mut r = vec![0.0; n];
         let mut q = Vec::new();
         let mut residual = eliminated(x, &mut r, &mut q);
-        let (target, max_iterations, tolerance) =
-            (self.target, self.max_iterations, self.tolerance);
+        // The caller's accuracy relaxes the multigrid iteration only: the
+        // Cholesky path's CG is nearly a direct solve (one or two
+        // iterations), with nothing to save.
+        let target = if multigrid {
+            self.target()
+        } else {
+            self.target
+        };
+        let (max_iterations, tolerance) = (self.max_iterations, self.tolerance);
         let Some(setup) = self.setup.as_mut() else {
             return Err(SolveError::Factorization {
                 solver: NAME,
@@ -1518,7 +1546,7 @@ impl BlockSolver {
             }
         }
         self.blocks = blocks;
-        self.finish(t1, iterations, residual, x)?;
+        self.finish(t1, iterations, residual, target, x)?;
         Ok(SolveReport {
             residual,
             iterations,
@@ -2111,5 +2139,72 @@ mod tests {
             );
             assert!(err < 1e-10, "restart {restart}: error {err:e}");
         }
+    }
+
+    /// The caller's accuracy ([`LinearSolver::set_accuracy`]): a solve
+    /// asked for less stops earlier, at a residual within what it was
+    /// asked, and is accepted although that is above the residual limit;
+    /// asked for nothing, it goes back to its own target.
+    #[test]
+    fn a_solve_asked_for_less_stops_earlier() {
+        // A mass-dominated velocity block (a path graph), `C` and a
+        // stabilisation Laplacian `L̃ = ε C Cᵀ` on 400 pressure rows.
+        let n: usize = 1200;
+        let (mut ptr, mut idx, mut val) = (vec![0], Vec::new(), Vec::new());
+        for j in 0..n {
+            for i in j.saturating_sub(1)..(j + 2).min(n) {
+                idx.push(i);
+                val.push(if i == j { 3.0 } else { -1.0 });
+            }
+            ptr.push(idx.len());
+        }
+        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
+        let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
+        let (mut c, _) = sample(n / 3, n, 5);
+        c.val.iter_mut().for_each(|v| *v *= 30.0);
+        let mut l = c.matmul(&c.transpose());
+        l.val.iter_mut().for_each(|v| *v *= 1e-3);
+        let offset: Vec<f64> = (0..c.nrows).map(|i| (i as f64 * 0.1).cos()).collect();
+        let coords: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let sys = SplitSystem {
+            a_v,
+            c_ptr: &c.ptr,
+            c_idx: &c.idx,
+            c_val: &c.val,
+            block_size: 1,
+            coords: &coords,
+            rhs: &rhs,
+            stabilisation: Some(crate::solver::Stabilisation {
+                l_ptr: &l.ptr,
+                l_idx: &l.idx,
+                l_val: &l.val,
+                offset: &offset,
+            }),
+        };
+        let mut solver = BlockSolver {
+            pressure: PressureSolve::Multigrid,
+            ..BlockSolver::default()
+        };
+        let run = |solver: &mut BlockSolver, accuracy: Option<f64>| {
+            solver.set_accuracy(accuracy);
+            let mut x = vec![0.0; n];
+            let r = solver.solve_split(&sys, 1, &mut x).unwrap();
+            assert_eq!(solver.stats.fallbacks, 0);
+            r
+        };
+        let full = run(&mut solver, None);
+        solver.last_q.1.clear();
+        let relaxed = run(&mut solver, Some(1e-4));
+        solver.last_q.1.clear();
+        let again = run(&mut solver, None);
+        assert!(full.residual <= solver.target, "{full:?}");
+        assert!(relaxed.residual <= 1e-4, "{relaxed:?}");
+        assert!(relaxed.residual > solver.residual_limit, "{relaxed:?}");
+        assert!(
+            3 * relaxed.iterations <= 2 * full.iterations,
+            "{relaxed:?} against {full:?}"
+        );
+        assert_eq!(again, full);
     }
 }

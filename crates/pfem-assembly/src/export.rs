@@ -118,6 +118,10 @@ impl LinearSolver for MatrixExport {
         self.inner.work()
     }
 
+    fn set_accuracy(&mut self, relative_residual: Option<f64>) {
+        self.inner.set_accuracy(relative_residual);
+    }
+
     fn wants_split(&self, dofs: usize) -> bool {
         self.inner.wants_split(dofs)
     }

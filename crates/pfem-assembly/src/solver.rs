@@ -88,6 +88,15 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
         SolverWork::default()
     }
 
+    /// The accuracy the caller needs of the solves that follow, as a
+    /// relative residual `‖b − A x‖/‖b‖` (`None`: the solver's own
+    /// target). The Picard loop asks its early iterates for less than the
+    /// last one (inexact Picard iterates,
+    /// `pfem_time::StepParams::picard_forcing`): an iterative solver may
+    /// then stop at the looser of this and its own target, and accept a
+    /// residual up to it. A direct solver ignores it (the default).
+    fn set_accuracy(&mut self, _relative_residual: Option<f64>) {}
+
     /// Whether this solver wants a system of about `dofs` unknowns in split
     /// form ([`SplitSystem`], solved by [`LinearSolver::solve_split`])
     /// rather than assembled whole. Asked once per step, before assembly.

@@ -104,9 +104,10 @@ impl Args {
     }
 
     /// Time-integration parameters from `--scheme newmark|bossak|euler`,
-    /// `--picard-tol TOL` and `--picard-stop change|estimate`
-    /// (`StepParams::picard_error_estimate`; defaults: Bossak with
-    /// α_B = −0.3, tolerance 1e-6, `change`).
+    /// `--picard-tol TOL`, `--picard-stop change|estimate`
+    /// (`StepParams::picard_error_estimate`) and `--picard-forcing F`
+    /// (`StepParams::picard_forcing`; defaults: Bossak with α_B = −0.3,
+    /// tolerance 1e-6, `change`, 1e-3).
     pub fn step_params(&self) -> Result<pfem_time::StepParams, ArgsError> {
         let mut p = pfem_time::StepParams::default();
         match self.options.get("scheme").map(String::as_str) {
@@ -128,6 +129,13 @@ impl Args {
                     "--picard-stop must be change or estimate, got `{other}`"
                 )))
             }
+        }
+        if let Some(x) = self.bounded(
+            "picard-forcing",
+            |x| (0.0..1.0).contains(&x),
+            "a number in [0, 1)",
+        )? {
+            p.picard_forcing = x;
         }
         if let Some(x) = self.bounded(
             "pressure-stabilisation",
@@ -316,7 +324,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-quality-2d --sliver-prediction --first-iterate{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --picard-forcing --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-quality-2d --sliver-prediction --first-iterate{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -327,10 +335,11 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 15] = [
+const COMMON: [&str; 16] = [
     "scheme",
     "picard-tol",
     "picard-stop",
+    "picard-forcing",
     "pressure-stabilisation",
     "solver",
     "volume-correction",
@@ -356,6 +365,9 @@ Options common to the bundled examples and `pfem run`:
   --no-vtu              no VTU frames
   --scheme S            bossak (default), newmark or euler
   --picard-tol X        Picard tolerance (default 1e-6)
+  --picard-stop S       change (default) or estimate (also stop on the estimated error)
+  --picard-forcing F    iterative solvers solve a Picard iterate to F times the last
+                        change (default 1e-3; 0: every iterate to the solver's target)
   --solver S            block (default), block-amg (multigrid), direct, lu, cholesky, cg
                         or petsc (built with the `petsc` feature; PETSc options in
                         PFEM_PETSC_OPTIONS, prefix -pfem_)
@@ -475,6 +487,15 @@ mod tests {
         assert!(fi.reject_unknown(&[]).is_ok());
         assert!(fi.step_params().unwrap().predict_first_iterate);
         assert!(args(&["--first-iterate", "end"]).step_params().is_err());
+        assert_eq!(
+            a.step_params().unwrap().picard_forcing,
+            pfem_time::PICARD_FORCING
+        );
+        let pf = args(&["--picard-forcing", "0"]);
+        assert!(pf.reject_unknown(&[]).is_ok());
+        assert_eq!(pf.step_params().unwrap().picard_forcing, 0.0);
+        assert!(args(&["--picard-forcing", "1"]).step_params().is_err());
+        assert!(args(&["--picard-forcing", "-1e-3"]).step_params().is_err());
         let sim = a
             .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
             .unwrap();
