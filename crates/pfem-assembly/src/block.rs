@@ -1044,32 +1044,24 @@ impl BlockSolver {
                     });
                 }
                 let inv: Vec<f64> = diag.iter().map(|v| 1.0 / v).collect();
-                // Ŝ = I + C Â⁻¹ Cᵀ (the Cholesky path forms its own, with
-                // the stiff dofs left out, in `Woodbury::new`).
-                let mut cd = c.clone();
-                for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
-                    *v *= inv[j];
-                }
-                let mut s = add_identity(&cd.matmul(ct));
-                if let Some(st) = sys.stabilisation {
-                    // Ŝ = I + L̃ + C Â⁻¹ Cᵀ.
-                    let mut t: Vec<(usize, usize, f64)> =
-                        Vec::with_capacity(s.nnz() + st.l_idx.len());
-                    for r in 0..s.nrows {
-                        for p in s.ptr[r]..s.ptr[r + 1] {
-                            t.push((r, s.idx[p], s.val[p]));
-                        }
-                        for p in st.l_ptr[r]..st.l_ptr[r + 1] {
-                            t.push((r, st.l_idx[p], st.l_val[p]));
-                        }
+                // Ŝ = I + L̃ + C Â⁻¹ Cᵀ (without a stabilisation, L̃ = 0;
+                // the Cholesky path forms its own, with the stiff dofs
+                // left out, in `Woodbury::new`).
+                let none = vec![0; c.nrows + 1];
+                let l = match sys.stabilisation {
+                    Some(st) => {
+                        let (m, k) = (c.nrows, st.l_val.len());
+                        crate::amg::check_structure(m, m, st.l_ptr, st.l_idx, k).map_err(|e| {
+                            SolveError::Factorization {
+                                solver: NAME,
+                                detail: format!("stabilisation matrix: {e}"),
+                            }
+                        })?;
+                        (st.l_ptr, st.l_idx, st.l_val, 1.0)
                     }
-                    s = Csr::try_from_triplets(s.nrows, s.ncols, &t).map_err(|e| {
-                        SolveError::Factorization {
-                            solver: NAME,
-                            detail: format!("pressure matrix: {e}"),
-                        }
-                    })?;
-                }
+                    None => (&none[..], &[][..], &[][..], 1.0),
+                };
+                let s = crate::amg::product_plus(c, Some(&inv), ct, Some(l));
                 let amg_err = |what: &str, e: crate::amg::AmgError| SolveError::Factorization {
                     solver: NAME,
                     detail: format!("{what} multigrid: {e}"),
@@ -1123,46 +1115,6 @@ fn off_diagonal(a: &Csr, i: usize) -> f64 {
         .filter(|&p| a.idx[p] != i)
         .map(|p| a.val[p].abs())
         .sum()
-}
-
-/// `S + I` for a square CSR matrix with sorted rows.
-fn add_identity(s: &Csr) -> Csr {
-    let n = s.nrows;
-    let mut ptr = Vec::with_capacity(n + 1);
-    let mut idx = Vec::with_capacity(s.nnz() + n);
-    let mut val = Vec::with_capacity(s.nnz() + n);
-    ptr.push(0);
-    for i in 0..n {
-        let mut done = false;
-        for p in s.ptr[i]..s.ptr[i + 1] {
-            let j = s.idx[p];
-            if !done && j > i {
-                idx.push(i);
-                val.push(1.0);
-                done = true;
-            }
-            if j == i {
-                idx.push(i);
-                val.push(s.val[p] + 1.0);
-                done = true;
-            } else {
-                idx.push(j);
-                val.push(s.val[p]);
-            }
-        }
-        if !done {
-            idx.push(i);
-            val.push(1.0);
-        }
-        ptr.push(idx.len());
-    }
-    Csr {
-        nrows: n,
-        ncols: n,
-        ptr,
-        idx,
-        val,
-    }
 }
 
 impl LinearSolver for BlockSolver {
@@ -2000,7 +1952,9 @@ mod tests {
             let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
             let (mut c, _) = sample(n / 3, n, n as u64);
             c.val.iter_mut().for_each(|v| *v *= scale);
-            let l = add_identity(&c.matmul(&c.transpose()));
+            let empty = vec![0; c.nrows + 1];
+            let identity = Some((&empty[..], &[][..], &[][..], 1.0));
+            let l = crate::amg::product_plus(&c, None, &c.transpose(), identity);
             let offset = vec![0.0; c.nrows];
             let coords = vec![0.0; n];
             let rhs = vec![1.0; n];
@@ -2052,11 +2006,9 @@ mod tests {
                     (&plan.ct_ptr, &plan.ct_idx, &ct_val),
                     (&ct.ptr, &ct.idx, &ct.val)
                 );
-                let mut cd = c.clone();
-                for (v, &j) in cd.val.iter_mut().zip(&cd.idx) {
-                    *v *= d[j];
-                }
-                let want = add_identity(&cd.matmul(&ct));
+                let empty = vec![0; rows + 1];
+                let identity = Some((&empty[..], &[][..], &[][..], 1.0));
+                let want = crate::amg::product_plus(&c, Some(&d), &ct, identity);
                 plan.product(&c.val, &ct_val, &d, false, &mut val);
                 let full = Csr {
                     nrows: rows,
