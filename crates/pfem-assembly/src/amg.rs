@@ -234,6 +234,10 @@ fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
     }
 }
 
+/// What [`product_plus`] adds to its product: the CSR arrays `(ptr, idx,
+/// val)` of a matrix and a shift of the diagonal.
+pub(crate) type Addend<'a> = (&'a [usize], &'a [usize], &'a [f64], f64);
+
 /// `A diag(s) B + extra` by rows, in parallel chunks above 4 096 rows:
 /// row `i` of the product sums `a_ik s_k b_kj` in the order of `A`'s and
 /// `B`'s entries (with `s` absent, `a_ik b_kj`, [`Csr::matmul`]); then
@@ -249,7 +253,7 @@ pub(crate) fn product_plus(
     a: &Csr,
     s: Option<&[f64]>,
     b: &Csr,
-    extra: Option<(&[usize], &[usize], &[f64], f64)>,
+    extra: Option<Addend<'_>>,
 ) -> Csr {
     assert_eq!(a.ncols, b.nrows, "matmul: inner dimensions differ");
     if let Some(s) = s {
