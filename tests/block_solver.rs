@@ -54,7 +54,7 @@ fn the_block_solver_gives_the_direct_solvers_dam_break() {
 #[test]
 fn multigrid_stays_fast_on_the_stabilised_running_3d_column() {
     // Every iterate solved to the solver's own target, as measured.
-    let (sim, per_solve, solves) = running_column(0.0);
+    let (sim, per_solve, solves) = running_column(0.0, multigrid());
     println!(
         "running 3D column at a/14, stabilised, multigrid: {per_solve:.1} GMRES iterations per solve over {solves} solves"
     );
@@ -63,10 +63,76 @@ fn multigrid_stays_fast_on_the_stabilised_running_3d_column() {
     assert!(sim.fluid_volume().is_finite());
 }
 
+/// The block solver on its multigrid path.
+fn multigrid() -> Box<dyn LinearSolver> {
+    let mut solver = BlockSolver::default();
+    solver.pressure = pfem::assembly::PressureSolve::Multigrid;
+    Box::new(solver)
+}
+
+/// The block solver on its multigrid path, hiding the last solve's `q`
+/// (`LinearSolver::saddle_increment`).
+#[derive(Debug)]
+struct NoGuess(Box<dyn LinearSolver>);
+
+impl LinearSolver for NoGuess {
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+    fn solve(
+        &mut self,
+        a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+        generation: u64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
+        self.0.solve(a, generation, b, x)
+    }
+    fn wants_split(&self, dofs: usize) -> bool {
+        self.0.wants_split(dofs)
+    }
+    fn solve_split(
+        &mut self,
+        sys: &pfem::assembly::SplitSystem<'_>,
+        generation: u64,
+        x: &mut [f64],
+    ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
+        self.0.solve_split(sys, generation, x)
+    }
+    fn set_accuracy(&mut self, relative_residual: Option<f64>) {
+        self.0.set_accuracy(relative_residual);
+    }
+}
+
+/// The stabilised pressure increments start from the last solve's `q`
+/// (`LinearSolver::saddle_increment`, session 22) and end where they end
+/// from zero: the same pressures to 10⁻⁸ of the largest.
+#[test]
+fn the_increments_guess_changes_no_pressure() {
+    let (with, _, _) = running_column(pfem::time::PICARD_FORCING, multigrid());
+    let (without, _, _) =
+        running_column(pfem::time::PICARD_FORCING, Box::new(NoGuess(multigrid())));
+    let (pa, pb) = (
+        &with.particles().state().pressure,
+        &without.particles().state().pressure,
+    );
+    let pmax = pa.iter().fold(0.0f64, |m, p| m.max(p.abs()));
+    let dp = pa
+        .iter()
+        .zip(pb)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    println!(
+        "pressures with and without the guess: largest difference {:.2e} of the largest pressure",
+        dp / pmax
+    );
+    assert!(pmax > 0.0);
+    assert!(dp <= 1e-8 * pmax, "{dp} against {pmax}");
+}
+
 /// The water column at a/14, stabilised, by multigrid, with the given
-/// [`StepParams::picard_forcing`]: the simulation after eight steps, the
+/// [`StepParams::picard_forcing`] and solver: the simulation after eight steps, the
 /// GMRES iterations per solve over the last four and their solves.
-fn running_column(picard_forcing: f64) -> (Simulation<3>, f64, u64) {
+fn running_column(picard_forcing: f64, solver: Box<dyn LinearSolver>) -> (Simulation<3>, f64, u64) {
     use pfem::cases3d::{slip_sides, WaterColumn3d};
     let mut c = WaterColumn3d {
         side_walls: false,
@@ -80,9 +146,7 @@ fn running_column(picard_forcing: f64) -> (Simulation<3>, f64, u64) {
     };
     let mut sim = Simulation::new(c.scene(), Box::new(Delaunay3::default()), params).unwrap();
     slip_sides(&mut sim);
-    let mut solver = BlockSolver::default();
-    solver.pressure = pfem::assembly::PressureSolve::Multigrid;
-    sim.set_solver(Box::new(solver));
+    sim.set_solver(solver);
     while sim.steps() < 4 {
         sim.step().unwrap();
     }
@@ -103,8 +167,9 @@ fn running_column(picard_forcing: f64) -> (Simulation<3>, f64, u64) {
 /// 10⁻⁶ of the largest, with a third fewer Krylov iterations or more.
 #[test]
 fn inexact_picard_iterates_give_the_same_steps_for_fewer_iterations() {
-    let (exact, its_exact, solves_exact) = running_column(0.0);
-    let (inexact, its_inexact, solves_inexact) = running_column(pfem::time::PICARD_FORCING);
+    let (exact, its_exact, solves_exact) = running_column(0.0, multigrid());
+    let (inexact, its_inexact, solves_inexact) =
+        running_column(pfem::time::PICARD_FORCING, multigrid());
     let vmax = exact
         .particles()
         .state()

@@ -249,12 +249,7 @@ pub(crate) type Addend<'a> = (&'a [usize], &'a [usize], &'a [f64], f64);
 ///
 /// # Panics
 /// Panics if `A.ncols != B.nrows`, or `s` or `extra` do not fit.
-pub(crate) fn product_plus(
-    a: &Csr,
-    s: Option<&[f64]>,
-    b: &Csr,
-    extra: Option<Addend<'_>>,
-) -> Csr {
+pub(crate) fn product_plus(a: &Csr, s: Option<&[f64]>, b: &Csr, extra: Option<Addend<'_>>) -> Csr {
     assert_eq!(a.ncols, b.nrows, "matmul: inner dimensions differ");
     if let Some(s) = s {
         assert_eq!(s.len(), a.ncols, "product_plus: scale length");

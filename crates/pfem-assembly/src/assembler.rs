@@ -1343,10 +1343,15 @@ where
     /// velocity `v` (indexed by particle) on the geometry of the last
     /// assembly: `(particle, Δp)` pairs in `out`. `Ok(false)` (and `out`
     /// empty) when the pressure is not stabilised
-    /// ([`Assembler::nodal_volumetric_rates`] then gives eq. 62).
+    /// ([`Assembler::nodal_volumetric_rates`] then gives eq. 62). `guess`,
+    /// when it has one value per pressure row, starts the iterative solve
+    /// (the last saddle-point solve's `q`,
+    /// [`crate::LinearSolver::saddle_increment`]); the answer is the same
+    /// to the solve's tolerance with or without it.
     pub fn stabilised_pressure_increments(
         &mut self,
         v: &[Vector<D>],
+        guess: Option<&[f64]>,
         out: &mut Vec<(u32, f64)>,
     ) -> Result<bool, crate::SolveError> {
         out.clear();
@@ -1394,7 +1399,10 @@ where
         let mut solved = false;
         if D == 3 && m >= INCREMENT_MULTIGRID_FROM {
             if let Ok(amg) = crate::amg::Amg::new(&il, None, &crate::amg::AmgOptions::default()) {
-                let mut x = vec![0.0; m];
+                let mut x = match guess {
+                    Some(g) if g.len() == m && g.iter().all(|v| v.is_finite()) => g.to_vec(),
+                    _ => vec![0.0; m],
+                };
                 let (_, residual) = crate::amg::pcg(
                     &il,
                     &q,

@@ -1182,6 +1182,11 @@ impl LinearSolver for BlockSolver {
     fn set_accuracy(&mut self, relative_residual: Option<f64>) {
         self.accuracy = relative_residual.filter(|a| a.is_finite() && *a > 0.0);
     }
+
+    fn saddle_increment(&self, generation: u64) -> Option<&[f64]> {
+        let (g, q) = &self.last_q;
+        (*g == generation && !q.is_empty()).then_some(q.as_slice())
+    }
 }
 
 impl BlockSolver {

@@ -122,6 +122,10 @@ impl LinearSolver for MatrixExport {
         self.inner.set_accuracy(relative_residual);
     }
 
+    fn saddle_increment(&self, generation: u64) -> Option<&[f64]> {
+        self.inner.saddle_increment(generation)
+    }
+
     fn wants_split(&self, dofs: usize) -> bool {
         self.inner.wants_split(dofs)
     }

@@ -97,6 +97,16 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
     /// residual up to it. A direct solver ignores it (the default).
     fn set_accuracy(&mut self, _relative_residual: Option<f64>) {}
 
+    /// The second field `q` of the last stabilised saddle-point solve
+    /// ([`SplitSystem::stabilisation`]) on the pattern `generation`, when
+    /// the solver keeps it: the starting guess of
+    /// `Assembler::stabilised_pressure_increments`, which solves for the
+    /// same `q` to a tighter tolerance. `None` (the default) starts it
+    /// from zero.
+    fn saddle_increment(&self, _generation: u64) -> Option<&[f64]> {
+        None
+    }
+
     /// Whether this solver wants a system of about `dofs` unknowns in split
     /// form ([`SplitSystem`], solved by [`LinearSolver::solve_split`])
     /// rather than assembled whole. Asked once per step, before assembly.

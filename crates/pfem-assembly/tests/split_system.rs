@@ -358,7 +358,10 @@ fn a_checkerboard_pressure_is_damped() {
         }
         let mut p = t.p.clone();
         let mut inc = Vec::new();
-        if asm.stabilised_pressure_increments(&v, &mut inc).unwrap() {
+        if asm
+            .stabilised_pressure_increments(&v, None, &mut inc)
+            .unwrap()
+        {
             for (k, dp) in inc {
                 p[k as usize] += dp;
             }

@@ -930,10 +930,12 @@ where
         let tu = std::time::Instant::now();
         // The stabilised pressure increments, before anything is updated
         // (their solve may fail).
+        // The last solve's `q` (same system, looser tolerance) starts it.
         let mut increments = Vec::new();
+        let guess = self.solver.saddle_increment(self.assembler.generation());
         let stabilised_increments = self
             .assembler
-            .stabilised_pressure_increments(&self.v_it, &mut increments)
+            .stabilised_pressure_increments(&self.v_it, guess, &mut increments)
             .map_err(|source| StepError::Solve { time, dt, source })?;
         // Final geometry must stay valid; solid kinematics at the converged
         // state for the stress update (eq. 63).
