@@ -7,8 +7,12 @@
 //! ```text
 //! cargo run --release --example solver_scaling -- \
 //!     [--case dam2d|column3d|all] [--sizes 20,40,80] [--steps 10] [--warmup 0] \
-//!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] [--end-time T]
+//!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] [--end-time T] \
+//!     [--picard-stop change|estimate] [--first-iterate start|predicted] [--picard-forcing F]
 //! ```
+//! The last three are the examples' options of the same names
+//! (`StepParams::picard_error_estimate`, `predict_first_iterate`,
+//! `picard_forcing`; defaults `change`, `start`, 1e-3).
 //! `--warmup W` runs `W` untimed steps before the `--steps` timed ones
 //! (the first steps from rest reject attempts at every size).
 //! `block` is the default `BlockSolver` (it chooses its pressure solve by
@@ -197,8 +201,24 @@ fn run() -> Res<()> {
     let stab = opt("stabilisation").unwrap_or_else(|| "0".into());
     // The 2D water's bulk modulus (Pa).
     let bulk = opt("bulk").unwrap_or_else(|| "2.2e9".into());
+    // The Picard loop's options (`StepParams::picard_error_estimate`,
+    // `predict_first_iterate`, `picard_forcing`), as the examples take them.
+    let picard_stop = opt("picard-stop").unwrap_or_else(|| "change".into());
+    let first_iterate = opt("first-iterate").unwrap_or_else(|| "start".into());
+    let forcing = opt("picard-forcing").unwrap_or_else(|| pfem::time::PICARD_FORCING.to_string());
     let params = StepParams {
         pressure_stabilisation: stab.parse()?,
+        picard_error_estimate: match picard_stop.as_str() {
+            "change" => false,
+            "estimate" => true,
+            other => return Err(format!("--picard-stop change|estimate, not {other}").into()),
+        },
+        predict_first_iterate: match first_iterate.as_str() {
+            "start" => false,
+            "predicted" => true,
+            other => return Err(format!("--first-iterate start|predicted, not {other}").into()),
+        },
+        picard_forcing: forcing.parse()?,
         ..StepParams::default()
     };
     // Child: one case, one size, one solver.
@@ -282,6 +302,12 @@ fn run() -> Res<()> {
                         &bulk,
                         "--warmup",
                         &warmup.to_string(),
+                        "--picard-stop",
+                        &picard_stop,
+                        "--first-iterate",
+                        &first_iterate,
+                        "--picard-forcing",
+                        &forcing,
                     ])
                     .output()?;
                 let text = String::from_utf8_lossy(&out.stdout);
