@@ -43,6 +43,66 @@ fn the_block_solver_gives_the_direct_solvers_dam_break() {
     assert!((v1 / v0 - 1.0).abs() < 1e-3, "volume {v0} vs {v1}");
 }
 
+/// A solver that, asked for less than an exact solve
+/// (`LinearSolver::set_accuracy`), stops at once: it returns its guess
+/// and reports the residual it was allowed, the extreme of an iterative
+/// solver that stops as soon as it may (or whose residual estimate is
+/// optimistic). Asked for nothing, or for zero, it solves exactly.
+#[derive(Debug)]
+struct Lazy {
+    inner: Box<dyn LinearSolver>,
+    asked: Option<f64>,
+}
+
+impl LinearSolver for Lazy {
+    fn name(&self) -> &str {
+        "lazy"
+    }
+    fn solve(
+        &mut self,
+        a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+        generation: u64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
+        match self.asked.filter(|a| *a > 0.0) {
+            Some(residual) => Ok(pfem::assembly::SolveReport {
+                residual,
+                iterations: 0,
+            }),
+            None => self.inner.solve(a, generation, b, x),
+        }
+    }
+    fn set_accuracy(&mut self, relative_residual: Option<f64>) {
+        self.asked = relative_residual;
+    }
+}
+
+/// An inexact Picard iterate cannot end the loop (session 22): an
+/// iterate whose solve was asked for less than the Picard tolerance and
+/// stopped above it may have left its guess (nearly) as it was, and the
+/// small change that follows is no convergence. Without the rule the
+/// lazy solver ended the first step on its first iterate, the guess
+/// (the water at rest), and the front never moved (0.0572 m after
+/// 0.05 s against the direct solver's 0.0780 m); with it the loop goes on
+/// to iterates asked for the tolerance or less and the water runs as
+/// with the direct solver (0.0787 m: within 1 %, not closer, because the
+/// lazy solver also skips the requests within the tolerance, which the
+/// rule accepts by design).
+#[test]
+fn an_inexact_iterate_does_not_end_the_picard_loop() {
+    let end = 0.05;
+    let (f0, v0, s0, _) = dam_break(Box::new(DirectSolver::default()), end);
+    let lazy = Lazy {
+        inner: Box::new(DirectSolver::default()),
+        asked: None,
+    };
+    let (f1, v1, s1, _) = dam_break(Box::new(lazy), end);
+    println!("front after {end} s: {f0:.6} m (direct, {s0} steps), {f1:.6} m (lazy, {s1} steps)");
+    assert!((f1 / f0 - 1.0).abs() < 0.02, "front {f0} vs {f1}");
+    assert!((v1 / v0 - 1.0).abs() < 1e-3, "volume {v0} vs {v1}");
+}
+
 /// The stabilised system of a running 3D flow by multigrid (issue 18,
 /// session 21): a sliver kept in shape (ARCHITECTURE.md deviation 13)
 /// carries no pressure stabilisation, whose Laplacian on a nearly flat

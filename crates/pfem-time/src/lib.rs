@@ -300,8 +300,12 @@ pub struct StepParams {
     /// iterate before (1 for the first), never tighter than the solver's
     /// own target. An iterate's solve need only be accurate against how
     /// far the loop still is from its fixed point, the inexact-Newton
-    /// rule. Iterative solvers only: a direct solve is exact whatever it
-    /// is asked. 0 turns it off.
+    /// rule. An iterate whose solve was asked for less than
+    /// [`Self::picard_tolerance`] and stopped above it cannot end the loop
+    /// (a solver content with its guess would show no change at all); the
+    /// next iterate is then asked for `picard_forcing ×` that change.
+    /// Iterative solvers only: a direct solve is exact whatever it is
+    /// asked. 0 turns it off.
     pub picard_forcing: f64,
 }
 
@@ -797,6 +801,11 @@ where
         let mut last_change = f64::INFINITY;
         let mut growth = 0;
         let mut refactor = false;
+        // The last solve was asked for less than the Picard tolerance and
+        // stopped above it (an inexact iterate, `picard_forcing`): its
+        // change says nothing of convergence (a solver content with the
+        // guess changes nothing), so it cannot end the loop.
+        let mut loose = false;
         rep.assemble_seconds = tp.elapsed().as_secs_f64();
         for it in 1..=self.params.max_picard_iterations {
             let ta = std::time::Instant::now();
@@ -845,6 +854,7 @@ where
                         *x += d;
                     }
                     corrected = true;
+                    loose = false;
                 }
             }
             if !corrected {
@@ -855,8 +865,8 @@ where
                 } else {
                     1.0
                 };
-                self.solver
-                    .set_accuracy((forcing > 0.0).then_some(forcing * progress));
+                let asked = (forcing > 0.0).then_some(forcing * progress);
+                self.solver.set_accuracy(asked);
                 let generation = self.assembler.generation();
                 let sr = match self.assembler.split_system() {
                     Some(sys) => self.solver.solve_split(&sys, generation, &mut self.sol),
@@ -870,6 +880,8 @@ where
                 .map_err(|source| StepError::Solve { time, dt, source })?;
                 rep.residual = sr.residual;
                 rep.factorizations += 1;
+                let tol = self.params.picard_tolerance;
+                loose = asked.is_some_and(|a| a > tol) && sr.residual > tol;
             }
             rep.solve_seconds += ts.elapsed().as_secs_f64();
             // Relative change of the velocity (system nodes).
@@ -899,8 +911,9 @@ where
             let rate = change / last_change;
             let estimate = (self.params.picard_error_estimate && it >= 3 && rate < 0.5)
                 .then(|| change * rate / (1.0 - rate));
-            if change <= self.params.picard_tolerance
-                || estimate.is_some_and(|e| e <= self.params.picard_tolerance)
+            if (change <= self.params.picard_tolerance
+                || estimate.is_some_and(|e| e <= self.params.picard_tolerance))
+                && !loose
             {
                 converged = true;
                 last_change = change;
