@@ -1980,6 +1980,32 @@ mod tests {
         (Csr::from_triplets(rows, cols, &t), d)
     }
 
+    /// A split system of block size 1 with `C`, and with `L̃` and the
+    /// offset when given.
+    fn split<'a>(
+        a_v: faer::sparse::SparseColMatRef<'a, usize, f64>,
+        c: &'a Csr,
+        stabilisation: Option<(&'a Csr, &'a [f64])>,
+        coords: &'a [f64],
+        rhs: &'a [f64],
+    ) -> SplitSystem<'a> {
+        SplitSystem {
+            a_v,
+            c_ptr: &c.ptr,
+            c_idx: &c.idx,
+            c_val: &c.val,
+            block_size: 1,
+            coords,
+            rhs,
+            stabilisation: stabilisation.map(|(l, offset)| crate::solver::Stabilisation {
+                l_ptr: &l.ptr,
+                l_idx: &l.idx,
+                l_val: &l.val,
+                offset,
+            }),
+        }
+    }
+
     /// The blocks kept across the solves of a generation are the blocks
     /// converted afresh: after new values on the same pattern, and after a
     /// new pattern (a new generation, and the same generation with the
@@ -2023,21 +2049,13 @@ mod tests {
             let offset = vec![0.0; c.nrows];
             let coords = vec![0.0; n];
             let rhs = vec![1.0; n];
-            let sys = SplitSystem {
+            let sys = split(
                 a_v,
-                c_ptr: &c.ptr,
-                c_idx: &c.idx,
-                c_val: &c.val,
-                block_size: 1,
-                coords: &coords,
-                rhs: &rhs,
-                stabilisation: stabilised.then_some(crate::solver::Stabilisation {
-                    l_ptr: &l.ptr,
-                    l_idx: &l.idx,
-                    l_val: &l.val,
-                    offset: &offset,
-                }),
-            };
+                &c,
+                stabilised.then_some((&l, &offset[..])),
+                &coords,
+                &rhs,
+            );
             blocks.refresh(&sys, generation);
             assert_eq!(blocks.a, Csr::from_faer_csc(a_v), "round {round}");
             assert_eq!(blocks.c, c, "round {round}");
@@ -2194,21 +2212,7 @@ mod tests {
         let offset: Vec<f64> = (0..c.nrows).map(|i| (i as f64 * 0.1).cos()).collect();
         let coords: Vec<f64> = (0..n).map(|i| i as f64).collect();
         let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
-        let sys = SplitSystem {
-            a_v,
-            c_ptr: &c.ptr,
-            c_idx: &c.idx,
-            c_val: &c.val,
-            block_size: 1,
-            coords: &coords,
-            rhs: &rhs,
-            stabilisation: Some(crate::solver::Stabilisation {
-                l_ptr: &l.ptr,
-                l_idx: &l.idx,
-                l_val: &l.val,
-                offset: &offset,
-            }),
-        };
+        let sys = split(a_v, &c, Some((&l, &offset[..])), &coords, &rhs);
         let mut solver = BlockSolver {
             pressure: PressureSolve::Multigrid,
             ..BlockSolver::default()
