@@ -8,11 +8,11 @@
 //! cargo run --release --example solver_scaling -- \
 //!     [--case dam2d|column3d|all] [--sizes 20,40,80] [--steps 10] [--warmup 0] \
 //!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] [--end-time T] \
-//!     [--picard-stop change|estimate] [--first-iterate start|predicted] [--picard-forcing F]
+//!     [--scheme S] [--picard-tol X] [--picard-stop change|estimate] \
+//!     [--first-iterate start|predicted] [--picard-forcing F]
 //! ```
-//! The last three are the examples' options of the same names
-//! (`StepParams::picard_error_estimate`, `predict_first_iterate`,
-//! `picard_forcing`; defaults `change`, `start`, 1e-3).
+//! The last five are the examples' options of the same names
+//! (`pfem::cli::Args::step_params`).
 //! `--warmup W` runs `W` untimed steps before the `--steps` timed ones
 //! (the first steps from rest reject attempts at every size).
 //! `block` is the default `BlockSolver` (it chooses its pressure solve by
@@ -186,6 +186,16 @@ where
     Ok(())
 }
 
+/// The examples' options of the time scheme and the Picard loop that
+/// `solver_scaling` takes too.
+const PICARD_OPTIONS: [&str; 5] = [
+    "scheme",
+    "picard-tol",
+    "picard-stop",
+    "picard-forcing",
+    "first-iterate",
+];
+
 fn run() -> Res<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let opt = |name: &str| {
@@ -201,25 +211,17 @@ fn run() -> Res<()> {
     let stab = opt("stabilisation").unwrap_or_else(|| "0".into());
     // The 2D water's bulk modulus (Pa).
     let bulk = opt("bulk").unwrap_or_else(|| "2.2e9".into());
-    // The Picard loop's options (`StepParams::picard_error_estimate`,
-    // `predict_first_iterate`, `picard_forcing`), as the examples take them.
-    let picard_stop = opt("picard-stop").unwrap_or_else(|| "change".into());
-    let first_iterate = opt("first-iterate").unwrap_or_else(|| "start".into());
-    let forcing = opt("picard-forcing").unwrap_or_else(|| pfem::time::PICARD_FORCING.to_string());
+    // The time scheme and the Picard loop's options, read as the examples
+    // read them (`pfem::cli::Args::step_params`) and passed on to the
+    // children as given.
+    let forwarded: Vec<String> = PICARD_OPTIONS
+        .iter()
+        .filter_map(|name| opt(name).map(|v| [format!("--{name}"), v]))
+        .flatten()
+        .collect();
     let params = StepParams {
         pressure_stabilisation: stab.parse()?,
-        picard_error_estimate: match picard_stop.as_str() {
-            "change" => false,
-            "estimate" => true,
-            other => return Err(format!("--picard-stop change|estimate, not {other}").into()),
-        },
-        predict_first_iterate: match first_iterate.as_str() {
-            "start" => false,
-            "predicted" => true,
-            other => return Err(format!("--first-iterate start|predicted, not {other}").into()),
-        },
-        picard_forcing: forcing.parse()?,
-        ..StepParams::default()
+        ..pfem::cli::Args::parse(forwarded.iter().cloned())?.step_params()?
     };
     // Child: one case, one size, one solver.
     let export = opt("export");
@@ -302,13 +304,8 @@ fn run() -> Res<()> {
                         &bulk,
                         "--warmup",
                         &warmup.to_string(),
-                        "--picard-stop",
-                        &picard_stop,
-                        "--first-iterate",
-                        &first_iterate,
-                        "--picard-forcing",
-                        &forcing,
                     ])
+                    .args(&forwarded)
                     .output()?;
                 let text = String::from_utf8_lossy(&out.stdout);
                 let Some(line) = text.lines().find(|l| l.starts_with("RESULT")) else {

@@ -1671,14 +1671,7 @@ fn apply_saddle(
 fn apply_blocks(velocity: &VelocityPrec, schur: &Amg, n: usize, r: &[f64], z: &mut [f64]) {
     let (rv, rq) = r.split_at(n);
     let (zv, zq) = z.split_at_mut(n);
-    match velocity {
-        VelocityPrec::Jacobi(inv) => zv
-            .iter_mut()
-            .zip(rv)
-            .zip(inv)
-            .for_each(|((z, r), d)| *z = r * d),
-        VelocityPrec::Amg(amg) => amg.apply(rv, zv),
-    }
+    velocity_step(velocity, rv, zv);
     schur.apply(rq, zq);
 }
 
@@ -1698,17 +1691,27 @@ fn apply_upper(
 ) {
     let (rv, rq) = r.split_at(n);
     let (zv, zq) = z.split_at_mut(n);
-    schur.apply(rq, zq);
-    zq.iter_mut().for_each(|v| *v = -*v);
+    schur_step(schur, rq, zq);
     ct.spmv(zq, tmp);
     tmp.iter_mut().zip(rv).for_each(|(t, r)| *t = r - *t);
+    velocity_step(velocity, tmp, zv);
+}
+
+/// `z_q = −Ŝ⁻¹ r_q`, the pressure row of the block preconditioners.
+fn schur_step(schur: &Amg, rq: &[f64], zq: &mut [f64]) {
+    schur.apply(rq, zq);
+    zq.iter_mut().for_each(|v| *v = -*v);
+}
+
+/// `z_v = Â⁻¹ t`, the velocity row of the block preconditioners.
+fn velocity_step(velocity: &VelocityPrec, t: &[f64], zv: &mut [f64]) {
     match velocity {
         VelocityPrec::Jacobi(inv) => zv
             .iter_mut()
-            .zip(tmp.iter())
+            .zip(t)
             .zip(inv)
             .for_each(|((z, t), d)| *z = t * d),
-        VelocityPrec::Amg(amg) => amg.apply(tmp, zv),
+        VelocityPrec::Amg(amg) => amg.apply(t, zv),
     }
 }
 
@@ -1730,22 +1733,14 @@ fn apply_upper_then_saddle(
     let (rv, rq) = r.split_at(n);
     let (zv, zq) = z.split_at_mut(n);
     let (wv, wq) = w.split_at_mut(n);
-    schur.apply(rq, zq);
-    zq.iter_mut().for_each(|v| *v = -*v);
+    schur_step(schur, rq, zq);
     ct.spmv(zq, tmp);
     // `w_v` holds `r_v − Cᵀ z_q` until `K z` overwrites it.
     wv.iter_mut()
         .zip(tmp.iter())
         .zip(rv)
         .for_each(|((w, t), r)| *w = r - t);
-    match velocity {
-        VelocityPrec::Jacobi(inv) => zv
-            .iter_mut()
-            .zip(wv.iter())
-            .zip(inv)
-            .for_each(|((z, t), d)| *z = t * d),
-        VelocityPrec::Amg(amg) => amg.apply(wv, zv),
-    }
+    velocity_step(velocity, wv, zv);
     a.spmv(zv, wv);
     wv.iter_mut().zip(tmp.iter()).for_each(|(o, t)| *o += t);
     c.spmv(zv, wq);
