@@ -379,3 +379,92 @@ fn poor_tetrahedra_do_not_reject_attempts_of_the_3d_water_column() {
         );
     }
 }
+
+/// The remeshing leaves out the walls far from the water and the cylinder
+/// (`Options::tessellate_far_walls`, default false): the fluid elements,
+/// the sealed slivers and the wall pockets are the same as when every wall
+/// is tessellated, step after step, and the particles move alike (to
+/// round-off: the elements come in another order).
+#[test]
+fn leaving_out_the_far_walls_changes_no_element() {
+    use pfem::cases3d::{ColumnOnCylinder3d, WaterColumn3d};
+    let case = ColumnOnCylinder3d {
+        column: WaterColumn3d {
+            spacing: 0.146 / 5.0,
+            end_time: 0.01,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let sim = |tessellate_far_walls: bool| {
+        Simulation::with_options(
+            case.scene().expect("valid cylinder"),
+            Box::new(Delaunay3::default()),
+            StepParams::default(),
+            Options {
+                tessellate_far_walls,
+                ..Options::default()
+            },
+        )
+        .expect("builds")
+    };
+    let (mut near, mut all) = (sim(false), sim(true));
+    let mut kept = Vec::new();
+    assert!(
+        pfem::geometry::near_matter(
+            near.particles().x(),
+            near.particles().kind(),
+            3.0 * 1.3 * 0.146 / 5.0,
+            &mut kept
+        ),
+        "the scene has far walls"
+    );
+    println!(
+        "tessellated {} of {} particles",
+        kept.len(),
+        near.particles().len()
+    );
+    let canon = |v: &[u32]| {
+        let mut o: Vec<Vec<u32>> = v
+            .chunks(4)
+            .map(|c| {
+                let mut c = c.to_vec();
+                c.sort_unstable();
+                c
+            })
+            .collect();
+        o.sort();
+        o
+    };
+    for step in 0..6 {
+        let (a, b) = (near.elements().shape(), all.elements().shape());
+        assert!(!a.mesh.is_empty());
+        assert_eq!(
+            canon(&a.mesh.simplices),
+            canon(&b.mesh.simplices),
+            "step {step}"
+        );
+        assert_eq!(canon(&a.closures), canon(&b.closures), "step {step}");
+        assert_eq!(
+            canon(&a.wall_pockets),
+            canon(&b.wall_pockets),
+            "step {step}"
+        );
+        assert!((a.kept_measure - b.kept_measure).abs() <= 1e-12 * b.kept_measure);
+        near.step().expect("steps");
+        all.step().expect("steps");
+    }
+    let scale = all
+        .particles()
+        .v()
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.norm()));
+    let gap = near
+        .particles()
+        .v()
+        .iter()
+        .zip(all.particles().v())
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).norm()));
+    println!("largest velocity difference {gap:.3e} of {scale:.3e} m/s");
+    assert!(gap <= 1e-6 * scale, "{gap:e} of {scale:e}");
+}

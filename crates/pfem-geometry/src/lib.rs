@@ -40,6 +40,7 @@ pub mod delaunay3;
 pub mod error;
 pub mod particles;
 pub mod quality;
+pub mod reach;
 pub mod tessellation;
 
 pub use alpha::{
@@ -58,4 +59,5 @@ pub use particles::{
     REMOVED,
 };
 pub use quality::{mesh_quality, radius_ratio, QualityParams, QualityReport};
+pub use reach::{near_matter, tessellate_subset};
 pub use tessellation::{Tessellation, Tessellator, NO_NEIGHBOR, SEALED};

@@ -236,6 +236,7 @@ impl Args {
         if let Some(q) = self.min_quality_3d()? {
             options.min_quality_3d = q;
         }
+        options.tessellate_far_walls = self.tessellate_far_walls()?;
         let mut scene = scene;
         scene.settings.max_dt = self.number("max-dt", scene.settings.max_dt)?;
         let mut sim =
@@ -246,6 +247,18 @@ impl Args {
             sim.add_hook(Box::new(crate::hooks::WallClockLimit::new(limit)));
         }
         Ok(sim)
+    }
+
+    /// `--far-walls skip|tessellate` (`Options::tessellate_far_walls`;
+    /// default skip).
+    pub fn tessellate_far_walls(&self) -> Result<bool, ArgsError> {
+        match self.options.get("far-walls").map(String::as_str) {
+            None | Some("skip") => Ok(false),
+            Some("tessellate") => Ok(true),
+            Some(other) => Err(ArgsError(format!(
+                "--far-walls must be skip or tessellate, got `{other}`"
+            ))),
+        }
     }
 
     /// The 3D quality floor `--min-quality-3d Q` (`Options::min_quality_3d`,
@@ -303,6 +316,7 @@ impl Args {
         self.solver()?;
         self.memory_budget()?;
         self.min_quality_3d()?;
+        self.tessellate_far_walls()?;
         self.number("max-dt", 1.0)?;
         self.volume_correction()?;
         if let Some(v) = self.options.get("max-wall-time") {
@@ -324,7 +338,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --picard-forcing --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-quality-2d --sliver-prediction --first-iterate{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --picard-forcing --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-quality-2d --sliver-prediction --first-iterate --far-walls{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -335,7 +349,7 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 16] = [
+const COMMON: [&str; 17] = [
     "scheme",
     "picard-tol",
     "picard-stop",
@@ -352,6 +366,7 @@ const COMMON: [&str; 16] = [
     "sliver-quality-2d",
     "sliver-prediction",
     "first-iterate",
+    "far-walls",
 ];
 
 /// The common options, for `--help`.
@@ -384,6 +399,9 @@ Options common to the bundled examples and `pfem run`:
   --first-iterate start|predicted
                         Picard's first iterate: the start of the step (default) or
                         the fluid's constant-acceleration prediction
+  --far-walls skip|tessellate
+                        3D remeshing: only the walls within a few spacings of a fluid
+                        or solid particle (default skip), or every wall particle
   --threads N           worker threads (default: one per core)
   --version             print the version
   --help, -h            this help
