@@ -653,18 +653,26 @@ where
             .iter()
             .fold(0.0, |a: f64, &h| a.max(h));
         let reach = WALL_REACH * self.alpha.alpha * h_max;
-        if D == 3 && !st.far_walls && near_matter(x, self.particles.kind(), reach, &mut st.near) {
-            tessellate_subset(
+        // The whole set when the subset cannot be tessellated (a flat
+        // layer of inflowing fluid far from every wall), which also reports
+        // a real failure with its particle indices.
+        let subset = D == 3
+            && !st.far_walls
+            && near_matter(x, self.particles.kind(), reach, &mut st.near)
+            && tessellate_subset(
                 st.tessellator.as_mut(),
                 x,
                 &st.near,
                 &mut st.scratch,
                 &mut st.tess,
             )
-        } else {
-            st.tessellator.tessellate(x, &mut st.tess)
+            .is_ok();
+        if !subset {
+            st.near.clear();
+            st.tessellator
+                .tessellate(x, &mut st.tess)
+                .map_err(RunError::Geometry)?;
         }
-        .map_err(RunError::Geometry)?;
         let ts = Instant::now();
         let mut shape = self.elements.take_shape();
         alpha_shape_cutting_into(
