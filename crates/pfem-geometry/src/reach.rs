@@ -119,7 +119,7 @@ where
     }
     // Dilate by one cell along each axis in turn: the 3^D block.
     let mut stride = 1usize;
-    let mut next = near.clone();
+    let mut next = vec![false; total];
     for &len in dim.iter() {
         for (c, v) in next.iter_mut().enumerate() {
             let at = (c / stride) % len;
@@ -337,38 +337,53 @@ mod tests {
         assert!(sub.is_empty() != some_left_out);
     }
 
-    /// The simplices with a fluid node that the alpha shape could keep or
-    /// count as slivers (every edge within `2 α h`) are the same with and
-    /// without the far walls, in 3D (own Bowyer–Watson, symbolic
-    /// perturbation, lattice walls full of cospherical ties) and 2D. The
-    /// large simplices across the empty tank differ, as they may.
+    /// Tessellates `x` whole and without its far walls (reach `3 α h`,
+    /// `α = 1.3`) and checks that the simplices with a fluid node and
+    /// every edge within `2 α h` (all the alpha shape could keep or count
+    /// as slivers) are the same; returns how many there are. The large
+    /// simplices across the empty tank differ, as they may.
+    fn same_near_the_fluid<const D: usize>(
+        mut tessellator: impl Tessellator<D>,
+        x: &[Point<D>],
+        k: &[ParticleKind],
+        h: f64,
+    ) -> usize
+    where
+        Const<D>: Dim,
+    {
+        let near_fluid = |t: &Tessellation| -> Vec<Vec<u32>> {
+            sorted_simplices(t)
+                .into_iter()
+                .filter(|s| s.iter().any(|&v| k[v as usize] == ParticleKind::Fluid))
+                .filter(|s| {
+                    s.iter().all(|&a| {
+                        s.iter()
+                            .all(|&b| (x[a as usize] - x[b as usize]).norm() <= 2.0 * 1.3 * h)
+                    })
+                })
+                .collect()
+        };
+        let mut whole = Tessellation::default();
+        tessellator.tessellate(x, &mut whole).unwrap();
+        let mut sub = Vec::new();
+        assert!(near_matter(x, k, 3.0 * 1.3 * h, &mut sub));
+        let (mut part, mut scratch) = (Tessellation::default(), Vec::new());
+        tessellate_subset(&mut tessellator, x, &sub, &mut scratch, &mut part).unwrap();
+        assert!(part.len() < whole.len());
+        let near = near_fluid(&whole);
+        assert_eq!(near_fluid(&part), near);
+        near.len()
+    }
+
+    /// The simplices near the fluid are those of the whole set, in 3D (own
+    /// Bowyer–Watson, symbolic perturbation, lattice walls full of
+    /// cospherical ties) and 2D.
     #[test]
     fn the_simplices_near_the_fluid_are_those_of_the_whole_set() {
         let h = 0.1;
         let (x, k) = tank3(h);
-        let small = |x: &[Point<3>], s: &[u32]| {
-            s.iter().all(|&a| {
-                s.iter()
-                    .all(|&b| (x[a as usize] - x[b as usize]).norm() <= 2.0 * 1.3 * h)
-            })
-        };
-        let fluid_simplices = |t: &Tessellation| -> Vec<Vec<u32>> {
-            sorted_simplices(t)
-                .into_iter()
-                .filter(|s| s.iter().any(|&v| k[v as usize] == ParticleKind::Fluid))
-                .filter(|s| small(&x, s))
-                .collect()
-        };
-        let mut whole = Tessellation::default();
-        Delaunay3::default().tessellate(&x, &mut whole).unwrap();
-        let mut sub = Vec::new();
-        assert!(near_matter(&x, &k, 3.0 * 1.3 * h, &mut sub));
-        let (mut part, mut scratch) = (Tessellation::default(), Vec::new());
-        tessellate_subset(&mut Delaunay3::default(), &x, &sub, &mut scratch, &mut part).unwrap();
-        assert!(part.len() < whole.len());
-        let near = fluid_simplices(&whole);
-        assert!(near.len() > 500, "{}", near.len());
-        assert_eq!(fluid_simplices(&part), near);
+        let n3 = same_near_the_fluid(Delaunay3::default(), &x, &k, h);
+        assert!(n3 > 500, "{n3}");
 
         // 2D: a square tank's walls, fluid in a corner.
         let (mut x2, mut k2) = (Vec::new(), Vec::new());
@@ -392,36 +407,8 @@ mod tests {
                 }
             }
         }
-        let fluid2 = |t: &Tessellation| -> Vec<Vec<u32>> {
-            sorted_simplices(t)
-                .into_iter()
-                .filter(|s| s.iter().any(|&v| k2[v as usize] == ParticleKind::Fluid))
-                .filter(|s| {
-                    s.iter().all(|&a| {
-                        s.iter()
-                            .all(|&b| (x2[a as usize] - x2[b as usize]).norm() <= 2.0 * 1.3 * h)
-                    })
-                })
-                .collect()
-        };
-        let mut whole2 = Tessellation::default();
-        Delaunay2::default().tessellate(&x2, &mut whole2).unwrap();
-        let mut sub2 = Vec::new();
-        assert!(near_matter(&x2, &k2, 3.0 * 1.3 * h, &mut sub2));
-        let mut part2 = Tessellation::default();
-        let mut scratch2 = Vec::new();
-        tessellate_subset(
-            &mut Delaunay2::default(),
-            &x2,
-            &sub2,
-            &mut scratch2,
-            &mut part2,
-        )
-        .unwrap();
-        assert!(part2.len() < whole2.len());
-        let near2 = fluid2(&whole2);
-        assert!(near2.len() > 100, "{}", near2.len());
-        assert_eq!(fluid2(&part2), near2);
+        let n2 = same_near_the_fluid(Delaunay2::default(), &x2, &k2, h);
+        assert!(n2 > 100, "{n2}");
     }
 
     #[test]
