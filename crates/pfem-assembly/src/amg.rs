@@ -216,8 +216,10 @@ fn row_dot_parts(ptr: &[usize], idx: &[usize], val: &[f64], i: usize, x: &[f64])
 }
 
 /// Calls `f(i, &mut y[i])` for every row: in parallel chunks of
-/// `SPMV_CHUNK` rows above `PAR_ROWS` rows, in order otherwise.
-fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
+/// `SPMV_CHUNK` rows above `PAR_ROWS` rows, in order otherwise. Each row's
+/// result depends on nothing but `i`, so it is the same for any number of
+/// threads.
+pub(crate) fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
     if y.len() > PAR_ROWS {
         y.par_chunks_mut(SPMV_CHUNK)
             .enumerate()
@@ -231,6 +233,75 @@ fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
         for (i, yi) in y.iter_mut().enumerate() {
             f(i, yi);
         }
+    }
+}
+
+/// [`for_each_row`] over two vectors of one length in step:
+/// `f(i, &mut y[i], &mut z[i])`.
+pub(crate) fn for_each_row2(
+    y: &mut [f64],
+    z: &mut [f64],
+    f: impl Fn(usize, &mut f64, &mut f64) + Sync,
+) {
+    debug_assert_eq!(y.len(), z.len());
+    if y.len() > PAR_ROWS {
+        y.par_chunks_mut(SPMV_CHUNK)
+            .zip(z.par_chunks_mut(SPMV_CHUNK))
+            .enumerate()
+            .for_each(|(c, (ys, zs))| {
+                let base = c * SPMV_CHUNK;
+                for (j, (yi, zi)) in ys.iter_mut().zip(zs).enumerate() {
+                    f(base + j, yi, zi);
+                }
+            });
+    } else {
+        for (i, (yi, zi)) in y.iter_mut().zip(z).enumerate() {
+            f(i, yi, zi);
+        }
+    }
+}
+
+/// [`for_each_row`] over three vectors of one length in step.
+pub(crate) fn for_each_row3(
+    y: &mut [f64],
+    z: &mut [f64],
+    w: &mut [f64],
+    f: impl Fn(usize, &mut f64, &mut f64, &mut f64) + Sync,
+) {
+    debug_assert!(y.len() == z.len() && y.len() == w.len());
+    if y.len() > PAR_ROWS {
+        y.par_chunks_mut(SPMV_CHUNK)
+            .zip(z.par_chunks_mut(SPMV_CHUNK))
+            .zip(w.par_chunks_mut(SPMV_CHUNK))
+            .enumerate()
+            .for_each(|(c, ((ys, zs), ws))| {
+                let base = c * SPMV_CHUNK;
+                for (j, ((yi, zi), wi)) in ys.iter_mut().zip(zs).zip(ws).enumerate() {
+                    f(base + j, yi, zi, wi);
+                }
+            });
+    } else {
+        for (i, ((yi, zi), wi)) in y.iter_mut().zip(z).zip(w).enumerate() {
+            f(i, yi, zi, wi);
+        }
+    }
+}
+
+/// `a · b`: up to `PAR_ROWS` entries in order; above, by chunks of
+/// `SPMV_CHUNK` entries (each in order, in parallel) and then the chunks'
+/// sums in order. The same bits for any number of threads (a parallel
+/// `sum` would combine the chunks in an order that depends on them).
+pub(crate) fn par_dot(a: &[f64], b: &[f64]) -> f64 {
+    debug_assert_eq!(a.len(), b.len());
+    if a.len() > PAR_ROWS {
+        let parts: Vec<f64> = a
+            .par_chunks(SPMV_CHUNK)
+            .zip(b.par_chunks(SPMV_CHUNK))
+            .map(|(x, y)| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>())
+            .collect();
+        parts.iter().sum()
+    } else {
+        a.iter().zip(b).map(|(p, q)| p * q).sum()
     }
 }
 
@@ -491,8 +562,9 @@ impl Csr {
         self.idx.len()
     }
 
+    /// Row `i` times `x`, summed in order.
     #[inline]
-    fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
+    pub(crate) fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
         row_dot_parts(&self.ptr, &self.idx, &self.val, i, x)
     }
 
@@ -780,18 +852,13 @@ fn estimate_lambda_max(a: &Csr, dinv: &[f64]) -> f64 {
     let mut alphas = Vec::new();
     let mut betas = Vec::new();
     let mut beta_prev = 0.0;
+    // The vector updates in parallel row chunks (`for_each_row`), each
+    // entry's arithmetic as in a serial pass; the dot products in order.
     for step in 0..steps {
-        for i in 0..n {
-            t[i] = dsq[i] * v[i];
-        }
-        a.spmv(&t, &mut w);
-        for i in 0..n {
-            w[i] *= dsq[i];
-        }
+        for_each_row(&mut t, |i, t| *t = dsq[i] * v[i]);
+        for_each_row(&mut w, |i, w| *w = a.row_dot(i, &t) * dsq[i]);
         let alpha = dot(&w, &v);
-        for i in 0..n {
-            w[i] -= alpha * v[i] + beta_prev * v_prev[i];
-        }
+        for_each_row(&mut w, |i, w| *w -= alpha * v[i] + beta_prev * v_prev[i]);
         alphas.push(alpha);
         let beta = norm2(&w);
         if step + 1 == steps || beta.is_nan() || beta <= 1e-12 * alpha.abs().max(f64::MIN_POSITIVE)
@@ -800,9 +867,7 @@ fn estimate_lambda_max(a: &Csr, dinv: &[f64]) -> f64 {
         }
         betas.push(beta);
         std::mem::swap(&mut v_prev, &mut v);
-        for i in 0..n {
-            v[i] = w[i] / beta;
-        }
+        for_each_row(&mut v, |i, v| *v = w[i] / beta);
         beta_prev = beta;
     }
     let lmax = tridiag_max_eig(&alphas, &betas);
@@ -821,49 +886,80 @@ struct StrengthGraph {
     weight: Vec<f64>,
 }
 
+/// What [`strength_graph`] keeps of a node's row: `f(node, cols, vals,
+/// idx, out)` pushes the kept columns to `idx` and their weights to `out`.
+type RowFilter<'a> = dyn Fn(usize, &[usize], &[f64], &mut Vec<usize>, &mut Vec<f64>) + Sync + 'a;
+
 fn strength_graph(a: &Csr, bs: usize, theta: f64) -> StrengthGraph {
     let nn = a.nrows / bs;
-    // Node-level matrix of squared Frobenius norms of the blocks.
-    let mut bptr = Vec::with_capacity(nn + 1);
-    let mut bidx = Vec::new();
-    let mut bval = Vec::new();
-    let mut marker = vec![usize::MAX; nn];
-    let mut pos = vec![0usize; nn];
-    bptr.push(0);
-    for node in 0..nn {
+    // Node `node`'s row of the node-level matrix of squared Frobenius norms
+    // of the blocks, in the order its columns first appear (`marker` and
+    // `pos` scratch of the node count, `cols`/`vals` its output).
+    let node_row = |node: usize,
+                    marker: &mut [usize],
+                    pos: &mut [usize],
+                    cols: &mut Vec<usize>,
+                    vals: &mut Vec<f64>| {
+        cols.clear();
+        vals.clear();
         for i in node * bs..node * bs + bs {
             for k in a.ptr[i]..a.ptr[i + 1] {
                 let j = a.idx[k] / bs;
                 let v = a.val[k] * a.val[k];
                 if marker[j] != node {
                     marker[j] = node;
-                    pos[j] = bidx.len();
-                    bidx.push(j);
-                    bval.push(v);
+                    pos[j] = cols.len();
+                    cols.push(j);
+                    vals.push(v);
                 } else {
-                    bval[pos[j]] += v;
+                    vals[pos[j]] += v;
                 }
             }
         }
-        bptr.push(bidx.len());
-    }
-    let mut dnorm = vec![0.0; nn];
-    for node in 0..nn {
-        for k in bptr[node]..bptr[node + 1] {
-            if bidx[k] == node {
-                dnorm[node] = bval[k].sqrt();
+    };
+    // Rows in parallel chunks, each with its own scratch.
+    let chunk = nn
+        .div_ceil((rayon::current_num_threads() * 4).max(1))
+        .max(4096);
+    let starts: Vec<usize> = (0..nn).step_by(chunk).collect();
+    let per_chunk = |f: &RowFilter<'_>| {
+        starts
+            .par_iter()
+            .map(|&n0| {
+                let n1 = (n0 + chunk).min(nn);
+                let (mut marker, mut pos) = (vec![usize::MAX; nn], vec![0usize; nn]);
+                let (mut cols, mut vals) = (Vec::new(), Vec::new());
+                let (mut idx, mut out) = (Vec::new(), Vec::new());
+                let mut lens = Vec::with_capacity(n1 - n0);
+                for node in n0..n1 {
+                    node_row(node, &mut marker, &mut pos, &mut cols, &mut vals);
+                    let before = idx.len();
+                    f(node, &cols, &vals, &mut idx, &mut out);
+                    lens.push(idx.len() - before);
+                }
+                (lens, idx, out)
+            })
+            .collect::<Vec<_>>()
+    };
+    // The Frobenius norm of each node's diagonal block.
+    let dnorm: Vec<f64> = (0..nn)
+        .into_par_iter()
+        .map(|node| {
+            let mut s = 0.0;
+            for i in node * bs..node * bs + bs {
+                for k in a.ptr[i]..a.ptr[i + 1] {
+                    if a.idx[k] / bs == node {
+                        s += a.val[k] * a.val[k];
+                    }
+                }
             }
-        }
-    }
+            s.sqrt()
+        })
+        .collect();
     let theta2 = theta * theta;
-    let mut ptr = Vec::with_capacity(nn + 1);
-    let mut idx = Vec::new();
-    let mut weight = Vec::new();
-    ptr.push(0);
-    for node in 0..nn {
-        for k in bptr[node]..bptr[node + 1] {
-            let j = bidx[k];
-            let s = bval[k];
+    let dnorm = &dnorm;
+    let parts = per_chunk(&|node, cols, vals, idx, weight| {
+        for (&j, &s) in cols.iter().zip(vals) {
             if j == node || s.is_nan() || s <= 0.0 {
                 continue;
             }
@@ -873,7 +969,19 @@ fn strength_graph(a: &Csr, bs: usize, theta: f64) -> StrengthGraph {
                 weight.push(if scale > 0.0 { s / scale } else { s });
             }
         }
-        ptr.push(idx.len());
+    });
+    let total: usize = parts.iter().map(|p| p.1.len()).sum();
+    let mut ptr = Vec::with_capacity(nn + 1);
+    let mut idx = Vec::with_capacity(total);
+    let mut weight = Vec::with_capacity(total);
+    ptr.push(0);
+    for (lens, pidx, pw) in parts {
+        for l in lens {
+            let last = ptr[ptr.len() - 1];
+            ptr.push(last + l);
+        }
+        idx.extend_from_slice(&pidx);
+        weight.extend_from_slice(&pw);
     }
     StrengthGraph { ptr, idx, weight }
 }
@@ -1101,7 +1209,8 @@ fn chebyshev(
     x: &mut [f64],
     zero_guess: bool,
     r: &mut [f64],
-    d: &mut [f64],
+    d: &mut Vec<f64>,
+    e: &mut Vec<f64>,
 ) {
     let upper = 1.1 * lmax;
     let lower = lmax / ratio;
@@ -1109,33 +1218,37 @@ fn chebyshev(
     let delta = 0.5 * (upper - lower);
     let sigma = theta / delta;
     let mut rho = 1.0 / sigma;
+    // Each pass over the rows does a product's row and the vector updates
+    // of that row (in parallel above `PAR_ROWS` rows); the arithmetic is
+    // that of the separate passes, term for term.
     if zero_guess {
-        r.copy_from_slice(b);
+        for_each_row3(r, d, x, |i, ri, di, xi| {
+            *ri = b[i];
+            *di = dinv[i] * *ri / theta;
+            *xi = *di;
+        });
     } else {
-        a.spmv(x, r);
-        for (ri, bi) in r.iter_mut().zip(b) {
-            *ri = bi - *ri;
-        }
-    }
-    for i in 0..d.len() {
-        d[i] = dinv[i] * r[i] / theta;
-    }
-    if zero_guess {
-        x.copy_from_slice(d);
-    } else {
-        for (xi, di) in x.iter_mut().zip(d.iter()) {
-            *xi += di;
-        }
+        // `x` is read whole by the product: its update follows.
+        for_each_row2(r, d, |i, ri, di| {
+            *ri = b[i] - a.row_dot(i, x);
+            *di = dinv[i] * *ri / theta;
+        });
+        let d: &[f64] = d;
+        for_each_row(x, |i, xi| *xi += d[i]);
     }
     for _ in 1..degree {
-        a.spmv_add(-1.0, d, r);
         let rho_new = 1.0 / (2.0 * sigma - rho);
         let c1 = rho_new * rho;
         let c2 = 2.0 * rho_new / delta;
-        for i in 0..d.len() {
-            d[i] = c1 * d[i] + c2 * dinv[i] * r[i];
-            x[i] += d[i];
-        }
+        // `r ← r − A d`, `e ← c₁ d + c₂ D⁻¹ r`, `x ← x + e`; `e` is the
+        // next `d`.
+        let dd: &[f64] = d;
+        for_each_row3(r, e, x, |i, ri, ei, xi| {
+            *ri -= a.row_dot(i, dd);
+            *ei = c1 * dd[i] + c2 * dinv[i] * *ri;
+            *xi += *ei;
+        });
+        std::mem::swap(d, e);
         rho = rho_new;
     }
 }
@@ -1245,6 +1358,8 @@ struct Work {
     x: Vec<f64>,
     r: Vec<f64>,
     d: Vec<f64>,
+    /// The Chebyshev smoother's next `d`.
+    e: Vec<f64>,
 }
 
 impl Work {
@@ -1254,6 +1369,7 @@ impl Work {
             x: vec![0.0; n],
             r: vec![0.0; n],
             d: vec![0.0; n],
+            e: vec![0.0; n],
         }
     }
 }
@@ -1471,6 +1587,7 @@ impl Amg {
                 true,
                 &mut w.r,
                 &mut w.d,
+                &mut w.e,
             ),
         }
     }
@@ -1492,11 +1609,10 @@ impl Amg {
                 true,
                 &mut w.r,
                 &mut w.d,
+                &mut w.e,
             );
-            lev.a.spmv(&w.x, &mut w.r);
-            for (ri, bi) in w.r.iter_mut().zip(&w.b) {
-                *ri = bi - *ri;
-            }
+            let (a, x, b) = (&lev.a, &w.x, &w.b);
+            for_each_row(&mut w.r, |i, ri| *ri = b[i] - a.row_dot(i, x));
             lev.r.spmv(&w.r, &mut hi[0].b);
         }
         self.coarse_solve(&mut work[nl]);
@@ -1515,6 +1631,7 @@ impl Amg {
                 false,
                 &mut w.r,
                 &mut w.d,
+                &mut w.e,
             );
         }
         z.copy_from_slice(&work[0].x);

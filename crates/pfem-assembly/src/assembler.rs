@@ -33,7 +33,6 @@ use crate::solver::SplitSystem;
 use crate::AssemblyError;
 
 const NONE: u32 = u32::MAX;
-const CHUNK: usize = 4096;
 
 /// Velocity constraints, per particle and component: wall particles
 /// (prescribed velocity, fixed or moving), slip walls (one component),
@@ -255,7 +254,12 @@ where
     w: Vec<Vector<D>>,
     states: Vec<ElementState<D>>,
     unified: Vec<Unified<D>>,
-    local: Vec<f64>,
+    /// The elements with a node in each part of the parallel scatter, in
+    /// order (`part_elems[part_ptr[k]..part_ptr[k + 1]]`), for the
+    /// pattern generation and node ranges in `part_key`.
+    part_ptr: Vec<usize>,
+    part_elems: Vec<u32>,
+    part_key: (u64, Vec<usize>),
     /// Whether the nodal volumetric term is kept apart as `Cᵀ C`
     /// ([`Assembler::set_split`]).
     split: bool,
@@ -958,124 +962,96 @@ where
         let ns = self.particle_of.len();
         self.mass.clear();
         self.mass.resize(ns, 0.0);
-        // 2. Element stiffness and solid history force: computed in
-        // parallel chunks, scattered through precomputed indices.
-        let stride = n_local * n_local + n_local;
-        self.local.resize(CHUNK * stride, 0.0);
+        // 2. Element stiffness and solid history force, in parallel: each
+        // part owns a range of nodes (the columns of `values`, the rows of
+        // `rhs` and `mass` that belong to them) and visits, in order, the
+        // elements with a node in it, computing each element's matrix and
+        // scattering its own entries. Each entry sums its terms in the
+        // order of a serial pass, for any number of parts; an element with
+        // nodes in two parts is computed by both.
         let node_parts = node_parts(&self.pattern.adj_ptr, rayon::current_num_threads());
-        for c0 in (0..ne).step_by(CHUNK) {
-            let c1 = (c0 + CHUNK).min(ne);
-            let states = &self.states;
-            let unified = &self.unified;
-            let elem_vol = &self.elem_vol;
-            let elem_fluid = &self.elem_fluid;
-            let (cut_of, cut_share) = (&self.cut_of, &self.cut_share);
-            self.local[..(c1 - c0) * stride]
-                .par_chunks_mut(stride)
-                .enumerate()
-                .for_each(|(i, buf)| {
-                    let e = c0 + i;
-                    let (k, f) = buf.split_at_mut(n_local * n_local);
-                    element_stiffness::<D>(&states[e], &unified[e], elem_vol[e], k);
-                    if let Some((share, _)) = cut_part(cut_of, cut_share, e) {
-                        k.iter_mut().for_each(|v| *v *= share);
-                    }
-                    f.iter_mut().for_each(|v| *v = 0.0);
-                    if !elem_fluid[e] {
-                        element_history_force::<D>(&states[e], &unified[e].sigma_hat, f);
-                    }
-                });
-            // Scattered in parallel: each part owns a range of nodes (the
-            // columns of `values`, the rows of `rhs` and `mass` that belong
-            // to them) and visits every element of the chunk in order, so
-            // each entry sums its terms in the order of a serial pass.
-            let cols = |n: usize| self.pattern.adj_ptr[n] * D * D;
-            let mut parts = Vec::with_capacity(node_parts.len());
-            let (mut values, mut rhs, mut mass) = (
-                self.values.as_mut_slice(),
-                self.rhs.as_mut_slice(),
-                self.mass.as_mut_slice(),
-            );
-            for w in node_parts.windows(2) {
-                let (n0, n1) = (w[0], w[1]);
-                let (v, vr) = values.split_at_mut(cols(n1) - cols(n0));
-                let (r, rr) = rhs.split_at_mut((n1 - n0) * D);
-                let (m, mr) = mass.split_at_mut(n1 - n0);
-                (values, rhs, mass) = (vr, rr, mr);
-                parts.push(ScatterPart {
-                    nodes: n0..n1,
-                    value0: cols(n0),
-                    values: v,
-                    rhs: r,
-                    mass: m,
-                });
-            }
-            let (local, elem_sys, elem_blocks) = (&self.local, &self.elem_sys, &self.elem_blocks);
-            let (elem_material, states) = (&self.elem_material, &self.states);
-            let (cut_of, cut_share) = (&self.cut_of, &self.cut_share);
-            let (pattern, particle_of) = (&self.pattern, &self.particle_of);
-            let constraints = input.constraints;
-            parts.into_par_iter().for_each(|part| {
-                let ScatterPart {
-                    nodes,
-                    value0,
-                    values,
-                    rhs,
-                    mass,
-                } = part;
-                let own = |n: u32| nodes.contains(&(n as usize));
-                for e in c0..c1 {
-                    let buf = &local[(e - c0) * stride..(e - c0 + 1) * stride];
-                    let el = &elem_sys[e * nv..(e + 1) * nv];
-                    let rho = input.materials[elem_material[e] as usize].density();
-                    for a in 0..nv {
-                        let i = el[a];
-                        let own_i = own(i);
-                        let pi = particle_of[i as usize] as usize;
-                        let ri = (i as usize).wrapping_sub(nodes.start);
-                        if own_i {
-                            // Lumped: ∫ ρ W_a over the element (or its cut part).
-                            mass[ri] += shape_integral::<D>(
-                                cut_of,
-                                cut_share,
-                                e,
-                                a,
-                                rho * states[e].volume_n,
-                            );
-                            for k in 0..D {
-                                if !constraints.is_fixed(pi, k) {
-                                    rhs[ri * D + k] += buf[n_local * n_local + a * D + k];
-                                }
+        self.part_elements(&node_parts);
+        let parts = scatter_parts::<D>(
+            &node_parts,
+            &self.pattern.adj_ptr,
+            &mut self.values,
+            &mut self.rhs,
+            &mut self.mass,
+        );
+        let (states, unified) = (&self.states, &self.unified);
+        let (elem_vol, elem_fluid) = (&self.elem_vol, &self.elem_fluid);
+        let (elem_sys, elem_blocks) = (&self.elem_sys, &self.elem_blocks);
+        let elem_material = &self.elem_material;
+        let (cut_of, cut_share) = (&self.cut_of, &self.cut_share);
+        let (pattern, particle_of) = (&self.pattern, &self.particle_of);
+        let constraints = input.constraints;
+        let (part_ptr, part_elems) = (&self.part_ptr, &self.part_elems);
+        parts.into_par_iter().enumerate().for_each(|(pi_, part)| {
+            let ScatterPart {
+                nodes,
+                value0,
+                values,
+                rhs,
+                mass,
+            } = part;
+            let own = |n: u32| nodes.contains(&(n as usize));
+            let mut buf = [0.0; MAX_LOCAL * MAX_LOCAL + MAX_LOCAL];
+            for &e in &part_elems[part_ptr[pi_]..part_ptr[pi_ + 1]] {
+                let e = e as usize;
+                let (k, f) = buf[..n_local * n_local + n_local].split_at_mut(n_local * n_local);
+                element_stiffness::<D>(&states[e], &unified[e], elem_vol[e], k);
+                if let Some((share, _)) = cut_part(cut_of, cut_share, e) {
+                    k.iter_mut().for_each(|v| *v *= share);
+                }
+                f.iter_mut().for_each(|v| *v = 0.0);
+                if !elem_fluid[e] {
+                    element_history_force::<D>(&states[e], &unified[e].sigma_hat, f);
+                }
+                let (k, f) = (&*k, &*f);
+                let el = &elem_sys[e * nv..(e + 1) * nv];
+                let rho = input.materials[elem_material[e] as usize].density();
+                for a in 0..nv {
+                    let i = el[a];
+                    let own_i = own(i);
+                    let pi = particle_of[i as usize] as usize;
+                    let ri = (i as usize).wrapping_sub(nodes.start);
+                    if own_i {
+                        // Lumped: ∫ ρ W_a over the element (or its cut part).
+                        mass[ri] +=
+                            shape_integral::<D>(cut_of, cut_share, e, a, rho * states[e].volume_n);
+                        for kk in 0..D {
+                            if !constraints.is_fixed(pi, kk) {
+                                rhs[ri * D + kk] += f[a * D + kk];
                             }
                         }
-                        for b in 0..nv {
-                            let j = el[b];
-                            let own_j = own(j);
-                            if !own_i && !own_j {
+                    }
+                    for b in 0..nv {
+                        let j = el[b];
+                        let own_j = own(j);
+                        if !own_i && !own_j {
+                            continue;
+                        }
+                        let p = elem_blocks[e * nv * nv + a * nv + b];
+                        let pj = particle_of[j as usize] as usize;
+                        for kk in 0..D {
+                            if constraints.is_fixed(pi, kk) {
                                 continue;
                             }
-                            let p = elem_blocks[e * nv * nv + a * nv + b];
-                            let pj = particle_of[j as usize] as usize;
-                            for k in 0..D {
-                                if constraints.is_fixed(pi, k) {
-                                    continue;
-                                }
-                                for l in 0..D {
-                                    let val = buf[(a * D + k) * n_local + b * D + l];
-                                    if constraints.is_fixed(pj, l) {
-                                        if own_i {
-                                            rhs[ri * D + k] -= val * constraints.velocity[pj][l];
-                                        }
-                                    } else if own_j {
-                                        values[pattern.value_index(p, j, k, l) - value0] += val;
+                            for l in 0..D {
+                                let val = k[(a * D + kk) * n_local + b * D + l];
+                                if constraints.is_fixed(pj, l) {
+                                    if own_i {
+                                        rhs[ri * D + kk] -= val * constraints.velocity[pj][l];
                                     }
+                                } else if own_j {
+                                    values[pattern.value_index(p, j, kk, l) - value0] += val;
                                 }
                             }
                         }
                     }
                 }
-            });
-        }
+            }
+        });
         if self.split {
             self.coords.clear();
             for &p in &self.particle_of {
@@ -1176,54 +1152,108 @@ where
                 }
             }
         }
-        // 4. Inertia and body force on each system node.
+        // 4. Inertia and body force on each system node, then (5.) the
+        // prescribed dofs: identity rows, value on the right. Node by node
+        // in parallel parts: node `a`'s terms go to its own column and row.
         let cm = input.inertia.mass_factor;
-        for a in 0..ns {
-            let part = self.particle_of[a] as usize;
-            let m = self.mass[a];
-            let mut f = input.v_n[part] * (cm * m);
-            let ca = input.inertia.acceleration_factor;
-            if ca != 0.0 {
-                f += input.a_n[part] * (ca * m);
-            }
-            if let Some(b) = input.body_force {
-                f += b * m; // eq. 59, lumped
-            }
-            let p = self.diag_block[a];
-            for k in 0..D {
-                sink.rhs(a as u32, k, f[k]);
-                sink.entry(p, a as u32, k, a as u32, k, cm * m);
-            }
-        }
-        // 5. Prescribed dofs: identity rows, value on the right.
-        for a in 0..ns {
-            let part = self.particle_of[a] as usize;
-            if input.constraints.mask[part] == 0 {
-                continue;
-            }
-            let p = self.diag_block[a];
-            for k in 0..D {
-                if input.constraints.is_fixed(part, k) {
-                    let idx = self.pattern.value_index(p, a as u32, k, k);
-                    self.values[idx] = 1.0;
-                    self.rhs[a * D + k] = input.constraints.velocity[part][k];
+        let ca = input.inertia.acceleration_factor;
+        let parts = scatter_parts::<D>(
+            &node_parts,
+            &self.pattern.adj_ptr,
+            &mut self.values,
+            &mut self.rhs,
+            &mut self.mass,
+        );
+        let (pattern, particle_of, diag_block) =
+            (&self.pattern, &self.particle_of, &self.diag_block);
+        let constraints = input.constraints;
+        parts.into_par_iter().for_each(|part| {
+            let ScatterPart {
+                nodes,
+                value0,
+                values,
+                rhs,
+                mass,
+            } = part;
+            for a in nodes.clone() {
+                let ra = a - nodes.start;
+                let part = particle_of[a] as usize;
+                let m = mass[ra];
+                let mut f = input.v_n[part] * (cm * m);
+                if ca != 0.0 {
+                    f += input.a_n[part] * (ca * m);
+                }
+                if let Some(b) = input.body_force {
+                    f += b * m; // eq. 59, lumped
+                }
+                let p = diag_block[a];
+                for k in 0..D {
+                    if !constraints.is_fixed(part, k) {
+                        rhs[ra * D + k] += f[k];
+                        values[pattern.value_index(p, a as u32, k, k) - value0] += cm * m;
+                    }
+                }
+                if constraints.mask[part] != 0 {
+                    for k in 0..D {
+                        if constraints.is_fixed(part, k) {
+                            values[pattern.value_index(p, a as u32, k, k) - value0] = 1.0;
+                            rhs[ra * D + k] = constraints.velocity[part][k];
+                        }
+                    }
                 }
             }
-        }
+        });
         if self.is_stabilised() {
             self.stabilise(input)?;
         }
-        if let Some(i) = self.rhs.iter().position(|v| !v.is_finite()) {
+        if let Some(i) = first_non_finite(&self.rhs) {
             return Err(AssemblyError::NonFiniteSystem { dof: i });
         }
         let c_val = if self.split { &self.c_val[..] } else { &[] };
-        if let Some(entry) = self.values.iter().chain(c_val).position(|v| !v.is_finite()) {
+        if let Some(entry) = first_non_finite(&self.values)
+            .or_else(|| first_non_finite(c_val).map(|i| i + self.values.len()))
+        {
             return Err(AssemblyError::NonFiniteMatrix { entry });
         }
         Ok(AssemblyInfo {
             dofs: self.pattern.dofs(),
             nnz: self.pattern.nnz(),
         })
+    }
+
+    /// The elements with a node in each of the node ranges `node_parts`
+    /// (ascending), kept while the pattern and the ranges stay.
+    fn part_elements(&mut self, node_parts: &[usize]) {
+        if self.part_key.0 == self.generation
+            && self.part_key.1 == node_parts
+            && self.part_ptr.len() == node_parts.len()
+        {
+            return;
+        }
+        let nv = <Const<D> as Dim>::NV;
+        let elem_sys = &self.elem_sys;
+        let lists: Vec<Vec<u32>> = node_parts
+            .par_windows(2)
+            .map(|w| {
+                let nodes = w[0]..w[1];
+                (0..self.n_elements)
+                    .filter(|&e| {
+                        elem_sys[e * nv..(e + 1) * nv]
+                            .iter()
+                            .any(|&n| nodes.contains(&(n as usize)))
+                    })
+                    .map(|e| e as u32)
+                    .collect()
+            })
+            .collect();
+        self.part_ptr.clear();
+        self.part_ptr.push(0);
+        self.part_elems.clear();
+        for l in &lists {
+            self.part_elems.extend_from_slice(l);
+            self.part_ptr.push(self.part_elems.len());
+        }
+        self.part_key = (self.generation, node_parts.to_vec());
     }
 
     /// The stabilisation of the split form at the iterate (see
@@ -1238,79 +1268,126 @@ where
         for k in 2..=D {
             fact *= k as f64;
         }
-        let scale: Vec<f64> = (0..ns).map(|a| self.nodal_scale(a)).collect();
-        // Per fluid element: τ V and grad pⁿ; nodal projection π.
+        let scale: Vec<f64> = (0..ns)
+            .into_par_iter()
+            .map(|a| self.nodal_scale(a))
+            .collect();
+        // Per fluid element: τ V, grad pⁿ and the element's measure V (None
+        // for an element that carries none), in parallel.
+        let per: Vec<Option<(f64, Vector<D>, f64)>> = (0..self.n_elements)
+            .into_par_iter()
+            .map(|e| {
+                if !self.elem_fluid[e] {
+                    return None;
+                }
+                let st = &self.states[e];
+                let vol = st.volume * self.share(e);
+                if vol <= 0.0 {
+                    return None;
+                }
+                // A sliver kept in shape (deviation 13) carries none: on a
+                // nearly flat tetrahedron `τ V ∇W_a·∇W_b` grows as the
+                // inverse of its height, with couplings of the wrong sign
+                // (positive off-diagonals up to 2.6 times the diagonal in
+                // the running 3D column), which stalled the pressure
+                // multigrid (43–50 CG iterations on `Ŝ + L̃` against 10).
+                // Left out of `L`, of `π` and of the offset alike, the term
+                // still vanishes for a linear pressure.
+                if self.frozen.get(e).copied().unwrap_or(false) {
+                    return None;
+                }
+                let mat = &input.materials[self.elem_material[e] as usize];
+                let h2 = (fact * st.volume).powf(2.0 / D as f64);
+                let tau = self.stabilisation
+                    / (input.inertia.mass_factor * mat.density() + 8.0 * self.unified[e].mu / h2);
+                let mut gp = Vector::<D>::zeros();
+                for a in 0..nv {
+                    let part = self.particle_of[self.elem_sys[e * nv + a] as usize] as usize;
+                    gp += st.grads[a] * input.pressure_n[part];
+                }
+                Some((tau * vol, gp, vol))
+            })
+            .collect();
+        // The nodal projection π, then `L̃` into the pattern's slots and
+        // `S τ (L pⁿ − P π)` per row: node by node in the parts of the
+        // scatter, each part visiting its elements in order (each entry
+        // sums its terms in the order of a serial pass).
         let mut pi = std::mem::take(&mut self.stab_pi);
         let mut weight = std::mem::take(&mut self.stab_weight);
         pi.clear();
         pi.resize(ns, Vector::<D>::zeros());
         weight.clear();
         weight.resize(ns, 0.0);
-        let mut elem: Vec<(usize, f64, Vector<D>)> = Vec::new();
-        for e in 0..self.n_elements {
-            if !self.elem_fluid[e] {
-                continue;
-            }
-            let st = &self.states[e];
-            let vol = st.volume * self.share(e);
-            if vol <= 0.0 {
-                continue;
-            }
-            // A sliver kept in shape (deviation 13) carries none: on a
-            // nearly flat tetrahedron `τ V ∇W_a·∇W_b` grows as the inverse of
-            // its height, with couplings of the wrong sign (positive
-            // off-diagonals up to 2.6 times the diagonal in the running 3D
-            // column), which stalled the pressure multigrid (43–50 CG
-            // iterations on `Ŝ + L̃` against 10). Left out of `L`, of `π` and
-            // of the offset alike, the term still vanishes for a linear
-            // pressure.
-            if self.frozen.get(e).copied().unwrap_or(false) {
-                continue;
-            }
-            let mat = &input.materials[self.elem_material[e] as usize];
-            let h2 = (fact * st.volume).powf(2.0 / D as f64);
-            let tau = self.stabilisation
-                / (input.inertia.mass_factor * mat.density() + 8.0 * self.unified[e].mu / h2);
-            let mut gp = Vector::<D>::zeros();
-            for a in 0..nv {
-                let part = self.particle_of[self.elem_sys[e * nv + a] as usize] as usize;
-                gp += st.grads[a] * input.pressure_n[part];
-            }
-            for a in 0..nv {
-                let na = self.elem_sys[e * nv + a] as usize;
-                pi[na] += gp * (vol / nv as f64);
-                weight[na] += vol / nv as f64;
-            }
-            elem.push((e, tau * vol, gp));
-        }
-        for (p, w) in pi.iter_mut().zip(&weight) {
-            if *w > 0.0 {
-                *p /= *w;
-            }
-        }
-        // `L̃` into the pattern's slots, `S τ (L pⁿ − P π)` per row.
-        self.l_val.iter_mut().for_each(|v| *v = 0.0);
-        self.c_offset.iter_mut().for_each(|v| *v = 0.0);
-        for &(e, tv, gp) in &elem {
-            let st = &self.states[e];
-            let el = &self.elem_sys[e * nv..(e + 1) * nv];
-            let mut pbar = Vector::<D>::zeros();
-            for &a in el {
-                pbar += pi[a as usize];
-            }
-            pbar /= nv as f64;
-            let jump = gp - pbar;
-            for a in 0..nv {
-                let na = el[a] as usize;
-                let sa = scale[na];
-                self.c_offset[self.c_row[na] as usize] += sa * tv * st.grads[a].dot(&jump);
-                for b in 0..nv {
-                    let slot = self.elem_slots[e * nv * nv + a * nv + b] as usize;
-                    self.l_val[slot] +=
-                        sa * scale[el[b] as usize] * tv * st.grads[a].dot(&st.grads[b]);
+        let bounds = self.part_key.1.clone();
+        let (part_ptr, part_elems) = (&self.part_ptr, &self.part_elems);
+        let elem_sys = &self.elem_sys;
+        let elements = |k: usize| &part_elems[part_ptr[k]..part_ptr[k + 1]];
+        split_mut(&mut pi, &bounds)
+            .into_par_iter()
+            .zip(split_mut(&mut weight, &bounds))
+            .enumerate()
+            .for_each(|(k, (pi, weight))| {
+                let n0 = bounds[k];
+                for &e in elements(k) {
+                    let e = e as usize;
+                    let Some((_, gp, vol)) = per[e] else { continue };
+                    for &na in &elem_sys[e * nv..(e + 1) * nv] {
+                        let Some(r) = (na as usize).checked_sub(n0).filter(|&r| r < pi.len())
+                        else {
+                            continue;
+                        };
+                        pi[r] += gp * (vol / nv as f64);
+                        weight[r] += vol / nv as f64;
+                    }
                 }
-            }
-        }
+                for (p, w) in pi.iter_mut().zip(weight.iter()) {
+                    if *w > 0.0 {
+                        *p /= *w;
+                    }
+                }
+            });
+        let patch_bounds: Vec<usize> = bounds.iter().map(|&n| self.patch_ptr[n]).collect();
+        let row_bounds: Vec<usize> = bounds
+            .iter()
+            .map(|&n| self.c_node.partition_point(|&a| (a as usize) < n))
+            .collect();
+        let (states, elem_slots, c_row) = (&self.states, &self.elem_slots, &self.c_row);
+        let pi_ref = &pi;
+        split_mut(&mut self.l_val, &patch_bounds)
+            .into_par_iter()
+            .zip(split_mut(&mut self.c_offset, &row_bounds))
+            .enumerate()
+            .for_each(|(k, (l_val, c_offset))| {
+                let (n0, n1) = (bounds[k], bounds[k + 1]);
+                let (s0, r0) = (patch_bounds[k], row_bounds[k]);
+                l_val.iter_mut().for_each(|v| *v = 0.0);
+                c_offset.iter_mut().for_each(|v| *v = 0.0);
+                for &e in elements(k) {
+                    let e = e as usize;
+                    let Some((tv, gp, _)) = per[e] else { continue };
+                    let st = &states[e];
+                    let el = &elem_sys[e * nv..(e + 1) * nv];
+                    let mut pbar = Vector::<D>::zeros();
+                    for &a in el {
+                        pbar += pi_ref[a as usize];
+                    }
+                    pbar /= nv as f64;
+                    let jump = gp - pbar;
+                    for a in 0..nv {
+                        let na = el[a] as usize;
+                        if na < n0 || na >= n1 {
+                            continue;
+                        }
+                        let sa = scale[na];
+                        c_offset[c_row[na] as usize - r0] += sa * tv * st.grads[a].dot(&jump);
+                        for b in 0..nv {
+                            let slot = elem_slots[e * nv * nv + a * nv + b] as usize;
+                            l_val[slot - s0] +=
+                                sa * scale[el[b] as usize] * tv * st.grads[a].dot(&st.grads[b]);
+                        }
+                    }
+                }
+            });
         self.stab_pi = pi;
         self.stab_weight = weight;
         // o = −(c₀ + r).
@@ -1443,40 +1520,62 @@ where
         self.vol_hat.resize(ns, 0.0);
         self.kappa_hat.clear();
         self.kappa_hat.resize(ns, 0.0);
-        for e in 0..self.n_elements {
-            if !self.elem_fluid[e] {
-                continue;
-            }
-            let st = &self.states[e];
-            let frozen = self.frozen.get(e).copied().unwrap_or(false);
-            for a in 0..nv {
-                let na = self.elem_sys[e * nv + a] as usize;
-                // A sliver kept in shape (deviation 13): `V grad W` and the
-                // signed `V` of the iterate, as for closures.
-                let (wv, frac) = if frozen {
-                    let frac = shape_integral::<D>(&self.cut_of, &self.cut_share, e, a, 1.0);
-                    (frac * self.frozen_w[e].0, frac)
-                } else {
-                    let wv = shape_integral::<D>(&self.cut_of, &self.cut_share, e, a, st.volume);
-                    (wv, 0.0)
-                };
-                self.vol_hat[na] += wv;
-                self.kappa_hat[na] += wv * self.unified[e].kappa;
-                for b in 0..nv {
-                    let slot = self.elem_slots[e * nv * nv + a * nv + b] as usize;
-                    self.w[slot] += if frozen {
-                        self.frozen_w[e].1[b] * frac
-                    } else {
-                        st.grads[b] * wv
-                    };
+        // Node by node in the parts of the scatter, each part visiting its
+        // elements in order (each sum in the order of a serial pass).
+        let bounds = self.part_key.1.clone();
+        let patch_bounds: Vec<usize> = bounds.iter().map(|&n| self.patch_ptr[n]).collect();
+        let (part_ptr, part_elems) = (&self.part_ptr, &self.part_elems);
+        let (elem_sys, elem_slots, elem_fluid) =
+            (&self.elem_sys, &self.elem_slots, &self.elem_fluid);
+        let (states, unified, frozen_w) = (&self.states, &self.unified, &self.frozen_w);
+        let (frozen_of, cut_of, cut_share) = (&self.frozen, &self.cut_of, &self.cut_share);
+        split_mut(&mut self.w, &patch_bounds)
+            .into_par_iter()
+            .zip(split_mut(&mut self.vol_hat, &bounds))
+            .zip(split_mut(&mut self.kappa_hat, &bounds))
+            .enumerate()
+            .for_each(|(k, ((w, vol_hat), kappa_hat))| {
+                let (n0, n1, s0) = (bounds[k], bounds[k + 1], patch_bounds[k]);
+                for &e in &part_elems[part_ptr[k]..part_ptr[k + 1]] {
+                    let e = e as usize;
+                    if !elem_fluid[e] {
+                        continue;
+                    }
+                    let st = &states[e];
+                    let frozen = frozen_of.get(e).copied().unwrap_or(false);
+                    for a in 0..nv {
+                        let na = elem_sys[e * nv + a] as usize;
+                        if na < n0 || na >= n1 {
+                            continue;
+                        }
+                        // A sliver kept in shape (deviation 13): `V grad W`
+                        // and the signed `V` of the iterate, as for
+                        // closures.
+                        let (wv, frac) = if frozen {
+                            let frac = shape_integral::<D>(cut_of, cut_share, e, a, 1.0);
+                            (frac * frozen_w[e].0, frac)
+                        } else {
+                            let wv = shape_integral::<D>(cut_of, cut_share, e, a, st.volume);
+                            (wv, 0.0)
+                        };
+                        vol_hat[na - n0] += wv;
+                        kappa_hat[na - n0] += wv * unified[e].kappa;
+                        for b in 0..nv {
+                            let slot = elem_slots[e * nv * nv + a * nv + b] as usize;
+                            w[slot - s0] += if frozen {
+                                frozen_w[e].1[b] * frac
+                            } else {
+                                st.grads[b] * wv
+                            };
+                        }
+                    }
                 }
-            }
-        }
-        for a in 0..ns {
-            if self.vol_hat[a] > 0.0 {
-                self.kappa_hat[a] /= self.vol_hat[a];
-            }
-        }
+                for (kh, v) in kappa_hat.iter_mut().zip(vol_hat.iter()) {
+                    if *v > 0.0 {
+                        *kh /= *v;
+                    }
+                }
+            });
         // Closures: `V grad W` directly (finite when V → 0); no 𝒦 weight (𝒦_a is
         // the mean over the elements).
         for c in 0..self.clo_sys.len() / nv {
@@ -1678,6 +1777,62 @@ struct ScatterPart<'s> {
     values: &'s mut [f64],
     rhs: &'s mut [f64],
     mass: &'s mut [f64],
+}
+
+/// The node ranges `node_parts` as [`ScatterPart`]s: each with its columns
+/// of `values` (`adj_ptr`, the node adjacency's row pointers), its rows of
+/// `rhs` and its entries of `mass`.
+fn scatter_parts<'s, const D: usize>(
+    node_parts: &[usize],
+    adj_ptr: &[usize],
+    values: &'s mut [f64],
+    rhs: &'s mut [f64],
+    mass: &'s mut [f64],
+) -> Vec<ScatterPart<'s>> {
+    let cols = |n: usize| adj_ptr[n] * D * D;
+    let mut parts = Vec::with_capacity(node_parts.len());
+    let (mut values, mut rhs, mut mass) = (values, rhs, mass);
+    for w in node_parts.windows(2) {
+        let (n0, n1) = (w[0], w[1]);
+        let (v, vr) = values.split_at_mut(cols(n1) - cols(n0));
+        let (r, rr) = rhs.split_at_mut((n1 - n0) * D);
+        let (m, mr) = mass.split_at_mut(n1 - n0);
+        (values, rhs, mass) = (vr, rr, mr);
+        parts.push(ScatterPart {
+            nodes: n0..n1,
+            value0: cols(n0),
+            values: v,
+            rhs: r,
+            mass: m,
+        });
+    }
+    parts
+}
+
+/// The first entry of `v` that is not finite: chunks in parallel.
+fn first_non_finite(v: &[f64]) -> Option<usize> {
+    const CH: usize = 8192;
+    let c = v
+        .par_chunks(CH)
+        .position_first(|c| c.iter().any(|x| !x.is_finite()))?;
+    let base = c * CH;
+    v[base..]
+        .iter()
+        .position(|x| !x.is_finite())
+        .map(|i| base + i)
+}
+
+/// `v` cut at the ascending `bounds` (from 0 to `v.len()`): one slice per
+/// consecutive pair.
+fn split_mut<'s, T>(v: &'s mut [T], bounds: &[usize]) -> Vec<&'s mut [T]> {
+    let mut out = Vec::with_capacity(bounds.len().saturating_sub(1));
+    let mut rest = v;
+    for w in bounds.windows(2) {
+        let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+        out.push(head);
+        rest = tail;
+    }
+    out
 }
 
 /// Boundaries of `parts` node ranges with about equal numbers of matrix

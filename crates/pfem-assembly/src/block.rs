@@ -71,7 +71,10 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Par, Side};
 
-use crate::amg::{spmv_parts, transpose_structure, Amg, AmgOptions, Csr};
+use crate::amg::{
+    for_each_row, for_each_row2, par_dot as dot, spmv_parts, transpose_structure, Amg, AmgOptions,
+    Csr,
+};
 use crate::solver::{
     DirectSolver, LinearSolver, SolveReport, SolverWork, SplitSystem, Workspace,
     DEFAULT_PARALLELISM,
@@ -939,18 +942,6 @@ pub const MULTIGRID_FROM: [usize; 2] = [1_000, 2_000];
 /// `docs/benchmarks.md` (session 18).
 pub const SPLIT_FROM: usize = 0;
 
-/// Parallel dot product above a size where it pays.
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    if a.len() > 50_000 {
-        a.par_chunks(8192)
-            .zip(b.par_chunks(8192))
-            .map(|(x, y)| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>())
-            .sum()
-    } else {
-        a.iter().zip(b).map(|(p, q)| p * q).sum()
-    }
-}
-
 /// The rigid-body modes of nodes at `coords` (`d` per node), centred:
 /// `d` translations and `d (d − 1) / 2` rotations, column-major.
 fn rigid_modes(coords: &[f64], d: usize) -> (Vec<f64>, usize) {
@@ -1265,7 +1256,7 @@ impl BlockSolver {
         let mut d = vec![0.0; nt];
         let residual_of = |y: &[f64], r: &mut [f64], tmp: &mut [f64]| {
             apply_k(y, r, tmp);
-            r.iter_mut().zip(&b).for_each(|(r, b)| *r = b - *r);
+            for_each_row(r, |i, r| *r = b[i] - *r);
             let num = dot(r, r).sqrt();
             if den > 0.0 {
                 num / den
@@ -1284,7 +1275,7 @@ impl BlockSolver {
         let target = self.target();
         let absolute = target * if den > 0.0 { den } else { 1.0 };
         while residual > target && iterations < self.max_iterations {
-            d.iter_mut().for_each(|v| *v = 0.0);
+            for_each_row(&mut d, |_, v| *v = 0.0);
             let left = self.max_iterations - iterations;
             let it = match self.krylov {
                 Krylov::Gmres => gmres(
@@ -1309,7 +1300,7 @@ impl BlockSolver {
                 ),
             };
             iterations += it.max(1);
-            y.iter_mut().zip(&d).for_each(|(y, d)| *y += d);
+            for_each_row(&mut y, |i, y| *y += d[i]);
             let new = residual_of(&y, &mut r, &mut tmp);
             if new.is_nan() || new >= residual {
                 residual = new;
@@ -1656,13 +1647,22 @@ fn apply_saddle(
     let n = a.nrows;
     let (yv, yq) = y.split_at(n);
     let (ov, oq) = out.split_at_mut(n);
-    a.spmv(yv, ov);
+    // Each row's terms in the order of separate products and sums.
     ct.spmv(yq, tmp);
-    ov.iter_mut().zip(tmp.iter()).for_each(|(o, t)| *o += t);
-    c.spmv(yv, oq);
-    oq.iter_mut().zip(yq).for_each(|(o, q)| *o -= q);
-    if let Some(l) = l {
-        l.spmv_add(-1.0, yq, oq);
+    let tmp: &[f64] = tmp;
+    for_each_row(ov, |i, o| *o = a.row_dot(i, yv) + tmp[i]);
+    pressure_rows(c, l, yv, yq, oq);
+}
+
+/// `o ← C v − q − L̃ q` (`L̃ = 0` when `l` is `None`): the pressure rows
+/// of the saddle-point operator, each row summed as `(C v)ᵢ − qᵢ − (L̃
+/// q)ᵢ`.
+fn pressure_rows(c: &Csr, l: Option<&Csr>, v: &[f64], q: &[f64], o: &mut [f64]) {
+    match l {
+        Some(l) => for_each_row(o, |i, o| {
+            *o = c.row_dot(i, v) - q[i] - l.row_dot(i, q);
+        }),
+        None => for_each_row(o, |i, o| *o = c.row_dot(i, v) - q[i]),
     }
 }
 
@@ -1692,25 +1692,21 @@ fn apply_upper(
     let (rv, rq) = r.split_at(n);
     let (zv, zq) = z.split_at_mut(n);
     schur_step(schur, rq, zq);
-    ct.spmv(zq, tmp);
-    tmp.iter_mut().zip(rv).for_each(|(t, r)| *t = r - *t);
+    let zq: &[f64] = zq;
+    for_each_row(tmp, |i, t| *t = rv[i] - ct.row_dot(i, zq));
     velocity_step(velocity, tmp, zv);
 }
 
 /// `z_q = −Ŝ⁻¹ r_q`, the pressure row of the block preconditioners.
 fn schur_step(schur: &Amg, rq: &[f64], zq: &mut [f64]) {
     schur.apply(rq, zq);
-    zq.iter_mut().for_each(|v| *v = -*v);
+    for_each_row(zq, |_, v| *v = -*v);
 }
 
 /// `z_v = Â⁻¹ t`, the velocity row of the block preconditioners.
 fn velocity_step(velocity: &VelocityPrec, t: &[f64], zv: &mut [f64]) {
     match velocity {
-        VelocityPrec::Jacobi(inv) => zv
-            .iter_mut()
-            .zip(t)
-            .zip(inv)
-            .for_each(|((z, t), d)| *z = t * d),
+        VelocityPrec::Jacobi(inv) => for_each_row(zv, |i, z| *z = t[i] * inv[i]),
         VelocityPrec::Amg(amg) => amg.apply(t, zv),
     }
 }
@@ -1734,20 +1730,15 @@ fn apply_upper_then_saddle(
     let (zv, zq) = z.split_at_mut(n);
     let (wv, wq) = w.split_at_mut(n);
     schur_step(schur, rq, zq);
-    ct.spmv(zq, tmp);
     // `w_v` holds `r_v − Cᵀ z_q` until `K z` overwrites it.
-    wv.iter_mut()
-        .zip(tmp.iter())
-        .zip(rv)
-        .for_each(|((w, t), r)| *w = r - t);
+    for_each_row2(tmp, wv, |i, t, w| {
+        *t = ct.row_dot(i, zq);
+        *w = rv[i] - *t;
+    });
     velocity_step(velocity, wv, zv);
-    a.spmv(zv, wv);
-    wv.iter_mut().zip(tmp.iter()).for_each(|(o, t)| *o += t);
-    c.spmv(zv, wq);
-    wq.iter_mut().zip(zq.iter()).for_each(|(o, q)| *o -= q);
-    if let Some(l) = l {
-        l.spmv_add(-1.0, zq, wq);
-    }
+    let tmp: &[f64] = tmp;
+    for_each_row(wv, |i, w| *w = a.row_dot(i, zv) + tmp[i]);
+    pressure_rows(c, l, zv, zq, wq);
 }
 
 /// `z = P⁻¹ v` and `w = K z` in one call, for operators that share work
@@ -1784,15 +1775,24 @@ fn gmres(
     let mut z = vec![0.0; nt];
     let mut w = vec![0.0; nt];
     let mut done = 0;
+    // The vector operations run in parallel row chunks above `PAR_ROWS`
+    // (`for_each_row`), each entry's arithmetic as in a serial pass.
     while done < max_iter {
-        apply_k(y, &mut w, tmp);
-        w.iter_mut().zip(b).for_each(|(w, b)| *w = b - *w);
+        if y.iter().all(|&v| v == 0.0) {
+            // `K 0 = 0`: the residual is `b` (the caller's correction solves
+            // start so), without a product.
+            w.copy_from_slice(b);
+        } else {
+            apply_k(y, &mut w, tmp);
+            for_each_row(&mut w, |i, w| *w = b[i] - *w);
+        }
         let beta = dot(&w, &w).sqrt();
         if beta.is_nan() || beta <= target {
             break;
         }
         basis.clear();
-        basis.extend(w.iter().map(|v| v / beta));
+        basis.resize(nt, 0.0);
+        for_each_row(&mut basis, |i, v| *v = w[i] / beta);
         g.iter_mut().for_each(|v| *v = 0.0);
         g[0] = beta;
         let mut k = 0;
@@ -1809,7 +1809,7 @@ fn gmres(
             for (i, v) in basis.chunks_exact(nt).enumerate() {
                 let hik = dot(&w, v);
                 h[i][k] = hik;
-                w.iter_mut().zip(v).for_each(|(w, v)| *w -= hik * v);
+                for_each_row(&mut w, |j, w| *w -= hik * v[j]);
             }
             let norm = dot(&w, &w).sqrt();
             h[k + 1][k] = norm;
@@ -1834,7 +1834,9 @@ fn gmres(
                 converged = true;
                 break;
             }
-            basis.extend(w.iter().map(|v| v / norm));
+            let start = basis.len();
+            basis.resize(start + nt, 0.0);
+            for_each_row(&mut basis[start..], |i, v| *v = w[i] / norm);
         }
         if k == 0 {
             break;
@@ -1848,12 +1850,17 @@ fn gmres(
             }
             alpha[i] = v / h[i][i];
         }
-        w.iter_mut().for_each(|v| *v = 0.0);
-        for (v, a) in basis.chunks_exact(nt).zip(&alpha) {
-            w.iter_mut().zip(v).for_each(|(w, v)| *w += a * v);
-        }
+        // `w = Σ αⱼ vⱼ`, each entry summed over the basis in order.
+        let basis_ref = &basis;
+        for_each_row(&mut w, |i, w| {
+            let mut s = 0.0;
+            for (j, a) in alpha.iter().enumerate() {
+                s += a * basis_ref[j * nt + i];
+            }
+            *w = s;
+        });
         apply_p(&w, &mut z, tmp);
-        y.iter_mut().zip(&z).for_each(|(y, z)| *y += z);
+        for_each_row(y, |i, y| *y += z[i]);
         if converged {
             break;
         }
