@@ -97,8 +97,8 @@ fn the_multigrid_path_gives_identical_results_on_one_and_two_threads() {
 
 fn compare(name: &str, scene: fn() -> Scene<2>) {
     let one = run(1, scene);
-    // Three threads as well: the assembly scatters element matrices in
-    // one part per thread, and a middle part owns neither end.
+    // Three threads as well: each part of the assembly owns a range of
+    // nodes, and a middle part owns neither end.
     for threads in [2, 3] {
         same(name, &one, &run(threads, scene), threads);
     }
