@@ -1648,9 +1648,9 @@ fn apply_saddle(
     let (yv, yq) = y.split_at(n);
     let (ov, oq) = out.split_at_mut(n);
     // Each row's terms in the order of separate products and sums.
-    ct.spmv(yq, tmp);
+    for_each_row(tmp, |i, t| *t = ct.row_dot4(i, yq));
     let tmp: &[f64] = tmp;
-    for_each_row(ov, |i, o| *o = a.row_dot(i, yv) + tmp[i]);
+    for_each_row(ov, |i, o| *o = a.row_dot4(i, yv) + tmp[i]);
     pressure_rows(c, l, yv, yq, oq);
 }
 
@@ -1660,9 +1660,9 @@ fn apply_saddle(
 fn pressure_rows(c: &Csr, l: Option<&Csr>, v: &[f64], q: &[f64], o: &mut [f64]) {
     match l {
         Some(l) => for_each_row(o, |i, o| {
-            *o = c.row_dot(i, v) - q[i] - l.row_dot(i, q);
+            *o = c.row_dot4(i, v) - q[i] - l.row_dot4(i, q);
         }),
-        None => for_each_row(o, |i, o| *o = c.row_dot(i, v) - q[i]),
+        None => for_each_row(o, |i, o| *o = c.row_dot4(i, v) - q[i]),
     }
 }
 
@@ -1693,7 +1693,7 @@ fn apply_upper(
     let (zv, zq) = z.split_at_mut(n);
     schur_step(schur, rq, zq);
     let zq: &[f64] = zq;
-    for_each_row(tmp, |i, t| *t = rv[i] - ct.row_dot(i, zq));
+    for_each_row(tmp, |i, t| *t = rv[i] - ct.row_dot4(i, zq));
     velocity_step(velocity, tmp, zv);
 }
 
@@ -1732,12 +1732,12 @@ fn apply_upper_then_saddle(
     schur_step(schur, rq, zq);
     // `w_v` holds `r_v − Cᵀ z_q` until `K z` overwrites it.
     for_each_row2(tmp, wv, |i, t, w| {
-        *t = ct.row_dot(i, zq);
+        *t = ct.row_dot4(i, zq);
         *w = rv[i] - *t;
     });
     velocity_step(velocity, wv, zv);
     let tmp: &[f64] = tmp;
-    for_each_row(wv, |i, w| *w = a.row_dot(i, zv) + tmp[i]);
+    for_each_row(wv, |i, w| *w = a.row_dot4(i, zv) + tmp[i]);
     pressure_rows(c, l, zv, zq, wq);
 }
 
