@@ -11,7 +11,7 @@ pub mod observe;
 pub mod output;
 
 pub use loads::{ContactForce, Loads};
-pub use observe::{Probe, StandardOutput};
+pub use observe::{Probe, StandardOutput, VOLUME_WARNING};
 
 impl From<output::OutputError> for pfem_driver::RunError {
     fn from(e: output::OutputError) -> Self {

@@ -17,6 +17,11 @@ use crate::simulation::{Observer, Simulation};
 use crate::RunError;
 use pfem_driver::checkpoint::{Checkpoint, CheckpointError, Decoder, Encoder};
 
+/// A run whose fluid volume changed by more than this fraction ends with a
+/// warning ([`StandardOutput::report`]): the volume correction keeps resolved
+/// runs within 0.1 %.
+pub const VOLUME_WARNING: f64 = 0.05;
+
 /// A named scalar measured on the simulation (front position, tip
 /// displacement, force…).
 pub struct Probe<const D: usize>
@@ -435,16 +440,30 @@ where
     pub fn report(&self, sim: &Simulation<D>) -> Result<RunSummary, RunError> {
         let summary = self.summary(sim);
         write_summary(self.dir.join("summary.json"), &summary)?;
+        let change = summary.relative_volume_change();
+        let volume = if change.is_finite() {
+            format!(
+                "fluid volume {:.6e} -> {:.6e} ({:+.3}%)",
+                summary.fluid_volume_initial,
+                summary.fluid_volume_final,
+                100.0 * change
+            )
+        } else {
+            "no fluid".to_string()
+        };
         println!(
-            "{} steps ({} rejected), simulated {:.4} s, fluid volume {:.6e} -> {:.6e} ({:+.3}%), wall time {:.1} s",
+            "{} steps ({} rejected), simulated {:.4} s, {volume}, wall time {:.1} s",
             summary.steps,
             summary.rejected_steps,
             summary.simulated_time,
-            summary.fluid_volume_initial,
-            summary.fluid_volume_final,
-            100.0 * summary.relative_volume_change(),
             summary.wall_time_s.get("total").copied().unwrap_or(0.0)
         );
+        if change.abs() > VOLUME_WARNING {
+            eprintln!(
+                "warning: the fluid volume changed by {:+.1}%: the run is likely unresolved (a soft bulk modulus, a coarse spacing, walls squeezing the water); see docs/robustness.md",
+                100.0 * change
+            );
+        }
         println!("wrote {}", self.dir.display());
         Ok(summary)
     }

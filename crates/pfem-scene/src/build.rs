@@ -330,6 +330,36 @@ where
                     fixed.push((i, Vector::<D>::zeros()));
                 }
             }
+            // A body that places no particle, or a clamp that holds none of
+            // its body's, is a mistake in the scene (an empty geometry, a
+            // body inside another, a clamp box beside its solid): refused,
+            // not run as if it were not there.
+            if particles.len() == first && welded == 0 {
+                return Err(SceneError::InvalidGeometry {
+                    body: b.name.clone(),
+                    why: if dropped > 0 {
+                        format!("all of its {dropped} particles fall on earlier bodies' particles")
+                    } else {
+                        "its geometry places no particle (empty or flat)".into()
+                    },
+                });
+            }
+            for (k, c) in b.clamps.iter().enumerate() {
+                if !particles.x()[first..].iter().any(|p| c.holds(p)) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: format!(
+                            "clamp {} ({}) holds none of its particles",
+                            k + 1,
+                            match c {
+                                crate::scene::Clamp::Box(lo, hi) =>
+                                    format!("box {:?} to {:?}", lo.as_slice(), hi.as_slice()),
+                                crate::scene::Clamp::Where(_) => "a predicate".into(),
+                            }
+                        ),
+                    });
+                }
+            }
             if let Some(f) = b.pressure_field.clone() {
                 pressure_fields.push((first..particles.len(), f));
             }

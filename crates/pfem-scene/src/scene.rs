@@ -614,9 +614,10 @@ where
         }
         let ps = self.pressure_stabilisation;
         if !(ps >= 0.0 && ps.is_finite()) {
-            return Err(SceneError::InvalidSetting {
+            return Err(SceneError::OutOfRange {
                 setting: "pressure_stabilisation",
                 value: ps,
+                range: "[0, ∞) (0 = off)",
             });
         }
         if !(ALPHA_RANGE.0..=ALPHA_RANGE.1).contains(&s.alpha) {
@@ -643,11 +644,38 @@ where
             return Err(SceneError::Empty);
         }
         for b in &self.bodies {
+            // Body names head probe columns and name bodies in messages.
+            if b.name.is_empty()
+                || b.name
+                    .chars()
+                    .any(|c| c.is_control() || c == ',' || c == '"')
+            {
+                return Err(SceneError::InvalidGeometry {
+                    body: b.name.clone(),
+                    why: "a body name must be non-empty, without commas, quotes or control characters".into(),
+                });
+            }
             if !(b.spacing > 0.0 && b.spacing.is_finite()) {
                 return Err(SceneError::InvalidSpacing {
                     body: b.name.clone(),
                     spacing: b.spacing,
                 });
+            }
+            if let Geometry::Particles(ps) = &b.geometry {
+                if let Some((k, q)) = ps
+                    .iter()
+                    .enumerate()
+                    .find(|(_, q)| q.iter().any(|v| !v.is_finite()))
+                {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: format!(
+                            "particle {} at {:?} has a non-finite coordinate",
+                            k + 1,
+                            q.as_slice()
+                        ),
+                    });
+                }
             }
             let (lo, hi) = b.geometry.bounds();
             if lo.iter().chain(hi.iter()).any(|v| !v.is_finite()) {
@@ -792,6 +820,22 @@ where
                     body: b.name.clone(),
                     why: "only a solid can be clamped".into(),
                 });
+            }
+            for (k, c) in b.clamps.iter().enumerate() {
+                if let Clamp::Box(lo, hi) = c {
+                    let finite = lo.iter().chain(hi.iter()).all(|v| v.is_finite());
+                    if !finite || (0..D).any(|i| hi[i] < lo[i]) {
+                        return Err(SceneError::InvalidGeometry {
+                            body: b.name.clone(),
+                            why: format!(
+                                "clamp {} (box {:?} to {:?}) must have finite corners, max not below min",
+                                k + 1,
+                                lo.as_slice(),
+                                hi.as_slice()
+                            ),
+                        });
+                    }
+                }
             }
             if b.pressure_field.is_some() && b.kind != ParticleKind::Fluid {
                 return Err(SceneError::InvalidGeometry {

@@ -144,6 +144,48 @@ where
                 )
             });
         }
+        if D == 2 {
+            // A polygon that crosses itself (a bowtie) has no inside to
+            // fill: two edges that share no vertex must not meet.
+            let edges: Vec<&[u32]> = self.facets.chunks_exact(2).collect();
+            let p = |i: u32| {
+                let v = &self.vertices[i as usize];
+                (v[0], v[1])
+            };
+            if let Some(e) = edges.iter().find(|e| p(e[0]) == p(e[1])) {
+                return Err(format!(
+                    "the polygon repeats a vertex: edge ({}, {}) has no length",
+                    e[0], e[1]
+                ));
+            }
+            let orient = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
+                (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+            };
+            for (i, e) in edges.iter().enumerate() {
+                for f in &edges[i + 1..] {
+                    if e.iter().any(|v| f.contains(v)) {
+                        continue;
+                    }
+                    let (a, b, c, d) = (p(e[0]), p(e[1]), p(f[0]), p(f[1]));
+                    let (o1, o2) = (orient(a, b, c), orient(a, b, d));
+                    let (o3, o4) = (orient(c, d, a), orient(c, d, b));
+                    if o1 * o2 <= 0.0 && o3 * o4 <= 0.0 {
+                        let collinear_apart = o1 == 0.0
+                            && o2 == 0.0
+                            && (a.0.max(b.0) < c.0.min(d.0)
+                                || c.0.max(d.0) < a.0.min(b.0)
+                                || a.1.max(b.1) < c.1.min(d.1)
+                                || c.1.max(d.1) < a.1.min(b.1));
+                        if !collinear_apart {
+                            return Err(format!(
+                                "the polygon crosses itself: edges ({}, {}) and ({}, {}) meet",
+                                e[0], e[1], f[0], f[1]
+                            ));
+                        }
+                    }
+                }
+            }
+        }
         Ok(())
     }
 

@@ -55,9 +55,7 @@ impl Args {
     /// Sizes rayon's global pool from `--threads N` (no-op without it).
     pub fn apply_threads(&self) -> Result<(), ArgsError> {
         if let Some(v) = self.options.get("threads") {
-            let n: usize = v.parse().ok().filter(|&n| n > 0).ok_or_else(|| {
-                ArgsError(format!("--threads must be a positive integer, got `{v}`"))
-            })?;
+            let n = parse_threads(v)?;
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build_global()
@@ -77,9 +75,11 @@ impl Args {
                 "--overwrite" => out.overwrite = true,
                 s if s.starts_with("--") => {
                     let name = s.trim_start_matches("--").to_string();
-                    let value = it
-                        .next()
-                        .ok_or_else(|| ArgsError(format!("--{name} needs a value")))?;
+                    let value = it.next().ok_or_else(|| {
+                        ArgsError(format!(
+                            "--{name} needs a value (or is not an option: see --help)"
+                        ))
+                    })?;
                     match name.as_str() {
                         "out" => out.out = Some(PathBuf::from(value)),
                         "spacing" => out.spacing = Some(parse_positive(&name, &value)?),
@@ -323,11 +323,7 @@ impl Args {
             parse_positive("max-wall-time", v)?;
         }
         if let Some(v) = self.options.get("threads") {
-            if v.parse::<usize>().ok().filter(|&n| n > 0).is_none() {
-                return Err(ArgsError(format!(
-                    "--threads must be a positive integer, got `{v}`"
-                )));
-            }
+            parse_threads(v)?;
         }
         Ok(())
     }
@@ -416,9 +412,40 @@ fn parse_positive(name: &str, v: &str) -> Result<f64, ArgsError> {
     }
 }
 
+/// `--threads N`: a positive integer, at most four threads per core of
+/// this machine (at least 8): more only slow a run, and a very large
+/// number spends the run creating threads.
+fn parse_threads(v: &str) -> Result<usize, ArgsError> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let limit = (4 * cores).max(8);
+    match v.parse::<usize>() {
+        Ok(n) if n > 0 && n <= limit => Ok(n),
+        Ok(n) if n > limit => Err(ArgsError(format!(
+            "--threads {n} is more than {limit}, four per core of this machine's {cores}: extra threads only slow the run"
+        ))),
+        _ => Err(ArgsError(format!(
+            "--threads must be a positive integer, got `{v}`"
+        ))),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A huge `--threads` spent a tiny run creating threads (10 000 did
+    /// not finish in 100 s, session 26's review): refused with the limit.
+    #[test]
+    fn too_many_threads_are_refused() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let limit = (4 * cores).max(8);
+        let args = |n: usize| Args::parse(["--threads".into(), n.to_string()]).unwrap();
+        assert!(args(limit).validate_options().is_ok());
+        let why = args(limit + 1).validate_options().unwrap_err().0;
+        assert!(why.contains(&format!("more than {limit}")), "{why}");
+        let why = Args::parse(["--bogus".to_string()]).unwrap_err().0;
+        assert!(why.contains("not an option"), "{why}");
+    }
 
     #[test]
     fn parses_the_contract_and_rejects_bad_values() {

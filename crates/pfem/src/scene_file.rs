@@ -750,6 +750,16 @@ impl SceneFile {
                 scene = scene.with_velocity(self.vector::<D>(v, &what("velocity"))?);
             }
             if let Some(f) = &b.velocity_field {
+                if b.velocity.is_some() {
+                    return Err(self.error(
+                        f.span(),
+                        format!(
+                            "{} and {} exclude each other",
+                            what("velocity"),
+                            what("velocity_field")
+                        ),
+                    ));
+                }
                 if b.kind == BodyKind::Wall {
                     return Err(self.error(
                         f.span(),
@@ -945,6 +955,15 @@ impl SceneFile {
                     ));
                 }
                 let point = Point::from(self.vector::<D>(point, "body_displacement.point")?);
+                if radius.is_some_and(|r| !(r > 0.0 && r.is_finite())) {
+                    return Err(self.error(
+                        p.span(),
+                        format!(
+                            "probe `body_displacement`: radius must be positive and finite, got {}",
+                            radius.unwrap_or_default()
+                        ),
+                    ));
+                }
                 let suffix = name.clone().unwrap_or_else(|| body.clone());
                 (0..D)
                     .map(|k| {
@@ -1008,6 +1027,20 @@ impl SceneFile {
         Const<D>: Dim,
     {
         for (i, p) in probes.iter().enumerate() {
+            // The names head `probes.csv`'s columns.
+            if p.name.is_empty()
+                || p.name
+                    .chars()
+                    .any(|c| c.is_control() || c == ',' || c == '"')
+            {
+                return Err(SceneError::File {
+                    path: self.path.clone(),
+                    why: format!(
+                        "probe column {:?}: a name must be non-empty, without commas, quotes or control characters (it heads a CSV column)",
+                        p.name
+                    ),
+                });
+            }
             if probes[..i].iter().any(|q| q.name == p.name) {
                 return Err(SceneError::File {
                     path: self.path.clone(),
@@ -1275,6 +1308,9 @@ impl SceneFile {
                 c.span(),
                 format!("{what} needs {D} numbers in a {D}D scene, got {}", v.len()),
             ));
+        }
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(self.error(c.span(), format!("{what} must be finite, got {v:?}")));
         }
         Ok(Vector::<D>::from_column_slice(v))
     }

@@ -309,7 +309,7 @@ fn a_scene_asks_for_the_pressure_stabilisation() {
     assert!(
         matches!(
             err,
-            SceneError::InvalidSetting {
+            SceneError::OutOfRange {
                 setting: "pressure_stabilisation",
                 ..
             }
@@ -507,4 +507,138 @@ fn initial_fields_from_sample_points() {
     let bad = format!("{WATER}\npressure_field = {{ points = [[0.0, 0.0]], values = [1.0, 2.0] }}");
     let why = file_error(&puddle("", "end_time = 0.01", &bad));
     assert!(why.contains("pressure_field"), "{why}");
+}
+
+/// The error a 2D file gives, from reading it or from building its
+/// simulation (where particles are placed), as text.
+fn any_error(text: &str) -> String {
+    match build(text) {
+        Err(e) => e.to_string(),
+        Ok(LoadedScene::Two(scene, _)) => {
+            match Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()) {
+                Err(e) => e.to_string(),
+                Ok(_) => panic!("a bad scene"),
+            }
+        }
+        Ok(LoadedScene::Three(..)) => panic!("2D"),
+    }
+}
+
+/// A solid on a floor, with `clamp` given.
+fn clamped_block(clamp: &str) -> String {
+    format!(
+        r#"dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.01
+[run]
+end_time = 0.01
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = {{ min = [0.0, -0.02], max = [0.4, 0.0] }}
+[[body]]
+name = "block"
+kind = "solid"
+material.hypoelastic = {{ density = 1100.0, young = 1e6, poisson = 0.3 }}
+geometry.box = {{ min = [0.2, 0.05], max = [0.24, 0.09] }}
+clamp = {clamp}
+"#
+    )
+}
+
+/// Found by an adversarial review (session 26): each of these ran as if
+/// the mistake were not there (a clamp beside its solid let the block fall
+/// through the floor, a flat fluid ran with no fluid, a bowtie polygon was
+/// filled) or failed only mid-run with no key named.
+#[test]
+fn mistakes_that_used_to_run_are_refused() {
+    // A clamp that holds none of its solid's particles.
+    let why = any_error(&clamped_block("{ min = [5.0, 5.0], max = [6.0, 6.0] }"));
+    assert!(
+        why.contains("block") && why.contains("clamp 1") && why.contains("holds none"),
+        "{why}"
+    );
+    // A clamp box with max below min, or a NaN corner.
+    let why = any_error(&clamped_block("{ min = [1.0, 0.1], max = [-1.0, -1.0] }"));
+    assert!(
+        why.contains("clamp 1") && why.contains("max not below min"),
+        "{why}"
+    );
+    let why = any_error(&clamped_block("{ min = [nan, -1.0], max = [1.0, 1.0] }"));
+    assert!(why.contains("clamp.min") && why.contains("finite"), "{why}");
+    // The clamp the review's block needed holds it.
+    assert!(build(&clamped_block("{ min = [0.2, 0.05], max = [0.24, 0.051] }")).is_ok());
+    // A fluid that places no particle: collinear polygon, or a box inside
+    // the floor.
+    let flat = "material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }\ngeometry.polygon = [[0.0, 0.1], [0.1, 0.1], [0.2, 0.1]]";
+    let why = any_error(&puddle("", "end_time = 0.01", flat));
+    assert!(
+        why.contains("water") && why.contains("places no particle"),
+        "{why}"
+    );
+    let inside = WATER.replace(
+        "min = [0.0, 0.0], max = [0.2, 0.2]",
+        "min = [0.0, -0.025], max = [0.1, 0.0]",
+    );
+    let why = any_error(&puddle("", "end_time = 0.01", &inside));
+    assert!(
+        why.contains("water") && why.contains("fall on earlier"),
+        "{why}"
+    );
+    // A polygon that crosses itself, or repeats a vertex.
+    let bowtie = "material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }\ngeometry.polygon = [[0.0, 0.0], [0.2, 0.2], [0.2, 0.0], [0.0, 0.2]]";
+    let why = any_error(&puddle("", "end_time = 0.01", bowtie));
+    assert!(why.contains("crosses itself"), "{why}");
+    let repeated = "material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }\ngeometry.polygon = [[0.0, 0.0], [0.2, 0.0], [0.2, 0.0], [0.0, 0.2]]";
+    let why = any_error(&puddle("", "end_time = 0.01", repeated));
+    assert!(why.contains("repeats a vertex"), "{why}");
+    // Non-finite coordinates are refused where they are written.
+    let nan_particles = "material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }\ngeometry.particles = [[0.1, 0.1], [0.2, nan]]";
+    let why = file_error(&puddle("", "end_time = 0.01", nan_particles));
+    assert!(
+        why.contains("geometry.particles") && why.contains("finite"),
+        "{why}"
+    );
+    // `velocity` and `velocity_field` on one body.
+    let both = format!(
+        "{WATER}\nvelocity = [1.0, 0.0]\nvelocity_field = {{ points = [[0.0, 0.0]], values = [[0.0, 1.0]] }}"
+    );
+    let why = file_error(&puddle("", "end_time = 0.01", &both));
+    assert!(
+        why.contains("velocity_field") && why.contains("exclude"),
+        "{why}"
+    );
+    // Probes: a NaN point, a negative radius, a name that breaks the CSV.
+    let why = file_error(&puddle(
+        "probes = [{ point = { at = [nan, 0.05], name = \"a\" } }]",
+        "end_time = 0.01",
+        WATER,
+    ));
+    assert!(why.contains("point.at") && why.contains("finite"), "{why}");
+    let why = file_error(&puddle(
+        "probes = [{ body_displacement = { body = \"water\", point = [0.1, 0.1], radius = -1.0 } }]",
+        "end_time = 0.01",
+        WATER,
+    ));
+    assert!(why.contains("radius must be positive"), "{why}");
+    let why = file_error(&puddle(
+        "probes = [{ point = { at = [0.1, 0.05], name = \"a,b\" } }]",
+        "end_time = 0.01",
+        WATER,
+    ));
+    assert!(why.contains("CSV column"), "{why}");
+    // An empty body name.
+    let text = puddle("", "end_time = 0.01", WATER).replace("name = \"water\"", "name = \"\"");
+    let why = any_error(&text);
+    assert!(why.contains("body name must be non-empty"), "{why}");
+    // A negative pressure stabilisation says what is allowed.
+    let why = any_error(&puddle(
+        "",
+        "end_time = 0.01\npressure_stabilisation = -1.0",
+        WATER,
+    ));
+    assert!(
+        why.contains("pressure_stabilisation") && why.contains("[0,"),
+        "{why}"
+    );
 }
