@@ -894,14 +894,43 @@ where
                 limit: MAX_STEPS,
             });
         }
-        for (a, b, mu) in &self.contact.friction {
+        for (k, (a, b, mu)) in self.contact.friction.iter().enumerate() {
             for n in [a, b] {
-                if !self.bodies.iter().any(|x| &x.name == n) {
-                    return Err(SceneError::InvalidGeometry {
-                        body: n.clone(),
-                        why: "friction names a body the scene does not have".into(),
-                    });
+                match self.bodies.iter().find(|x| &x.name == n) {
+                    None => {
+                        return Err(SceneError::InvalidGeometry {
+                            body: n.clone(),
+                            why: "friction names a body the scene does not have".into(),
+                        })
+                    }
+                    Some(x) if x.kind == ParticleKind::Fluid => {
+                        return Err(SceneError::InvalidGeometry {
+                            body: n.clone(),
+                            why:
+                                "friction acts between solids and walls in contact, not on a fluid"
+                                    .into(),
+                        })
+                    }
+                    Some(_) => {}
                 }
+            }
+            // Contact is between two bodies; a pair given twice would be
+            // ambiguous.
+            let why = if a == b {
+                Some("a body has no contact with itself")
+            } else if self.contact.friction[..k]
+                .iter()
+                .any(|(c, d, _)| (c == a && d == b) || (c == b && d == a))
+            {
+                Some("this pair's friction is given twice")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(SceneError::InvalidGeometry {
+                    body: format!("{a}` and `{b}"),
+                    why: format!("friction: {why}"),
+                });
             }
             if !(mu.is_finite() && *mu >= 0.0) {
                 return Err(SceneError::OutOfRange {

@@ -269,3 +269,34 @@ fn the_contact_table_sets_friction_stiffness_and_damping() {
     assert_eq!(scene.contact.stiffness, Some(5e7));
     assert_eq!(scene.contact.damping, 0.0);
 }
+
+/// Friction pairs that mean nothing are refused (session 26's review: they
+/// were accepted): a body with itself, a fluid, the same pair twice.
+#[test]
+fn meaningless_friction_pairs_are_refused() {
+    let text = std::fs::read_to_string(scenes().join("dam_break_block_2d.toml")).unwrap();
+    let pair = "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }]";
+    assert!(text.contains(pair));
+    for (with, expect) in [
+        (
+            "friction = [{ bodies = [\"block\", \"block\"], mu = 0.1 }]",
+            "no contact with itself",
+        ),
+        (
+            "friction = [{ bodies = [\"block\", \"water\"], mu = 0.1 }]",
+            "not on a fluid",
+        ),
+        (
+            "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }, { bodies = [\"floor\", \"block\"], mu = 0.3 }]",
+            "given twice",
+        ),
+    ] {
+        let err = SceneFile::parse(&text.replace(pair, with), "bad.toml")
+            .unwrap()
+            .build()
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(expect), "{err}");
+    }
+}
