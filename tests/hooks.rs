@@ -540,3 +540,82 @@ fn unknown_body_names_are_errors() {
     )));
     assert!(matches!(sim.step(), Err(RunError::UnknownBody { .. })));
 }
+
+/// Counts its `start` calls and records the time of the first.
+struct Starts(std::sync::Arc<std::sync::Mutex<Vec<f64>>>);
+
+impl Hook<2> for Starts {
+    fn name(&self) -> &str {
+        "starts"
+    }
+    fn start(&mut self, ctx: &mut HookContext<'_, 2>) -> Result<(), RunError> {
+        self.0.lock().unwrap().push(ctx.time());
+        Ok(())
+    }
+}
+
+/// A hook added after the run has started has its `start` before the next
+/// step, once (session 26's review: it never had it, so a `SlipPlanes`
+/// checked no axis and an `Inflow` knew no body), and hooks started
+/// before are not started again.
+#[test]
+fn a_hook_added_during_a_run_is_started_once() {
+    let h = 0.05;
+    let scene = Scene::<2>::new("late_hook")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.05,
+            max_dt: 0.005,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, 0.0, 0.2, 0.1),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    let early = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    sim.add_hook(Box::new(Starts(early.clone())));
+    sim.step().unwrap();
+    let late = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    sim.add_hook(Box::new(Starts(late.clone())));
+    let t1 = sim.time();
+    sim.step().unwrap();
+    sim.step().unwrap();
+    assert_eq!(*early.lock().unwrap(), vec![0.0]);
+    assert_eq!(*late.lock().unwrap(), vec![t1]);
+    // A hook whose start refuses the scene stops the run with its error.
+    sim.add_hook(Box::new(pfem::hooks::SlipPlanes { axis: 2 }));
+    let err = sim.step().unwrap_err().to_string();
+    assert!(err.contains("axis"), "{err}");
+}
+
+/// An inflow with a non-finite face or velocity, or a face too large for
+/// its spacing, is refused when it is made (session 26's review: an
+/// infinite face meant an endless allocation, an infinite velocity an
+/// endless loop).
+#[test]
+fn an_inflow_refuses_non_finite_or_huge_faces() {
+    let p = |x: f64, y: f64| Point::<2>::new(x, y);
+    let v = Vector::<2>::new(0.5, 0.0);
+    let ok = Inflow::new("water", p(0.0, 0.0), p(0.0, 0.1), v, 0.01, 0.02);
+    assert!(ok.is_ok());
+    for (lo, hi, vel, h) in [
+        (p(0.0, 0.0), p(0.0, f64::INFINITY), v, 0.01),
+        (
+            p(0.0, 0.0),
+            p(0.0, 0.1),
+            Vector::<2>::new(f64::INFINITY, 0.0),
+            0.01,
+        ),
+        (p(0.0, 0.0), p(0.0, 1e6), v, 1e-3),
+    ] {
+        let err = Inflow::new("water", lo, hi, vel, h, 2.0 * h)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("finite") || err.contains("layer"), "{err}");
+    }
+}

@@ -1765,7 +1765,9 @@ fn gmres(
     max_iter: usize,
 ) -> usize {
     let nt = b.len();
-    let restart = restart.max(1);
+    // More basis vectors than iterations or unknowns are never used; a
+    // huge `restart` ("never restart") must not allocate them.
+    let restart = restart.min(max_iter).min(nt).max(1);
     // The basis, vector `i` at `i nt..(i + 1) nt`: one allocation for the
     // solve, reused by every restart (pages are touched as vectors come).
     let mut basis: Vec<f64> = Vec::with_capacity((restart + 1) * nt);
@@ -2152,7 +2154,8 @@ mod tests {
             }
         };
         let norm_b = dot(&b, &b).sqrt();
-        for restart in [50, 4] {
+        // `usize::MAX` ("never restart") overflowed the basis' size.
+        for restart in [50, 4, usize::MAX] {
             let mut y = vec![1.0; n];
             let mut tmp = vec![0.0; n];
             let it = gmres(

@@ -328,7 +328,9 @@ where
     materials: Vec<Box<dyn Material<D>>>,
     body_names: Vec<String>,
     hooks: Vec<Box<dyn Hook<D>>>,
-    started: bool,
+    /// How many of `hooks` have had their `start` (a hook added during a
+    /// run has it before the next step).
+    started: usize,
     stop: Option<String>,
     stages: Stages,
     stats: StageStats,
@@ -426,6 +428,39 @@ where
                 value: params.sliver_quality_2d,
             });
         }
+        // The time scheme's and the Picard loop's parameters: a zero, negative
+        // or NaN value would otherwise show only as failed steps.
+        for (setting, value) in [
+            ("picard_tolerance", params.picard_tolerance),
+            ("min_dt", params.min_dt),
+            ("max_picard_iterations", params.max_picard_iterations as f64),
+        ] {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(SceneError::InvalidSetting { setting, value });
+            }
+        }
+        for (setting, value) in [
+            ("velocity_floor", params.velocity_floor),
+            ("pressure_stabilisation", params.pressure_stabilisation),
+            ("picard_forcing", params.picard_forcing),
+        ] {
+            if !(value >= 0.0 && value.is_finite()) {
+                return Err(SceneError::OutOfRange {
+                    setting,
+                    value,
+                    range: "[0, ∞)",
+                });
+            }
+        }
+        if params.scheme == pfem_time::Scheme::Bossak
+            && !(-1.0 / 3.0..=0.0).contains(&params.bossak_alpha)
+        {
+            return Err(SceneError::OutOfRange {
+                setting: "bossak_alpha",
+                value: params.bossak_alpha,
+                range: "[-1/3, 0]",
+            });
+        }
         scene.validate_within(options.memory_budget)?;
         // The scene's pressure stabilisation, unless the program set one.
         let mut params = params;
@@ -517,7 +552,7 @@ where
             materials,
             body_names,
             hooks,
-            started: false,
+            started: 0,
             stop: None,
             stages,
             stats: StageStats::default(),
@@ -619,7 +654,8 @@ where
     }
 
     /// Adds a hook, run after those added before it (and after the
-    /// driver's own, [`Options`]).
+    /// driver's own, [`Options`]). A hook added after the run has started
+    /// has its `start` before the next step, seeing the state of then.
     pub fn add_hook(&mut self, hook: Box<dyn Hook<D>>) {
         self.hooks.push(hook);
     }
@@ -729,14 +765,29 @@ where
     /// Runs the hooks at one point of the step, booking their volume
     /// changes; a hook that changes the particle set has the mesh remade
     /// before the next hook runs.
+    /// `Hook::start` of the hooks that have not had it yet.
+    fn start_hooks(&mut self) -> Result<(), RunError> {
+        let first = self.started;
+        if first < self.hooks.len() {
+            self.started = self.hooks.len();
+            self.run_hooks_from(HookPoint::Start, first)?;
+        }
+        Ok(())
+    }
+
     fn run_hooks(&mut self, point: HookPoint) -> Result<(), RunError> {
-        if self.hooks.is_empty() {
+        self.run_hooks_from(point, 0)
+    }
+
+    /// Runs `point` of the hooks from the `first`.
+    fn run_hooks_from(&mut self, point: HookPoint, first: usize) -> Result<(), RunError> {
+        if self.hooks.len() <= first {
             return Ok(());
         }
         let t0 = Instant::now();
         let mut hooks = std::mem::take(&mut self.hooks);
         let mut result = Ok(());
-        for hook in hooks.iter_mut() {
+        for hook in hooks.iter_mut().skip(first) {
             let mut ctx = HookContext {
                 time: self.clock.time,
                 dt: self.clock.dt,
@@ -837,10 +888,7 @@ where
     }
 
     fn step_in_pool(&mut self) -> Result<(), RunError> {
-        if !self.started {
-            self.started = true;
-            self.run_hooks(HookPoint::Start)?;
-        }
+        self.start_hooks()?;
         // The fluid volume at the end of the last step is `volume_now`; it is
         // measured once after remeshing and once after the solution.
         // The step's bookkeeping (volume ledger, Courant bound, finite
@@ -1115,6 +1163,9 @@ where
     }
 
     /// Position of particle `i` when it entered the simulation (m).
+    ///
+    /// # Panics
+    /// Panics if `i` is not below `particles().len()`, as indexing does.
     pub fn initial_position(&self, i: usize) -> Point<D> {
         self.particles.initial_positions()[i]
     }
@@ -1304,10 +1355,7 @@ where
         }
         // Hooks see the scene's initial state at their start, as in the
         // uninterrupted run; their saved state is read after.
-        if !self.started {
-            self.started = true;
-            self.run_hooks(HookPoint::Start)?;
-        }
+        self.start_hooks()?;
         self.elements.decode_solid(&mut d)?;
         self.elements.decode_contact(&mut d, particles.len())?;
         let mut volume = VolumeLedger {

@@ -75,6 +75,9 @@ where
     }
 }
 
+/// The largest layer of particles an [`Inflow`] may place at once.
+pub const MAX_LAYER: f64 = 1e7;
+
 /// An inflow: fluid enters through a plane face at a prescribed velocity.
 ///
 /// The face is the box `face` of zero thickness along the inflow direction
@@ -130,6 +133,14 @@ where
             hook: Self::NAME.into(),
             why,
         };
+        if face_min
+            .iter()
+            .chain(face_max.iter())
+            .chain(velocity.iter())
+            .any(|v| !v.is_finite())
+        {
+            return Err(bad("the face and the velocity must be finite".into()));
+        }
         let axis = (0..D)
             .find(|&k| velocity[k] != 0.0)
             .ok_or_else(|| bad("the inflow velocity is zero".into()))?;
@@ -150,6 +161,17 @@ where
         }
         if (0..D).any(|k| k != axis && face_max[k] - face_min[k] < 0.0) {
             return Err(bad("face max below min".into()));
+        }
+        // One layer of particles is placed each time the fluid advances a
+        // spacing: bound it before allocating it.
+        let layer_count: f64 = (0..D)
+            .filter(|&k| k != axis)
+            .map(|k| ((face_max[k] - face_min[k]) / spacing).floor() + 1.0)
+            .product();
+        if layer_count > MAX_LAYER {
+            return Err(bad(format!(
+                "a layer of the face would hold about {layer_count:.3e} particles, more than {MAX_LAYER:.0e} (coarsen the spacing or shrink the face)"
+            )));
         }
         let mut lo = face_min;
         let mut hi = face_max;

@@ -472,3 +472,72 @@ fn plane_stress_is_a_2d_option_of_scene_files() {
     .to_string();
     assert!(err.contains("2D") && err.contains("line 7"), "{err}");
 }
+
+/// Time-scheme and Picard parameters that cannot work are refused when the
+/// simulation is made, with the setting named (session 26's review: a zero
+/// tolerance or iteration limit showed only as every step failing, a
+/// negative `min_dt` as a thousand halvings).
+#[test]
+fn bad_step_params_are_refused_up_front() {
+    let d = StepParams::default();
+    let cases: [(StepParams, &str); 8] = [
+        (
+            StepParams {
+                picard_tolerance: 0.0,
+                ..d
+            },
+            "picard_tolerance",
+        ),
+        (
+            StepParams {
+                picard_tolerance: f64::NAN,
+                ..d
+            },
+            "picard_tolerance",
+        ),
+        (
+            StepParams {
+                max_picard_iterations: 0,
+                ..d
+            },
+            "max_picard_iterations",
+        ),
+        (StepParams { min_dt: -1e-9, ..d }, "min_dt"),
+        (
+            StepParams {
+                velocity_floor: f64::NAN,
+                ..d
+            },
+            "velocity_floor",
+        ),
+        (
+            StepParams {
+                pressure_stabilisation: -1.0,
+                ..d
+            },
+            "pressure_stabilisation",
+        ),
+        (
+            StepParams {
+                picard_forcing: f64::INFINITY,
+                ..d
+            },
+            "picard_forcing",
+        ),
+        (
+            StepParams {
+                bossak_alpha: 0.5,
+                ..d
+            },
+            "bossak_alpha",
+        ),
+    ];
+    for (params, setting) in cases {
+        let err = Simulation::new(puddle("p"), Box::new(Delaunay2::default()), params)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(setting), "{setting}: {err}");
+    }
+    assert!(Simulation::new(puddle("p"), Box::new(Delaunay2::default()), d).is_ok());
+}

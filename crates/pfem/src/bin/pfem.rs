@@ -100,9 +100,20 @@ fn main() -> ExitCode {
 
 /// An error of loading `file`, with the line of the body it names when the
 /// error came from validating the scene.
-fn located(file: &Path, e: pfem::SceneError) -> String {
+fn located(file: &Path, e: pfem::SceneError, parsed: &Args) -> String {
     if matches!(e, pfem::SceneError::File { .. }) {
         return e.to_string();
+    }
+    // A limit the command line's `--end-time` or `--spacing` set is not the
+    // file's line.
+    let overridden = parsed.end_time.is_some() || parsed.spacing.is_some();
+    if overridden
+        && matches!(
+            e,
+            pfem::SceneError::CannotFinish { .. } | pfem::SceneError::TooLarge { .. }
+        )
+    {
+        return format!("{e} (with the command line's --end-time / --spacing)");
     }
     match SceneFile::read(file).ok().and_then(|f| f.locate(&e)) {
         Some(at) => format!("scene file {}: {at}: {e}", file.display()),
@@ -160,7 +171,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
             // The run options are checked as `run` would.
             parsed.validate_options().map_err(|e| e.to_string())?;
             let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
-                .map_err(|e| located(&file, e))?;
+                .map_err(|e| located(&file, e, &parsed))?;
             match loaded {
                 LoadedScene::Two(s, p) => {
                     check(&file, s, p.len(), &mut Delaunay2::default(), &parsed)
@@ -174,7 +185,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
             parsed.validate_options().map_err(|e| e.to_string())?;
             parsed.apply_threads().map_err(|e| e.to_string())?;
             let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
-                .map_err(|e| located(&file, e))?;
+                .map_err(|e| located(&file, e, &parsed))?;
             match loaded {
                 LoadedScene::Two(scene, probes) => simulate(
                     scene,
