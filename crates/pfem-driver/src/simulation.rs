@@ -788,6 +788,7 @@ where
         let mut hooks = std::mem::take(&mut self.hooks);
         let mut result = Ok(());
         for hook in hooks.iter_mut().skip(first) {
+            let generation = self.particles.generation();
             let mut ctx = HookContext {
                 time: self.clock.time,
                 dt: self.clock.dt,
@@ -812,7 +813,12 @@ where
                 HookPoint::BeforeSolve => hook.before_solve(&mut ctx),
                 HookPoint::AfterStep => hook.after_step(&mut ctx),
             };
+            // A particle set changed by any means (`Particles::remap` or
+            // `push` through `particles_mut` too) has its mesh remade: the
+            // elements' indices are the old set's.
             let (moved, remesh) = (ctx.moved, ctx.remesh);
+            let changed = self.particles.generation() != generation;
+            let (moved, remesh) = (moved || changed, remesh || changed);
             if let Err(e) = r {
                 result = Err(e);
                 break;

@@ -81,7 +81,7 @@
 //! (negative spacing, `end_time ≤ 0`, a fluid without material…) are the
 //! typed errors of [`Scene::validate`].
 
-use std::cell::OnceCell;
+use std::cell::RefCell;
 use std::ops::Range;
 use std::path::Path;
 
@@ -969,11 +969,19 @@ impl SceneFile {
                     .map(|k| {
                         let body = body.clone();
                         let radius = *radius;
-                        let chosen: OnceCell<Vec<usize>> = OnceCell::new();
+                        // The particles followed, chosen again whenever
+                        // particles come or go (their indices then shift).
+                        let chosen: RefCell<Option<(u64, Vec<usize>)>> = RefCell::new(None);
                         Probe::new(
                             &format!("u{}_{suffix}", ["x", "y", "z"][k]),
                             move |s: &Simulation<D>| {
-                                let idx = chosen.get_or_init(|| followed(s, &body, &point, radius));
+                                let generation = s.particles().generation();
+                                let mut chosen = chosen.borrow_mut();
+                                if chosen.as_ref().is_none_or(|c| c.0 != generation) {
+                                    *chosen =
+                                        Some((generation, followed(s, &body, &point, radius)));
+                                }
+                                let idx: &[usize] = chosen.as_ref().map_or(&[], |c| &c.1);
                                 if idx.is_empty() {
                                     return f64::NAN;
                                 }

@@ -642,3 +642,51 @@ fn mistakes_that_used_to_run_are_refused() {
         "{why}"
     );
 }
+
+/// A `body_displacement` probe on a fluid keeps following particles when
+/// particles are removed (session 26's review: it kept the indices it
+/// chose first, which shift, and indexed past the end).
+#[test]
+fn a_fluid_displacement_probe_survives_removed_particles() {
+    use pfem::geometry::{Origin, ParticleMap, REMOVED};
+    use pfem::hooks::FnHook;
+    let text = puddle(
+        "probes = [{ body_displacement = { body = \"water\", point = [0.2, 0.2] } }]",
+        "end_time = 0.02\nmax_dt = 5e-3",
+        WATER,
+    );
+    let LoadedScene::Two(scene, probes) = build(&text).unwrap() else {
+        panic!("2D")
+    };
+    let mut sim = simulation(scene);
+    // After the first step, remove the last particle (the water's top
+    // right corner, the one the probe follows).
+    sim.add_hook(Box::new(FnHook::new("remove one").after_step(
+        |ctx: &mut HookContext<'_, 2>| {
+            if ctx.steps() == 1 {
+                let n = ctx.particles().len();
+                let map = ParticleMap {
+                    old_to_new: (0..n as u32)
+                        .map(|i| if i + 1 == n as u32 { REMOVED } else { i })
+                        .collect(),
+                    origin: (0..n as u32 - 1).map(Origin::Kept).collect(),
+                };
+                ctx.particles_mut().remap(&map).unwrap();
+            }
+            Ok(())
+        },
+    )));
+    let mut out = StandardOutput::new(
+        std::env::temp_dir().join("pfem_scene_file_removed"),
+        false,
+        probes,
+        true,
+    )
+    .overwrite(true);
+    sim.run(&mut [&mut out]).unwrap();
+    let ux = out.probe_series("ux_water");
+    assert!(
+        ux.len() >= 3 && ux.iter().all(|v| v.1.is_finite()),
+        "{ux:?}"
+    );
+}
