@@ -215,6 +215,26 @@ fn row_dot_parts(ptr: &[usize], idx: &[usize], val: &[f64], i: usize, x: &[f64])
     s
 }
 
+/// `Σₖ term(val[k], idx[k])` in four running sums (terms `k ≡ 0, 1, 2, 3`
+/// mod 4, then added pairwise, then the remainder in order): the row
+/// products of [`Csr::row_dot4`] and of the lean multigrid levels.
+#[inline(always)]
+fn sum4<V: Copy, J: Copy>(val: &[V], idx: &[J], term: impl Fn(V, J) -> f64) -> f64 {
+    let mut s = [0.0f64; 4];
+    let mut vc = val.chunks_exact(4);
+    let mut ic = idx.chunks_exact(4);
+    for (v, j) in (&mut vc).zip(&mut ic) {
+        for l in 0..4 {
+            s[l] += term(v[l], j[l]);
+        }
+    }
+    let mut t = (s[0] + s[1]) + (s[2] + s[3]);
+    for (&v, &j) in vc.remainder().iter().zip(ic.remainder()) {
+        t += term(v, j);
+    }
+    t
+}
+
 /// Calls `f(i, &mut y[i])` for every row: in parallel chunks of
 /// `SPMV_CHUNK` rows above `PAR_ROWS` rows, in order otherwise. Each row's
 /// result depends on nothing but `i`, so it is the same for any number of
@@ -576,20 +596,7 @@ impl Csr {
     #[inline]
     pub(crate) fn row_dot4(&self, i: usize, x: &[f64]) -> f64 {
         let (r0, r1) = (self.ptr[i], self.ptr[i + 1]);
-        let (val, idx) = (&self.val[r0..r1], &self.idx[r0..r1]);
-        let mut s = [0.0f64; 4];
-        let mut vc = val.chunks_exact(4);
-        let mut ic = idx.chunks_exact(4);
-        for (v, j) in (&mut vc).zip(&mut ic) {
-            for l in 0..4 {
-                s[l] += v[l] * x[j[l]];
-            }
-        }
-        let mut t = (s[0] + s[1]) + (s[2] + s[3]);
-        for (&v, &j) in vc.remainder().iter().zip(ic.remainder()) {
-            t += v * x[j];
-        }
-        t
+        sum4(&self.val[r0..r1], &self.idx[r0..r1], |v, j| v * x[j])
     }
 
     /// `y = A x`. Runs in parallel (rayon, row chunks) when the matrix has
@@ -1467,20 +1474,9 @@ impl Rows for LevelMatrix {
                 // Four running sums: a single one is bound by the latency
                 // of its additions, not by memory.
                 let (r0, r1) = (ptr[i], ptr[i + 1]);
-                let (val, idx) = (&val[r0..r1], &idx[r0..r1]);
-                let mut s = [0.0f64; 4];
-                let mut vc = val.chunks_exact(4);
-                let mut ic = idx.chunks_exact(4);
-                for (v, j) in (&mut vc).zip(&mut ic) {
-                    for l in 0..4 {
-                        s[l] += f64::from(v[l]) * x[j[l] as usize];
-                    }
-                }
-                let mut t = (s[0] + s[1]) + (s[2] + s[3]);
-                for (&v, &j) in vc.remainder().iter().zip(ic.remainder()) {
-                    t += f64::from(v) * x[j as usize];
-                }
-                t
+                sum4(&val[r0..r1], &idx[r0..r1], |v, j| {
+                    f64::from(v) * x[j as usize]
+                })
             }
             LevelMatrix::Full(a) => a.row_dot(i, x),
         }

@@ -645,11 +645,7 @@ where
         }
         for b in &self.bodies {
             // Body names head probe columns and name bodies in messages.
-            if b.name.is_empty()
-                || b.name
-                    .chars()
-                    .any(|c| c.is_control() || c == ',' || c == '"')
-            {
+            if !is_column_name(&b.name) {
                 return Err(SceneError::InvalidGeometry {
                     body: b.name.clone(),
                     why: "a body name must be non-empty, without commas, quotes or control characters".into(),
@@ -977,6 +973,12 @@ pub const ALPHA_RANGE: (f64, f64) = (0.5, 10.0);
 
 /// Most output frames a scene may ask for (`end_time / output_interval`).
 pub const MAX_FRAMES: f64 = 1e6;
+
+/// Whether `name` can head a CSV column (body names head probe columns):
+/// non-empty, without commas, quotes or control characters.
+pub fn is_column_name(name: &str) -> bool {
+    !name.is_empty() && !name.chars().any(|c| c.is_control() || c == ',' || c == '"')
+}
 
 /// A scene name becomes file names (`NAME.pvd`, `NAME_000001.vtu`): it must
 /// be one plain path component.

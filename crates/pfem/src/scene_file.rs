@@ -1036,11 +1036,7 @@ impl SceneFile {
     {
         for (i, p) in probes.iter().enumerate() {
             // The names head `probes.csv`'s columns.
-            if p.name.is_empty()
-                || p.name
-                    .chars()
-                    .any(|c| c.is_control() || c == ',' || c == '"')
-            {
+            if !pfem_scene::is_column_name(&p.name) {
                 return Err(SceneError::File {
                     path: self.path.clone(),
                     why: format!(
