@@ -762,9 +762,6 @@ where
         Ok(())
     }
 
-    /// Runs the hooks at one point of the step, booking their volume
-    /// changes; a hook that changes the particle set has the mesh remade
-    /// before the next hook runs.
     /// `Hook::start` of the hooks that have not had it yet.
     fn start_hooks(&mut self) -> Result<(), RunError> {
         let first = self.started;
@@ -779,7 +776,9 @@ where
         self.run_hooks_from(point, 0)
     }
 
-    /// Runs `point` of the hooks from the `first`.
+    /// Runs the hooks from the `first` at one point of the step, booking
+    /// their volume changes; a hook that changes the particle set has the
+    /// mesh remade before the next hook runs.
     fn run_hooks_from(&mut self, point: HookPoint, first: usize) -> Result<(), RunError> {
         if self.hooks.len() <= first {
             return Ok(());
@@ -805,7 +804,6 @@ where
                 initial_volume: self.volume.initial,
                 sources: self.volume.sources,
                 moved: false,
-                remesh: false,
             };
             let r = match point {
                 HookPoint::Start => hook.start(&mut ctx),
@@ -813,12 +811,13 @@ where
                 HookPoint::BeforeSolve => hook.before_solve(&mut ctx),
                 HookPoint::AfterStep => hook.after_step(&mut ctx),
             };
-            // A particle set changed by any means (`Particles::remap` or
-            // `push` through `particles_mut` too) has its mesh remade: the
-            // elements' indices are the old set's.
-            let (moved, remesh) = (ctx.moved, ctx.remesh);
-            let changed = self.particles.generation() != generation;
-            let (moved, remesh) = (moved || changed, remesh || changed);
+            // A particle set changed by any means (`insert_fluid`,
+            // `manage_particles`, or `Particles::remap` / `push` through
+            // `particles_mut`) has its mesh remade: the elements' indices
+            // are the old set's.
+            let moved = ctx.moved;
+            let remesh = self.particles.generation() != generation;
+            let moved = moved || remesh;
             if let Err(e) = r {
                 result = Err(e);
                 break;

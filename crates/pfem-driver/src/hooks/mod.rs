@@ -154,7 +154,6 @@ where
     pub(crate) initial_volume: f64,
     pub(crate) sources: f64,
     pub(crate) moved: bool,
-    pub(crate) remesh: bool,
 }
 
 impl<const D: usize> std::fmt::Debug for HookContext<'_, D>
@@ -290,7 +289,6 @@ where
                 why: "non-finite position or velocity, or non-positive spacing".into(),
             });
         }
-        self.remesh = true;
         self.moved = true;
         Ok(self.particles.push(p))
     }
@@ -321,7 +319,6 @@ where
             hook: "manage_particles".into(),
             why: e.to_string(),
         })?;
-        self.remesh = true;
         self.moved = true;
         Ok((upd.removed, upd.inserted))
     }
