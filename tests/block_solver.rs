@@ -2,7 +2,7 @@
 //! `pfem::assembly::BlockSolver`) gives the direct solver's answers: the
 //! 2D dam break's front and fluid volume after the same simulated time,
 //! and the elastic gate's deflection.
-//! `cargo test --release --test block_solver -- --nocapture`
+//! `cargo test --release --test suite block_solver:: -- --nocapture`
 
 use pfem::assembly::{BlockSolver, DirectSolver, LinearSolver};
 use pfem::cases::DamBreak;

@@ -5,7 +5,7 @@
 //! and a dam break whose particles come and go (particle management and an
 //! inflow: hook states). A checkpoint of another scene, a damaged one, and
 //! one of another format are refused with typed errors.
-//! `cargo test --release --test checkpoint`
+//! `cargo test --release --test suite checkpoint::`
 //!
 //! The kill-and-restart test of the `pfem` binary (SIGKILL at random
 //! points) is `crates/pfem/tests/restart.rs`.

@@ -5,7 +5,7 @@
 //!
 //! The incline is the floor under gravity tilted by θ (the same problem in
 //! the floor's frame). The 3D block is a known gap (ignored, see its docs).
-//! `cargo test --release --test contact -- --nocapture`
+//! `cargo test --release --test suite contact:: -- --nocapture`
 
 use pfem::constitutive::Hypoelastic;
 use pfem::prelude::*;
@@ -364,7 +364,7 @@ fn an_elastic_disk_bounces_off_a_floor_and_keeps_its_energy() {
 /// block-on-contact mode (about 180 Hz) the damping ratio `c ω Δt / 2`,
 /// 0.1 at Δt = 2 ms and 0.006 at the 0.1 ms the rejections leave. 32 s.
 #[test]
-#[ignore = "known gap: still ringing at 0.3 s (floor force 171-192 N against 176.6 N; mean +0.93 %, bound 1 %), 158 of 564 steps rejected; cargo test --release --test contact -- --ignored 3d"]
+#[ignore = "known gap: still ringing at 0.3 s (floor force 171-192 N against 176.6 N; mean +0.93 %, bound 1 %), 158 of 564 steps rejected; cargo test --release --test suite contact::a_free_block_rests_on_a_floor_in_3d -- --ignored"]
 fn a_free_block_rests_on_a_floor_in_3d() {
     let h = 0.05;
     let scene = Scene::<3>::new("block3d")

@@ -109,7 +109,7 @@ fn water_at_rest_is_exact_at_every_resolution() {
     }
 }
 
-/// `cargo test --release --test convergence -- --ignored dam_break`
+/// `cargo test --release --test suite convergence::dam_break -- --ignored`
 #[test]
 #[ignore = "long: the reference run at a/32 takes about 40 s"]
 fn dam_break_front_converges_to_a_finer_run() {

@@ -1,7 +1,7 @@
 //! The same scene gives bit-identical results with 1, 2 and 3 threads (issue
 //! 17): every parallel loop of a step writes disjoint entries or reduces in
 //! a fixed order.
-//! `cargo test --release --test determinism`
+//! `cargo test --release --test suite determinism::`
 
 use pfem::cases::{DamBreak, ElasticGate};
 use pfem::prelude::*;

@@ -6,7 +6,7 @@
 //! RMS of ρ g (H − y), volume within 0.1 %).
 //! Floating bodies need `Options::cut_dry_bridges` (on by default; it cuts
 //! against free solids only; ARCHITECTURE.md, deviation 7).
-//! `cargo test --release --test floating -- --nocapture` (20 s)
+//! `cargo test --release --test suite floating:: -- --nocapture` (20 s)
 
 use pfem::cases::rest_figures;
 use pfem::constitutive::Hypoelastic;

@@ -9,7 +9,7 @@
 //! √(gH) over the whole run, pressure 0.36 % RMS (with a stress-free start
 //! of the block: +0.28 %, 4.4·10⁻³ after the first 0.1 s, 0.29 %).
 //!
-//! `cargo test --release --test floating_3d -- --ignored --nocapture`
+//! `cargo test --release --test suite floating_3d:: -- --ignored --nocapture`
 //! (about 3 minutes on 2 cores).
 
 use pfem::cases::rest_figures;
@@ -20,7 +20,7 @@ use pfem::prelude::*;
 const G: f64 = 9.81;
 
 #[test]
-#[ignore = "about 3 minutes: cargo test --release --test floating_3d -- --ignored --nocapture"]
+#[ignore = "about 3 minutes: cargo test --release --test suite floating_3d:: -- --ignored --nocapture"]
 fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
     let h = 0.025;
     let (length, width, depth) = (0.6, 0.4, 0.2);

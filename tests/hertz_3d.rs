@@ -26,7 +26,7 @@
 //! (`a_solid_ball_does_not_pass_through_a_floor`). Solid cylinders
 //! (`Geometry::Cylinder`) are still lattices.
 //!
-//! `cargo test --release --test hertz_3d -- --ignored --nocapture` (2 min)
+//! `cargo test --release --test suite hertz_3d:: -- --ignored --nocapture` (2 min)
 
 use pfem::constitutive::Hypoelastic;
 use pfem::prelude::*;
@@ -136,7 +136,7 @@ fn throw(h: f64, r: f64, k_c: Option<f64>) -> Bounce {
 }
 
 #[test]
-#[ignore = "2 minutes: cargo test --release --test hertz_3d -- --ignored --nocapture"]
+#[ignore = "2 minutes: cargo test --release --test suite hertz_3d:: -- --ignored --nocapture"]
 fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
     // 30 times the default (the ball's P-wave modulus, 1.35 MPa).
     let b = throw(0.00625, 0.05, Some(4.05e7));

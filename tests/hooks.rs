@@ -1,7 +1,7 @@
 //! Hooks and scenes that change during a run (issue 15): a paddle
 //! wave-maker, an inflow, a plate clamped at both ends, an obstacle standing
 //! on a floor, per-particle initial fields, a hook that stops the run.
-//! `cargo test --release --test hooks`
+//! `cargo test --release --test suite hooks::`
 
 use pfem::core::ParticleKind;
 use pfem::hooks::{BodyForceRamp, FnHook, Inflow, PrescribedMotion, Sinusoidal, StopWhen};

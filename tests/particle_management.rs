@@ -1,7 +1,7 @@
 //! Particle management (`pfem::hooks::ParticleManagement`, issue 15): a
 //! long coarse dam break with and without it — element quality, particle
 //! counts and the volume ledger.
-//! `cargo test --release --test particle_management -- --nocapture`
+//! `cargo test --release --test suite particle_management:: -- --nocapture`
 
 use pfem::cases::{DamBreak, G};
 use pfem::geometry::{radius_ratio, ParticleManagementParams};

@@ -2,7 +2,7 @@
 //! solvers' answers: the 2D dam break's front and fluid volume, and the
 //! elastic gate's largest deflection, after the same simulated time.
 //! Needs PETSc (Debian: `apt-get install libpetsc-real-dev`):
-//! `cargo test --release --features petsc --test petsc -- --nocapture`
+//! `cargo test --release --features petsc --test suite petsc:: -- --nocapture`
 #![cfg(feature = "petsc")]
 
 use pfem::assembly::{BlockSolver, LinearSolver};

@@ -4,7 +4,7 @@
 //! 0.1 s against the default stop on the last change; and starting it
 //! from the step's predicted end (`StepParams::predict_first_iterate`),
 //! exact for a free fall.
-//! `cargo test --release --test picard_stop -- --nocapture`
+//! `cargo test --release --test suite picard_stop:: -- --nocapture`
 
 use pfem::cases::DamBreak;
 use pfem::prelude::*;

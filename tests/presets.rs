@@ -113,7 +113,7 @@ fn standard_meets_its_documented_errors() {
     );
 }
 
-/// `cargo test --release --test presets -- --ignored` (about a minute).
+/// `cargo test --release --test suite presets:: -- --ignored` (about a minute).
 #[test]
 #[ignore = "slow: the Fine dam break takes about 30 s"]
 fn fine_meets_its_documented_errors() {

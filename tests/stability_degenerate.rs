@@ -1,13 +1,10 @@
 //! Near-degenerate input: lattice-aligned particles (every Delaunay cell
 //! cocircular) and particles 1e-9 m apart. Release mode:
-//! `cargo test --release --test stability_degenerate`.
+//! `cargo test --release --test suite stability_degenerate::`.
 
-#[path = "stability_support.rs"]
-mod support;
-
+use crate::stability_support::*;
 use pfem::core::Point;
 use pfem::prelude::*;
-use support::*;
 
 /// Energy growth allowed over the initial total: 5 %. The flows only lose
 /// energy physically, but the remeshing changes the fluid volume by a few

@@ -1,8 +1,8 @@
 //! Hard fluid cases: real water bulk modulus at Courant 1, a violent
 //! splash, a step far beyond the stable limit (rejected, halved,
 //! recovered), and a long sloshing run. Release mode:
-//! `cargo test --release --test stability_fluid` (the long run:
-//! `cargo test --release --test stability_fluid -- --ignored`).
+//! `cargo test --release --test suite stability_fluid::` (the long run:
+//! `cargo test --release --test suite stability_fluid:: -- --ignored`).
 //!
 //! Every case checks (see `stability_support.rs`): the run ends at its end
 //! time or with a typed error, no NaN, no inverted fluid or solid element
@@ -13,12 +13,9 @@
 //! deviates by at most `VOLUME_STEP_TOL` (5 %) after any step. The
 //! stricter 1 % at every step is a separate, ignored test (known gap).
 
-#[path = "stability_support.rs"]
-mod support;
-
+use crate::stability_support::*;
 use pfem::cases::DamBreak;
 use pfem::prelude::*;
-use support::*;
 
 /// Energy growth allowed over the initial total: 5 %. The flows only lose
 /// energy physically, but the remeshing changes the fluid volume by a few
@@ -144,7 +141,7 @@ fn short_sloshing_is_stable() {
 /// never above the initial total + 5 %, fluid volume within 5 % at every
 /// step, no inverted element, no NaN. Measured figures in the README
 /// (`report` prints them).
-/// `cargo test --release --test stability_fluid -- --ignored long_sloshing`
+/// `cargo test --release --test suite stability_fluid::long_sloshing -- --ignored`
 #[test]
 #[ignore = "long: 1e4 steps, about 30 s"]
 fn long_sloshing_has_no_energy_or_volume_drift() {
@@ -164,7 +161,7 @@ fn long_sloshing_has_no_energy_or_volume_drift() {
 /// step at h = 12.5 mm); the correction restores about 2 % per step, limited
 /// by the guard that stops it flattening elements, so the volume is back
 /// within 1 % one or two steps later.
-/// `cargo test --release --test stability_fluid -- --ignored hard_cases_keep`
+/// `cargo test --release --test suite stability_fluid::hard_cases_keep -- --ignored`
 #[test]
 #[ignore = "known gap: the splash peaks at 3.85% for a step (bound 1%); the others stay within 0.25%"]
 fn hard_cases_keep_fluid_volume_within_one_percent() {

@@ -1,7 +1,7 @@
 //! Hard fluid–structure cases: stiffness contrast (E = 1e9 Pa and
 //! E = 1e3 Pa in water), density ratio (free solids 10× heavier and 10×
 //! lighter than water) and a thin structure (aspect ratio 1:50) hit by a
-//! wave. Release mode: `cargo test --release --test stability_fsi`.
+//! wave. Release mode: `cargo test --release --test suite stability_fsi::`.
 //!
 //! Checks as in `stability_fluid.rs`: ends at its end time or with a typed
 //! error, no NaN, no inverted fluid or solid element after a step, the
@@ -10,12 +10,9 @@
 //! fluid volume change over the run within `VOLUME_CHANGE_TOL` (1 %) and
 //! within `VOLUME_STEP_TOL` (5 %) after any step.
 
-#[path = "stability_support.rs"]
-mod support;
-
+use crate::stability_support::*;
 use pfem::core::Point;
 use pfem::prelude::*;
-use support::*;
 
 /// Energy growth allowed over the initial total: 5 %. The flows only lose
 /// energy physically, but the remeshing changes the fluid volume by a few
@@ -231,7 +228,7 @@ fn thin_structure_hit_by_a_wave_with_backward_euler() {
 /// earlier record: 2.42 %, 0.44 %, 0.02 %); every run ends within 0.01 % (with the
 /// trapezoidal Newmark and no correction: 26 %, 6.5 %, 18 %). The peaks
 /// are single remeshings the correction needs a step or two to absorb.
-/// `cargo test --release --test stability_fsi -- --ignored hard_cases_keep`
+/// `cargo test --release --test suite stability_fsi::hard_cases_keep -- --ignored`
 #[test]
 #[ignore = "known gap: the stiffness contrast peaks at 3.50% for a step (bound 1%); the others stay within 0.45%"]
 fn hard_cases_keep_fluid_volume_within_one_percent() {
@@ -267,7 +264,7 @@ fn hard_cases_keep_fluid_volume_within_one_percent() {
 /// 2, 2.05, 2.1, 2.15, 2.2 ms): without 0.96, 0.95, 0.96, 0.92, 22.4,
 /// 0.97, 0.97, 48.8, 45.7 h; with α = 1 0.96, 0.97, 0.96, 0.96, 0.92, 0.98,
 /// 0.96, 0.97, 0.85 h (docs/benchmarks.md). About a minute on 2 cores:
-/// `cargo test --release --test stability_fsi -- dam_break_carries`
+/// `cargo test --release --test suite stability_fsi::a_dam_break_carries`
 #[test]
 fn a_dam_break_carries_a_free_block_into_the_wall() {
     use pfem::scene_file::{LoadedScene, SceneFile};

@@ -1,7 +1,5 @@
-//! Shared checks of the hard-case suite (`tests/stability_*.rs`), included
-//! by each of them with `#[path]`. Compiled on its own too, as a test
-//! target without tests.
-#![allow(dead_code)]
+//! Shared checks of the hard-case suite (`tests/stability_*.rs`), a module
+//! of the test binary `tests/suite.rs` that each of them uses.
 
 use pfem::core::{simplex_measure, ParticleKind, Point};
 use pfem::prelude::*;

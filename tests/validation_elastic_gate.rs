@@ -1,6 +1,6 @@
 //! Release-mode elastic-gate validation (Antoci, Gallati & Sibilla 2007),
 //! with the published E = 12 MPa, ν = 0.4. Run with `cargo test --release
-//! --test validation_elastic_gate` (the refinement and the timing gap:
+//! --test suite validation_elastic_gate::` (the refinement and the timing gap:
 //! `-- --ignored`).
 //!
 //! The gate is a 2D solid, so the 2D assumption is a modelling choice:
@@ -105,7 +105,7 @@ fn plane_stress_gate_peaks_within_ten_percent_of_the_measured_46_mm() {
     assert!(uxs.is_finite() && uxs > 0.0);
 }
 
-/// `cargo test --release --test validation_elastic_gate -- --ignored refinement`
+/// `cargo test --release --test suite validation_elastic_gate::refinement -- --ignored`
 /// (about 2 minutes).
 #[test]
 #[ignore = "long: the h/2 run takes about 100 s"]
@@ -125,7 +125,7 @@ fn refinement_from_h_to_half_h_moves_the_peak_by_less_than_ten_percent() {
     assert!((0.08..=0.20).contains(&t), "h/2 peak at {t} s");
 }
 
-/// `cargo test --release --test validation_elastic_gate -- --ignored peak_time`
+/// `cargo test --release --test suite validation_elastic_gate::gate_peak_time -- --ignored`
 #[test]
 #[ignore = "known gap: the simulated peak comes 0.035–0.055 s before the measured one (bound 0.03 s)"]
 fn gate_peak_time_within_three_hundredths_of_a_second() {

@@ -1,7 +1,7 @@
 //! The volume correction (`pfem::hooks::VolumeCorrection`, installed by
 //! `Options::volume_correction`): geometric, booked in the ledger, off when
 //! asked, refused when out of range.
-//! `cargo test --release --test volume_correction`
+//! `cargo test --release --test suite volume_correction::`
 
 use pfem::cases::{DamBreak, G};
 use pfem::hooks::VolumeCorrection;

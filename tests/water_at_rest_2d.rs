@@ -11,7 +11,7 @@
 //! g/4 from rest and the tank sloshed for good: largest speed 0.026 √(gH),
 //! RMS 3·10⁻³ √(gH) within 1 s at h = 0.025 m.
 //!
-//! `cargo test --release --test water_at_rest_2d` (h = 0.025 m); the finer
+//! `cargo test --release --test suite water_at_rest_2d::` (h = 0.025 m); the finer
 //! h = 0.0125 m with `-- --ignored` (about 2.5 minutes; measured 1.27e-4 √(gH)
 //! largest, 5.3e-6 RMS, pressure 0.027 %).
 
@@ -80,7 +80,7 @@ fn water_at_rest_in_a_2d_tank_stays_at_rest() {
 }
 
 #[test]
-#[ignore = "about 2.5 minutes in release: cargo test --release --test water_at_rest_2d -- --ignored"]
+#[ignore = "about 2.5 minutes in release: cargo test --release --test suite water_at_rest_2d:: -- --ignored"]
 fn water_at_rest_in_a_2d_tank_stays_at_rest_fine() {
     check(0.0125);
 }

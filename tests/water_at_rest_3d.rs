@@ -19,7 +19,7 @@
 //! the lattice's Delaunay ties flip; what then kept it moving is the third
 //! cause (see `two_seconds`).
 //!
-//! `cargo test --release --test water_at_rest_3d` (the 2 s acceptance at
+//! `cargo test --release --test suite water_at_rest_3d::` (the 2 s acceptance at
 //! H/10 takes about 1.5 min); H/20 with `-- --ignored --nocapture` (8 times
 //! the particles, about 5 minutes on 2 cores with the block solver: largest
 //! speed 4.1e-4 √(gH), pressure 0.012 % RMS, volume −0.0000 %).
@@ -125,7 +125,7 @@ fn three_d_water_at_rest_for_two_seconds_h10() {
 }
 
 #[test]
-#[ignore = "long: 4 000 water particles in 3D, about 5 minutes; cargo test --release --test water_at_rest_3d -- --ignored"]
+#[ignore = "long: 4 000 water particles in 3D, about 5 minutes; cargo test --release --test suite water_at_rest_3d:: -- --ignored"]
 fn three_d_water_at_rest_for_two_seconds_h20() {
     two_seconds(0.025);
 }

@@ -8,7 +8,7 @@
 //! `E' = E / (1 − ν²)`, `q = ρ g t`, `I = t³/12`: 16.88 mm; the first
 //! bending frequency `f₁ = (1.8751² / 2π) √(E' I / (ρ A L⁴))` = 2.153 Hz.
 
-mod common;
+use crate::common;
 
 use pfem_assembly::{Constraints, StepMesh, VolumetricTreatment};
 use pfem_constitutive::{History, Hypoelastic, Material};

@@ -1,7 +1,7 @@
 //! Closed-form checks of the Newmark–Picard step on fixed meshes: free fall,
 //! hydrostatics, patch tests, locking shown and cured.
 
-mod common;
+use crate::common;
 
 use pfem_assembly::{Constraints, StepMesh, VolumetricTreatment};
 use pfem_constitutive::{History, Material, Newtonian};

@@ -18,7 +18,7 @@
 //! corner falls faster than g, 50 mm, an unphysical motion, with a
 //! checkerboard of 0.45 against 0.05 ρgH.)
 
-mod common;
+use crate::common;
 
 use pfem_assembly::{Constraints, StepMesh, VolumetricTreatment};
 use pfem_constitutive::{History, Material, Newtonian};

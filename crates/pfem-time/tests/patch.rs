@@ -9,7 +9,7 @@
 //! `V = L x₀` on interior particles to round-off and keep every element's
 //! stress (solid) and every node's pressure (fluid) uniform.
 
-mod common;
+use crate::common;
 
 use pfem_assembly::{Constraints, StepMesh, VolumetricTreatment};
 use pfem_constitutive::{History, Hypoelastic, Material, MaterialKind, Newtonian};

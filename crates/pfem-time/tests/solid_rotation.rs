@@ -14,7 +14,7 @@
 //! `(R − I) X / Δt` has `sym grad V = (1 − cos θ) I / Δt`, a spurious
 //! dilatation of 12 % of a strain per 0.5 rad step.
 
-mod common;
+use crate::common;
 
 use pfem_assembly::{Constraints, StepMesh};
 use pfem_constitutive::{History, Hypoelastic, Material};

@@ -3,7 +3,7 @@
 //! duplicated or garbled, the file cut there). Every mutant must load to a
 //! typed error or to a scene that validates within a memory budget and runs
 //! its first steps: no panic, no hang, no allocation above the budget.
-//! `cargo test --release -p pfem --test fuzz_scenes -- --nocapture`
+//! `cargo test --release -p pfem --test suite fuzz_scenes:: -- --nocapture`
 
 use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};

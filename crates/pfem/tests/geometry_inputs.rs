@@ -3,7 +3,7 @@
 //! and point probes; a polygon body in 2D; and the ways such input can be
 //! wrong (an open surface, a missing file, a polygon in 3D), each a typed
 //! error naming its line.
-//! `cargo test --release -p pfem --test geometry_inputs -- --nocapture`
+//! `cargo test --release -p pfem --test suite geometry_inputs:: -- --nocapture`
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

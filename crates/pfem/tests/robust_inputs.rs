@@ -1,7 +1,7 @@
 //! Hostile inputs (issue 17): names that would write outside their folder,
 //! settings that cannot finish, scenes too large for the memory, a second
 //! run into a used folder, and what `pfem check` reports.
-//! `cargo test --release -p pfem --test robust_inputs`
+//! `cargo test --release -p pfem --test suite robust_inputs::`
 
 use std::process::Command;
 

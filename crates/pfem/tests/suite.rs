@@ -1,0 +1,11 @@
+//! The `pfem` crate's integration tests, as one test binary: each file of
+//! `tests/` is a module of it (`Cargo.toml`: `autotests = false`), so that
+//! the generic pipeline is compiled once, not once per file. Run one
+//! file's tests with its module name as the filter:
+//! `cargo test --release -p pfem --test suite -- restart::`.
+
+mod fuzz_scenes;
+mod geometry_inputs;
+mod restart;
+mod robust_inputs;
+mod scene_file;
