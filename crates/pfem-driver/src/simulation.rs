@@ -416,51 +416,13 @@ where
                 value: options.min_quality_3d,
             });
         }
-        if !(0.0..0.5).contains(&params.sliver_quality_3d) {
-            return Err(SceneError::InvalidSetting {
-                setting: "sliver_quality_3d",
-                value: params.sliver_quality_3d,
-            });
-        }
-        if !(0.0..1.0).contains(&params.sliver_quality_2d) {
-            return Err(SceneError::InvalidSetting {
-                setting: "sliver_quality_2d",
-                value: params.sliver_quality_2d,
-            });
-        }
-        // The time scheme's and the Picard loop's parameters: a zero, negative
-        // or NaN value would otherwise show only as failed steps.
-        for (setting, value) in [
-            ("picard_tolerance", params.picard_tolerance),
-            ("min_dt", params.min_dt),
-            ("max_picard_iterations", params.max_picard_iterations as f64),
-        ] {
-            if !(value > 0.0 && value.is_finite()) {
-                return Err(SceneError::InvalidSetting { setting, value });
-            }
-        }
-        for (setting, value) in [
-            ("velocity_floor", params.velocity_floor),
-            ("pressure_stabilisation", params.pressure_stabilisation),
-            ("picard_forcing", params.picard_forcing),
-        ] {
-            if !(value >= 0.0 && value.is_finite()) {
-                return Err(SceneError::OutOfRange {
-                    setting,
-                    value,
-                    range: "[0, ∞)",
-                });
-            }
-        }
-        if params.scheme == pfem_time::Scheme::Bossak
-            && !(-1.0 / 3.0..=0.0).contains(&params.bossak_alpha)
-        {
-            return Err(SceneError::OutOfRange {
-                setting: "bossak_alpha",
-                value: params.bossak_alpha,
-                range: "[-1/3, 0]",
-            });
-        }
+        // The time scheme's and the Picard loop's parameters, named here
+        // rather than found as failed steps.
+        params.validate().map_err(|e| SceneError::OutOfRange {
+            setting: e.setting,
+            value: e.value,
+            range: e.range,
+        })?;
         scene.validate_within(options.memory_budget)?;
         // The scene's pressure stabilisation, unless the program set one.
         let mut params = params;

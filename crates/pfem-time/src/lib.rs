@@ -347,6 +347,64 @@ impl Default for StepParams {
     }
 }
 
+/// A [`StepParams`] setting outside its range ([`StepParams::validate`]).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("the step parameter `{setting}` = {value} is outside {range}")]
+pub struct InvalidStepParam {
+    /// The field of [`StepParams`].
+    pub setting: &'static str,
+    /// Its value (a count as `f64`).
+    pub value: f64,
+    /// The accepted range.
+    pub range: &'static str,
+}
+
+impl StepParams {
+    /// Checks every setting against its range, naming the first that is
+    /// outside it. A zero, negative or NaN tolerance, step floor or
+    /// iteration limit would otherwise show only as every step failing,
+    /// and a negative stabilisation would silently switch itself off.
+    /// [`Integrator::try_step`] checks it on every attempt,
+    /// `pfem_driver::Simulation::new` once, up front.
+    pub fn validate(&self) -> Result<(), InvalidStepParam> {
+        let out = |setting, value, range| {
+            Err(InvalidStepParam {
+                setting,
+                value,
+                range,
+            })
+        };
+        for (setting, value) in [
+            ("picard_tolerance", self.picard_tolerance),
+            ("min_dt", self.min_dt),
+            ("max_picard_iterations", self.max_picard_iterations as f64),
+        ] {
+            if !(value > 0.0 && value.is_finite()) {
+                return out(setting, value, "(0, ∞)");
+            }
+        }
+        for (setting, value) in [
+            ("velocity_floor", self.velocity_floor),
+            ("pressure_stabilisation", self.pressure_stabilisation),
+            ("picard_forcing", self.picard_forcing),
+        ] {
+            if !(value >= 0.0 && value.is_finite()) {
+                return out(setting, value, "[0, ∞)");
+            }
+        }
+        if self.scheme == Scheme::Bossak && !(-1.0 / 3.0..=0.0).contains(&self.bossak_alpha) {
+            return out("bossak_alpha", self.bossak_alpha, "[-1/3, 0]");
+        }
+        if !(0.0..0.5).contains(&self.sliver_quality_3d) {
+            return out("sliver_quality_3d", self.sliver_quality_3d, "[0, 0.5)");
+        }
+        if !(0.0..1.0).contains(&self.sliver_quality_2d) {
+            return out("sliver_quality_2d", self.sliver_quality_2d, "[0, 1)");
+        }
+        Ok(())
+    }
+}
+
 /// Per-particle state: the unknowns and their history.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ParticleState<const D: usize>
@@ -704,24 +762,11 @@ where
                 what: format!("time step {dt} is not a positive finite number"),
             });
         }
-        let ab = self.params.bossak_alpha;
-        if self.params.scheme == Scheme::Bossak && !((-1.0 / 3.0..=0.0).contains(&ab)) {
-            return Err(StepError::InvalidInput {
-                what: format!("bossak_alpha {ab} is outside [-1/3, 0]"),
-            });
-        }
-        let q = self.params.sliver_quality_3d;
-        if !(0.0..0.5).contains(&q) {
-            return Err(StepError::InvalidInput {
-                what: format!("sliver_quality_3d {q} is outside [0, 0.5)"),
-            });
-        }
-        let q = self.params.sliver_quality_2d;
-        if !(0.0..1.0).contains(&q) {
-            return Err(StepError::InvalidInput {
-                what: format!("sliver_quality_2d {q} is outside [0, 1)"),
-            });
-        }
+        self.params
+            .validate()
+            .map_err(|e| StepError::InvalidInput {
+                what: e.to_string(),
+            })?;
         if state.v.len() != n
             || state.a.len() != n
             || state.pressure.len() != n
@@ -1074,6 +1119,89 @@ impl CourantController {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each setting outside its range is named by [`StepParams::validate`]
+    /// (the integrator's attempt: `tests/closed_forms.rs`).
+    #[test]
+    fn step_params_outside_their_range_are_named() {
+        let d = StepParams::default();
+        assert_eq!(d.validate(), Ok(()));
+        let bad = [
+            (
+                StepParams {
+                    picard_tolerance: 0.0,
+                    ..d
+                },
+                "picard_tolerance",
+            ),
+            (
+                StepParams {
+                    min_dt: f64::NAN,
+                    ..d
+                },
+                "min_dt",
+            ),
+            (
+                StepParams {
+                    max_picard_iterations: 0,
+                    ..d
+                },
+                "max_picard_iterations",
+            ),
+            (
+                StepParams {
+                    velocity_floor: -1.0,
+                    ..d
+                },
+                "velocity_floor",
+            ),
+            (
+                StepParams {
+                    pressure_stabilisation: f64::INFINITY,
+                    ..d
+                },
+                "pressure_stabilisation",
+            ),
+            (
+                StepParams {
+                    picard_forcing: -1e-3,
+                    ..d
+                },
+                "picard_forcing",
+            ),
+            (
+                StepParams {
+                    bossak_alpha: -0.5,
+                    ..d
+                },
+                "bossak_alpha",
+            ),
+            (
+                StepParams {
+                    sliver_quality_3d: 0.5,
+                    ..d
+                },
+                "sliver_quality_3d",
+            ),
+            (
+                StepParams {
+                    sliver_quality_2d: f64::NAN,
+                    ..d
+                },
+                "sliver_quality_2d",
+            ),
+        ];
+        for (params, setting) in bad {
+            assert_eq!(params.validate().map_err(|e| e.setting), Err(setting));
+        }
+        // Bossak's α matters only under Bossak.
+        let trapezoidal = StepParams {
+            scheme: Scheme::Newmark,
+            bossak_alpha: 0.5,
+            ..d
+        };
+        assert_eq!(trapezoidal.validate(), Ok(()));
+    }
 
     /// One-degree-of-freedom oscillator `m ẍ + k x = 0` (x along the first
     /// axis, m = 1) advanced with the weights of `scheme`: the velocity

@@ -14,6 +14,40 @@ fn centroid(x: &[Point<2>]) -> Point<2> {
     x.iter().fold(Point::<2>::zeros(), |a, b| a + b) / x.len() as f64
 }
 
+/// An integrator built with a setting outside its range refuses its first
+/// attempt with the setting named (`StepParams::validate`); a zero Picard
+/// tolerance used to show only as every step failing to converge.
+#[test]
+fn an_integrator_with_a_zero_tolerance_names_it() {
+    let (pts, tris) = common::grid(0.0, 1.0, 0.2, 0.2, 4, 4);
+    let ne = tris.len() / 3;
+    let materials: Vec<Box<dyn Material<2>>> = vec![Box::new(Newtonian::water())];
+    let mat = vec![0u16; ne];
+    let mut history = vec![History::<2>::default(); ne];
+    let constraints = Constraints::<2>::free(pts.len());
+    let mut state = ParticleState::at_rest(pts);
+    let mut integ = Integrator::<2>::new(StepParams {
+        picard_tolerance: 0.0,
+        ..StepParams::default()
+    });
+    let input = StepInput {
+        mesh: StepMesh {
+            elements: &tris,
+            element_material: &mat,
+            closures: &[],
+            surface_cuts: Default::default(),
+        },
+        materials: &materials,
+        constraints: &constraints,
+        body_force: Some(Vector::<2>::new(0.0, -G)),
+    };
+    let err = integ
+        .try_step(0.0, 1e-3, &mut state, &mut history, &input)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("picard_tolerance"), "{err}");
+}
+
 #[test]
 fn free_fall_of_a_detached_fluid_block() {
     let (pts, tris) = common::grid(0.0, 1.0, 0.2, 0.2, 8, 8);
