@@ -11,9 +11,9 @@
 //! points) is `crates/pfem/tests/restart.rs`.
 
 use pfem::cases::{DamBreak, ElasticGate};
-use pfem::checkpoint::{Checkpoint, CheckpointError, SIMULATION};
+use pfem::checkpoint::{Checkpoint, CheckpointError, Decoder, Encoder, SIMULATION};
 use pfem::geometry::{ParticleManagementParams, Tessellator};
-use pfem::hooks::{Inflow, ParticleManagement};
+use pfem::hooks::{Hook, HookContext, Inflow, ParticleManagement};
 use pfem::prelude::*;
 
 /// Builds a simulation with its hooks.
@@ -254,4 +254,105 @@ fn foreign_damaged_and_future_checkpoints_are_refused() {
     s3.step().unwrap();
     let err = sim.restore(&s3.checkpoint()).unwrap_err();
     assert!(err.to_string().contains("dimension"), "{err}");
+}
+
+/// A scene whose material changed since the checkpoint (the gate's Young's
+/// modulus doubled) is refused with the material named; before, only the
+/// number of materials was compared, and the run went on as another
+/// material.
+#[test]
+fn a_checkpoint_of_another_material_is_refused() {
+    let mut sim = gate();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let mut stiffer = sim2(
+        ElasticGate {
+            end_time: 0.012,
+            young: 2.0 * ElasticGate::default().young,
+            ..Default::default()
+        }
+        .scene()
+        .unwrap(),
+    );
+    let err = stiffer.restore(&ck).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            RunError::Checkpoint(CheckpointError::Mismatch {
+                what: "a material",
+                ..
+            })
+        ),
+        "{err}"
+    );
+    println!("another material: {err}");
+    // The same material restores.
+    gate().restore(&ck).unwrap();
+}
+
+/// Counts accepted steps and saves the count; refuses to read back a count
+/// above `limit`, as a hook does with a state it cannot take.
+struct Counter {
+    steps: u64,
+    limit: u64,
+}
+
+impl Hook<2> for Counter {
+    fn name(&self) -> &str {
+        "counter"
+    }
+    fn after_step(&mut self, _ctx: &mut HookContext<'_, 2>) -> Result<(), RunError> {
+        self.steps += 1;
+        Ok(())
+    }
+    fn save_state(&self, out: &mut Encoder) {
+        out.u64(self.steps);
+    }
+    fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
+        let steps = from.u64()?;
+        if steps > self.limit {
+            return Err(CheckpointError::Corrupt(format!("{steps} steps")));
+        }
+        self.steps = steps;
+        Ok(())
+    }
+}
+
+fn coming_and_going_counted(limit: u64) -> Simulation<2> {
+    let mut sim = coming_and_going();
+    sim.add_hook(Box::new(Counter { steps: 0, limit }));
+    sim
+}
+
+/// A checkpoint refused after the other hooks have read their states (the
+/// last hook refuses its own) leaves the simulation as it was: the same
+/// saved state, and the run goes on to end bit for bit where the
+/// uninterrupted run ends. Before, particle management and the inflow kept
+/// the checkpoint's states while the particles stayed the simulation's.
+#[test]
+fn a_refused_checkpoint_leaves_the_simulation_as_it_was() {
+    let mut later = coming_and_going_counted(u64::MAX);
+    while later.steps() < 6 {
+        later.step().unwrap();
+    }
+    let ck = later.checkpoint();
+    drop(later);
+    let mut sim = coming_and_going_counted(3);
+    while sim.steps() < 3 {
+        sim.step().unwrap();
+    }
+    let before = sim.checkpoint();
+    let err = sim.restore(&ck).unwrap_err();
+    assert!(
+        matches!(err, RunError::Checkpoint(CheckpointError::Corrupt(_))),
+        "{err}"
+    );
+    assert!(
+        sim.checkpoint().section(SIMULATION) == before.section(SIMULATION),
+        "the refused checkpoint changed the simulation"
+    );
+    sim.run(&mut []).unwrap();
+    let mut whole = coming_and_going_counted(u64::MAX);
+    whole.run(&mut []).unwrap();
+    assert_same("refused restore", &whole, &sim);
 }

@@ -50,7 +50,11 @@ pub const MAGIC: &[u8; 8] = b"PFEMCKPT";
 /// The format this library writes and reads. Bumped whenever the content
 /// of a section changes; an older or newer file is refused
 /// ([`CheckpointError::Version`]).
-pub const FORMAT_VERSION: u32 = 1;
+///
+/// Version 2 (session 27): the simulation section records each material's
+/// name, kind, density and wave speed, so that a scene whose material
+/// changed since the checkpoint is refused.
+pub const FORMAT_VERSION: u32 = 2;
 
 /// The driver's section: the simulation state.
 pub const SIMULATION: &str = "simulation";

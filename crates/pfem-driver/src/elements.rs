@@ -9,6 +9,9 @@ use pfem_geometry::{AlphaShape, Tessellation};
 
 use crate::checkpoint::{fingerprint, CheckpointError, Decoder, Encoder};
 
+/// Contact elements kept between two meshes: connectivity and histories.
+pub(crate) type ContactStash<const D: usize> = (Vec<u32>, Vec<History<D>>);
+
 /// Elements of a simulation, `D + 1` particle indices each: the solid range
 /// first (each solid's own mesh, built once, carrying its stress history
 /// from step to step), then the fluid range (rebuilt by every remeshing,
@@ -34,7 +37,7 @@ where
     /// The last contact range (connectivity, histories), kept when the
     /// fluid range is replaced so that the next contact range carries the
     /// tangential tractions of elements that persist.
-    stash: (Vec<u32>, Vec<History<D>>),
+    stash: ContactStash<D>,
     contact_set: bool,
     shape: AlphaShape,
     close_sealed_voids: bool,
@@ -403,9 +406,13 @@ where
         }
     }
 
-    /// Reads what [`Elements::encode_solid`] wrote into the solid range,
-    /// which must be the same mesh.
-    pub(crate) fn decode_solid(&mut self, d: &mut Decoder<'_>) -> Result<(), CheckpointError> {
+    /// Reads what [`Elements::encode_solid`] wrote, for the solid range,
+    /// which must be the same mesh: its histories, to be put in place by
+    /// [`Elements::set_solid_history`].
+    pub(crate) fn decode_solid(
+        &self,
+        d: &mut Decoder<'_>,
+    ) -> Result<Vec<History<D>>, CheckpointError> {
         let n = d.len(0)?;
         if n != self.n_solid {
             return Err(CheckpointError::Mismatch {
@@ -436,8 +443,12 @@ where
             }
             history.push(h);
         }
-        self.history[..n].copy_from_slice(&history);
-        Ok(())
+        Ok(history)
+    }
+
+    /// Puts the solid range's histories ([`Elements::decode_solid`]) in place.
+    pub(crate) fn set_solid_history(&mut self, history: &[History<D>]) {
+        self.history[..history.len()].copy_from_slice(history);
     }
 
     /// Keeps the stash as the source of the next contact range (after a
@@ -463,13 +474,12 @@ where
         }
     }
 
-    /// Reads what [`Elements::encode_contact`] wrote into the stash, which
-    /// the next contact range carries from.
+    /// Reads what [`Elements::encode_contact`] wrote: the stash the next
+    /// contact range carries from ([`Elements::set_stash`]).
     pub(crate) fn decode_contact(
-        &mut self,
         d: &mut Decoder<'_>,
         n_particles: usize,
-    ) -> Result<(), CheckpointError> {
+    ) -> Result<ContactStash<D>, CheckpointError> {
         let nv = D + 1;
         let n = d.len(8 * (nv + 8))?;
         let mut conn = Vec::with_capacity(n * nv);
@@ -488,8 +498,14 @@ where
             }
             hist.push(h);
         }
+        Ok((conn, hist))
+    }
+
+    /// Drops the fluid and contact ranges and keeps `stash` (from
+    /// [`Elements::decode_contact`]) as the source of the next contact
+    /// range.
+    pub(crate) fn set_stash(&mut self, stash: ContactStash<D>) {
         self.truncate_to_solid();
-        self.stash = (conn, hist);
-        Ok(())
+        self.stash = stash;
     }
 }

@@ -1183,6 +1183,13 @@ where
             e.str(b);
         }
         e.u64(self.materials.len() as u64);
+        for m in &self.materials {
+            let (name, kind, density, wave_speed) = material_signature(m.as_ref());
+            e.str(&name);
+            e.u64(kind);
+            e.f64(density);
+            e.f64(wave_speed);
+        }
         let c = &self.clock;
         e.f64(c.time);
         e.f64(c.dt);
@@ -1241,7 +1248,8 @@ where
 
     /// Continues from `checkpoint` ([`Simulation::checkpoint`]): this
     /// simulation must be built from the same scene with the same options
-    /// (the dimension, scene and body names, materials and solid meshes
+    /// (the dimension, scene and body names, materials (name, kind,
+    /// density, wave speed) and solid meshes
     /// are checked; [`crate::checkpoint::CheckpointError::Mismatch`]
     /// otherwise). The hooks' [`Hook::start`] runs first on the initial
     /// state, then each hook's saved state is read back by name (a hook
@@ -1249,6 +1257,15 @@ where
     /// remade from the restored positions; a stop asked for before the
     /// checkpoint is not carried over. The end time stays this
     /// simulation's, so a finished run may be continued further.
+    ///
+    /// A refused checkpoint (any error) leaves the simulation as it was
+    /// before the call: everything is read and checked before anything
+    /// changes, and what can fail after (a hook reading its state, the
+    /// remeshing) puts the state back, each hook reading back its own state
+    /// saved just before ([`Hook::save_state`] then [`Hook::restore_state`]
+    /// must give the hook back, as every checkpoint assumes). The one
+    /// change kept is the hooks' [`Hook::start`], which a fresh simulation
+    /// runs at its first step anyway.
     pub fn restore(&mut self, checkpoint: &Checkpoint) -> Result<(), RunError> {
         let mut d = Decoder::new(checkpoint.require(SIMULATION)?);
         let mismatch = |what, checkpoint: String, simulation: String| {
@@ -1285,6 +1302,23 @@ where
                 self.materials.len().to_string(),
             ));
         }
+        // Each material's name, kind, density and wave speed: a bulk or
+        // Young's modulus changed in the scene file since the checkpoint
+        // would otherwise continue the run as another material.
+        for m in &self.materials {
+            let saved = (d.str()?.to_string(), d.u64()?, d.f64()?, d.f64()?);
+            let now = material_signature(m.as_ref());
+            let same = saved.0 == now.0
+                && saved.1 == now.1
+                && saved.2.to_bits() == now.2.to_bits()
+                && saved.3.to_bits() == now.3.to_bits();
+            if !same {
+                let show = |(name, _, rho, c): &(String, u64, f64, f64)| {
+                    format!("`{name}` with density {rho} kg/m³ and wave speed {c} m/s")
+                };
+                return Err(mismatch("a material", show(&saved), show(&now)));
+            }
+        }
         let clock = Clock {
             time: d.f64()?,
             dt: d.f64()?,
@@ -1320,11 +1354,8 @@ where
             )
             .into());
         }
-        // Hooks see the scene's initial state at their start, as in the
-        // uninterrupted run; their saved state is read after.
-        self.start_hooks()?;
-        self.elements.decode_solid(&mut d)?;
-        self.elements.decode_contact(&mut d, particles.len())?;
+        let solid_history = self.elements.decode_solid(&mut d)?;
+        let stash = Elements::<D>::decode_contact(&mut d, particles.len())?;
         let mut volume = VolumeLedger {
             initial: d.f64()?,
             remeshing: d.f64()?,
@@ -1350,6 +1381,7 @@ where
         d.end()?;
         // The k-th hook of a name takes the k-th saved state of that name.
         let mut used = vec![false; self.hooks.len()];
+        let mut hook_states = Vec::with_capacity(saved.len());
         for (name, bytes) in saved {
             let slot = self
                 .hooks
@@ -1359,9 +1391,7 @@ where
             match slot {
                 Some(i) => {
                     used[i] = true;
-                    let mut hd = Decoder::new(bytes);
-                    self.hooks[i].restore_state(&mut hd)?;
-                    hd.end()?;
+                    hook_states.push((i, bytes));
                 }
                 None if bytes.is_empty() => {}
                 None => {
@@ -1373,36 +1403,130 @@ where
                 }
             }
         }
-        self.particles = particles;
-        self.clock = clock;
-        self.volume = volume;
-        self.volume_now = volume_now;
-        self.gravity = has_gravity.then_some(g);
-        self.stages.body_force = self.gravity.is_some_and(|g| g.norm() > 0.0);
-        self.stop = None;
-        self.elements.clear_fluid();
-        self.remesh()?;
-        self.elements.keep_stash();
-        if let Some(t) = checkpoint.section(TIMINGS) {
-            let mut d = Decoder::new(t);
-            let mut pair = || -> Result<(u64, f64), CheckpointError> { Ok((d.u64()?, d.f64()?)) };
-            let s = StageStats {
-                remesh: pair()?,
-                free_surface: pair()?,
-                assemble: pair()?,
-                solve: pair()?,
-                update: pair()?,
-                observe: pair()?,
-                hooks: pair()?,
-                rejected: pair()?,
-                pressure_updates: d.u64()?,
-                stress_updates: d.u64()?,
-            };
-            d.end()?;
-            self.stats = s;
+        let stats = match checkpoint.section(TIMINGS) {
+            Some(t) => {
+                let mut d = Decoder::new(t);
+                let mut pair =
+                    || -> Result<(u64, f64), CheckpointError> { Ok((d.u64()?, d.f64()?)) };
+                let s = StageStats {
+                    remesh: pair()?,
+                    free_surface: pair()?,
+                    assemble: pair()?,
+                    solve: pair()?,
+                    update: pair()?,
+                    observe: pair()?,
+                    hooks: pair()?,
+                    rejected: pair()?,
+                    pressure_updates: d.u64()?,
+                    stress_updates: d.u64()?,
+                };
+                d.end()?;
+                Some(s)
+            }
+            None => None,
+        };
+        // Nothing has changed so far. Hooks see the scene's initial state
+        // at their start, as in the uninterrupted run; their saved state is
+        // read after.
+        self.start_hooks()?;
+        let before = Backup {
+            particles: self.particles.clone(),
+            elements: self.elements.clone(),
+            contact: self.contact.clone(),
+            stop: self.stop.clone(),
+            clock: self.clock,
+            volume: self.volume.clone(),
+            volume_now: self.volume_now,
+            gravity: self.gravity,
+            body_force: self.stages.body_force,
+            hooks: self
+                .hooks
+                .iter()
+                .map(|h| {
+                    let mut e = Encoder::new();
+                    h.save_state(&mut e);
+                    e.finish()
+                })
+                .collect(),
+        };
+        let result = (|| -> Result<(), RunError> {
+            for (i, bytes) in hook_states {
+                let mut hd = Decoder::new(bytes);
+                self.hooks[i].restore_state(&mut hd)?;
+                hd.end()?;
+            }
+            self.particles = particles;
+            self.clock = clock;
+            self.volume = volume;
+            self.volume_now = volume_now;
+            self.gravity = has_gravity.then_some(g);
+            self.stages.body_force = self.gravity.is_some_and(|g| g.norm() > 0.0);
+            self.stop = None;
+            self.elements.set_solid_history(&solid_history);
+            self.elements.set_stash(stash);
+            self.elements.clear_fluid();
+            self.remesh()?;
+            self.elements.keep_stash();
+            Ok(())
+        })();
+        match result {
+            Ok(()) => {
+                if let Some(s) = stats {
+                    self.stats = s;
+                }
+            }
+            Err(_) => {
+                self.particles = before.particles;
+                self.elements = before.elements;
+                self.contact = before.contact;
+                self.stop = before.stop;
+                self.clock = before.clock;
+                self.volume = before.volume;
+                self.volume_now = before.volume_now;
+                self.gravity = before.gravity;
+                self.stages.body_force = before.body_force;
+                for (h, bytes) in self.hooks.iter_mut().zip(&before.hooks) {
+                    // A hook's own state read back: cannot fail for a hook
+                    // whose save and restore agree; if it did, the
+                    // checkpoint's error is still the one to report.
+                    let _ = h.restore_state(&mut Decoder::new(bytes));
+                }
+            }
         }
-        Ok(())
+        result
     }
+}
+
+/// The state [`Simulation::restore`] puts back when it refuses a
+/// checkpoint.
+struct Backup<const D: usize>
+where
+    Const<D>: Dim,
+{
+    particles: Particles<D>,
+    elements: Elements<D>,
+    contact: ContactSetup<D>,
+    stop: Option<String>,
+    clock: Clock,
+    volume: VolumeLedger,
+    volume_now: f64,
+    gravity: Option<Vector<D>>,
+    body_force: bool,
+    hooks: Vec<Vec<u8>>,
+}
+
+/// What a checkpoint records of a material to recognise it: its name, kind
+/// (0 fluid, 1 solid), density and wave speed (which moves with its bulk
+/// or Young's modulus).
+fn material_signature<const D: usize>(m: &dyn Material<D>) -> (String, u64, f64, f64)
+where
+    Const<D>: Dim,
+{
+    let kind = match m.kind() {
+        MaterialKind::Fluid => 0,
+        MaterialKind::Solid => 1,
+    };
+    (m.name().to_string(), kind, m.density(), m.wave_speed())
 }
 
 /// Replaces the accelerations `a` of the particles `members` (index, mass)
