@@ -3,7 +3,7 @@
 //! least-squares slope of log error against log h). The full sweeps, with
 //! wall time, are in `examples/accuracy_cost.rs` and
 //! `docs/accuracy-cost.md`. Run with `cargo test --release --test
-//! convergence -- --nocapture` (the dam break's self-convergence:
+//! suite convergence:: -- --nocapture` (the dam break's self-convergence:
 //! `-- --ignored`).
 
 use pfem::cases::{rest_figures, RestTank};

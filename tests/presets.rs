@@ -2,7 +2,7 @@
 //! (`pfem::fidelity`, `docs/accuracy-cost.md`), on every case with an
 //! exact reference that runs in seconds and on the dam break against
 //! Martin & Moyce (1952). Release mode: `cargo test --release --test
-//! presets` (Draft, Standard); Fine: `-- --ignored`.
+//! suite presets::` (Draft, Standard); Fine: `-- --ignored`.
 //!
 //! Each bound is the full study's figure plus 25 % (the runs are
 //! deterministic; the margin is for other platforms' floating point), and

@@ -18,8 +18,8 @@
 //! restored state is the saved one to the last bit.
 //!
 //! [`Simulation::checkpoint`](crate::Simulation::checkpoint) writes the
-//! section [`SIMULATION`] (particles, solid histories, clock, volume
-//! ledger, body force, hook states) and [`TIMINGS`] (stage timers);
+//! section [`SIMULATION`] (particles, materials, solid histories, clock,
+//! volume ledger, body force, hook states) and [`TIMINGS`] (stage timers);
 //! [`Simulation::restore`](crate::Simulation::restore) reads
 //! them back into a simulation built from the same scene. The output layer
 //! adds its own section (frames written, probe rows). What is *not* saved:

@@ -1169,7 +1169,7 @@ where
     Const<D>: Dim,
 {
     /// The run's state as a checkpoint ([`crate::checkpoint`]): sections
-    /// [`SIMULATION`] (particles, solid histories, clock, volume ledger,
+    /// [`SIMULATION`] (particles, materials, solid histories, clock, volume ledger,
     /// body force, hook states) and [`TIMINGS`]. Add an observer's own
     /// sections, encode and write it; [`Simulation::restore`] continues a
     /// simulation built from the same scene and options from it, bit for
@@ -1433,6 +1433,8 @@ where
             particles: self.particles.clone(),
             elements: self.elements.clone(),
             contact: self.contact.clone(),
+            tess: self.stepper.tess.clone(),
+            near: self.stepper.near.clone(),
             stop: self.stop.clone(),
             clock: self.clock,
             volume: self.volume.clone(),
@@ -1479,6 +1481,8 @@ where
                 self.particles = before.particles;
                 self.elements = before.elements;
                 self.contact = before.contact;
+                self.stepper.tess = before.tess;
+                self.stepper.near = before.near;
                 self.stop = before.stop;
                 self.clock = before.clock;
                 self.volume = before.volume;
@@ -1506,6 +1510,10 @@ where
     particles: Particles<D>,
     elements: Elements<D>,
     contact: ContactSetup<D>,
+    /// The last tessellation, which a hook's `manage_particles` reads in a
+    /// step that does not remesh first.
+    tess: Tessellation,
+    near: Vec<u32>,
     stop: Option<String>,
     clock: Clock,
     volume: VolumeLedger,

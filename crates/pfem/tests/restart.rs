@@ -8,7 +8,7 @@
 //!
 //! The kill times are drawn from a seed printed by the test (set
 //! `PFEM_KILL_SEED` to replay one).
-//! `cargo test --release -p pfem --test suite restart:: -- --nocapture`
+//! `cargo test --release -p pfem --test restart -- --nocapture`
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
