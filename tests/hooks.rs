@@ -541,6 +541,44 @@ fn unknown_body_names_are_errors() {
     assert!(matches!(sim.step(), Err(RunError::UnknownBody { .. })));
 }
 
+/// A motion law that gives a non-finite velocity or position (here a
+/// `Sinusoidal` built by hand with a zero period) stops the run with the
+/// body named, at the hook's start; before, the NaN wall showed only as
+/// steps failing down to the smallest time step.
+#[test]
+fn a_motion_law_giving_nan_is_an_error_naming_its_body() {
+    let h = 0.05;
+    let scene = Scene::<2>::new("nan wall")
+        .settings(RunSettings {
+            end_time: 0.01,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
+        .wall("paddle", boxed(-0.1, 0.0, -0.05, 0.2), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, 0.0, 0.1, 0.1),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    sim.add_hook(Box::new(PrescribedMotion::new(
+        "paddle",
+        std::sync::Arc::new(Sinusoidal {
+            amplitude: Vector::<2>::new(0.01, 0.0),
+            period: 0.0,
+            ramp: 0.0,
+        }),
+    )));
+    let err = sim.run(&mut []).unwrap_err().to_string();
+    assert!(
+        err.contains("paddle") && err.contains("non-finite"),
+        "{err}"
+    );
+    assert_eq!(sim.steps(), 0);
+}
+
 /// Counts its `start` calls and records the time of the first.
 struct Starts(std::sync::Arc<std::sync::Mutex<Vec<f64>>>);
 

@@ -1,6 +1,6 @@
 //! A wall moving along a motion law.
 
-use pfem_core::{Const, Dim, ParticleKind};
+use pfem_core::{Const, Dim, ParticleKind, Vector};
 use pfem_scene::motion::MotionLaw;
 
 use super::{body_particles, Hook, HookContext};
@@ -61,7 +61,7 @@ where
         let p = ctx.particles_mut();
         for &i in &self.particles {
             let x0 = p.initial_positions()[i];
-            let v = self.law.velocity(&x0, t);
+            let v = self.finite(self.law.velocity(&x0, t), "velocity", t)?;
             p.v_mut()[i] = v;
             p.constraints_mut().fix(i, v);
         }
@@ -73,7 +73,7 @@ where
         let p = ctx.particles_mut();
         for &i in &self.particles {
             let x0 = p.initial_positions()[i];
-            let v = self.law.velocity(&x0, t1);
+            let v = self.finite(self.law.velocity(&x0, t1), "velocity", t1)?;
             p.constraints_mut().fix(i, v);
         }
         Ok(())
@@ -84,8 +84,34 @@ where
         let p = ctx.particles_mut();
         for &i in &self.particles {
             let x0 = p.initial_positions()[i];
-            p.x_mut()[i] = self.law.position(&x0, t);
+            let x = self.law.position(&x0, t);
+            self.finite(x, "position", t)?;
+            p.x_mut()[i] = x;
         }
         Ok(())
+    }
+}
+
+impl<const D: usize> PrescribedMotion<D>
+where
+    Const<D>: Dim,
+{
+    /// `v` if every component is finite; otherwise an error naming the body
+    /// and the time. A law is user code (a `Sinusoidal` built by hand with
+    /// a zero period, a law of one's own): a NaN wall would otherwise show
+    /// only as failed steps.
+    fn finite(&self, v: Vector<D>, what: &str, t: f64) -> Result<Vector<D>, RunError> {
+        if v.iter().all(|c| c.is_finite()) {
+            Ok(v)
+        } else {
+            Err(RunError::Hook {
+                hook: "prescribed motion".into(),
+                why: format!(
+                    "the motion law of body `{}` gives the non-finite {what} {:?} at t = {t} s",
+                    self.body,
+                    v.as_slice()
+                ),
+            })
+        }
     }
 }
