@@ -579,6 +579,36 @@ fn a_motion_law_giving_nan_is_an_error_naming_its_body() {
     assert_eq!(sim.steps(), 0);
 }
 
+/// Particle management every 0 steps (a struct literal; `new` raises it
+/// to one) is refused at the start; before, it divided by zero at the
+/// second step and panicked.
+#[test]
+fn particle_management_every_zero_steps_is_refused() {
+    let h = 0.05;
+    let scene = Scene::<2>::new("every zero")
+        .settings(RunSettings {
+            end_time: 0.01,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, 0.0, 0.1, 0.1),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    sim.add_hook(Box::new(pfem::hooks::ParticleManagement {
+        params: Default::default(),
+        every: 0,
+        removed: 0,
+        inserted: 0,
+    }));
+    let err = sim.run(&mut []).unwrap_err().to_string();
+    assert!(err.contains("every"), "{err}");
+}
+
 /// Counts its `start` calls and records the time of the first.
 struct Starts(std::sync::Arc<std::sync::Mutex<Vec<f64>>>);
 

@@ -50,6 +50,13 @@ where
     }
 
     fn start(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        // `new` raises 0 to 1; a struct literal does not.
+        if self.every == 0 {
+            return Err(RunError::Hook {
+                hook: Self::NAME.into(),
+                why: "`every` is 0: it must be a number of steps, 1 or more".into(),
+            });
+        }
         self.params.validate().map_err(RunError::Geometry)
     }
 

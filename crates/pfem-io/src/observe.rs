@@ -58,7 +58,8 @@ where
     dir: PathBuf,
     vtu: bool,
     probes: Vec<Probe<D>>,
-    /// Interval between probe rows (s); every step when `None`.
+    /// Interval between probe rows (s), positive and finite (else the
+    /// run's start is refused); every step when `None`.
     pub probe_interval: Option<f64>,
     series: Option<VtuSeries>,
     csv: Option<CsvProbe>,
@@ -247,7 +248,7 @@ where
 
     /// Checks the output directory: refuses a non-empty one, or clears the
     /// previous run's files from it when overwriting.
-    fn prepare_dir(&self) -> Result<(), crate::output::OutputError> {
+    fn prepare_dir(&self, name: &str) -> Result<(), crate::output::OutputError> {
         use crate::output::OutputError;
         let Ok(entries) = std::fs::read_dir(&self.dir) else {
             return Ok(()); // does not exist yet
@@ -265,8 +266,15 @@ where
         }
         for n in names {
             let s = n.to_string_lossy();
-            let ours = s.ends_with(".vtu")
-                || s.ends_with(".pvd")
+            // This scene's series only: another scene's frames in the same
+            // folder are not the previous run's.
+            let frame = s
+                .strip_prefix(name)
+                .and_then(|r| r.strip_prefix('_'))
+                .and_then(|r| r.strip_suffix(".vtu"))
+                .is_some_and(|r| r.len() == 6 && r.bytes().all(|b| b.is_ascii_digit()));
+            let ours = frame
+                || s == format!("{name}.pvd")
                 || s == "probes.csv"
                 || s == "summary.json"
                 || s == CHECKPOINT_FILE
@@ -590,10 +598,19 @@ where
 {
     fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
         self.started = Some(Instant::now());
+        if let Some(t) = self.probe_interval {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(RunError::InvalidSetting {
+                    name: "probe_interval",
+                    value: t,
+                    reason: "must be positive and finite (None records every step)",
+                });
+            }
+        }
         if let Some(r) = self.resume.take() {
             return self.start_resumed(sim, r);
         }
-        self.prepare_dir()?;
+        self.prepare_dir(sim.name())?;
         std::fs::create_dir_all(&self.dir)
             .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
         if self.vtu && sim.output_interval().is_some() {

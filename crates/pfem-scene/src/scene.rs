@@ -983,7 +983,21 @@ pub fn is_column_name(name: &str) -> bool {
 /// A scene name becomes file names (`NAME.pvd`, `NAME_000001.vtu`): it must
 /// be one plain path component.
 fn check_name(name: &str) -> Result<(), SceneError> {
-    let why = if name.is_empty() {
+    match file_name_fault(name) {
+        Some(why) => Err(SceneError::InvalidName {
+            name: name.chars().take(64).collect(),
+            why,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Why `name` cannot be the stem of a file in a chosen folder (empty, over
+/// 128 bytes, a path separator, a leading dot, a control character or
+/// `:`), or `None` when it can: one plain path component, so that nothing
+/// is written outside the folder.
+pub fn file_name_fault(name: &str) -> Option<&'static str> {
+    if name.is_empty() {
         Some("is empty")
     } else if name.len() > 128 {
         Some("is longer than 128 bytes")
@@ -995,13 +1009,6 @@ fn check_name(name: &str) -> Result<(), SceneError> {
         Some("contains a control character or `:`")
     } else {
         None
-    };
-    match why {
-        Some(why) => Err(SceneError::InvalidName {
-            name: name.chars().take(64).collect(),
-            why,
-        }),
-        None => Ok(()),
     }
 }
 

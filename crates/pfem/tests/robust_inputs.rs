@@ -165,12 +165,40 @@ fn a_used_output_folder_is_refused_unless_overwritten() {
     assert!(err.to_string().contains("not empty"), "{err}");
     assert_eq!(files(&dir, "vtu"), first, "nothing written or removed");
 
+    // Another scene's series in the same folder is not this run's to
+    // clear (session 27: overwriting removed every `.vtu` and `.pvd`).
+    std::fs::write(dir.join("other.pvd"), "theirs").unwrap();
+    std::fs::write(dir.join("other_000000.vtu"), "theirs").unwrap();
+    std::fs::write(dir.join("reuse_notes.vtu"), "not a frame").unwrap();
     let mut sim = build(puddle("reuse")).unwrap();
     let mut out = StandardOutput::new(&dir, true, vec![], true).overwrite(true);
     sim.run(&mut [&mut out]).unwrap();
-    assert_eq!(files(&dir, "vtu"), 3, "frames at 0, 0.01, 0.02 s only");
+    assert_eq!(
+        files(&dir, "vtu"),
+        3 + 2,
+        "frames at 0, 0.01, 0.02 s, and the two files not of this series"
+    );
     assert!(dir.join("notes.txt").is_file());
+    assert!(dir.join("other.pvd").is_file());
+    assert!(dir.join("other_000000.vtu").is_file());
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A probe interval of zero, below zero or NaN is refused at the start;
+/// before, the probes quietly stopped after the first step.
+#[test]
+fn a_meaningless_probe_interval_is_refused() {
+    for bad in [0.0, -1.0, f64::NAN] {
+        let dir = std::env::temp_dir().join(format!("pfem-test-probe-dt-{}", std::process::id()));
+        std::fs::remove_dir_all(&dir).ok();
+        let mut sim = build(puddle("probes")).unwrap();
+        let mut out = StandardOutput::new(&dir, false, vec![], true);
+        out.probe_interval = Some(bad);
+        let err = sim.run(&mut [&mut out]).expect_err("refused").to_string();
+        assert!(err.contains("probe_interval"), "{bad}: {err}");
+        assert_eq!(sim.steps(), 0);
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
 
 /// `pfem check` reports the particle count, memory, steps and merged

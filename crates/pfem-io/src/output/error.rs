@@ -41,6 +41,18 @@ pub enum OutputError {
         #[source]
         source: FrameError,
     },
+    /// A series name that is not one plain file-name component: it would
+    /// write outside the chosen folder, or give a collection whose frames
+    /// ParaView cannot find.
+    #[error("{dir}: the series name {name:?} {why}")]
+    InvalidName {
+        /// The output folder.
+        dir: PathBuf,
+        /// The rejected name (at most 64 characters of it).
+        name: String,
+        /// What is wrong with it.
+        why: &'static str,
+    },
     /// A CSV probe row does not have one value per column.
     #[error("{path}: row has {got} values but the header has {expected} columns")]
     RowLength {

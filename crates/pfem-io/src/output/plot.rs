@@ -176,21 +176,30 @@ fn register_font() -> Result<(), ()> {
 
 /// The range covering `values` with a 5 % margin, or `fixed`.
 fn axis_range(fixed: Option<(f64, f64)>, values: impl Iterator<Item = f64>) -> (f64, f64) {
-    if let Some((lo, hi)) = fixed.filter(|(lo, hi)| lo.is_finite() && hi.is_finite() && lo < hi) {
-        return (lo, hi);
+    // A span or margin that overflows (a range from f64::MIN to f64::MAX,
+    // values near ±1e308) would hang the plotting library's choice of tick
+    // marks: such a range falls back to the data's, then to (0, 1).
+    let usable = |(lo, hi): (f64, f64)| lo < hi && (1.1 * (hi - lo)).is_finite();
+    if let Some(r) = fixed.filter(|&r| usable(r)) {
+        return r;
     }
     let (lo, hi) = values
         .filter(|v| v.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(v), hi.max(v))
         });
-    if lo > hi {
+    let range = if lo > hi {
         (0.0, 1.0)
     } else if lo == hi {
         (lo - 0.5 * lo.abs().max(1.0), hi + 0.5 * hi.abs().max(1.0))
     } else {
         let m = 0.05 * (hi - lo);
         (lo - m, hi + m)
+    };
+    if usable(range) {
+        range
+    } else {
+        (0.0, 1.0)
     }
 }
 
@@ -272,4 +281,28 @@ fn draw(spec: &PlotSpec<'_>, rgb: &mut [u8]) -> Result<(), String> {
     }
     root.present().map_err(|e| err(&e))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A range whose span or margin overflows falls back to a finite one:
+    /// handed to the plotting library, it hung the choice of tick marks.
+    #[test]
+    fn an_overflowing_axis_range_falls_back_to_a_finite_one() {
+        let finite = |(lo, hi): (f64, f64)| lo < hi && (hi - lo).is_finite();
+        assert!(finite(axis_range(
+            Some((f64::MIN, f64::MAX)),
+            [1.0, 2.0].into_iter()
+        )));
+        let (lo, hi) = axis_range(Some((f64::MIN, f64::MAX)), [1.0, 3.0].into_iter());
+        assert!(
+            (lo - 0.9).abs() < 1e-12 && (hi - 3.1).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        assert!(finite(axis_range(None, [-1e308, 1e308].into_iter())));
+        assert!(finite(axis_range(None, [f64::MAX].into_iter())));
+        assert_eq!(axis_range(Some((0.0, 2.0)), [5.0].into_iter()), (0.0, 2.0));
+    }
 }

@@ -98,6 +98,20 @@ pub struct VtuSeries {
     pvd: PvdWriter,
 }
 
+/// Refuses a series name that is not one plain file-name component
+/// (`pfem_scene::file_name_fault`: `../x` or `/tmp/x` would write outside
+/// `dir`; `case/x` would give a collection whose frames are not found).
+fn check_series_name(dir: &std::path::Path, name: &str) -> Result<(), OutputError> {
+    match pfem_scene::file_name_fault(name) {
+        Some(why) => Err(OutputError::InvalidName {
+            dir: dir.to_path_buf(),
+            name: name.chars().take(64).collect(),
+            why,
+        }),
+        None => Ok(()),
+    }
+}
+
 impl VtuSeries {
     /// Creates `dir` (and its parents) if needed and starts an empty
     /// collection `dir/NAME.pvd`, replacing any earlier one.
@@ -107,6 +121,7 @@ impl VtuSeries {
         encoding: Encoding,
     ) -> Result<Self, OutputError> {
         let dir = dir.into();
+        check_series_name(&dir, name)?;
         std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
         let pvd = PvdWriter::create(dir.join(format!("{name}.pvd")))?;
         Ok(Self {
@@ -129,6 +144,7 @@ impl VtuSeries {
         entries: Vec<(f64, String)>,
     ) -> Result<Self, OutputError> {
         let dir = dir.into();
+        check_series_name(&dir, name)?;
         std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
         let kept = entries.len();
         if let Ok(list) = std::fs::read_dir(&dir) {
@@ -202,5 +218,37 @@ impl VtuSeries {
     /// The directory the frames are written to.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A series name that is not one plain file-name component is refused
+    /// and nothing is written: `../x` and `/tmp/x` wrote outside the
+    /// folder, `case/x` wrote a collection whose frames were not found.
+    #[test]
+    fn a_series_name_with_a_path_is_refused() {
+        let dir =
+            std::env::temp_dir().join(format!("pfem-test-series-name-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        for name in ["../escape", "/tmp/escape", "case/a20", "", ".hidden"] {
+            let err = VtuSeries::create(&dir, name, Encoding::Base64).map(|_| ());
+            assert!(
+                matches!(err, Err(OutputError::InvalidName { .. })),
+                "{name:?}: {err:?}"
+            );
+            let err = VtuSeries::resume(&dir, name, Encoding::Base64, Vec::new()).map(|_| ());
+            assert!(
+                matches!(err, Err(OutputError::InvalidName { .. })),
+                "{name:?}"
+            );
+        }
+        assert!(!dir.exists(), "nothing created");
+        assert!(!dir.parent().unwrap().join("escape.pvd").exists());
+        VtuSeries::create(&dir, "case", Encoding::Base64).unwrap();
+        assert!(dir.join("case.pvd").is_file());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -611,10 +611,13 @@ impl XmlWriter {
     }
 }
 
-/// Appends `s` to `out` with the five XML special characters escaped.
+/// Appends `s` to `out` with the five XML special characters escaped, and
+/// the control characters XML 1.0 forbids even as references (all below
+/// U+0020 but tab, line feed and carriage return) replaced by U+FFFD.
 pub(crate) fn escape_xml_into(s: &str, out: &mut String) {
     for c in s.chars() {
         match c {
+            c if c < ' ' && !matches!(c, '\t' | '\n' | '\r') => out.push('\u{FFFD}'),
             '&' => out.push_str("&amp;"),
             '<' => out.push_str("&lt;"),
             '>' => out.push_str("&gt;"),
@@ -628,6 +631,15 @@ pub(crate) fn escape_xml_into(s: &str, out: &mut String) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Control characters XML 1.0 forbids are replaced: a name holding one
+    /// made a file no XML reader opens.
+    #[test]
+    fn names_with_control_characters_stay_well_formed_xml() {
+        let mut out = String::new();
+        escape_xml_into("a\u{1}b\tc<&", &mut out);
+        assert_eq!(out, "a\u{FFFD}b\tc&lt;&amp;");
+    }
 
     #[test]
     fn rejects_out_of_range_index() {
