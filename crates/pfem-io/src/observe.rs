@@ -607,6 +607,29 @@ where
                 });
             }
         }
+        // A solid's internal variables become cell arrays by name: one named
+        // like a built-in array, or twice by one material, would give a
+        // frame two arrays of one name (ParaView shows one of them).
+        for m in sim.materials() {
+            let names = m.internal_variables();
+            for (k, name) in names.iter().enumerate() {
+                let why = if FRAME_CELL_ARRAYS.contains(name) {
+                    Some("is a built-in cell array of the frames: rename the material's internal variable")
+                } else if names[..k].contains(name) {
+                    Some("is given twice by one material's internal variables")
+                } else {
+                    None
+                };
+                if let Some(why) = why {
+                    return Err(crate::output::OutputError::InvalidName {
+                        dir: self.dir.clone(),
+                        name: name.to_string(),
+                        why,
+                    }
+                    .into());
+                }
+            }
+        }
         if let Some(r) = self.resume.take() {
             return self.start_resumed(sim, r);
         }
@@ -663,6 +686,10 @@ where
         Ok(())
     }
 }
+
+/// The cell arrays every frame writes besides the solids' internal
+/// variables.
+const FRAME_CELL_ARRAYS: [&str; 4] = ["material", "stress", "stress_zz", "contact_pressure"];
 
 /// The first multiple of `interval` after `t` (infinite without an
 /// interval). Computed, not stepped: an interval too small to move a sum

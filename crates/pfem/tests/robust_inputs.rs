@@ -184,6 +184,76 @@ fn a_used_output_folder_is_refused_unless_overwritten() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+use pfem::constitutive::{History, Hypoelastic, Kinematics, Material, MaterialKind, Unified};
+
+/// A hypoelastic solid whose internal variables have the given names.
+#[derive(Debug)]
+struct Named(Hypoelastic, &'static [&'static str]);
+
+impl Material<2> for Named {
+    fn name(&self) -> &str {
+        "named"
+    }
+    fn kind(&self) -> MaterialKind {
+        Material::<2>::kind(&self.0)
+    }
+    fn density(&self) -> f64 {
+        Material::<2>::density(&self.0)
+    }
+    fn wave_speed(&self) -> f64 {
+        Material::<2>::wave_speed(&self.0)
+    }
+    fn unified(&self, kin: &Kinematics<2>, history: &History<2>) -> Unified<2> {
+        self.0.unified(kin, history)
+    }
+    fn update_history(&self, kin: &Kinematics<2>, history: &mut History<2>) {
+        self.0.update_history(kin, history)
+    }
+    fn internal_variables(&self) -> &[&str] {
+        self.1
+    }
+}
+
+/// A solid's internal variable named like a built-in cell array of the
+/// frames, or twice by one material, is refused when the output starts;
+/// before, the frame held two arrays of one name and ParaView showed one.
+#[test]
+fn internal_variables_named_like_built_in_arrays_are_refused() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-internal-{}", std::process::id()));
+    for (names, ok) in [
+        (&["stress_zz"][..], false),
+        (&["material"][..], false),
+        (&["damage", "damage"][..], false),
+        (&["damage", "equivalent_plastic_strain"][..], true),
+    ] {
+        std::fs::remove_dir_all(&dir).ok();
+        let block = Named(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap(), names);
+        let scene = puddle("internal").solid(
+            "block",
+            Box::new(block),
+            Geometry::Box {
+                min: Point::<2>::new(0.24, 0.1),
+                max: Point::<2>::new(0.29, 0.2),
+            },
+            0.05,
+            None,
+        );
+        let mut sim = build(scene).unwrap();
+        let mut out = StandardOutput::new(&dir, true, vec![], true);
+        let run = sim.run(&mut [&mut out]);
+        match (run, ok) {
+            (Ok(_), true) => {}
+            (Err(e), false) => {
+                let e = e.to_string();
+                assert!(e.contains(names[0]), "{names:?}: {e}");
+                assert_eq!(sim.steps(), 0);
+            }
+            (r, _) => panic!("{names:?}: {r:?}"),
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// A probe interval of zero, below zero or NaN is refused at the start;
 /// before, the probes quietly stopped after the first step.
 #[test]

@@ -41,10 +41,12 @@ pub enum OutputError {
         #[source]
         source: FrameError,
     },
-    /// A series name that is not one plain file-name component: it would
-    /// write outside the chosen folder, or give a collection whose frames
-    /// ParaView cannot find.
-    #[error("{dir}: the series name {name:?} {why}")]
+    /// A name that cannot be written: a series name that is not one plain
+    /// file-name component (it would write outside the chosen folder, or
+    /// give a collection whose frames ParaView cannot find), or a
+    /// material's internal variable named like a built-in array of the
+    /// frames.
+    #[error("{dir}: the name {name:?} {why}")]
     InvalidName {
         /// The output folder.
         dir: PathBuf,
