@@ -365,12 +365,15 @@ mod tests {
             b[i] ^= 0x40;
             assert!(Checkpoint::decode(&b).is_err(), "flip {i}");
         }
-        let mut v2 = bytes.clone();
-        v2[8] = 2;
-        assert!(matches!(
-            Checkpoint::decode(&v2),
-            Err(CheckpointError::Version { found: 2, .. })
-        ));
+        // The next format, and the former one (1, before the materials).
+        for other in [FORMAT_VERSION + 1, FORMAT_VERSION - 1] {
+            let mut v = bytes.clone();
+            v[8..12].copy_from_slice(&other.to_le_bytes());
+            assert!(matches!(
+                Checkpoint::decode(&v),
+                Err(CheckpointError::Version { found, .. }) if found == other
+            ));
+        }
         assert_eq!(
             Checkpoint::decode(b"hello world, no checkpoint"),
             Err(CheckpointError::NotACheckpoint)
