@@ -55,6 +55,18 @@ fn csv_probe_is_readable_after_every_row() {
 
     let err = CsvProbe::create(dir.join("bad.csv"), &["t", "x,y"]).unwrap_err();
     assert!(matches!(err, OutputError::ColumnName { ref name, .. } if name == "x,y"));
+    // Session 27: a tab, no column at all, and a name given twice (a probe
+    // named `t`) were accepted: blank rows, or two columns of one name of
+    // which readers take the first.
+    let err = CsvProbe::create(dir.join("bad.csv"), &["t", "a\tb"]).unwrap_err();
+    assert!(matches!(err, OutputError::ColumnName { .. }), "{err}");
+    let err = CsvProbe::create(dir.join("bad.csv"), &[]).unwrap_err();
+    assert!(matches!(err, OutputError::ColumnName { .. }), "{err}");
+    let err = CsvProbe::create(dir.join("bad.csv"), &["t", "x", "t"]).unwrap_err();
+    assert!(
+        matches!(err, OutputError::DuplicateColumn { ref name, .. } if name == "t"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

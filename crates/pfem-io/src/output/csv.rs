@@ -34,17 +34,27 @@ pub struct CsvProbe {
 }
 
 impl CsvProbe {
-    /// Creates (or truncates) `path` and writes the header line. Column
-    /// names must be non-empty and free of commas, quotes and line breaks.
+    /// Creates (or truncates) `path` and writes the header line. There must
+    /// be at least one column, each named once, non-empty and free of
+    /// commas, quotes and control characters.
     pub fn create(path: impl Into<PathBuf>, columns: &[&str]) -> Result<Self, OutputError> {
         let path = path.into();
+        // The rule body and probe names follow: non-empty, no comma, quote
+        // or control character. No columns at all is a file of blank rows.
         if let Some(bad) = columns
             .iter()
-            .find(|c| c.is_empty() || c.contains([',', '"', '\n', '\r']))
+            .find(|c| !pfem_scene::is_column_name(c))
+            .or(columns.is_empty().then_some(&""))
         {
             return Err(OutputError::ColumnName {
                 path,
                 name: (*bad).to_owned(),
+            });
+        }
+        if let Some(k) = (1..columns.len()).find(|&k| columns[..k].contains(&columns[k])) {
+            return Err(OutputError::DuplicateColumn {
+                path,
+                name: columns[k].to_owned(),
             });
         }
         let mut file = std::fs::File::create(&path).map_err(|e| OutputError::io(&path, e))?;

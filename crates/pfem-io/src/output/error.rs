@@ -55,6 +55,24 @@ pub enum OutputError {
         /// What is wrong with it.
         why: &'static str,
     },
+    /// A CSV column name is given twice (a probe named `t`, two probes of
+    /// one name): readers would take the first for both.
+    #[error("{path}: the column {name:?} is given twice")]
+    DuplicateColumn {
+        /// The CSV file.
+        path: PathBuf,
+        /// The repeated name.
+        name: String,
+    },
+    /// A collection entry with a NaN or infinite time, which ParaView
+    /// cannot place.
+    #[error("{path}: the time {time} of a frame is not finite")]
+    NonFiniteTime {
+        /// The collection file.
+        path: PathBuf,
+        /// The time.
+        time: f64,
+    },
     /// A CSV probe row does not have one value per column.
     #[error("{path}: row has {got} values but the header has {expected} columns")]
     RowLength {

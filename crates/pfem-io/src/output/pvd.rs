@@ -50,6 +50,12 @@ impl PvdWriter {
     /// collection. `file` is stored as given: make it relative to the
     /// `.pvd`'s directory so that the output folder can be moved.
     pub fn push(&mut self, time: f64, file: impl AsRef<Path>) -> Result<(), OutputError> {
+        if !time.is_finite() {
+            return Err(OutputError::NonFiniteTime {
+                path: self.path.clone(),
+                time,
+            });
+        }
         // Forward slashes read on every platform ParaView runs on.
         let file = file.as_ref().to_string_lossy().replace('\\', "/");
         self.entries.push((time, file));
@@ -249,6 +255,22 @@ mod tests {
         assert!(!dir.parent().unwrap().join("escape.pvd").exists());
         VtuSeries::create(&dir, "case", Encoding::Base64).unwrap();
         assert!(dir.join("case.pvd").is_file());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A NaN or infinite time is refused: the collection wrote
+    /// `timestep="NaN"`, which ParaView cannot place.
+    #[test]
+    fn a_non_finite_time_is_refused() {
+        let dir = std::env::temp_dir().join(format!("pfem-test-pvd-time-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut pvd = PvdWriter::create(dir.join("c.pvd")).unwrap();
+        for t in [f64::NAN, f64::INFINITY] {
+            let err = pvd.push(t, "c_000000.vtu").unwrap_err();
+            assert!(matches!(err, OutputError::NonFiniteTime { .. }), "{err}");
+        }
+        assert!(pvd.entries().is_empty());
+        pvd.push(0.0, "c_000000.vtu").unwrap();
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
