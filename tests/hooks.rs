@@ -20,6 +20,25 @@ fn boxed(x0: f64, y0: f64, x1: f64, y1: f64) -> Geometry<2> {
     }
 }
 
+/// A 0.1 m square of water on a floor (h = 0.05 m), run for 0.01 s
+/// without frames: the scene of the tests that check an input is refused.
+fn small_tank(name: &str) -> Scene<2> {
+    let h = 0.05;
+    Scene::<2>::new(name)
+        .settings(RunSettings {
+            end_time: 0.01,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, 0.0, 0.1, 0.1),
+            h,
+        )
+}
+
 /// Elevation of the free surface near `x`: the highest fluid particle
 /// within half a spacing of it.
 fn elevation(sim: &Simulation<2>, x: f64, h: f64) -> f64 {
@@ -510,20 +529,7 @@ fn a_hook_stops_the_run_and_a_ramp_loads_gradually() {
 /// Unknown body names are typed errors, not zeros.
 #[test]
 fn unknown_body_names_are_errors() {
-    let h = 0.05;
-    let scene = Scene::<2>::new("names")
-        .settings(RunSettings {
-            end_time: 0.01,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
-        .fluid(
-            "water",
-            Box::new(Newtonian::water()),
-            boxed(0.0, 0.0, 0.1, 0.1),
-            h,
-        );
+    let scene = small_tank("names");
     let mut sim = sim2(scene, StepParams::default());
     assert!(matches!(
         sim.pressure_force_on("watr"),
@@ -547,21 +553,12 @@ fn unknown_body_names_are_errors() {
 /// steps failing down to the smallest time step.
 #[test]
 fn a_motion_law_giving_nan_is_an_error_naming_its_body() {
-    let h = 0.05;
-    let scene = Scene::<2>::new("nan wall")
-        .settings(RunSettings {
-            end_time: 0.01,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
-        .wall("paddle", boxed(-0.1, 0.0, -0.05, 0.2), h, WallMotion::Fixed)
-        .fluid(
-            "water",
-            Box::new(Newtonian::water()),
-            boxed(0.0, 0.0, 0.1, 0.1),
-            h,
-        );
+    let scene = small_tank("nan wall").wall(
+        "paddle",
+        boxed(-0.1, 0.0, -0.05, 0.2),
+        0.05,
+        WallMotion::Fixed,
+    );
     let mut sim = sim2(scene, StepParams::default());
     sim.add_hook(Box::new(PrescribedMotion::new(
         "paddle",
@@ -584,20 +581,7 @@ fn a_motion_law_giving_nan_is_an_error_naming_its_body() {
 /// second step and panicked.
 #[test]
 fn particle_management_every_zero_steps_is_refused() {
-    let h = 0.05;
-    let scene = Scene::<2>::new("every zero")
-        .settings(RunSettings {
-            end_time: 0.01,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
-        .fluid(
-            "water",
-            Box::new(Newtonian::water()),
-            boxed(0.0, 0.0, 0.1, 0.1),
-            h,
-        );
+    let scene = small_tank("every zero");
     let mut sim = sim2(scene, StepParams::default());
     sim.add_hook(Box::new(pfem::hooks::ParticleManagement {
         params: Default::default(),

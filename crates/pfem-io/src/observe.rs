@@ -268,12 +268,7 @@ where
             let s = n.to_string_lossy();
             // This scene's series only: another scene's frames in the same
             // folder are not the previous run's.
-            let frame = s
-                .strip_prefix(name)
-                .and_then(|r| r.strip_prefix('_'))
-                .and_then(|r| r.strip_suffix(".vtu"))
-                .is_some_and(|r| r.len() == 6 && r.bytes().all(|b| b.is_ascii_digit()));
-            let ours = frame
+            let ours = crate::output::frame_index(&s, name).is_some()
                 || s == format!("{name}.pvd")
                 || s == "probes.csv"
                 || s == "summary.json"

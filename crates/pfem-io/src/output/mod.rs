@@ -55,6 +55,7 @@ mod error;
 mod plot;
 mod progress;
 mod pvd;
+pub(crate) use pvd::frame_index;
 pub mod reference;
 mod summary;
 mod vtu;

@@ -118,6 +118,16 @@ fn check_series_name(dir: &std::path::Path, name: &str) -> Result<(), OutputErro
     }
 }
 
+/// The number `N` of a frame file `NAME_NNNNNN.vtu` of the series `name`,
+/// or `None` for any other file.
+pub(crate) fn frame_index(file: &str, name: &str) -> Option<usize> {
+    file.strip_prefix(name)
+        .and_then(|r| r.strip_prefix('_'))
+        .and_then(|r| r.strip_suffix(".vtu"))
+        .filter(|r| r.len() == 6 && r.bytes().all(|b| b.is_ascii_digit()))
+        .and_then(|r| r.parse().ok())
+}
+
 impl VtuSeries {
     /// Creates `dir` (and its parents) if needed and starts an empty
     /// collection `dir/NAME.pvd`, replacing any earlier one.
@@ -154,16 +164,10 @@ impl VtuSeries {
         std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
         let kept = entries.len();
         if let Ok(list) = std::fs::read_dir(&dir) {
-            let prefix = format!("{name}_");
             for e in list.flatten() {
                 let f = e.file_name();
                 let f = f.to_string_lossy();
-                let index = f
-                    .strip_prefix(&prefix)
-                    .and_then(|r| r.strip_suffix(".vtu"))
-                    .filter(|r| r.len() == 6)
-                    .and_then(|r| r.parse::<usize>().ok());
-                if index.is_some_and(|i| i >= kept) {
+                if frame_index(&f, name).is_some_and(|i| i >= kept) {
                     let p = e.path();
                     std::fs::remove_file(&p).map_err(|e| OutputError::io(&p, e))?;
                 }
