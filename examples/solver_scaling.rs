@@ -20,7 +20,9 @@
 //! `block-reuse` keeps the block solver's set-up across a step's Picard
 //! iterates (`BlockSolver::reuse_setup`); `amg` is the block solver with
 //! multigrid on the pressure
-//! (`PressureSolve::Multigrid`), `amg-minres` the same with MINRES
+//! (`PressureSolve::Multigrid`), `amg-fresh` the same building its
+//! pressure hierarchy anew for every pattern (`BlockSolver::carry_steps`
+//! = 0, as before session 28), `amg-minres` the same with MINRES
 //! (`Krylov::Minres`); `petsc`, with `--features petsc`, is
 //! `pfem::petsc::PetscSolver` (options in `PFEM_PETSC_OPTIONS`), and
 //! `cholmod` the whole system factored by CHOLMOD through PETSc, beside
@@ -93,6 +95,14 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
             b.pressure = pfem::assembly::PressureSolve::Multigrid;
             Box::new(b)
         }
+        // The multigrid path with a new pressure hierarchy for every
+        // pattern (`BlockSolver::carry_steps` = 0), as before session 28.
+        "amg-fresh" => {
+            let mut b = pfem::assembly::BlockSolver::default();
+            b.pressure = pfem::assembly::PressureSolve::Multigrid;
+            b.carry_steps = 0;
+            Box::new(b)
+        }
         // The stabilised multigrid path with MINRES and the block-diagonal
         // preconditioner (its Krylov method until session 20).
         "amg-minres" => {
@@ -114,7 +124,7 @@ fn solver(name: &str) -> Res<Box<dyn pfem::assembly::LinearSolver>> {
         }
         other => {
             return Err(format!(
-                "unknown solver {other} (direct, block, block-reuse, block-ldlt, amg, amg-minres; petsc, cholmod with --features petsc)"
+                "unknown solver {other} (direct, block, block-reuse, block-ldlt, amg, amg-fresh, amg-minres; petsc, cholmod with --features petsc)"
             )
             .into())
         }

@@ -92,6 +92,57 @@ fn multigrid() -> Box<dyn LinearSolver> {
     Box::new(solver)
 }
 
+/// The block solver on its multigrid path, building its pressure
+/// hierarchy anew for every pattern (`BlockSolver::carry_steps` = 0).
+fn multigrid_fresh() -> Box<dyn LinearSolver> {
+    let mut solver = BlockSolver::default();
+    solver.pressure = pfem::assembly::PressureSolve::Multigrid;
+    solver.carry_steps = 0;
+    Box::new(solver)
+}
+
+/// The pressure hierarchy carried over from step to step
+/// (`BlockSolver::carry_steps`, issue 18, session 28): every step after
+/// the first carries it, and the steps end where those with a new
+/// hierarchy every step end: the same solves, the same velocities to 10⁻⁶
+/// of the largest, and at most one GMRES iteration more per solve.
+#[test]
+fn a_carried_pressure_hierarchy_gives_the_same_steps() {
+    let (fresh, its_fresh, solves_fresh) = running_column(0.0, multigrid_fresh());
+    let (carried, its_carried, solves_carried) = running_column(0.0, multigrid());
+    let vmax = fresh
+        .particles()
+        .state()
+        .v
+        .iter()
+        .map(|v| v.norm())
+        .fold(0.0, f64::max);
+    let dv = fresh
+        .particles()
+        .state()
+        .v
+        .iter()
+        .zip(&carried.particles().state().v)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    let (wf, wc) = (fresh.work(), carried.work());
+    println!(
+        "a/14, 8 steps: new hierarchies {} set-ups, {its_fresh:.2} GMRES iterations per solve over {solves_fresh} solves; carried {} of {} set-ups, {its_carried:.2} over {solves_carried}; largest velocity difference {:.2e} of the largest velocity",
+        wf.factorizations,
+        wc.setups_carried,
+        wc.factorizations,
+        dv / vmax
+    );
+    assert_eq!(wf.setups_carried, 0);
+    assert!(wc.setups_carried >= 7, "{wc:?}");
+    assert_eq!(solves_fresh, solves_carried);
+    assert!(dv <= 1e-6 * vmax, "{dv} against {vmax}");
+    assert!(
+        its_carried <= its_fresh + 1.0,
+        "{its_carried} against {its_fresh}"
+    );
+}
+
 /// A solver wrapped for a test: it forwards everything but the last
 /// solve's `q` (`LinearSolver::saddle_increment`, left at its default,
 /// none) and, when `lazy`, stops at once whenever it is asked for less

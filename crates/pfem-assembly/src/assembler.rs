@@ -181,6 +181,48 @@ where
 /// found by multigrid-preconditioned CG from this many rows (the 3D
 /// stabilised system's `block::MULTIGRID_FROM`), by the sparse factor below.
 const INCREMENT_MULTIGRID_FROM: usize = crate::block::MULTIGRID_FROM[1];
+
+/// A multigrid hierarchy of the stabilised increments' `I + L̃` with what
+/// carrying it to the next pattern needs ([`Assembler`]'s `inc_amg`).
+struct IncrementHierarchy {
+    amg: crate::amg::Amg,
+    /// The particle of each row it was last used for.
+    ids: Vec<u32>,
+    /// Patterns it has been carried over (`u32::MAX`: no more).
+    age: u32,
+    /// CG iterations of its first solve.
+    fresh_iterations: usize,
+}
+
+impl std::fmt::Debug for IncrementHierarchy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("IncrementHierarchy")
+            .field("rows", &self.ids.len())
+            .field("age", &self.age)
+            .field("fresh_iterations", &self.fresh_iterations)
+            .finish_non_exhaustive()
+    }
+}
+
+impl IncrementHierarchy {
+    /// The hierarchy on the new matrix `il` whose rows belong to the
+    /// particles `ids` (`Amg::with_finest`), under the block solver's
+    /// rules (`BlockSolver::carry_steps`): at most
+    /// [`crate::block::CARRY_STEPS`] patterns in a row, no more than one
+    /// row in twenty new.
+    fn carry(self, il: &crate::amg::Csr, ids: &[u32]) -> Option<IncrementHierarchy> {
+        if self.age >= crate::block::CARRY_STEPS || self.ids.is_empty() {
+            return None;
+        }
+        let from = crate::block::rows_from(&self.ids, ids)?;
+        Some(IncrementHierarchy {
+            amg: self.amg.with_finest(il, &from)?,
+            ids: Vec::new(),
+            age: self.age + 1,
+            fresh_iterations: self.fresh_iterations,
+        })
+    }
+}
 /// Relative residual at which that CG stops; the sparse factor it replaces
 /// reaches about 10⁻¹⁴.
 const INCREMENT_TOLERANCE: f64 = 1e-12;
@@ -267,6 +309,10 @@ where
     /// patch), CSR over dofs; row `r` belongs to system node
     /// `c_node[r]`; node `a`'s row is `c_row[a]` (NONE without a patch).
     c_node: Vec<u32>,
+    /// The particle of each row of `C` (`particle_of[c_node[r]]`): the
+    /// rows' identities across patterns
+    /// ([`crate::solver::Stabilisation::row_ids`]).
+    c_particle: Vec<u32>,
     c_row: Vec<u32>,
     c_ptr: Vec<usize>,
     c_idx: Vec<usize>,
@@ -307,6 +353,12 @@ where
     stab_weight: Vec<f64>,
     /// The factor of `I + L̃` ([`Assembler::stabilised_pressure_increments`]).
     l_factor: crate::block::QuasiDefinite,
+    /// 3D: the multigrid hierarchy of the last `I + L̃` (CG for the
+    /// stabilised increments), carried over to the next pattern as the
+    /// block solver carries its own (`BlockSolver::carry_steps`): the
+    /// hierarchy, its rows' particles, the patterns it has been carried
+    /// over, and the most CG iterations it took when new.
+    inc_amg: Option<IncrementHierarchy>,
 }
 
 /// Work an [`Assembler`] has done.
@@ -483,6 +535,7 @@ where
                     l_idx: &self.l_idx,
                     l_val: &self.l_val,
                     offset: &self.c_offset,
+                    row_ids: Some(&self.c_particle),
                 }),
         })
     }
@@ -755,6 +808,7 @@ where
         self.patch_block_ptr.push(0);
         self.patch_blocks.clear();
         self.c_node.clear();
+        self.c_particle.clear();
         self.c_row.clear();
         self.c_ptr.clear();
         self.c_idx.clear();
@@ -769,6 +823,7 @@ where
                 }
                 self.c_row[a] = self.c_node.len() as u32;
                 self.c_node.push(a as u32);
+                self.c_particle.push(self.particle_of[a]);
                 for &i in p {
                     self.c_idx.extend((0..D).map(|k| i as usize * D + k));
                 }
@@ -1475,22 +1530,50 @@ where
         // 0.5 s per step).
         let mut solved = false;
         if D == 3 && m >= INCREMENT_MULTIGRID_FROM {
-            if let Ok(amg) = crate::amg::Amg::new(&il, None, &crate::amg::AmgOptions::default()) {
+            // The last pattern's hierarchy first, then a new one.
+            let carried = self
+                .inc_amg
+                .take()
+                .and_then(|h| h.carry(&il, &self.c_particle));
+            let fresh = || {
+                crate::amg::Amg::new(&il, None, &crate::amg::AmgOptions::default())
+                    .ok()
+                    .map(|amg| IncrementHierarchy {
+                        amg,
+                        ids: Vec::new(),
+                        age: 0,
+                        fresh_iterations: 0,
+                    })
+            };
+            let mut next = carried.or_else(fresh);
+            while let Some(mut h) = next.take() {
                 let mut x = match guess {
                     Some(g) if g.len() == m && g.iter().all(|v| v.is_finite()) => g.to_vec(),
                     _ => vec![0.0; m],
                 };
-                let (_, residual) = crate::amg::pcg(
+                let (iterations, residual) = crate::amg::pcg(
                     &il,
                     &q,
                     &mut x,
-                    &|r: &[f64], z: &mut [f64]| amg.apply(r, z),
+                    &|r: &[f64], z: &mut [f64]| h.amg.apply(r, z),
                     INCREMENT_TOLERANCE,
                     INCREMENT_MAX_ITERATIONS,
                 );
+                let carried = h.age > 0;
                 if residual <= INCREMENT_TOLERANCE * 10.0 {
                     q = x;
                     solved = true;
+                    if !carried {
+                        h.fresh_iterations = iterations;
+                    } else if iterations > (h.fresh_iterations * 3 / 2).max(h.fresh_iterations + 3)
+                    {
+                        h.age = u32::MAX;
+                    }
+                    h.ids.clear();
+                    h.ids.extend_from_slice(&self.c_particle);
+                    self.inc_amg = Some(h);
+                } else if carried {
+                    next = fresh();
                 }
             }
         }

@@ -173,6 +173,18 @@ pub struct BlockSolver {
     /// solves with the same pattern generation (the Picard iterates of a
     /// step).
     pub stabilised_reuse: bool,
+    /// The stabilised multigrid path: carry the pressure hierarchy over
+    /// to the next pattern (the next step's remeshing) for at most this
+    /// many patterns in a row (0: build anew for every pattern). A
+    /// carried hierarchy keeps the last aggregates and coarse levels, row
+    /// by row through the particles the rows belong to
+    /// ([`crate::solver::Stabilisation::row_ids`]), and takes the new
+    /// `Ŝ` on its finest level; the velocity block's Jacobi is new. It is
+    /// built anew when the rows do not name their particles, when more
+    /// than one row in twenty is new, and after a solve on it took more
+    /// than `max(1.5 n, n + 3)` iterations, `n` the most a solve took on
+    /// the hierarchy when it was new.
+    pub carry_steps: u32,
     /// The stabilised multigrid path's Krylov method.
     pub krylov: Krylov,
     /// [`Krylov::Gmres`]: the basis vectors kept before a restart (each
@@ -218,6 +230,9 @@ pub struct BlockStats {
     /// Solves handed to the direct solver because the iteration could
     /// not set up or did not converge.
     pub fallbacks: u64,
+    /// Set-ups that carried the last pattern's pressure hierarchy over
+    /// ([`BlockSolver::carry_steps`]), among [`BlockStats::setups`].
+    pub carried: u64,
     /// Wall time in set-ups (s).
     pub setup_seconds: f64,
     /// Wall time in iterations (s).
@@ -887,6 +902,14 @@ struct Setup {
     n: usize,
     m: usize,
     prec: Prec,
+    /// The stabilised multigrid path: the pressure rows' identities
+    /// ([`crate::solver::Stabilisation::row_ids`]) and the steps the
+    /// hierarchy has been carried over ([`BlockSolver::carry`]).
+    ids: Vec<u32>,
+    age: u32,
+    /// The most Krylov iterations a solve took on the hierarchy when it
+    /// was new.
+    fresh_iterations: usize,
 }
 
 impl std::fmt::Debug for Setup {
@@ -914,6 +937,7 @@ impl Default for BlockSolver {
             amg: AmgOptions::default(),
             reuse_setup: false,
             stabilised_reuse: true,
+            carry_steps: CARRY_STEPS,
             krylov: Krylov::Gmres,
             restart: 30,
             setup: None,
@@ -937,6 +961,27 @@ const NAME: &str = "block-split iterative";
 /// from 800 rows in 2D, and in 3D at 343, 1 728, 2 744 and 5 184 rows but
 /// not at 1 000). It was 100 000 and 4 000 with MINRES (session 18).
 pub const MULTIGRID_FROM: [usize; 2] = [1_000, 2_000];
+
+/// Default [`BlockSolver::carry_steps`]: on the running stabilised 3D
+/// water column (31k particles, 20 steps) a hierarchy carried over 19
+/// patterns took no more GMRES iterations than new ones
+/// (`docs/benchmarks.md`, session 28).
+pub const CARRY_STEPS: u32 = 20;
+
+/// For rows named `new` (their particles), the row of each among rows
+/// named `old` (`u32::MAX` for a particle without one), or `None` when
+/// more than one row in twenty is new: the map by which a hierarchy is
+/// carried over to a new pattern ([`BlockSolver::carry_steps`]).
+pub(crate) fn rows_from(old: &[u32], new: &[u32]) -> Option<Vec<u32>> {
+    let top = old.iter().chain(new).copied().max().unwrap_or(0) as usize + 1;
+    let mut row_of = vec![u32::MAX; top];
+    for (r, &p) in old.iter().enumerate() {
+        row_of[p as usize] = r as u32;
+    }
+    let from: Vec<u32> = new.iter().map(|&p| row_of[p as usize]).collect();
+    let missing = from.iter().filter(|&&k| k == u32::MAX).count();
+    (missing * 20 <= from.len()).then_some(from)
+}
 
 /// Default [`BlockSolver::split_from`] (unknowns): measured in
 /// `docs/benchmarks.md` (session 18).
@@ -1096,6 +1141,9 @@ impl BlockSolver {
             n: sys.a_v.nrows(),
             m: sys.c_rows(),
             prec,
+            ids: Vec::new(),
+            age: 0,
+            fresh_iterations: 0,
         })
     }
 }
@@ -1221,8 +1269,25 @@ impl BlockSolver {
                 self.work.resolves += 1;
                 s
             }
-            _ => {
-                let s = self.build(PressureSolve::Multigrid, Some((a, c, ct)), sys, generation)?;
+            old => {
+                let carried = old.and_then(|o| self.carry(o, sys, a, c, ct, generation));
+                let s = match carried {
+                    Some(s) => {
+                        self.stats.carried += 1;
+                        self.work.carried += 1;
+                        s
+                    }
+                    None => {
+                        let mut s = self.build(
+                            PressureSolve::Multigrid,
+                            Some((a, c, ct)),
+                            sys,
+                            generation,
+                        )?;
+                        s.ids = st.row_ids.map(<[u32]>::to_vec).unwrap_or_default();
+                        s
+                    }
+                };
                 self.work.factorizations += 1;
                 self.stats.setups += 1;
                 s
@@ -1308,6 +1373,14 @@ impl BlockSolver {
             }
             residual = new;
         }
+        let mut setup = setup;
+        if setup.age == 0 {
+            setup.fresh_iterations = setup.fresh_iterations.max(iterations);
+        } else if iterations > (setup.fresh_iterations * 3 / 2).max(setup.fresh_iterations + 3) {
+            // A carried hierarchy that has stopped fitting: the next
+            // pattern builds anew.
+            setup.age = u32::MAX;
+        }
         self.setup = Some(setup);
         self.blocks = blocks;
         self.finish(t1, iterations, residual, target, &y)?;
@@ -1318,6 +1391,59 @@ impl BlockSolver {
         Ok(SolveReport {
             residual,
             iterations,
+        })
+    }
+
+    /// The last step's pressure hierarchy carried over to this pattern
+    /// (`Amg::with_finest`), when the rows name their particles and most
+    /// of them had a row before: the velocity block's Jacobi and `Ŝ` are
+    /// new, the aggregates and coarse levels old.
+    fn carry(
+        &mut self,
+        old: Setup,
+        sys: &SplitSystem<'_>,
+        a: &Csr,
+        c: &Csr,
+        ct: &Csr,
+        generation: u64,
+    ) -> Option<Setup> {
+        let st = sys.stabilisation?;
+        let ids = st.row_ids?;
+        if old.age >= self.carry_steps || old.ids.is_empty() || ids.len() != c.nrows {
+            return None;
+        }
+        let Prec::Blocks { schur, velocity } = old.prec else {
+            return None;
+        };
+        if !matches!(*velocity, VelocityPrec::Jacobi(_)) || self.velocity == VelocityBlock::Amg {
+            return None;
+        }
+        let from = rows_from(&old.ids, ids)?;
+        let diag = a.diagonal();
+        if diag.iter().any(|&v| !(v > 0.0 && v.is_finite())) {
+            return None;
+        }
+        if self.velocity == VelocityBlock::Auto {
+            let off: f64 = (0..a.nrows).map(|i| off_diagonal(a, i)).sum();
+            if off > self.dominance_limit * diag.iter().sum::<f64>() {
+                return None;
+            }
+        }
+        let inv: Vec<f64> = diag.iter().map(|v| 1.0 / v).collect();
+        let l = (st.l_ptr, st.l_idx, st.l_val, 1.0);
+        let s = crate::amg::product_plus(c, Some(&inv), ct, Some(l));
+        let schur = schur.with_finest(&s, &from)?;
+        Some(Setup {
+            generation,
+            n: a.nrows,
+            m: c.nrows,
+            prec: Prec::Blocks {
+                velocity: Box::new(VelocityPrec::Jacobi(inv)),
+                schur: Box::new(schur),
+            },
+            ids: ids.to_vec(),
+            age: old.age + 1,
+            fresh_iterations: old.fresh_iterations,
         })
     }
 
@@ -2006,6 +2132,7 @@ mod tests {
                 l_idx: &l.idx,
                 l_val: &l.val,
                 offset,
+                row_ids: None,
             }),
         }
     }
@@ -2014,6 +2141,25 @@ mod tests {
     /// converted afresh: after new values on the same pattern, and after a
     /// new pattern (a new generation, and the same generation with the
     /// stabilisation added).
+    /// The map by which a hierarchy is carried over (session 28): each
+    /// new row's old row through its particle, and none when more than
+    /// one row in twenty is new.
+    #[test]
+    fn rows_are_carried_over_through_their_particles() {
+        let old = [7u32, 3, 9, 1];
+        assert_eq!(rows_from(&old, &[1, 7, 3, 9]), Some(vec![3, 0, 1, 2]));
+        let mut old: Vec<u32> = (0..40).collect();
+        let mut new: Vec<u32> = (0..40).rev().collect();
+        new[0] = 99;
+        new[1] = 98;
+        let from = rows_from(&old, &new).unwrap();
+        assert_eq!(&from[..3], &[u32::MAX, u32::MAX, 37]);
+        new[2] = 97;
+        assert_eq!(rows_from(&old, &new), None);
+        old.clear();
+        assert_eq!(rows_from(&old, &[]), Some(vec![]));
+    }
+
     #[test]
     fn kept_blocks_follow_the_values_and_the_pattern() {
         // A full symmetric `A_v` as CSC (a path graph of `n` dofs).

@@ -42,6 +42,10 @@ pub struct SolverWork {
     /// Krylov iterations summed over solves (iterative solvers; 0 for a
     /// direct one).
     pub iterations: u64,
+    /// Preconditioner set-ups that carried an earlier pattern's over
+    /// instead of building anew (among [`SolverWork::factorizations`];
+    /// `BlockSolver::carry_steps`).
+    pub carried: u64,
 }
 
 impl std::ops::Add for SolverWork {
@@ -52,6 +56,7 @@ impl std::ops::Add for SolverWork {
             factorizations: self.factorizations + o.factorizations,
             resolves: self.resolves + o.resolves,
             iterations: self.iterations + o.iterations,
+            carried: self.carried + o.carried,
         }
     }
 }
@@ -179,6 +184,10 @@ pub struct Stabilisation<'a> {
     pub l_val: &'a [f64],
     /// Offset `o`, one per row of `C`.
     pub offset: &'a [f64],
+    /// A stable identity of each row of `C` (its particle), the same
+    /// from one pattern to the next, or `None`: lets an iterative solver
+    /// carry its preconditioner across remeshings.
+    pub row_ids: Option<&'a [u32]>,
 }
 
 impl SplitSystem<'_> {

@@ -185,6 +185,10 @@ pub struct Work {
     /// Numeric factorisations (direct) or preconditioner set-ups
     /// (iterative) of the linear solver.
     pub factorizations: u64,
+    /// Preconditioner set-ups carried over from an earlier pattern
+    /// instead of built anew (among `factorizations`;
+    /// `pfem_assembly::BlockSolver::carry_steps`).
+    pub setups_carried: u64,
     /// Krylov iterations of the linear solver (0 for a direct one).
     pub solver_iterations: u64,
     /// Linear solves, rejected attempts included: factorisations or
@@ -978,6 +982,7 @@ where
             elements_assembled: a.elements_assembled,
             symbolic_analyses: s.symbolic_analyses,
             factorizations: s.factorizations,
+            setups_carried: s.carried,
             solver_iterations: s.iterations,
             linear_solves: s.factorizations + s.resolves,
         }

@@ -121,6 +121,7 @@ fn system(g: &Grid, stabilised: bool) -> SplitSystem<'_> {
             l_idx: &g.l_idx,
             l_val: &g.l_val,
             offset: &g.offset,
+            row_ids: None,
         }),
     }
 }
