@@ -646,6 +646,36 @@ impl Csr {
         product_plus(self, None, other, None)
     }
 
+    /// `self + alpha · other` (same shape), columns sorted within rows.
+    ///
+    /// # Panics
+    /// Panics if the shapes differ.
+    pub(crate) fn plus_scaled(&self, other: &Csr, alpha: f64) -> Csr {
+        assert_eq!((self.nrows, self.ncols), (other.nrows, other.ncols));
+        let mut ptr = Vec::with_capacity(self.nrows + 1);
+        let mut idx = Vec::with_capacity(self.nnz().max(other.nnz()));
+        let mut val = Vec::with_capacity(idx.capacity());
+        let mut row: Vec<(usize, f64)> = Vec::new();
+        ptr.push(0);
+        for i in 0..self.nrows {
+            row.clear();
+            let mine = self.ptr[i]..self.ptr[i + 1];
+            row.extend(mine.map(|k| (self.idx[k], self.val[k])));
+            let theirs = other.ptr[i]..other.ptr[i + 1];
+            row.extend(theirs.map(|k| (other.idx[k], alpha * other.val[k])));
+            row.sort_by_key(|e| e.0);
+            push_merged(row.iter().copied(), &mut idx, &mut val);
+            ptr.push(idx.len());
+        }
+        Csr {
+            nrows: self.nrows,
+            ncols: self.ncols,
+            ptr,
+            idx,
+            val,
+        }
+    }
+
     /// Main diagonal (length `min(nrows, ncols)`); missing entries are 0 and
     /// duplicate entries are summed.
     pub fn diagonal(&self) -> Vec<f64> {
@@ -788,6 +818,12 @@ pub struct AmgOptions {
     /// entry that `f32` cannot hold to that accuracy (beyond its normal
     /// range) keeps `f64`. The coarsest level's solve is always in `f64`.
     pub lean_levels: bool,
+    /// Keep, on every coarse level, the Galerkin image of the identity
+    /// apart from the rest (in `f64`), so that [`Amg::with_finest`] can
+    /// rescale the coarse operators for a new finest operator `I + ρ (A −
+    /// I)`. The set-up then forms a second Galerkin product per level.
+    /// Default false.
+    pub rescalable: bool,
 }
 
 impl Default for AmgOptions {
@@ -801,6 +837,7 @@ impl Default for AmgOptions {
             smoother_eig_ratio: 5.0,
             prolongator_damping: 4.0 / 3.0,
             lean_levels: true,
+            rescalable: false,
         }
     }
 }
@@ -1382,6 +1419,20 @@ enum CoarseSolver {
     Chebyshev { dinv: Vec<f64>, lmax: f64 },
 }
 
+impl CoarseSolver {
+    /// The coarsest level's solve: dense `L D Lᵀ` up to
+    /// `DENSE_COARSE_LIMIT` rows, Chebyshev above.
+    fn new(a: &Csr) -> CoarseSolver {
+        if a.nrows <= DENSE_COARSE_LIMIT {
+            CoarseSolver::Dense(DenseLdl::factor(a))
+        } else {
+            let dinv = inverse_diagonal(a);
+            let lmax = estimate_lambda_max(a, &dinv);
+            CoarseSolver::Chebyshev { dinv, lmax }
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Hierarchy
 // ---------------------------------------------------------------------------
@@ -1393,6 +1444,24 @@ struct Level {
     lmax: f64,
     p: LevelMatrix,
     r: LevelMatrix,
+    /// [`AmgOptions::rescalable`], below the finest level: `a` as the
+    /// Galerkin image `M` of the finest level's identity and the rest `L`.
+    parts: Option<Parts>,
+}
+
+#[derive(Debug)]
+/// A coarse operator `M + L` kept as its two parts (`M` the Galerkin
+/// image of the finest level's identity; [`AmgOptions::rescalable`]).
+struct Parts {
+    m: Csr,
+    l: Csr,
+}
+
+impl Parts {
+    /// `M + ρ L`.
+    fn at(&self, rho: f64) -> Csr {
+        self.m.plus_scaled(&self.l, rho)
+    }
 }
 
 /// The rows a product reads: [`Csr`] or a [`LevelMatrix`].
@@ -1533,6 +1602,10 @@ impl Work {
 pub struct Amg {
     levels: Vec<Level>,
     coarse_a: Csr,
+    /// The coarsest operator's [`Parts`] ([`AmgOptions::rescalable`]).
+    coarse_parts: Option<Parts>,
+    /// The scale `ρ` the coarse operators are at (1 when built).
+    rho: f64,
     coarse: CoarseSolver,
     degree: usize,
     ratio: f64,
@@ -1633,6 +1706,10 @@ impl Amg {
         let mut levels = Vec::new();
         let mut cur = a.clone();
         let mut cur_bs = bs;
+        // `AmgOptions::rescalable`: the identity's Galerkin image on the
+        // current level (`None` on the finest, where it is `I`).
+        let mut cur_m: Option<Csr> = None;
+        let mut cur_parts: Option<Parts> = None;
         loop {
             let nf = cur.nrows;
             if nf <= opts.max_coarse || levels.len() + 1 >= opts.max_levels {
@@ -1654,6 +1731,15 @@ impl Amg {
             let p = s.matmul(&p_tent);
             let r = p.transpose();
             let ac = r.matmul(&cur.matmul(&p));
+            let next_parts = opts.rescalable.then(|| {
+                let m = match &cur_m {
+                    None => r.matmul(&p),
+                    Some(m) => r.matmul(&m.matmul(&p)),
+                };
+                let l = ac.plus_scaled(&m, -1.0);
+                Parts { m, l }
+            });
+            cur_m = next_parts.as_ref().map(|pt| pt.m.clone());
             let next = ac;
             // One decision for `P` and `R = Pᵀ` (their values fit alike;
             // indices below `nf` fit `u32` for both), so `R` stays `Pᵀ`.
@@ -1664,22 +1750,19 @@ impl Amg {
                 lmax,
                 p: LevelMatrix::new(p, lean),
                 r: LevelMatrix::new(r, lean),
+                parts: std::mem::replace(&mut cur_parts, next_parts),
             });
             b = bc;
             cur_bs = m;
         }
-        let coarse = if cur.nrows <= DENSE_COARSE_LIMIT {
-            CoarseSolver::Dense(DenseLdl::factor(&cur))
-        } else {
-            let dinv = inverse_diagonal(&cur);
-            let lmax = estimate_lambda_max(&cur, &dinv);
-            CoarseSolver::Chebyshev { dinv, lmax }
-        };
+        let coarse = CoarseSolver::new(&cur);
         let mut work: Vec<Work> = levels.iter().map(|l| Work::new(l.a.nrows())).collect();
         work.push(Work::new(cur.nrows));
         Ok(Amg {
             levels,
             coarse_a: cur,
+            coarse_parts: cur_parts,
+            rho: 1.0,
             coarse,
             degree: opts.smoother_degree,
             ratio: opts.smoother_eig_ratio,
@@ -1699,7 +1782,13 @@ impl Amg {
     /// flow, row `i` the same particle), it saves the set-up at the price
     /// of a coarse correction that fits less well. `None` for a hierarchy
     /// of one level, or when `from` does not fit.
-    pub(crate) fn with_finest(mut self, a: &Csr, from: &[u32]) -> Option<Amg> {
+    ///
+    /// `rho`: built [`AmgOptions::rescalable`], the coarse operators are
+    /// set to `M + ρ L` (`M` the Galerkin image of the identity, `L` that
+    /// of the rest of the operator the hierarchy was built on), for a new
+    /// operator `I + ρ (A − I)`: the balance of a mass term against a
+    /// Laplacian that a change of time step moves. Otherwise ignored.
+    pub(crate) fn with_finest(mut self, a: &Csr, from: &[u32], rho: f64) -> Option<Amg> {
         if self.levels.is_empty() || from.len() != a.nrows || a.nrows != a.ncols {
             return None;
         }
@@ -1753,8 +1842,23 @@ impl Amg {
                 lmax,
                 p: LevelMatrix::new(p, lean),
                 r: LevelMatrix::new(r, lean),
+                parts: None,
             },
         );
+        if rho.is_finite() && rho > 0.0 && rho != self.rho {
+            if let Some(cp) = &self.coarse_parts {
+                for level in self.levels.iter_mut().skip(1) {
+                    let Some(parts) = &level.parts else { continue };
+                    let al = parts.at(rho);
+                    level.dinv = inverse_diagonal(&al);
+                    level.lmax = estimate_lambda_max(&al, &level.dinv);
+                    level.a = LevelMatrix::new(al, lean);
+                }
+                self.coarse_a = cp.at(rho);
+                self.coarse = CoarseSolver::new(&self.coarse_a);
+                self.rho = rho;
+            }
+        }
         self.fine_nnz = a.nnz();
         let mut work: Vec<Work> = self.levels.iter().map(|l| Work::new(l.a.nrows())).collect();
         work.push(Work::new(self.coarse_a.nrows));
@@ -2202,7 +2306,7 @@ mod tests {
         let from: Vec<u32> = (0..a.nrows as u32).collect();
         let carried = Amg::new(&a, None, &opts)
             .unwrap()
-            .with_finest(&a, &from)
+            .with_finest(&a, &from, 1.0)
             .unwrap();
         let r = lcg_vector(a.nrows, 7);
         let (mut z0, mut z1) = (vec![0.0; a.nrows], vec![0.0; a.nrows]);
@@ -2210,6 +2314,52 @@ mod tests {
         carried.apply(&r, &mut z1);
         assert_eq!(z0, z1);
         assert_eq!(first.level_sizes(), carried.level_sizes());
+    }
+
+    /// Carried to `I + ρ L` from a hierarchy built on `I + L` (the time
+    /// step of a remeshed flow changed), a hierarchy built
+    /// [`AmgOptions::rescalable`] sets its coarse levels to the new
+    /// balance and preconditions CG as a new one does (at most two
+    /// iterations more; measured: the same, 7 and 8, where the old coarse
+    /// levels take 15 and 16).
+    #[test]
+    fn a_carried_hierarchy_rescales_its_coarse_levels() {
+        let n = 64;
+        let rows = n * n;
+        // The Laplacian's weight against the identity: both matter on
+        // the coarse levels.
+        let w = 100.0;
+        let lap = jump_laplacian_plus_mass(n, 10.0, 0.0);
+        let ones: Vec<(usize, usize, f64)> = (0..rows).map(|i| (i, i, 1.0)).collect();
+        let eye = Csr::from_triplets(rows, rows, &ones);
+        let from: Vec<u32> = (0..rows as u32).collect();
+        let rhs = vec![1.0; rows];
+        let opts = AmgOptions {
+            rescalable: true,
+            ..AmgOptions::default()
+        };
+        for rho in [0.25, 4.0] {
+            let old = eye.plus_scaled(&lap, w);
+            let new = eye.plus_scaled(&lap, w * rho);
+            let fresh = solve(&new, &rhs, None, &opts);
+            let mut its = Vec::new();
+            for given in [rho, 1.0] {
+                let carried = Amg::new(&old, None, &opts)
+                    .unwrap()
+                    .with_finest(&new, &from, given)
+                    .unwrap();
+                let mut x = vec![0.0; rows];
+                let (iters, res) = pcg(&new, &rhs, &mut x, &|r, z| carried.apply(r, z), 1e-8, 500);
+                assert!(res <= 1e-8, "{res}");
+                its.push(iters);
+            }
+            println!(
+                "ρ = {rho}: rescaled {} iterations, not rescaled {}, new hierarchy {}",
+                its[0], its[1], fresh.iters
+            );
+            assert!(its[0] <= fresh.iters + 2, "{its:?} against {}", fresh.iters);
+            assert!(its[1] > its[0], "{its:?}");
+        }
     }
 
     /// A hierarchy carried to the next step's matrix (the same particles
@@ -2246,7 +2396,7 @@ mod tests {
             }
             let carried = Amg::new(&old, None, &opts)
                 .unwrap()
-                .with_finest(&b, &from)
+                .with_finest(&b, &from, 1.0)
                 .unwrap();
             let mut x = vec![0.0; rows];
             let (iters, res) = pcg(&b, &rhs, &mut x, &|r, z| carried.apply(r, z), 1e-8, 500);
@@ -2261,12 +2411,12 @@ mod tests {
         let short = vec![0u32; rows - 1];
         assert!(Amg::new(&old, None, &opts)
             .unwrap()
-            .with_finest(&b, &short)
+            .with_finest(&b, &short, 1.0)
             .is_none());
         let beyond = vec![rows as u32; rows];
         assert!(Amg::new(&old, None, &opts)
             .unwrap()
-            .with_finest(&b, &beyond)
+            .with_finest(&b, &beyond, 1.0)
             .is_none());
     }
 

@@ -192,6 +192,8 @@ struct IncrementHierarchy {
     age: u32,
     /// CG iterations of its first solve.
     fresh_iterations: usize,
+    /// [`increment_scale`] of the matrix it was built on.
+    scale: f64,
 }
 
 impl std::fmt::Debug for IncrementHierarchy {
@@ -209,19 +211,34 @@ impl IncrementHierarchy {
     /// particles `ids` (`Amg::with_finest`), under the block solver's
     /// rules (`BlockSolver::carry_steps`): at most
     /// [`crate::block::CARRY_STEPS`] patterns in a row, no more than one
-    /// row in twenty new.
+    /// row in twenty new, the scale of `L̃` within a factor 4 of the
+    /// hierarchy's (the coarse levels rescaled to it).
     fn carry(self, il: &crate::amg::Csr, ids: &[u32]) -> Option<IncrementHierarchy> {
         if self.age >= crate::block::CARRY_STEPS || self.ids.is_empty() {
             return None;
         }
+        let scale = increment_scale(il);
+        let drift = crate::block::SCALE_DRIFT;
+        if !(scale <= self.scale * drift && scale * drift >= self.scale) {
+            return None;
+        }
+        let rho = scale / self.scale;
         let from = crate::block::rows_from(&self.ids, ids)?;
         Some(IncrementHierarchy {
-            amg: self.amg.with_finest(il, &from)?,
+            amg: self.amg.with_finest(il, &from, rho)?,
             ids: Vec::new(),
             age: self.age + 1,
             fresh_iterations: self.fresh_iterations,
+            scale: self.scale,
         })
     }
+}
+
+/// The mean diagonal of `L̃` in `I + L̃`: the scale of the pressure
+/// Laplacian against the identity, which the time step sets.
+fn increment_scale(il: &crate::amg::Csr) -> f64 {
+    let sum: f64 = il.diagonal().iter().map(|d| d - 1.0).sum();
+    sum / il.nrows.max(1) as f64
 }
 /// Relative residual at which that CG stops; the sparse factor it replaces
 /// reaches about 10⁻¹⁴.
@@ -1536,13 +1553,18 @@ where
                 .take()
                 .and_then(|h| h.carry(&il, &self.c_particle));
             let fresh = || {
-                crate::amg::Amg::new(&il, None, &crate::amg::AmgOptions::default())
+                let opts = crate::amg::AmgOptions {
+                    rescalable: true,
+                    ..Default::default()
+                };
+                crate::amg::Amg::new(&il, None, &opts)
                     .ok()
                     .map(|amg| IncrementHierarchy {
                         amg,
                         ids: Vec::new(),
                         age: 0,
                         fresh_iterations: 0,
+                        scale: increment_scale(&il),
                     })
             };
             let mut next = carried.or_else(fresh);

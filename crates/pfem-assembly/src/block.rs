@@ -181,7 +181,9 @@ pub struct BlockSolver {
     /// ([`crate::solver::Stabilisation::row_ids`]), and takes the new
     /// `Ŝ` on its finest level; the velocity block's Jacobi is new. It is
     /// built anew when the rows do not name their particles, when more
-    /// than one row in twenty is new, and after a solve on it took more
+    /// than one row in twenty is new, when the mean diagonal of `Ŝ − I`
+    /// has moved by more than a factor 4 from the hierarchy's (the time
+    /// step changed; within it the coarse levels are rescaled), and after a solve on it took more
     /// than `max(1.5 n, n + 3)` iterations, `n` the most a solve took on
     /// the hierarchy when it was new.
     pub carry_steps: u32,
@@ -910,6 +912,8 @@ struct Setup {
     /// The most Krylov iterations a solve took on the hierarchy when it
     /// was new.
     fresh_iterations: usize,
+    /// [`schur_scale`] of the `Ŝ` the hierarchy was built on.
+    scale: f64,
 }
 
 impl std::fmt::Debug for Setup {
@@ -967,6 +971,35 @@ pub const MULTIGRID_FROM: [usize; 2] = [1_000, 2_000];
 /// patterns took no more GMRES iterations than new ones
 /// (`docs/benchmarks.md`, session 28).
 pub const CARRY_STEPS: u32 = 20;
+
+/// How far the scale of `Ŝ − I` may move from a carried hierarchy's
+/// before it is built anew ([`BlockSolver::carry_steps`]). Within it, the
+/// coarse levels are rescaled (`AmgOptions::rescalable`): they would
+/// otherwise keep the old balance of `I` against the pressure Laplacian,
+/// which the time step sets. On the 2D dam break's first steps the scale
+/// changed 1.25–37 times from one step to the next, and a hierarchy
+/// carried without rescaling took 13–68 GMRES iterations a solve against
+/// 4–11 for new ones; rescaled, carried across a fourfold change, 3–9
+/// against 3–8 (session 28).
+pub(crate) const SCALE_DRIFT: f64 = 4.0;
+
+/// The mean diagonal of `Ŝ − I = L̃ + C Â⁻¹ Cᵀ` (`inv` = `Â⁻¹`), without
+/// forming `Ŝ`: the scale of its pressure Laplacian against the identity.
+fn schur_scale(c: &Csr, inv: &[f64], st: &crate::solver::Stabilisation<'_>) -> f64 {
+    let m = c.nrows;
+    let mut sum = 0.0;
+    for i in 0..m {
+        for k in c.ptr[i]..c.ptr[i + 1] {
+            sum += c.val[k] * c.val[k] * inv[c.idx[k]];
+        }
+        for k in st.l_ptr[i]..st.l_ptr[i + 1] {
+            if st.l_idx[k] == i {
+                sum += st.l_val[k];
+            }
+        }
+    }
+    sum / m.max(1) as f64
+}
 
 /// For rows named `new` (their particles), the row of each among rows
 /// named `old` (`u32::MAX` for a particle without one), or `None` when
@@ -1127,6 +1160,8 @@ impl BlockSolver {
                 };
                 let opts = AmgOptions {
                     block_size: 1,
+                    rescalable: self.amg.rescalable
+                        || (self.carry_steps > 0 && sys.stabilisation.is_some()),
                     ..self.amg.clone()
                 };
                 let schur = Amg::new(&s, None, &opts).map_err(|e| amg_err("pressure", e))?;
@@ -1144,6 +1179,7 @@ impl BlockSolver {
             ids: Vec::new(),
             age: 0,
             fresh_iterations: 0,
+            scale: 0.0,
         })
     }
 }
@@ -1285,6 +1321,8 @@ impl BlockSolver {
                             generation,
                         )?;
                         s.ids = st.row_ids.map(<[u32]>::to_vec).unwrap_or_default();
+                        let inv: Vec<f64> = a.diagonal().iter().map(|v| 1.0 / v).collect();
+                        s.scale = schur_scale(c, &inv, &st);
                         s
                     }
                 };
@@ -1430,9 +1468,14 @@ impl BlockSolver {
             }
         }
         let inv: Vec<f64> = diag.iter().map(|v| 1.0 / v).collect();
+        let scale = schur_scale(c, &inv, &st);
+        if !(scale <= old.scale * SCALE_DRIFT && scale * SCALE_DRIFT >= old.scale) {
+            return None;
+        }
+        let rho = scale / old.scale;
         let l = (st.l_ptr, st.l_idx, st.l_val, 1.0);
         let s = crate::amg::product_plus(c, Some(&inv), ct, Some(l));
-        let schur = schur.with_finest(&s, &from)?;
+        let schur = schur.with_finest(&s, &from, rho)?;
         Some(Setup {
             generation,
             n: a.nrows,
@@ -1444,6 +1487,7 @@ impl BlockSolver {
             ids: ids.to_vec(),
             age: old.age + 1,
             fresh_iterations: old.fresh_iterations,
+            scale: old.scale,
         })
     }
 
