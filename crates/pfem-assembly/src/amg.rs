@@ -819,9 +819,11 @@ pub struct AmgOptions {
     /// range) keeps `f64`. The coarsest level's solve is always in `f64`.
     pub lean_levels: bool,
     /// Keep, on every coarse level, the Galerkin image of the identity
-    /// apart from the rest (in `f64`), so that [`Amg::with_finest`] can
-    /// rescale the coarse operators for a new finest operator `I + ρ (A −
-    /// I)`. The set-up then forms a second Galerkin product per level.
+    /// apart from the rest (in `f64`), so that a hierarchy carried over to
+    /// a new finest operator `I + ρ (A − I)`
+    /// ([`crate::BlockSolver::carry_steps`]) can rescale its coarse
+    /// operators. The set-up then forms a second Galerkin product per
+    /// level.
     /// Default false.
     pub rescalable: bool,
 }

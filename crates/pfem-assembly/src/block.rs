@@ -42,7 +42,9 @@
 //!   [`SplitSystem::stabilisation`]) they are gone: the iteration runs on
 //!   `[A_v Cᵀ; C −(I + L̃)]` with `Ŝ` grown by `L̃`, warm-started from the
 //!   last Picard iterate's `q` and keeping the multigrid set-up across the
-//!   iterates of a step ([`BlockSolver::stabilised_reuse`]), and its
+//!   iterates of a step ([`BlockSolver::stabilised_reuse`]) and carrying
+//!   its pressure hierarchy over to the next steps' patterns, row by row
+//!   through their particles ([`BlockSolver::carry_steps`]), and its
 //!   iterations stay nearly flat in size and in the bulk modulus
 //!   (`crates/pfem-assembly/tests/split_system.rs`). By default
 //!   ([`Krylov::Gmres`]) it is GMRES preconditioned on the right by the
@@ -243,7 +245,7 @@ pub struct BlockStats {
 
 enum VelocityPrec {
     Jacobi(Vec<f64>),
-    Amg(Amg),
+    Amg(Box<Amg>),
 }
 
 /// A symmetric quasi-definite matrix factored as `L D Lᵀ` (faer; any
@@ -1151,10 +1153,10 @@ impl BlockSolver {
                         ..self.amg.clone()
                     };
                     self.stats.velocity_amg += 1;
-                    VelocityPrec::Amg(
+                    VelocityPrec::Amg(Box::new(
                         Amg::new(a, Some((&modes, m)), &opts)
                             .map_err(|e| amg_err("velocity", e))?,
-                    )
+                    ))
                 } else {
                     VelocityPrec::Jacobi(inv)
                 };
@@ -2462,7 +2464,10 @@ mod tests {
         let (modes, k) = rigid_modes(&coords, 1);
         let amg = Amg::new(&a, Some((&modes, k)), &AmgOptions::default()).unwrap();
         let r: Vec<f64> = (0..n + m).map(|i| (i as f64 * 0.73).sin()).collect();
-        for velocity in [VelocityPrec::Jacobi(inv.clone()), VelocityPrec::Amg(amg)] {
+        for velocity in [
+            VelocityPrec::Jacobi(inv.clone()),
+            VelocityPrec::Amg(Box::new(amg)),
+        ] {
             let mut tmp = vec![0.0; n];
             let (mut z0, mut w0) = (vec![0.0; n + m], vec![0.0; n + m]);
             apply_upper(&velocity, &schur, &ct, n, &r, &mut z0, &mut tmp);
