@@ -237,6 +237,9 @@ pub struct BlockStats {
     /// Set-ups that carried the last pattern's pressure hierarchy over
     /// ([`BlockSolver::carry_steps`]), among [`BlockStats::setups`].
     pub carried: u64,
+    /// Solves on a carried hierarchy that did not converge, and were
+    /// solved again on a new one.
+    pub carry_failures: u64,
     /// Wall time in set-ups (s).
     pub setup_seconds: f64,
     /// Wall time in iterations (s).
@@ -1233,7 +1236,16 @@ impl LinearSolver for BlockSolver {
         }
         let done = if sys.stabilisation.is_some() {
             self.saddle = QuasiDefinite::default();
-            self.iterate_stabilised(sys, generation, x)
+            let carried = self.stats.carried;
+            match self.iterate_stabilised(sys, generation, x) {
+                // A carried hierarchy that failed: once more on a new one
+                // (the failure dropped it) before the direct fallback.
+                Err(SolveError::NoConvergence { .. }) if self.stats.carried > carried => {
+                    self.stats.carry_failures += 1;
+                    self.iterate_stabilised(sys, generation, x)
+                }
+                done => done,
+            }
         } else {
             self.iterate(sys, pressure, generation, x)
         };
