@@ -22,7 +22,8 @@
 //! multigrid on the pressure
 //! (`PressureSolve::Multigrid`), `amg-fresh` the same building its
 //! pressure hierarchy anew for every pattern (`BlockSolver::carry_steps`
-//! = 0, as before session 28), `amg-minres` the same with MINRES
+//! = 0, as before session 28; the 3D increments' hierarchy, in the
+//! assembler, is carried either way), `amg-minres` the same with MINRES
 //! (`Krylov::Minres`); `petsc`, with `--features petsc`, is
 //! `pfem::petsc::PetscSolver` (options in `PFEM_PETSC_OPTIONS`), and
 //! `cholmod` the whole system factored by CHOLMOD through PETSc, beside

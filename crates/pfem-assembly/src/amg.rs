@@ -1791,7 +1791,7 @@ impl Amg {
     /// operator `I + ρ (A − I)`: the balance of a mass term against a
     /// Laplacian that a change of time step moves. Otherwise ignored.
     pub(crate) fn with_finest(mut self, a: &Csr, from: &[u32], rho: f64) -> Option<Amg> {
-        if self.levels.is_empty() || from.len() != a.nrows || a.nrows != a.ncols {
+        if self.levels.is_empty() || from.len() != a.nrows || a.nrows != a.ncols || a.nrows == 0 {
             return None;
         }
         let n_old = self.levels[0].a.nrows();

@@ -330,6 +330,13 @@ where
     /// rows' identities across patterns
     /// ([`crate::solver::Stabilisation::row_ids`]).
     c_particle: Vec<u32>,
+    /// Whether `c_particle` names the same particles as the last pattern's
+    /// rows did (false on the first pattern after
+    /// [`Assembler::particles_renumbered`]).
+    ids_valid: bool,
+    /// [`Assembler::particles_renumbered`] was called since the last
+    /// [`Assembler::prepare`].
+    renumbered: bool,
     c_row: Vec<u32>,
     c_ptr: Vec<usize>,
     c_idx: Vec<usize>,
@@ -526,6 +533,18 @@ where
         }
     }
 
+    /// The particles' indices changed since the last step (particles
+    /// removed or inserted, a restored checkpoint): the next pattern's rows
+    /// name no particles ([`crate::solver::Stabilisation::row_ids`] is
+    /// `None`), so that no solver carries a preconditioner across the
+    /// renumbering, and the stabilised increments' carried hierarchy is
+    /// dropped. `pfem-driver` calls it whenever its particle set's
+    /// generation changed.
+    pub fn particles_renumbered(&mut self) {
+        self.renumbered = true;
+        self.inc_amg = None;
+    }
+
     /// Whether the pressure is stabilised (and so the assembly split).
     pub fn is_stabilised(&self) -> bool {
         self.split && self.stabilisation > 0.0
@@ -552,7 +571,7 @@ where
                     l_idx: &self.l_idx,
                     l_val: &self.l_val,
                     offset: &self.c_offset,
-                    row_ids: Some(&self.c_particle),
+                    row_ids: self.ids_valid.then_some(&self.c_particle[..]),
                 }),
         })
     }
@@ -568,6 +587,10 @@ where
         materials: &[Box<dyn Material<D>>],
     ) -> Result<(), AssemblyError> {
         self.work.prepares += 1;
+        let renumbered = std::mem::take(&mut self.renumbered);
+        if renumbered {
+            self.ids_valid = false;
+        }
         // Which elements are slivers depends on `xⁿ` (and, foreseen, on
         // `vⁿ`, `aⁿ` and `Δt`): decided again at the first assembly of
         // this attempt.
@@ -592,6 +615,7 @@ where
         // Forget the last mesh first: a failed build must not be reused.
         self.last_mesh.3 = usize::MAX;
         self.prepare_new(n_particles, mesh, materials)?;
+        self.ids_valid = !renumbered;
         self.work.patterns_built += 1;
         let last = &mut self.last_mesh;
         last.0.clear();

@@ -204,6 +204,8 @@ pub struct BlockSolver {
     /// The multigrid path's CSR blocks, kept across the solves of one
     /// pattern generation.
     blocks: Blocks,
+    /// The last stabilised multigrid solve ran on a carried hierarchy.
+    used_carried: bool,
     /// The caller's accuracy ([`LinearSolver::set_accuracy`]): the
     /// multigrid iterations stop at the looser of it and
     /// [`BlockSolver::target`] (the Cholesky path keeps its target).
@@ -953,6 +955,7 @@ impl Default for BlockSolver {
             saddle: QuasiDefinite::default(),
             last_q: (u64::MAX, Vec::new()),
             accuracy: None,
+            used_carried: false,
             blocks: Blocks::default(),
             direct: DirectSolver::default(),
             work: SolverWork::default(),
@@ -1012,11 +1015,27 @@ fn schur_scale(c: &Csr, inv: &[f64], st: &crate::solver::Stabilisation<'_>) -> f
 /// carried over to a new pattern ([`BlockSolver::carry_steps`]).
 pub(crate) fn rows_from(old: &[u32], new: &[u32]) -> Option<Vec<u32>> {
     let top = old.iter().chain(new).copied().max().unwrap_or(0) as usize + 1;
-    let mut row_of = vec![u32::MAX; top];
-    for (r, &p) in old.iter().enumerate() {
-        row_of[p as usize] = r as u32;
-    }
-    let from: Vec<u32> = new.iter().map(|&p| row_of[p as usize]).collect();
+    let from: Vec<u32> = if top <= 4 * (old.len() + new.len()) + 1024 {
+        let mut row_of = vec![u32::MAX; top];
+        for (r, &p) in old.iter().enumerate() {
+            row_of[p as usize] = r as u32;
+        }
+        new.iter().map(|&p| row_of[p as usize]).collect()
+    } else {
+        // Sparse identities: by search, not a table as large as the largest.
+        let mut sorted: Vec<(u32, u32)> = old
+            .iter()
+            .enumerate()
+            .map(|(r, &p)| (p, r as u32))
+            .collect();
+        sorted.sort_unstable();
+        new.iter()
+            .map(|&p| match sorted.binary_search_by_key(&p, |e| e.0) {
+                Ok(k) => sorted[k].1,
+                Err(_) => u32::MAX,
+            })
+            .collect()
+    };
     let missing = from.iter().filter(|&&k| k == u32::MAX).count();
     (missing * 20 <= from.len()).then_some(from)
 }
@@ -1166,7 +1185,8 @@ impl BlockSolver {
                 let opts = AmgOptions {
                     block_size: 1,
                     rescalable: self.amg.rescalable
-                        || (self.carry_steps > 0 && sys.stabilisation.is_some()),
+                        || (self.carry_steps > 0
+                            && sys.stabilisation.is_some_and(|st| st.row_ids.is_some())),
                     ..self.amg.clone()
                 };
                 let schur = Amg::new(&s, None, &opts).map_err(|e| amg_err("pressure", e))?;
@@ -1236,11 +1256,10 @@ impl LinearSolver for BlockSolver {
         }
         let done = if sys.stabilisation.is_some() {
             self.saddle = QuasiDefinite::default();
-            let carried = self.stats.carried;
             match self.iterate_stabilised(sys, generation, x) {
                 // A carried hierarchy that failed: once more on a new one
                 // (the failure dropped it) before the direct fallback.
-                Err(SolveError::NoConvergence { .. }) if self.stats.carried > carried => {
+                Err(SolveError::NoConvergence { .. }) if self.used_carried => {
                     self.stats.carry_failures += 1;
                     self.iterate_stabilised(sys, generation, x)
                 }
@@ -1345,6 +1364,7 @@ impl BlockSolver {
                 s
             }
         };
+        self.used_carried = setup.age > 0;
         let t1 = Instant::now();
         self.stats.setup_seconds += (t1 - t0).as_secs_f64();
         let Prec::Blocks { velocity, schur } = &setup.prec else {
@@ -1461,7 +1481,13 @@ impl BlockSolver {
     ) -> Option<Setup> {
         let st = sys.stabilisation?;
         let ids = st.row_ids?;
-        if old.age >= self.carry_steps || old.ids.is_empty() || ids.len() != c.nrows {
+        if old.age >= self.carry_steps
+            || old.generation == generation
+            || old.ids.is_empty()
+            || ids.len() != c.nrows
+            || crate::amg::check_structure(c.nrows, c.nrows, st.l_ptr, st.l_idx, st.l_val.len())
+                .is_err()
+        {
             return None;
         }
         let Prec::Blocks { schur, velocity } = old.prec else {
@@ -2216,6 +2242,13 @@ mod tests {
         assert_eq!(rows_from(&old, &new), None);
         old.clear();
         assert_eq!(rows_from(&old, &[]), Some(vec![]));
+        // Identities far apart (a caller's global numbers) take no table
+        // as large as the largest.
+        let far = [4_000_000_000u32, 7, 3_000_000_000];
+        assert_eq!(
+            rows_from(&far, &[3_000_000_000, 4_000_000_000, 7]),
+            Some(vec![2, 0, 1])
+        );
     }
 
     #[test]

@@ -523,3 +523,51 @@ fn multigrid_solve(asm: &Assembler<2>) -> (usize, u64) {
         .unwrap();
     (rep.iterations, block.stats().fallbacks)
 }
+
+/// The rows of `C` name their particles (`Stabilisation::row_ids`), except
+/// on the pattern after the particles were renumbered
+/// (`Assembler::particles_renumbered`, session 28): a solver must not
+/// carry a preconditioner across a renumbering, whose indices name other
+/// particles.
+#[test]
+fn rows_name_no_particles_after_a_renumbering() {
+    let t = tank(8);
+    let mut asm = assembled_with(&t, true, 1.0);
+    let ids = |asm: &Assembler<2>| {
+        asm.split_system()
+            .unwrap()
+            .stabilisation
+            .unwrap()
+            .row_ids
+            .map(<[u32]>::to_vec)
+    };
+    let first = ids(&asm).expect("rows name their particles");
+    assert!(!first.is_empty());
+    let prepare = |asm: &mut Assembler<2>, tris: &[u32]| {
+        asm.prepare(
+            t.x.len(),
+            StepMesh {
+                elements: tris,
+                element_material: &t.mat,
+                closures: &[],
+                surface_cuts: Default::default(),
+            },
+            &t.materials,
+        )
+        .unwrap();
+    };
+    // The same mesh after a renumbering: no identities.
+    asm.particles_renumbered();
+    prepare(&mut asm, &t.tris);
+    assert_eq!(ids(&asm), None);
+    // A new pattern without one: identities again (each triangle's nodes
+    // rotated, so that the mesh is new to the assembler).
+    let rotated: Vec<u32> = t.tris.chunks(3).flat_map(|c| [c[1], c[2], c[0]]).collect();
+    prepare(&mut asm, &rotated);
+    // The same particles, in the order the new mesh numbers its nodes.
+    let mut again = ids(&asm).expect("identities again");
+    let mut first = first;
+    again.sort_unstable();
+    first.sort_unstable();
+    assert_eq!(again, first);
+}

@@ -307,6 +307,10 @@ where
     near: Vec<u32>,
     /// Their coordinates.
     scratch: Vec<Point<D>>,
+    /// The particles' generation at the last step (`None`: no step yet;
+    /// `u64::MAX` after a restore): when it changes, the integrator is
+    /// told that the indices changed (`Integrator::particles_renumbered`).
+    numbering: Option<u64>,
 }
 
 /// Counters of a run.
@@ -551,6 +555,7 @@ where
                 far_walls: options.tessellate_far_walls,
                 near: Vec::new(),
                 scratch: Vec::new(),
+                numbering: None,
             },
             contact: ContactSetup {
                 material: contact_material,
@@ -895,6 +900,11 @@ where
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();
         self.run_hooks(HookPoint::BeforeSolve)?;
+        let numbering = self.particles.generation();
+        if self.stepper.numbering.is_some_and(|n| n != numbering) {
+            self.stepper.integrator.particles_renumbered();
+        }
+        self.stepper.numbering = Some(numbering);
         let (mesh, history) = self.elements.step_mesh();
         let (state, constraints) = self.particles.state_and_constraints();
         let input = StepInput {
@@ -1476,6 +1486,9 @@ where
             self.elements.keep_stash();
             Ok(())
         })();
+        // The solver's carried preconditioners name particles by index:
+        // the next step tells it the indices may have changed.
+        self.stepper.numbering = Some(u64::MAX);
         match result {
             Ok(()) => {
                 if let Some(s) = stats {

@@ -604,6 +604,12 @@ where
         &self.assembler
     }
 
+    /// The particles' indices changed since the last step
+    /// ([`Assembler::particles_renumbered`]).
+    pub fn particles_renumbered(&mut self) {
+        self.assembler.particles_renumbered();
+    }
+
     /// The linear solver's work so far ([`LinearSolver::work`]).
     pub fn solver_work(&self) -> pfem_assembly::SolverWork {
         self.solver.work()
