@@ -304,3 +304,66 @@ fn inexact_picard_iterates_give_the_same_steps_for_fewer_iterations() {
         "{its_inexact} against {its_exact}"
     );
 }
+
+/// Particles that come and go renumber the rest, and a carried pressure
+/// hierarchy names its rows by particle index: the driver tells the
+/// integrator (`Integrator::particles_renumbered`), and no hierarchy is
+/// carried onto the pattern that follows a renumbering (session 28, from
+/// a review). A stabilised dam break on the multigrid path, with
+/// particle management every 6 steps and an inflow: wherever the particle
+/// set changed between two steps, one of the two steps around it carried
+/// nothing; and hierarchies are carried elsewhere.
+#[test]
+fn no_hierarchy_is_carried_across_a_renumbering() {
+    use pfem::geometry::ParticleManagementParams;
+    use pfem::hooks::{Inflow, ParticleManagement};
+    let case = DamBreak {
+        spacing: 0.05715 / 16.0,
+        ..Default::default()
+    };
+    let h = case.spacing;
+    let params = StepParams {
+        pressure_stabilisation: 1.0,
+        ..StepParams::default()
+    };
+    let mut sim = Simulation::new(case.scene(), Box::new(Delaunay2::default()), params).unwrap();
+    sim.set_solver(multigrid());
+    sim.add_hook(Box::new(ParticleManagement::new(
+        ParticleManagementParams::default(),
+        6,
+    )));
+    sim.add_hook(Box::new(
+        Inflow::new(
+            "water",
+            Point::<2>::new(h, 0.5 * (case.width * case.aspect)),
+            Point::<2>::new(h, 0.9 * (case.width * case.aspect)),
+            Vector::<2>::new(0.5, 0.0),
+            h,
+            2.0 * h,
+        )
+        .unwrap(),
+    ));
+    let mut generation = vec![sim.particles().generation()];
+    let mut carried = vec![0u64];
+    while sim.steps() < 60 {
+        sim.step().unwrap();
+        generation.push(sim.particles().generation());
+        carried.push(sim.work().setups_carried);
+    }
+    let (mut renumberings, mut carries) = (0, 0);
+    for k in 1..generation.len() - 1 {
+        let carried_in = |k: usize| carried[k] - carried[k - 1];
+        carries += carried_in(k);
+        if generation[k] != generation[k - 1] {
+            renumberings += 1;
+            assert!(
+                carried_in(k) == 0 || carried_in(k + 1) == 0,
+                "step {k}: the particle set changed, and steps {k} and {} both carried a hierarchy",
+                k + 1
+            );
+        }
+    }
+    println!("60 steps: {renumberings} renumberings, {carries} set-ups carried");
+    assert!(renumberings >= 5, "{renumberings}");
+    assert!(carries >= 5, "{carries}");
+}
