@@ -92,6 +92,19 @@ fn multigrid() -> Box<dyn LinearSolver> {
     Box::new(solver)
 }
 
+/// The largest particle velocity difference between two runs, and the
+/// largest velocity of the first.
+fn velocity_difference(a: &Simulation<3>, b: &Simulation<3>) -> (f64, f64) {
+    let (va, vb) = (&a.particles().state().v, &b.particles().state().v);
+    let vmax = va.iter().map(|v| v.norm()).fold(0.0, f64::max);
+    let dv = va
+        .iter()
+        .zip(vb)
+        .map(|(x, y)| (x - y).norm())
+        .fold(0.0, f64::max);
+    (dv, vmax)
+}
+
 /// The block solver on its multigrid path, building its pressure
 /// hierarchy anew for every pattern (`BlockSolver::carry_steps` = 0).
 fn multigrid_fresh() -> Box<dyn LinearSolver> {
@@ -110,21 +123,7 @@ fn multigrid_fresh() -> Box<dyn LinearSolver> {
 fn a_carried_pressure_hierarchy_gives_the_same_steps() {
     let (fresh, its_fresh, solves_fresh) = running_column(0.0, multigrid_fresh());
     let (carried, its_carried, solves_carried) = running_column(0.0, multigrid());
-    let vmax = fresh
-        .particles()
-        .state()
-        .v
-        .iter()
-        .map(|v| v.norm())
-        .fold(0.0, f64::max);
-    let dv = fresh
-        .particles()
-        .state()
-        .v
-        .iter()
-        .zip(&carried.particles().state().v)
-        .map(|(a, b)| (a - b).norm())
-        .fold(0.0, f64::max);
+    let (dv, vmax) = velocity_difference(&fresh, &carried);
     let (wf, wc) = (fresh.work(), carried.work());
     println!(
         "a/14, 8 steps: new hierarchies {} set-ups, {its_fresh:.2} GMRES iterations per solve over {solves_fresh} solves; carried {} of {} set-ups, {its_carried:.2} over {solves_carried}; largest velocity difference {:.2e} of the largest velocity",
@@ -278,21 +277,7 @@ fn inexact_picard_iterates_give_the_same_steps_for_fewer_iterations() {
     let (exact, its_exact, solves_exact) = running_column(0.0, multigrid());
     let (inexact, its_inexact, solves_inexact) =
         running_column(pfem::time::PICARD_FORCING, multigrid());
-    let vmax = exact
-        .particles()
-        .state()
-        .v
-        .iter()
-        .map(|v| v.norm())
-        .fold(0.0, f64::max);
-    let dv = exact
-        .particles()
-        .state()
-        .v
-        .iter()
-        .zip(&inexact.particles().state().v)
-        .map(|(a, b)| (a - b).norm())
-        .fold(0.0, f64::max);
+    let (dv, vmax) = velocity_difference(&exact, &inexact);
     println!(
         "a/14, 4 steps: {its_exact:.1} GMRES iterations per solve over {solves_exact} solves exactly, {its_inexact:.1} over {solves_inexact} inexactly; largest velocity difference {:.2e} of the largest velocity",
         dv / vmax
@@ -315,34 +300,17 @@ fn inexact_picard_iterates_give_the_same_steps_for_fewer_iterations() {
 /// nothing; and hierarchies are carried elsewhere.
 #[test]
 fn no_hierarchy_is_carried_across_a_renumbering() {
-    use pfem::geometry::ParticleManagementParams;
-    use pfem::hooks::{Inflow, ParticleManagement};
     let case = DamBreak {
         spacing: 0.05715 / 16.0,
         ..Default::default()
     };
-    let h = case.spacing;
     let params = StepParams {
         pressure_stabilisation: 1.0,
         ..StepParams::default()
     };
     let mut sim = Simulation::new(case.scene(), Box::new(Delaunay2::default()), params).unwrap();
     sim.set_solver(multigrid());
-    sim.add_hook(Box::new(ParticleManagement::new(
-        ParticleManagementParams::default(),
-        6,
-    )));
-    sim.add_hook(Box::new(
-        Inflow::new(
-            "water",
-            Point::<2>::new(h, 0.5 * (case.width * case.aspect)),
-            Point::<2>::new(h, 0.9 * (case.width * case.aspect)),
-            Vector::<2>::new(0.5, 0.0),
-            h,
-            2.0 * h,
-        )
-        .unwrap(),
-    ));
+    crate::checkpoint::add_coming_and_going(&mut sim, &case, 6);
     let mut generation = vec![sim.particles().generation()];
     let mut carried = vec![0u64];
     while sim.steps() < 60 {

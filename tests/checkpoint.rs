@@ -53,11 +53,18 @@ fn coming_and_going() -> Simulation<2> {
         end_time: 0.06,
         ..Default::default()
     };
-    let h = case.spacing;
     let mut sim = sim2(case.scene());
+    add_coming_and_going(&mut sim, &case, 2);
+    sim
+}
+
+/// Particle management every `every` steps and an inflow into the dam
+/// break's reservoir from the left wall (also `tests/block_solver.rs`).
+pub(crate) fn add_coming_and_going(sim: &mut Simulation<2>, case: &DamBreak, every: u64) {
+    let h = case.spacing;
     sim.add_hook(Box::new(ParticleManagement::new(
         ParticleManagementParams::default(),
-        2,
+        every,
     )));
     sim.add_hook(Box::new(
         Inflow::new(
@@ -70,7 +77,6 @@ fn coming_and_going() -> Simulation<2> {
         )
         .unwrap(),
     ));
-    sim
 }
 
 /// A free elastic block sliding down a floor tilted by 35° with friction

@@ -1106,6 +1106,7 @@ impl BlockSolver {
         sys: &SplitSystem<'_>,
         generation: u64,
     ) -> Result<Setup, SolveError> {
+        let (mut ids, mut scale) = (Vec::new(), 0.0);
         let prec = match (pressure, blocks) {
             (PressureSolve::Cholesky | PressureSolve::Auto, _) => {
                 // The last set-up gives its storage and, for the same
@@ -1155,6 +1156,11 @@ impl BlockSolver {
                     None => (&none[..], &[][..], &[][..], 1.0),
                 };
                 let s = crate::amg::product_plus(c, Some(&inv), ct, Some(l));
+                // What carrying the hierarchy over needs (`carry`).
+                if let Some(st) = sys.stabilisation {
+                    ids = st.row_ids.map(<[u32]>::to_vec).unwrap_or_default();
+                    scale = schur_scale(c, &inv, &st);
+                }
                 let amg_err = |what: &str, e: crate::amg::AmgError| SolveError::Factorization {
                     solver: NAME,
                     detail: format!("{what} multigrid: {e}"),
@@ -1201,10 +1207,10 @@ impl BlockSolver {
             n: sys.a_v.nrows(),
             m: sys.c_rows(),
             prec,
-            ids: Vec::new(),
+            ids,
             age: 0,
             fresh_iterations: 0,
-            scale: 0.0,
+            scale,
         })
     }
 }
@@ -1347,16 +1353,7 @@ impl BlockSolver {
                         s
                     }
                     None => {
-                        let mut s = self.build(
-                            PressureSolve::Multigrid,
-                            Some((a, c, ct)),
-                            sys,
-                            generation,
-                        )?;
-                        s.ids = st.row_ids.map(<[u32]>::to_vec).unwrap_or_default();
-                        let inv: Vec<f64> = a.diagonal().iter().map(|v| 1.0 / v).collect();
-                        s.scale = schur_scale(c, &inv, &st);
-                        s
+                        self.build(PressureSolve::Multigrid, Some((a, c, ct)), sys, generation)?
                     }
                 };
                 self.work.factorizations += 1;
