@@ -83,10 +83,14 @@ pub(crate) fn add_coming_and_going(sim: &mut Simulation<2>, case: &DamBreak, eve
 /// 0.5: contact elements whose tangential tractions persist from step to
 /// step.
 fn sliding_block() -> Simulation<2> {
+    sim2(sliding_block_scene())
+}
+
+fn sliding_block_scene() -> Scene<2> {
     use pfem::constitutive::Hypoelastic;
     let h = 0.02;
     let th = 35f64.to_radians();
-    sim2(
+    {
         Scene::<2>::new("slide")
             .gravity(Vector::<2>::new(9.81 * th.sin(), -9.81 * th.cos()))
             .settings(RunSettings {
@@ -114,8 +118,8 @@ fn sliding_block() -> Simulation<2> {
                 h,
                 None,
             )
-            .friction("block", "floor", 0.5),
-    )
+            .friction("block", "floor", 0.5)
+    }
 }
 
 fn column3d() -> Simulation<3> {
@@ -294,6 +298,69 @@ fn a_checkpoint_of_another_material_is_refused() {
     println!("another material: {err}");
     // The same material restores.
     gate().restore(&ck).unwrap();
+}
+
+/// What the material trait does not expose is compared through the
+/// materials' responses: a contact damping or a water viscosity changed
+/// since the checkpoint (same names, densities and wave speeds) is
+/// refused; before, the run went on with the new value.
+#[test]
+fn a_checkpoint_of_another_viscosity_or_contact_law_is_refused() {
+    use pfem::constitutive::Newtonian;
+    let refused = |err: RunError| {
+        matches!(
+            err,
+            RunError::Checkpoint(CheckpointError::Mismatch {
+                what: "a material",
+                ..
+            })
+        )
+    };
+    let mut sim = sliding_block();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let mut damped = sim2(sliding_block_scene().contact_damping(123.0));
+    let err = damped.restore(&ck).unwrap_err();
+    println!("another contact law: {err}");
+    assert!(refused(err));
+    sliding_block().restore(&ck).unwrap();
+
+    let water = |mu: f64| {
+        sim2(
+            Scene::<2>::new("still")
+                .gravity(Vector::<2>::new(0.0, -9.81))
+                .settings(RunSettings {
+                    end_time: 0.01,
+                    output_interval: None,
+                    ..Default::default()
+                })
+                .wall(
+                    "floor",
+                    Geometry::Box {
+                        min: Point::<2>::new(-0.05, -0.05),
+                        max: Point::<2>::new(0.25, 0.0),
+                    },
+                    0.025,
+                    WallMotion::Fixed,
+                )
+                .fluid(
+                    "water",
+                    Box::new(Newtonian::new(1000.0, mu, 2.2e7).unwrap()),
+                    Geometry::Box {
+                        min: Point::<2>::new(0.0, 0.025),
+                        max: Point::<2>::new(0.2, 0.1),
+                    },
+                    0.025,
+                ),
+        )
+    };
+    let mut sim = water(1e-3);
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let err = water(2e-3).restore(&ck).unwrap_err();
+    println!("another viscosity: {err}");
+    assert!(refused(err));
+    water(1e-3).restore(&ck).unwrap();
 }
 
 /// Counts accepted steps and saves the count; refuses to read back a count

@@ -54,7 +54,11 @@ pub const MAGIC: &[u8; 8] = b"PFEMCKPT";
 /// Version 2 (session 27): the simulation section records each material's
 /// name, kind, density and wave speed, so that a scene whose material
 /// changed since the checkpoint is refused.
-pub const FORMAT_VERSION: u32 = 2;
+///
+/// Version 3 (session 29): and a fingerprint of each material's response
+/// to two fixed probes, so that a changed viscosity, shear modulus or
+/// contact stiffness is refused too.
+pub const FORMAT_VERSION: u32 = 3;
 
 /// The driver's section: the simulation state.
 pub const SIMULATION: &str = "simulation";

@@ -3,8 +3,8 @@
 
 use std::time::Instant;
 
-use pfem_constitutive::{Material, MaterialKind};
-use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
+use pfem_constitutive::{History, Kinematics, Material, MaterialKind};
+use pfem_core::{Const, Dim, ParticleKind, Point, Tensor, Vector};
 use pfem_geometry::{
     alpha_shape_cutting_into, near_matter, tessellate_subset, AlphaShapeParams, Tessellation,
     Tessellator,
@@ -1199,11 +1199,12 @@ where
         }
         e.u64(self.materials.len() as u64);
         for m in &self.materials {
-            let (name, kind, density, wave_speed) = material_signature(m.as_ref());
+            let (name, kind, density, wave_speed, response) = material_signature(m.as_ref());
             e.str(&name);
             e.u64(kind);
             e.f64(density);
             e.f64(wave_speed);
+            e.u64(response);
         }
         let c = &self.clock;
         e.f64(c.time);
@@ -1264,7 +1265,7 @@ where
     /// Continues from `checkpoint` ([`Simulation::checkpoint`]): this
     /// simulation must be built from the same scene with the same options
     /// (the dimension, scene and body names, materials (name, kind,
-    /// density, wave speed) and solid meshes
+    /// density, wave speed, response to two fixed probes) and solid meshes
     /// are checked; [`crate::checkpoint::CheckpointError::Mismatch`]
     /// otherwise). The hooks' [`Hook::start`] runs first on the initial
     /// state, then each hook's saved state is read back by name (a hook
@@ -1317,19 +1318,24 @@ where
                 self.materials.len().to_string(),
             ));
         }
-        // Each material's name, kind, density and wave speed: a bulk or
-        // Young's modulus changed in the scene file since the checkpoint
-        // would otherwise continue the run as another material.
+        // Each material's name, kind, density, wave speed and response: a
+        // bulk or Young's modulus, a viscosity or a contact stiffness
+        // changed in the scene file since the checkpoint would otherwise
+        // continue the run as another material.
         for m in &self.materials {
-            let saved = (d.str()?.to_string(), d.u64()?, d.f64()?, d.f64()?);
+            let saved = (d.str()?.to_string(), d.u64()?, d.f64()?, d.f64()?, d.u64()?);
             let now = material_signature(m.as_ref());
             let same = saved.0 == now.0
                 && saved.1 == now.1
                 && saved.2.to_bits() == now.2.to_bits()
-                && saved.3.to_bits() == now.3.to_bits();
+                && saved.3.to_bits() == now.3.to_bits()
+                && saved.4 == now.4;
             if !same {
-                let show = |(name, _, rho, c): &(String, u64, f64, f64)| {
-                    format!("`{name}` with density {rho} kg/m³ and wave speed {c} m/s")
+                let show = |(name, _, rho, c, r): &(String, u64, f64, f64, u64)| {
+                    format!(
+                        "`{name}` with density {rho} kg/m³, wave speed {c} m/s and response \
+                         {r:016x}"
+                    )
                 };
                 return Err(mismatch("a material", show(&saved), show(&now)));
             }
@@ -1544,7 +1550,7 @@ where
 /// What a checkpoint records of a material to recognise it: its name, kind
 /// (0 fluid, 1 solid), density and wave speed (which moves with its bulk
 /// or Young's modulus).
-fn material_signature<const D: usize>(m: &dyn Material<D>) -> (String, u64, f64, f64)
+fn material_signature<const D: usize>(m: &dyn Material<D>) -> (String, u64, f64, f64, u64)
 where
     Const<D>: Dim,
 {
@@ -1552,7 +1558,56 @@ where
         MaterialKind::Fluid => 0,
         MaterialKind::Solid => 1,
     };
-    (m.name().to_string(), kind, m.density(), m.wave_speed())
+    (
+        m.name().to_string(),
+        kind,
+        m.density(),
+        m.wave_speed(),
+        material_response(m),
+    )
+}
+
+/// A fingerprint of what a material answers ([`Material::unified`],
+/// [`Material::update_pressure`]) to two fixed probes, at rest and under
+/// a stressed shearing compression with internal variables: the parameters the trait does not
+/// expose (a viscosity, a shear modulus, a yield stress, a contact
+/// stiffness) change it, and the same material gives the same bits.
+fn material_response<const D: usize>(m: &dyn Material<D>) -> u64
+where
+    Const<D>: Dim,
+{
+    let dt = 1e-3;
+    let f = Tensor::<D>::from_fn(|i, j| {
+        if i == j {
+            1.0 - 1e-4
+        } else {
+            1e-3 * (i as f64 + 1.0)
+        }
+    });
+    let d = Tensor::<D>::from_fn(|i, j| if i == j { -0.1 } else { 0.5 });
+    let stressed = History::<D> {
+        stress: Tensor::<D>::from_fn(|i, j| if i == j { -2e4 } else { 5e3 }),
+        stress_zz: -2e4,
+        pressure: 2e4,
+        // Internal variables in (0, 1): a contact element pressed to 0.9
+        // of its gap with friction 0.5, a plastic strain…
+        internal: [0.9, 0.5, 0.6, 0.8, 0.3, 1e-3, 2e-3, 3e-3],
+    };
+    let mut bytes = Vec::new();
+    for (kin, history) in [
+        (Kinematics::<D>::at_rest(dt), History::<D>::default()),
+        (Kinematics::<D>::new(f, d, dt), stressed),
+    ] {
+        let u = m.unified(&kin, &history);
+        let values = [u.mu, u.kappa, u.sigma_hat_zz]
+            .into_iter()
+            .chain(u.sigma_hat.iter().copied())
+            .chain([m.update_pressure(history.pressure, -0.1, dt)]);
+        for v in values {
+            bytes.extend_from_slice(&v.to_bits().to_le_bytes());
+        }
+    }
+    crate::checkpoint::fingerprint(&bytes)
 }
 
 /// Replaces the accelerations `a` of the particles `members` (index, mass)

@@ -27,8 +27,9 @@ const VTK_VERTEX: u8 = 1;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Encoding {
     /// Human-readable decimal text, shortest representation that reads back
-    /// to the same `f64`. About three times larger than [`Encoding::Base64`];
-    /// VTK's ASCII reader does not accept NaN or infinities.
+    /// to the same `f64`. About three times larger than [`Encoding::Base64`].
+    /// VTK's ASCII reader does not accept NaN or infinities, so a frame
+    /// holding one is refused ([`FrameError::NonFiniteAscii`]).
     Ascii,
     /// Little-endian binary, base64-encoded inline (`format="binary"`), with
     /// a `UInt64` byte-count header per array. Exact, compact, NaN-safe.
@@ -212,6 +213,21 @@ pub enum FrameError {
         expected: usize,
         /// Entries given.
         got: usize,
+    },
+    /// A NaN or infinite value asked to be written as text: VTK's ASCII
+    /// reader stops at it, so the file would not open. Binary encoding
+    /// ([`Encoding::Base64`]) stores such values exactly.
+    #[error(
+        "{name:?} holds the non-finite value {value} at entry {entry}, which VTK's ASCII \
+         reader cannot read; write binary (base64) frames to keep it"
+    )]
+    NonFiniteAscii {
+        /// Array name (`"Points"`, `"TimeValue"` or a data array's).
+        name: String,
+        /// The entry (point or cell) holding it.
+        entry: usize,
+        /// The value.
+        value: f64,
     },
 }
 
@@ -419,8 +435,40 @@ fn validate(g: &Grid<'_>) -> Result<(), FrameError> {
     Ok(())
 }
 
+/// The first non-finite value of a floating-point array, for ASCII frames.
+fn non_finite(a: &Array<'_>) -> Option<FrameError> {
+    let Values::F64 { ncomp, get } = &a.values else {
+        return None;
+    };
+    (0..a.len).find_map(|i| {
+        (0..*ncomp)
+            .map(|k| get(i, k))
+            .find(|v| !v.is_finite())
+            .map(|value| FrameError::NonFiniteAscii {
+                name: a.name.to_owned(),
+                entry: i,
+                value,
+            })
+    })
+}
+
 fn encode_vtu_dyn(g: &Grid<'_>, encoding: Encoding) -> Result<Vec<u8>, FrameError> {
     validate(g)?;
+    if encoding == Encoding::Ascii {
+        if let Some(value) = g.time.filter(|t| !t.is_finite()) {
+            return Err(FrameError::NonFiniteAscii {
+                name: "TimeValue".into(),
+                entry: 0,
+                value,
+            });
+        }
+        let arrays = std::iter::once(&g.points)
+            .chain(&g.point_data)
+            .chain(&g.cell_data);
+        if let Some(e) = arrays.filter_map(non_finite).next() {
+            return Err(e);
+        }
+    }
     let nv = g.nodes_per_cell;
     let n_points = g.points.len;
     let n_simplices = g.cells.len() / nv;
@@ -639,6 +687,42 @@ mod tests {
         let mut out = String::new();
         escape_xml_into("a\u{1}b\tc<&", &mut out);
         assert_eq!(out, "a\u{FFFD}b\tc&lt;&amp;");
+    }
+
+    /// A NaN written as text made a file ParaView could not open; it is
+    /// refused in ASCII and kept exactly in binary.
+    #[test]
+    fn ascii_refuses_non_finite_values_binary_keeps_them() {
+        let points = [Point::<2>::zeros(); 3];
+        let p = [1.0, f64::NAN, 2.0];
+        let frame = Frame {
+            points: &points,
+            cells: &[0, 1, 2],
+            point_data: vec![Field {
+                name: "pressure".into(),
+                data: FieldData::F64(&p),
+            }],
+            ..Default::default()
+        };
+        match encode_vtu(&frame, Encoding::Ascii).unwrap_err() {
+            FrameError::NonFiniteAscii { name, entry, value } => {
+                assert_eq!((name.as_str(), entry), ("pressure", 1));
+                assert!(value.is_nan());
+            }
+            e => panic!("unexpected error {e}"),
+        }
+        assert!(encode_vtu(&frame, Encoding::Base64).is_ok());
+        let mut bad = points;
+        bad[2][1] = f64::INFINITY;
+        let frame = Frame {
+            points: &bad,
+            cells: &[0, 1, 2],
+            ..Default::default()
+        };
+        assert!(matches!(
+            encode_vtu(&frame, Encoding::Ascii),
+            Err(FrameError::NonFiniteAscii { entry: 2, .. })
+        ));
     }
 
     #[test]
