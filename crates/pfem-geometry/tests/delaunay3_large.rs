@@ -118,3 +118,29 @@ fn jittered_and_shifted_lattices() {
         assert!((vol - expect).abs() < tol, "{vol} vs {expect}");
     }
 }
+
+/// The output runs along a space-filling curve: consecutive tetrahedra are
+/// neighbours or near ones, so that a caller numbering nodes by first
+/// appearance (the assembly) numbers neighbours close together. For
+/// 20 000 random points in the unit cube (spacing `n^(-1/3)` = 0.037) the
+/// mean distance between consecutive centroids is 0.034; in slot order
+/// (before session 29) it was 0.098.
+#[test]
+fn consecutive_tetrahedra_are_close() {
+    let pts = random_points(20_000, 11);
+    let mut out = Tessellation::new(4);
+    Delaunay3::default().tessellate(&pts, &mut out).unwrap();
+    let centroid = |s: usize| {
+        out.simplex(s)
+            .iter()
+            .fold(Point::<3>::zeros(), |c, &i| c + pts[i as usize] / 4.0)
+    };
+    let n = out.len();
+    let mean = (1..n)
+        .map(|s| (centroid(s) - centroid(s - 1)).norm())
+        .sum::<f64>()
+        / (n - 1) as f64;
+    println!("{n} tetrahedra, mean step between consecutive centroids {mean:.4}");
+    let spacing = (pts.len() as f64).powf(-1.0 / 3.0);
+    assert!(mean < 1.5 * spacing, "mean step {mean}");
+}

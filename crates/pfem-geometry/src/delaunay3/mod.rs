@@ -612,22 +612,33 @@ impl Workspace {
 
     /// Writes the finite tetrahedra and their adjacency.
     fn write(&mut self, out: &mut Tessellation) {
+        // The live tetrahedra along the Hilbert curve of their first
+        // vertex on it (then by slot): slots are reused in the order of
+        // insertion, which scatters neighbours over the whole output, and
+        // a caller that numbers nodes by first appearance (the assembly)
+        // would scatter them too.
+        let (rank, keys) = (&self.rank, &self.keys);
+        let mut live: Vec<(u64, u32)> = self
+            .tets
+            .iter()
+            .enumerate()
+            .filter(|(_, Tet { v, .. })| v[0] != DEAD && v[3] != INF)
+            .map(|(t, Tet { v, .. })| {
+                let key = v.iter().map(|&i| keys[rank[i as usize] as usize]).min();
+                (key.unwrap_or(0), t as u32)
+            })
+            .collect();
+        live.sort_unstable();
         // Reuse `mark` as the slot -> output index map.
-        let mut count = 0u32;
-        for (t, Tet { v, .. }) in self.tets.iter().enumerate() {
-            if v[0] == DEAD || v[3] == INF {
-                self.mark[t] = u32::MAX;
-            } else {
-                self.mark[t] = count;
-                count += 1;
-            }
+        self.mark.iter_mut().for_each(|m| *m = u32::MAX);
+        for (k, &(_, t)) in live.iter().enumerate() {
+            self.mark[t as usize] = k as u32;
         }
-        out.simplices.reserve(4 * count as usize);
-        out.neighbors.reserve(4 * count as usize);
-        for (t, Tet { v, n }) in self.tets.iter().enumerate() {
-            if self.mark[t] == u32::MAX {
-                continue;
-            }
+        let count = live.len();
+        out.simplices.reserve(4 * count);
+        out.neighbors.reserve(4 * count);
+        for &(_, t) in &live {
+            let Tet { v, n } = &self.tets[t as usize];
             out.simplices
                 .extend(v.iter().map(|&i| self.rank[i as usize]));
             for &nb in n {
