@@ -13,6 +13,11 @@
 //! 3. the tetrahedra whose circumsphere contains the point (its *cavity*,
 //!    found by a breadth-first search from the located tetrahedron) are
 //!    replaced by the star of the point on the cavity boundary.
+//! 4. the tetrahedra are written along the Hilbert curve of their first
+//!    vertex on it, so that consecutive ones are near: a caller numbering
+//!    nodes by first appearance (the assembly) numbers neighbours close
+//!    together, which made the 3D assembly a third faster at 98k particles
+//!    (`docs/benchmarks.md`, session 29).
 //!
 //! Every in-sphere tie (cospherical points: every cube of a lattice) is
 //! broken by the symbolic perturbation of [`predicates`], so the result is
