@@ -90,36 +90,34 @@ fn sliding_block_scene() -> Scene<2> {
     use pfem::constitutive::Hypoelastic;
     let h = 0.02;
     let th = 35f64.to_radians();
-    {
-        Scene::<2>::new("slide")
-            .gravity(Vector::<2>::new(9.81 * th.sin(), -9.81 * th.cos()))
-            .settings(RunSettings {
-                end_time: 0.05,
-                max_dt: 2e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall(
-                "floor",
-                Geometry::Box {
-                    min: Point::<2>::new(-0.2, -h),
-                    max: Point::<2>::new(0.6, 0.0),
-                },
-                h,
-                WallMotion::Fixed,
-            )
-            .solid(
-                "block",
-                Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
-                Geometry::Box {
-                    min: Point::<2>::new(0.0, h),
-                    max: Point::<2>::new(0.2, h + 0.1),
-                },
-                h,
-                None,
-            )
-            .friction("block", "floor", 0.5)
-    }
+    Scene::<2>::new("slide")
+        .gravity(Vector::<2>::new(9.81 * th.sin(), -9.81 * th.cos()))
+        .settings(RunSettings {
+            end_time: 0.05,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.2, -h),
+                max: Point::<2>::new(0.6, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, h),
+                max: Point::<2>::new(0.2, h + 0.1),
+            },
+            h,
+            None,
+        )
+        .friction("block", "floor", 0.5)
 }
 
 fn column3d() -> Simulation<3> {

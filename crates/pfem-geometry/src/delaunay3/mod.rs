@@ -159,6 +159,9 @@ struct Workspace {
     input: Vec<[f64; 3]>,
     /// Hilbert keys (scratch of the ordering).
     keys: Vec<u64>,
+    /// The live tetrahedra by output order: (key, slot) (scratch of
+    /// `write`).
+    live: Vec<(u64, u32)>,
     /// Tetrahedron slots: vertices and neighbours together, one memory
     /// access per tetrahedron.
     tets: Vec<Tet>,
@@ -622,18 +625,20 @@ impl Workspace {
         // insertion, which scatters neighbours over the whole output, and
         // a caller that numbers nodes by first appearance (the assembly)
         // would scatter them too.
-        let (rank, keys) = (&self.rank, &self.keys);
-        let mut live: Vec<(u64, u32)> = self
-            .tets
-            .iter()
-            .enumerate()
-            .filter(|(_, Tet { v, .. })| v[0] != DEAD && v[3] != INF)
-            .map(|(t, Tet { v, .. })| {
-                let key = v.iter().map(|&i| keys[rank[i as usize] as usize]).min();
-                (key.unwrap_or(0), t as u32)
-            })
-            .collect();
+        let (rank, keys, live) = (&self.rank, &self.keys, &mut self.live);
+        live.clear();
+        live.extend(
+            self.tets
+                .iter()
+                .enumerate()
+                .filter(|(_, Tet { v, .. })| v[0] != DEAD && v[3] != INF)
+                .map(|(t, Tet { v, .. })| {
+                    let key = v.iter().map(|&i| keys[rank[i as usize] as usize]).min();
+                    (key.unwrap_or(0), t as u32)
+                }),
+        );
         live.sort_unstable();
+        let live = &self.live;
         // Reuse `mark` as the slot -> output index map.
         self.mark.iter_mut().for_each(|m| *m = u32::MAX);
         for (k, &(_, t)) in live.iter().enumerate() {
@@ -642,7 +647,7 @@ impl Workspace {
         let count = live.len();
         out.simplices.reserve(4 * count);
         out.neighbors.reserve(4 * count);
-        for &(_, t) in &live {
+        for &(_, t) in live {
             let Tet { v, n } = &self.tets[t as usize];
             out.simplices
                 .extend(v.iter().map(|&i| self.rank[i as usize]));
