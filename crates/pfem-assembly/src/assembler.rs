@@ -353,6 +353,10 @@ where
     /// quality at the step's predicted end is below `sliver_quality`
     /// ([`Assembler::set_sliver_prediction`]).
     sliver_prediction: bool,
+    /// A sliver kept in shape whose quality at `tⁿ` is at least this
+    /// carries the pressure stabilisation on that shape; `None`: no sliver
+    /// does ([`Assembler::set_sliver_stabilisation`]).
+    sliver_stabilised_from: Option<f64>,
     /// Per element: integrated on its geometry at `tⁿ`, decided at the
     /// step's first assembly (`prepare`, `set_sliver_quality` and
     /// `set_sliver_prediction` clear it), and then its signed measure and `V grad W` at the iterate,
@@ -482,6 +486,39 @@ where
         }
     }
 
+    /// Which slivers kept in shape ([`Assembler::set_sliver_quality`])
+    /// carry the pressure stabilisation
+    /// ([`Assembler::set_pressure_stabilisation`]): with `Some(q)`, those
+    /// whose quality at `tⁿ` is at least `q`, on their shape at `tⁿ`
+    /// (where they are integrated; the term still vanishes for a linear
+    /// pressure); the flatter ones carry none, nor does any with `None`
+    /// (the default). A sliver foreseen to flatten within the step
+    /// ([`Assembler::set_sliver_prediction`]) is often of fair shape at
+    /// `tⁿ`; left without the term, the regions a violent flow deforms
+    /// lose it, and the pressure multigrid with them: on the stabilised
+    /// 3D water column at a/20 after its impact on the wall, GMRES took
+    /// 22–38 iterations a solve with none carrying it, 10–12 with `0.02`
+    /// (`docs/benchmarks.md`, session 30). `pfem_time::StepParams::sliver_stabilised_3d`
+    /// sets it in 3D. A `q` that is not a number is `None`. Takes effect
+    /// at the next [`Assembler::assemble`].
+    pub fn set_sliver_stabilisation(&mut self, q: Option<f64>) {
+        self.sliver_stabilised_from = q.filter(|q| !q.is_nan());
+    }
+
+    /// Whether the sliver kept in shape `e` carries the pressure
+    /// stabilisation ([`Assembler::set_sliver_stabilisation`]).
+    fn sliver_stabilised(&self, e: usize, input: &AssemblyInput<'_, D>) -> bool {
+        let Some(q) = self.sliver_stabilised_from else {
+            return false;
+        };
+        let nv = <Const<D> as Dim>::NV;
+        let mut xn = [Point::<D>::zeros(); MAX_NV];
+        for (a, x) in xn.iter_mut().enumerate().take(nv) {
+            *x = input.x_n[self.particle_of[self.elem_sys[e * nv + a] as usize] as usize];
+        }
+        crate::kernels::shape_quality::<D>(&xn[..nv]) >= q
+    }
+
     /// Whether element `e` was integrated on its geometry at `tⁿ` in the
     /// last assembly ([`Assembler::set_sliver_quality`]).
     pub fn is_frozen(&self, e: usize) -> bool {
@@ -511,7 +548,8 @@ where
     /// projection of `grad pⁿ`, so that the term vanishes for a pressure
     /// linear in space (hydrostatics) and the scheme stays consistent (an
     /// orthogonal-subscale, time-lagged projection). A sliver kept in
-    /// shape ([`Assembler::set_sliver_quality`]) is left out of `L` and `π`:
+    /// shape ([`Assembler::set_sliver_quality`]) is left out of `L` and `π`
+    /// unless [`Assembler::set_sliver_stabilisation`] keeps it:
     /// on a nearly flat tetrahedron `∫ ∇W_a·∇W_b` grows as the inverse of
     /// its height with couplings of the wrong sign, which stalled the
     /// pressure multigrid of a running 3D flow. The system is then
@@ -1381,15 +1419,19 @@ where
                 if vol <= 0.0 {
                     return None;
                 }
-                // A sliver kept in shape (deviation 13) carries none: on a
-                // nearly flat tetrahedron `τ V ∇W_a·∇W_b` grows as the
-                // inverse of its height, with couplings of the wrong sign
-                // (positive off-diagonals up to 2.6 times the diagonal in
-                // the running 3D column), which stalled the pressure
-                // multigrid (43–50 CG iterations on `Ŝ + L̃` against 10).
-                // Left out of `L`, of `π` and of the offset alike, the term
-                // still vanishes for a linear pressure.
-                if self.frozen.get(e).copied().unwrap_or(false) {
+                // A sliver kept in shape (deviation 13) whose shape at `tⁿ`
+                // is flat carries none: on a nearly flat tetrahedron
+                // `τ V ∇W_a·∇W_b` grows as the inverse of its height, with
+                // couplings of the wrong sign (positive off-diagonals up to
+                // 2.6 times the diagonal in the running 3D column), which
+                // stalled the pressure multigrid (43–50 CG iterations on
+                // `Ŝ + L̃` against 10). Left out of `L`, of `π` and of the
+                // offset alike, the term still vanishes for a linear
+                // pressure. One of fair shape at `tⁿ` (foreseen to flatten,
+                // or just below the sliver quality) carries it on that
+                // shape ([`Assembler::set_sliver_stabilisation`]).
+                if self.frozen.get(e).copied().unwrap_or(false) && !self.sliver_stabilised(e, input)
+                {
                     return None;
                 }
                 let mat = &input.materials[self.elem_material[e] as usize];

@@ -79,11 +79,28 @@ fn assemble_mesh<const D: usize>(
 where
     Const<D>: Dim,
 {
+    assemble_configured(mesh, x, q, predict, v_n, |_| {})
+}
+
+/// [`assemble_mesh`] with the assembler further set by `configure`
+/// before its first `prepare`.
+fn assemble_configured<const D: usize>(
+    mesh: &Mesh<'_, D>,
+    x: &[Point<D>],
+    q: f64,
+    predict: bool,
+    v_n: &[Vector<D>],
+    configure: impl Fn(&mut Assembler<D>),
+) -> (Assembler<D>, Result<(), AssemblyError>)
+where
+    Const<D>: Dim,
+{
     let n = mesh.xn.len();
     let dt = 1e-3;
     let mut asm = Assembler::<D>::new(VolumetricTreatment::NodalAveraged);
     asm.set_sliver_quality(q);
     asm.set_sliver_prediction(predict);
+    configure(&mut asm);
     asm.prepare(
         n,
         StepMesh {
@@ -201,6 +218,69 @@ fn a_tetrahedron_foreseen_flat_keeps_its_start_shape() {
     // Nothing moving at tⁿ: the prediction adds nothing.
     let (asm, _) = assemble_moving(&start(), 0.06, true, &[Vector::<3>::zeros(); 6]);
     assert!(asm.is_frozen(0) && !asm.is_frozen(1) && !asm.is_frozen(2));
+}
+
+/// A sliver kept in shape carries the pressure stabilisation on its
+/// shape at `tⁿ` when that shape is fair
+/// (`Assembler::set_sliver_stabilisation`, issue 18, session 30): with
+/// `Some(0.02)` tetrahedron 2, foreseen flat but of quality above 0.1 at
+/// `tⁿ`, does; the sliver 0, flat at `tⁿ` (quality 0.005), never does; with
+/// `None` neither does. Tetrahedron 1, which follows the iterate, carries
+/// it either way.
+#[test]
+fn a_sliver_of_fair_start_shape_carries_the_stabilisation() {
+    use std::collections::HashMap;
+    let dt = 1e-3;
+    let mut v_n = vec![Vector::<3>::zeros(); 6];
+    v_n[5].z = -1.0 / dt;
+    // The first iterate, at the start: node 5's nodal measure (tetrahedron
+    // 2's alone) is positive, so its row of `L̃` can be.
+    let x = start();
+    let materials: Vec<Box<dyn Material<3>>> = vec![Box::new(Newtonian::water())];
+    let xn = start();
+    let mesh = Mesh {
+        xn: &xn,
+        elements: &TETS,
+        element_material: &[0, 0, 0],
+        materials: &materials,
+    };
+    // The entries of `L̃`, by the particles of their row and column.
+    let couplings = |from: Option<f64>| -> HashMap<(u32, u32), f64> {
+        let (asm, r) = assemble_configured(&mesh, &x, 0.06, true, &v_n, |a| {
+            a.set_split(true);
+            a.set_pressure_stabilisation(1.0);
+            a.set_sliver_stabilisation(from);
+        });
+        r.unwrap();
+        assert!(asm.is_frozen(0) && !asm.is_frozen(1) && asm.is_frozen(2));
+        let sys = asm.split_system().unwrap();
+        let st = sys.stabilisation.unwrap();
+        let ids = st.row_ids.unwrap();
+        let mut out = HashMap::new();
+        for i in 0..ids.len() {
+            for k in st.l_ptr[i]..st.l_ptr[i + 1] {
+                out.insert((ids[i], ids[st.l_idx[k]]), st.l_val[k]);
+            }
+        }
+        out
+    };
+    let none = couplings(None);
+    let fair = couplings(Some(0.02));
+    let at = |m: &HashMap<(u32, u32), f64>, a, b| m.get(&(a, b)).copied().unwrap_or(0.0);
+    // Node 5 belongs to tetrahedron 2 alone.
+    for b in 0..6 {
+        assert_eq!(at(&none, 5, b), 0.0, "(5, {b}) without");
+    }
+    assert!(at(&fair, 5, 5) > 0.0, "(5, 5) with: {}", at(&fair, 5, 5));
+    assert!(at(&fair, 1, 5) != 0.0);
+    // The edge 0-2 belongs to the sliver 0 alone.
+    assert_eq!(at(&none, 0, 2), 0.0);
+    assert_eq!(at(&fair, 0, 2), 0.0);
+    // Node 4 belongs to tetrahedron 1 alone.
+    let (a, b) = (at(&none, 4, 4), at(&fair, 4, 4));
+    assert!(a > 0.0 && (a - b).abs() <= 1e-12 * a, "{a} against {b}");
+    // A threshold above its quality at `tⁿ` leaves tetrahedron 2 out again.
+    assert_eq!(at(&couplings(Some(0.45)), 5, 5), 0.0);
 }
 
 /// Two triangles on the edge 1-2: triangle 0 (0, 1, 2) well shaped,

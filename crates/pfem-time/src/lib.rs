@@ -264,6 +264,15 @@ pub struct StepParams {
     /// back mid-run and its error against Martin & Moyce grows from
     /// 3.85 % to 11.57 % (`docs/benchmarks.md`, session 19).
     pub sliver_quality_2d: f64,
+    /// A 3D sliver kept in shape whose quality at the start of the step is
+    /// at least this carries the pressure stabilisation
+    /// ([`StepParams::pressure_stabilisation`]) on that shape; flatter
+    /// ones carry none, as every sliver did until session 30
+    /// (`pfem_assembly::Assembler::set_sliver_stabilisation`; a value at
+    /// or above [`StepParams::sliver_quality_3d`] leaves out all but the
+    /// slivers foreseen ([`StepParams::sliver_prediction`]) of fair shape
+    /// at `tⁿ`). Default [`SLIVER_STABILISED_3D`]. 2D slivers carry none.
+    pub sliver_stabilised_3d: f64,
     /// Slivers foreseen (deviation 13): also treat as a sliver a fluid
     /// element whose quality at the step's predicted end
     /// (`xⁿ + Δt vⁿ + ½ Δt² aⁿ`) is below [`StepParams::sliver_quality_3d`]
@@ -314,6 +323,13 @@ pub struct StepParams {
 /// between 10⁻³ and 0.06 at the start of the step (median 4·10⁻³).
 pub const SLIVER_QUALITY_3D: f64 = 0.06;
 
+/// Default [`StepParams::sliver_stabilised_3d`]: on the stabilised 3D
+/// water column at a/20, from its impact on the far wall (0.30–0.32 s),
+/// GMRES took 22–38 iterations a solve with no sliver carrying the
+/// stabilisation, 10–12 with 0.01 or 0.02, 14–18 with 0.04 and 12–13 with
+/// every sliver carrying it (`docs/benchmarks.md`, session 30).
+pub const SLIVER_STABILISED_3D: f64 = 0.02;
+
 /// The threshold to opt in with for [`StepParams::sliver_quality_2d`]
 /// (default off): with the prediction on, the
 /// 2D dam break's rejected attempts (0.4 s) were 4, 4, 2, 1 and 2 for
@@ -340,6 +356,7 @@ impl Default for StepParams {
             pressure_stabilisation: 0.0,
             sliver_quality_3d: SLIVER_QUALITY_3D,
             sliver_quality_2d: 0.0,
+            sliver_stabilised_3d: SLIVER_STABILISED_3D,
             sliver_prediction: true,
             predict_first_iterate: false,
             picard_forcing: PICARD_FORCING,
@@ -400,6 +417,13 @@ impl StepParams {
         }
         if !(0.0..1.0).contains(&self.sliver_quality_2d) {
             return out("sliver_quality_2d", self.sliver_quality_2d, "[0, 1)");
+        }
+        if !(0.0..0.5).contains(&self.sliver_stabilised_3d) {
+            return out(
+                "sliver_stabilised_3d",
+                self.sliver_stabilised_3d,
+                "[0, 0.5)",
+            );
         }
         Ok(())
     }
@@ -749,6 +773,8 @@ where
         });
         self.assembler
             .set_sliver_prediction(self.params.sliver_prediction);
+        self.assembler
+            .set_sliver_stabilisation((D == 3).then_some(self.params.sliver_stabilised_3d));
     }
 
     /// One attempt of a step of size `dt` (§6). Leaves `state` and

@@ -152,6 +152,13 @@ impl Args {
             p.sliver_quality_3d = q;
         }
         if let Some(q) = self.bounded(
+            "sliver-stabilised-3d",
+            |q| (0.0..0.5).contains(&q),
+            "a number in [0, 0.5)",
+        )? {
+            p.sliver_stabilised_3d = q;
+        }
+        if let Some(q) = self.bounded(
             "sliver-quality-2d",
             |q| (0.0..1.0).contains(&q),
             "a number in [0, 1)",
@@ -334,7 +341,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --picard-forcing --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-quality-2d --sliver-prediction --first-iterate --far-walls{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --picard-forcing --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-stabilised-3d --sliver-quality-2d --sliver-prediction --first-iterate --far-walls{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -345,7 +352,7 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 17] = [
+const COMMON: [&str; 18] = [
     "scheme",
     "picard-tol",
     "picard-stop",
@@ -359,6 +366,7 @@ const COMMON: [&str; 17] = [
     "max-dt",
     "min-quality-3d",
     "sliver-quality-3d",
+    "sliver-stabilised-3d",
     "sliver-quality-2d",
     "sliver-prediction",
     "first-iterate",
@@ -390,6 +398,9 @@ Options common to the bundled examples and `pfem run`:
   --max-dt S            largest time step (s; default: the scene's)
   --min-quality-3d Q    3D quality floor of fluid tetrahedra, in [0, 0.5) (default 1e-3)
   --sliver-quality-3d Q fluid tetrahedra below this quality keep their start-of-step shape, in [0, 0.5) (default 0.06; 0: off)
+  --sliver-stabilised-3d Q
+                        those of quality at least Q at the step's start carry the pressure
+                        stabilisation there, in [0, 0.5) (default 0.02)
   --sliver-quality-2d Q the same for 2D triangles, in [0, 1) (default 0: off; 0.05 measured)
   --sliver-prediction on|off  also those whose predicted end-of-step quality is below it (default on)
   --first-iterate start|predicted
@@ -526,6 +537,13 @@ mod tests {
         assert!(q2.reject_unknown(&[]).is_ok());
         assert_eq!(q2.step_params().unwrap().sliver_quality_2d, 0.1);
         assert!(args(&["--sliver-quality-2d", "1.2"]).step_params().is_err());
+        assert_eq!(
+            a.step_params().unwrap().sliver_stabilised_3d,
+            pfem_time::SLIVER_STABILISED_3D
+        );
+        let s3 = args(&["--sliver-stabilised-3d", "0.04"]);
+        assert!(s3.reject_unknown(&[]).is_ok());
+        assert_eq!(s3.step_params().unwrap().sliver_stabilised_3d, 0.04);
         assert_eq!(a.step_params().unwrap().sliver_quality_2d, 0.0);
         assert!(!a.step_params().unwrap().predict_first_iterate);
         let fi = args(&["--first-iterate", "predicted"]);
@@ -553,6 +571,8 @@ mod tests {
             &["--min-quality-3d", "-0.1"],
             &["--sliver-quality-3d", "0.5"],
             &["--sliver-quality-3d", "-1"],
+            &["--sliver-stabilised-3d", "0.5"],
+            &["--sliver-stabilised-3d", "nan"],
             &["--picard-stop", "never"],
         ] {
             let a = args(bad);
