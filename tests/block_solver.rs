@@ -67,12 +67,14 @@ fn an_inexact_iterate_does_not_end_the_picard_loop() {
 
 /// The stabilised system of a running 3D flow by multigrid (issue 18,
 /// session 21): a sliver kept in shape (ARCHITECTURE.md deviation 13)
-/// carries no pressure stabilisation, whose Laplacian on a nearly flat
-/// tetrahedron couples its nodes with the wrong sign and stalled the
-/// pressure multigrid. On the water column at a/14 (2 744 pressure rows,
-/// past `MULTIGRID_FROM`), four steps after four from rest, GMRES took
-/// 37.6 iterations per solve with the slivers' stabilisation and takes
-/// 9.2 without it.
+/// that is flat at `tⁿ` carries no pressure stabilisation, whose
+/// Laplacian on a nearly flat tetrahedron couples its nodes with the
+/// wrong sign and stalled the pressure multigrid. On the water column at
+/// a/14 (2 744 pressure rows, past `MULTIGRID_FROM`), four steps after
+/// four from rest, GMRES took 37.6 iterations per solve with every
+/// sliver's stabilisation and 9.2 with none (session 21); 10.2 since
+/// session 30, where the slivers of fair shape at `tⁿ` carry it
+/// (`StepParams::sliver_stabilised_3d`).
 #[test]
 fn multigrid_stays_fast_on_the_stabilised_running_3d_column() {
     // Every iterate solved to the solver's own target, as measured.
