@@ -363,6 +363,9 @@ where
     /// which its volumetric terms use.
     frozen: Vec<bool>,
     frozen_w: Vec<(f64, [Vector<D>; MAX_NV])>,
+    /// Per element, decided with `frozen`: kept in shape and carrying no
+    /// pressure stabilisation ([`Assembler::set_sliver_stabilisation`]).
+    frozen_bare: Vec<bool>,
     /// Per particle: a node of a solid element of the mesh
     /// ([`Assembler::is_solid_particle`]).
     in_solid: Vec<bool>,
@@ -502,21 +505,11 @@ where
     /// sets it in 3D. A `q` that is not a number is `None`. Takes effect
     /// at the next [`Assembler::assemble`].
     pub fn set_sliver_stabilisation(&mut self, q: Option<f64>) {
-        self.sliver_stabilised_from = q.filter(|q| !q.is_nan());
-    }
-
-    /// Whether the sliver kept in shape `e` carries the pressure
-    /// stabilisation ([`Assembler::set_sliver_stabilisation`]).
-    fn sliver_stabilised(&self, e: usize, input: &AssemblyInput<'_, D>) -> bool {
-        let Some(q) = self.sliver_stabilised_from else {
-            return false;
-        };
-        let nv = <Const<D> as Dim>::NV;
-        let mut xn = [Point::<D>::zeros(); MAX_NV];
-        for (a, x) in xn.iter_mut().enumerate().take(nv) {
-            *x = input.x_n[self.particle_of[self.elem_sys[e * nv + a] as usize] as usize];
+        let q = q.filter(|q| !q.is_nan());
+        if q != self.sliver_stabilised_from {
+            self.sliver_stabilised_from = q;
+            self.frozen.clear();
         }
-        crate::kernels::shape_quality::<D>(&xn[..nv]) >= q
     }
 
     /// Whether element `e` was integrated on its geometry at `tⁿ` in the
@@ -991,7 +984,10 @@ where
         frozen.resize(ne, false);
         let mut frozen_w = std::mem::take(&mut self.frozen_w);
         frozen_w.resize(ne, (0.0, [Vector::<D>::zeros(); MAX_NV]));
+        let mut frozen_bare = std::mem::take(&mut self.frozen_bare);
+        frozen_bare.resize(ne, false);
         let (elem_fluid, sliver_quality) = (&self.elem_fluid, self.sliver_quality);
+        let stabilised_from = self.sliver_stabilised_from;
         let predict = self.sliver_prediction;
         // 2D: an element touching a particle of a solid element is never
         // kept in shape, so that a film of water between two bodies can be
@@ -1001,9 +997,14 @@ where
         let bad = states
             .par_iter_mut()
             .zip(unified.par_iter_mut())
-            .zip(frozen.par_iter_mut().zip(frozen_w.par_iter_mut()))
+            .zip(
+                frozen
+                    .par_iter_mut()
+                    .zip(frozen_w.par_iter_mut())
+                    .zip(frozen_bare.par_iter_mut()),
+            )
             .enumerate()
-            .map(|(e, ((st, un), (fr, fw)))| {
+            .map(|(e, ((st, un), ((fr, fw), bare)))| {
                 let mut x = [Point::<D>::zeros(); MAX_NV];
                 let mut xn = [Point::<D>::zeros(); MAX_NV];
                 let mut v = [Vector::<D>::zeros(); MAX_NV];
@@ -1016,10 +1017,16 @@ where
                     v[a] = input.v[p];
                 }
                 if decide {
-                    *fr = sliver_quality > 0.0
-                        && elem_fluid[e]
-                        && !touches_solid(&parts[..nv])
-                        && (crate::kernels::shape_quality::<D>(&xn[..nv]) < sliver_quality
+                    let candidate =
+                        sliver_quality > 0.0 && elem_fluid[e] && !touches_solid(&parts[..nv]);
+                    // Its quality at `tⁿ` (only a candidate's is needed).
+                    let qn = if candidate {
+                        crate::kernels::shape_quality::<D>(&xn[..nv])
+                    } else {
+                        f64::INFINITY
+                    };
+                    *fr = candidate
+                        && (qn < sliver_quality
                             || (predict && {
                                 // The constant-acceleration prediction of
                                 // the step's end (deviation 13).
@@ -1029,6 +1036,8 @@ where
                                 }
                                 crate::kernels::shape_quality::<D>(&xp[..nv]) < sliver_quality
                             }));
+                    // Flat at `tⁿ`, it carries no pressure stabilisation.
+                    *bare = *fr && stabilised_from.is_none_or(|q| qn < q);
                 }
                 if *fr {
                     // Its volumetric terms at the iterate (finite through
@@ -1065,6 +1074,7 @@ where
         self.unified = unified;
         self.frozen = frozen;
         self.frozen_w = frozen_w;
+        self.frozen_bare = frozen_bare;
         // The cut parts at `xⁿ`, once per step (`prepare` clears them):
         // material within the step (the affine map of each element keeps
         // shares and barycentric centroids).
@@ -1430,8 +1440,7 @@ where
                 // pressure. One of fair shape at `tⁿ` (foreseen to flatten,
                 // or just below the sliver quality) carries it on that
                 // shape ([`Assembler::set_sliver_stabilisation`]).
-                if self.frozen.get(e).copied().unwrap_or(false) && !self.sliver_stabilised(e, input)
-                {
+                if self.frozen_bare.get(e).copied().unwrap_or(false) {
                     return None;
                 }
                 let mat = &input.materials[self.elem_material[e] as usize];
