@@ -341,6 +341,32 @@ pub(crate) type Addend<'a> = (&'a [usize], &'a [usize], &'a [f64], f64);
 /// # Panics
 /// Panics if `A.ncols != B.nrows`, or `s` or `extra` do not fit.
 pub(crate) fn product_plus(a: &Csr, s: Option<&[f64]>, b: &Csr, extra: Option<Addend<'_>>) -> Csr {
+    let mut out = Csr::default();
+    product_plus_into(a, s, b, extra, &mut out, &mut ProductScratch::default());
+    out
+}
+
+/// What [`product_plus_into`] keeps from one call to the next: each
+/// chunk's rows before they are joined.
+#[derive(Debug, Default)]
+pub(crate) struct ProductScratch {
+    parts: Vec<(Vec<usize>, Vec<usize>, Vec<f64>)>,
+}
+
+/// [`product_plus`] into `out`, whose arrays it reuses, as it reuses the
+/// chunks' arrays in `scratch`: a caller forming a product of about the
+/// same size every step (the block solver's `Ŝ`) then writes into memory
+/// it already holds instead of fresh pages, each zeroed by the system on
+/// first touch (session 31: at 257k pressure rows in 3D, most of the
+/// product's time). The result is the same, bit for bit.
+pub(crate) fn product_plus_into(
+    a: &Csr,
+    s: Option<&[f64]>,
+    b: &Csr,
+    extra: Option<Addend<'_>>,
+    out: &mut Csr,
+    scratch: &mut ProductScratch,
+) {
     assert_eq!(a.ncols, b.nrows, "matmul: inner dimensions differ");
     if let Some(s) = s {
         assert_eq!(s.len(), a.ncols, "product_plus: scale length");
@@ -357,16 +383,20 @@ pub(crate) fn product_plus(a: &Csr, s: Option<&[f64]>, b: &Csr, extra: Option<Ad
     };
     let chunk = nrows.div_ceil(nchunks).max(1);
     let starts: Vec<usize> = (0..nrows).step_by(chunk).collect();
-    let parts: Vec<(Vec<usize>, Vec<usize>, Vec<f64>)> = starts
+    let parts = &mut scratch.parts;
+    parts.resize_with(starts.len(), Default::default);
+    parts.truncate(starts.len());
+    starts
         .par_iter()
-        .map(|&r0| {
+        .zip(parts.par_iter_mut())
+        .for_each(|(&r0, (lens, idx, val))| {
             let r1 = (r0 + chunk).min(nrows);
             let mut marker = vec![usize::MAX; ncols];
             let mut acc = vec![0.0f64; ncols];
             let mut cols: Vec<usize> = Vec::new();
-            let mut lens = Vec::with_capacity(r1 - r0);
-            let mut idx = Vec::new();
-            let mut val = Vec::new();
+            lens.clear();
+            idx.clear();
+            val.clear();
             for i in r0..r1 {
                 cols.clear();
                 let mut touch = |j: usize, cols: &mut Vec<usize>, acc: &mut [f64]| {
@@ -404,29 +434,39 @@ pub(crate) fn product_plus(a: &Csr, s: Option<&[f64]>, b: &Csr, extra: Option<Ad
                 }
                 lens.push(cols.len());
             }
-            (lens, idx, val)
-        })
-        .collect();
-    let total: usize = parts.iter().map(|p| p.1.len()).sum();
-    let mut ptr = Vec::with_capacity(nrows + 1);
-    let mut idx = Vec::with_capacity(total);
-    let mut val = Vec::with_capacity(total);
-    ptr.push(0);
-    for (lens, pidx, pval) in parts {
-        for l in lens {
-            let last = ptr[ptr.len() - 1];
-            ptr.push(last + l);
+        });
+    out.nrows = nrows;
+    out.ncols = ncols;
+    out.ptr.clear();
+    out.ptr.push(0);
+    for (lens, ..) in parts.iter() {
+        for &l in lens {
+            let last = out.ptr[out.ptr.len() - 1];
+            out.ptr.push(last + l);
         }
-        idx.extend_from_slice(&pidx);
-        val.extend_from_slice(&pval);
     }
-    Csr {
-        nrows,
-        ncols,
-        ptr,
-        idx,
-        val,
+    let total = out.ptr[nrows];
+    out.idx.clear();
+    out.idx.resize(total, 0);
+    out.val.clear();
+    out.val.resize(total, 0.0);
+    // Each chunk's rows into their place, in parallel.
+    let mut pieces = Vec::with_capacity(parts.len());
+    let (mut idx_rest, mut val_rest) = (&mut out.idx[..], &mut out.val[..]);
+    for (_, pidx, _) in parts.iter() {
+        let (i0, i1) = std::mem::take(&mut idx_rest).split_at_mut(pidx.len());
+        let (v0, v1) = std::mem::take(&mut val_rest).split_at_mut(pidx.len());
+        pieces.push((i0, v0));
+        idx_rest = i1;
+        val_rest = v1;
     }
+    pieces
+        .into_par_iter()
+        .zip(parts.par_iter())
+        .for_each(|((i0, v0), (_, pidx, pval))| {
+            i0.copy_from_slice(pidx);
+            v0.copy_from_slice(pval);
+        });
 }
 
 /// The structure of the transpose of a compressed matrix of `rows` rows
@@ -439,27 +479,135 @@ pub(crate) fn transpose_structure(
     range: impl Fn(usize) -> std::ops::Range<usize>,
     idx: &[usize],
 ) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
-    let mut count = vec![0usize; cols + 1];
+    let (mut ptr, mut out, mut from) = (Vec::new(), Vec::new(), Vec::new());
+    transpose_structure_into(rows, cols, range, idx, &mut ptr, &mut out, &mut from);
+    (ptr, out, from)
+}
+
+/// [`transpose_structure`] into the caller's vectors, whose allocations
+/// it reuses: a caller that transposes a new pattern of about the same
+/// size every step then writes into memory it already holds, instead of
+/// the fresh pages (each zeroed by the system on first touch) that new
+/// vectors of a few hundred megabytes would be.
+pub(crate) fn transpose_structure_into(
+    rows: usize,
+    cols: usize,
+    range: impl Fn(usize) -> std::ops::Range<usize>,
+    idx: &[usize],
+    ptr: &mut Vec<usize>,
+    out: &mut Vec<usize>,
+    from: &mut Vec<usize>,
+) {
+    ptr.clear();
+    ptr.resize(cols + 1, 0);
     for i in 0..rows {
         for k in range(i) {
-            count[idx[k] + 1] += 1;
+            ptr[idx[k] + 1] += 1;
         }
     }
     for j in 0..cols {
-        count[j + 1] += count[j];
+        ptr[j + 1] += ptr[j];
     }
-    let mut next = count.clone();
-    let total = count[cols];
-    let (mut out, mut from) = (vec![0usize; total], vec![0usize; total]);
+    let total = ptr[cols];
+    out.clear();
+    out.resize(total, 0);
+    from.clear();
+    from.resize(total, 0);
+    // `ptr[j]` serves as the next free slot of row `j`, then is shifted
+    // back by one row.
     for i in 0..rows {
         for k in range(i) {
             let j = idx[k];
-            out[next[j]] = i;
-            from[next[j]] = k;
-            next[j] += 1;
+            out[ptr[j]] = i;
+            from[ptr[j]] = k;
+            ptr[j] += 1;
         }
     }
-    (count, out, from)
+    for j in (1..=cols).rev() {
+        ptr[j] = ptr[j - 1];
+    }
+    ptr[0] = 0;
+}
+
+/// Rows of `(ptr, idx, val)` picked by `src` (`u32::MAX`: an empty row),
+/// written into `out_*`, whose allocations are reused.
+fn gather_rows<I: Copy, V: Copy>(
+    ptr: &[usize],
+    idx: &[I],
+    val: &[V],
+    src: &[u32],
+    out_ptr: &mut Vec<usize>,
+    out_idx: &mut Vec<I>,
+    out_val: &mut Vec<V>,
+) {
+    out_ptr.clear();
+    out_idx.clear();
+    out_val.clear();
+    out_ptr.push(0);
+    for &k in src {
+        if k != u32::MAX {
+            let range = ptr[k as usize]..ptr[k as usize + 1];
+            out_idx.extend_from_slice(&idx[range.clone()]);
+            out_val.extend_from_slice(&val[range]);
+        }
+        out_ptr.push(out_idx.len());
+    }
+}
+
+/// A column index as kept by a level's matrix.
+trait ColumnIndex: Copy + Default {
+    fn to_usize(self) -> usize;
+    fn from_usize(i: usize) -> Self;
+}
+
+impl ColumnIndex for u32 {
+    fn to_usize(self) -> usize {
+        self as usize
+    }
+    fn from_usize(i: usize) -> Self {
+        i as u32
+    }
+}
+
+/// The transpose of the compressed matrix `(ptr, idx, val)` of `ncols`
+/// columns, by a counting sort (columns sorted within each row), written
+/// into `out_*`, whose allocations are reused.
+fn transpose_into<I: ColumnIndex, V: Copy + Default>(
+    ncols: usize,
+    ptr: &[usize],
+    idx: &[I],
+    val: &[V],
+    out_ptr: &mut Vec<usize>,
+    out_idx: &mut Vec<I>,
+    out_val: &mut Vec<V>,
+) {
+    let nrows = ptr.len() - 1;
+    out_ptr.clear();
+    out_ptr.resize(ncols + 1, 0);
+    for &j in idx {
+        out_ptr[j.to_usize() + 1] += 1;
+    }
+    for j in 0..ncols {
+        out_ptr[j + 1] += out_ptr[j];
+    }
+    let total = out_ptr[ncols];
+    out_idx.clear();
+    out_idx.resize(total, I::default());
+    out_val.clear();
+    out_val.resize(total, V::default());
+    for i in 0..nrows {
+        for k in ptr[i]..ptr[i + 1] {
+            let j = idx[k].to_usize();
+            let slot = out_ptr[j];
+            out_idx[slot] = I::from_usize(i);
+            out_val[slot] = val[k];
+            out_ptr[j] += 1;
+        }
+    }
+    for j in (1..=ncols).rev() {
+        out_ptr[j] = out_ptr[j - 1];
+    }
+    out_ptr[0] = 0;
 }
 
 impl Default for Csr {
@@ -1496,19 +1644,65 @@ impl LevelMatrix {
     /// `a` as the cycle keeps it: lean when asked and every entry fits
     /// (`f32`'s normal range, or zero; column indices below `u32::MAX`).
     fn new(a: Csr, lean: bool) -> LevelMatrix {
-        let fits = |v: f64| {
-            let w = v as f32;
-            v == 0.0 || (w.is_finite() && w.abs() >= f32::MIN_POSITIVE)
-        };
-        if !lean || a.ncols >= u32::MAX as usize || !a.val.iter().all(|&v| fits(v)) {
+        if !Self::can_be_lean(&a, lean) {
             return LevelMatrix::Full(a);
         }
         LevelMatrix::Lean {
             nrows: a.nrows,
-            idx: a.idx.iter().map(|&j| j as u32).collect(),
-            val: a.val.iter().map(|&v| v as f32).collect(),
+            idx: a.idx.par_iter().map(|&j| j as u32).collect(),
+            val: a.val.par_iter().map(|&v| v as f32).collect(),
             ptr: a.ptr,
         }
+    }
+
+    /// [`LevelMatrix::new`] of a copy of `a`: a lean matrix is converted
+    /// from `a` itself, without the whole `f64` copy first.
+    fn of(a: &Csr, lean: bool) -> LevelMatrix {
+        if !Self::can_be_lean(a, lean) {
+            return LevelMatrix::Full(a.clone());
+        }
+        LevelMatrix::Lean {
+            nrows: a.nrows,
+            idx: a.idx.par_iter().map(|&j| j as u32).collect(),
+            val: a.val.par_iter().map(|&v| v as f32).collect(),
+            ptr: a.ptr.clone(),
+        }
+    }
+
+    /// [`LevelMatrix::of`], written into the arrays of a lean matrix no
+    /// longer needed (a carried hierarchy's former finest operator).
+    fn refill(
+        a: &Csr,
+        lean: bool,
+        mut ptr: Vec<usize>,
+        mut idx: Vec<u32>,
+        mut val: Vec<f32>,
+    ) -> LevelMatrix {
+        if !Self::can_be_lean(a, lean) {
+            return LevelMatrix::Full(a.clone());
+        }
+        ptr.clear();
+        ptr.extend_from_slice(&a.ptr);
+        idx.clear();
+        idx.par_extend(a.idx.par_iter().map(|&j| j as u32));
+        val.clear();
+        val.par_extend(a.val.par_iter().map(|&v| v as f32));
+        LevelMatrix::Lean {
+            nrows: a.nrows,
+            ptr,
+            idx,
+            val,
+        }
+    }
+
+    /// Whether `a` is kept lean: asked for, and every entry within `f32`'s
+    /// normal range and every column index within `u32`.
+    fn can_be_lean(a: &Csr, lean: bool) -> bool {
+        let fits = |v: f64| {
+            let w = v as f32;
+            v == 0.0 || (w.is_finite() && w.abs() >= f32::MIN_POSITIVE)
+        };
+        lean && a.ncols < u32::MAX as usize && a.val.par_iter().all(|&v| fits(v))
     }
 
     /// The matrix as [`Csr`] of `ncols` columns (`f32` values widen
@@ -1800,50 +1994,90 @@ impl Amg {
         }
         let old = self.levels.remove(0);
         let lean = matches!(old.a, LevelMatrix::Lean { .. });
-        let p_old = old.p.to_csr(match self.levels.first() {
+        let ncoarse = match self.levels.first() {
             Some(l) => l.a.nrows(),
             None => self.coarse_a.nrows,
-        });
-        let mut ptr = Vec::with_capacity(a.nrows + 1);
-        let mut idx = Vec::with_capacity(p_old.nnz());
-        let mut val = Vec::with_capacity(p_old.nnz());
-        ptr.push(0);
-        for (i, &k) in from.iter().enumerate() {
-            // A row it has not seen interpolates as its strongest seen
-            // neighbour does.
-            let k = if k != u32::MAX {
-                k
-            } else {
+        };
+        // The old prolongator row each new row takes: its own particle's,
+        // or, for a row it has not seen, its strongest seen neighbour's.
+        let src: Vec<u32> = from
+            .iter()
+            .enumerate()
+            .map(|(i, &k)| {
+                if k != u32::MAX {
+                    return k;
+                }
                 (a.ptr[i]..a.ptr[i + 1])
                     .filter(|&q| a.idx[q] != i && from[a.idx[q]] != u32::MAX)
                     .max_by(|&q1, &q2| a.val[q1].abs().total_cmp(&a.val[q2].abs()))
                     .map_or(u32::MAX, |q| from[a.idx[q]])
-            };
-            if k != u32::MAX {
-                let range = p_old.ptr[k as usize]..p_old.ptr[k as usize + 1];
-                idx.extend_from_slice(&p_old.idx[range.clone()]);
-                val.extend_from_slice(&p_old.val[range]);
+            })
+            .collect();
+        let (p, r) = match (old.p, old.r) {
+            // Lean levels, the default: the new prolongator's rows are the
+            // old one's, copied as they are kept, into the old restriction's
+            // arrays; the new restriction, its transpose, into the old
+            // prolongator's. No array is allocated anew.
+            (
+                LevelMatrix::Lean {
+                    ptr: pp,
+                    idx: pi,
+                    val: pv,
+                    ..
+                },
+                LevelMatrix::Lean {
+                    ptr: mut rp,
+                    idx: mut ri,
+                    val: mut rv,
+                    ..
+                },
+            ) => {
+                gather_rows(&pp, &pi, &pv, &src, &mut rp, &mut ri, &mut rv);
+                let (mut tp, mut ti, mut tv) = (pp, pi, pv);
+                transpose_into(ncoarse, &rp, &ri, &rv, &mut tp, &mut ti, &mut tv);
+                (
+                    LevelMatrix::Lean {
+                        nrows: a.nrows,
+                        ptr: rp,
+                        idx: ri,
+                        val: rv,
+                    },
+                    LevelMatrix::Lean {
+                        nrows: ncoarse,
+                        ptr: tp,
+                        idx: ti,
+                        val: tv,
+                    },
+                )
             }
-            ptr.push(idx.len());
-        }
-        let p = Csr {
-            nrows: a.nrows,
-            ncols: p_old.ncols,
-            ptr,
-            idx,
-            val,
+            (p_old, _) => {
+                let p_old = p_old.to_csr(ncoarse);
+                let mut p = Csr {
+                    nrows: a.nrows,
+                    ncols: ncoarse,
+                    ..Csr::default()
+                };
+                gather_rows(
+                    &p_old.ptr, &p_old.idx, &p_old.val, &src, &mut p.ptr, &mut p.idx, &mut p.val,
+                );
+                let r = p.transpose();
+                (LevelMatrix::new(p, lean), LevelMatrix::new(r, lean))
+            }
         };
-        let r = p.transpose();
         let dinv = inverse_diagonal(a);
         let lmax = estimate_lambda_max(a, &dinv);
+        let fine = match old.a {
+            LevelMatrix::Lean { ptr, idx, val, .. } => LevelMatrix::refill(a, lean, ptr, idx, val),
+            LevelMatrix::Full(_) => LevelMatrix::of(a, lean),
+        };
         self.levels.insert(
             0,
             Level {
-                a: LevelMatrix::new(a.clone(), lean),
+                a: fine,
                 dinv,
                 lmax,
-                p: LevelMatrix::new(p, lean),
-                r: LevelMatrix::new(r, lean),
+                p,
+                r,
                 parts: None,
             },
         );
@@ -2795,6 +3029,85 @@ mod tests {
             assert!(worst < 1e-12, "{rows} rows: {worst}");
             assert_eq!(product_plus(&a, None, &b, None), a.matmul(&b));
         }
+    }
+
+    /// Forming products into arrays kept from a former product of another
+    /// size (larger, then smaller, then larger again: what a pattern that
+    /// changes every step does) gives the fresh product bit for bit.
+    #[test]
+    fn a_product_into_kept_arrays_is_the_fresh_product() {
+        let mut out = Csr::default();
+        let mut scratch = ProductScratch::default();
+        for (rows, inner, seed) in [(9000, 7000, 1), (5000, 6000, 2), (12000, 8000, 3)] {
+            let a = random_csr(rows, inner, 3, seed);
+            let b = random_csr(inner, rows, 2, seed + 10);
+            let s: Vec<f64> = lcg_vector(inner, seed + 20)
+                .iter()
+                .map(|v| 1.5 + v)
+                .collect();
+            let e = random_csr(rows, rows, 2, seed + 30);
+            let extra = Some((&e.ptr[..], &e.idx[..], &e.val[..], 2.0));
+            product_plus_into(&a, Some(&s), &b, extra, &mut out, &mut scratch);
+            assert_eq!(out, product_plus(&a, Some(&s), &b, extra), "{rows} rows");
+        }
+    }
+
+    /// A transposed structure written into kept arrays is the fresh one.
+    #[test]
+    fn a_transpose_into_kept_arrays_is_the_fresh_one() {
+        let (mut ptr, mut idx, mut from) = (Vec::new(), Vec::new(), Vec::new());
+        for (rows, cols, seed) in [(300, 200, 1), (50, 400, 2), (500, 100, 3)] {
+            let a = random_csr(rows, cols, 4, seed);
+            let range = |i: usize| a.ptr[i]..a.ptr[i + 1];
+            transpose_structure_into(rows, cols, range, &a.idx, &mut ptr, &mut idx, &mut from);
+            let fresh = transpose_structure(rows, cols, range, &a.idx);
+            assert_eq!((&ptr, &idx, &from), (&fresh.0, &fresh.1, &fresh.2));
+            let t = a.transpose();
+            assert_eq!((ptr.clone(), idx.clone()), (t.ptr, t.idx));
+        }
+    }
+
+    /// The lean levels' own row gather and transpose (a carried
+    /// hierarchy's new prolongator and restriction) give what the `f64`
+    /// path gives, rounded to `f32`.
+    #[test]
+    fn lean_gather_and_transpose_match_the_full_path() {
+        let p = random_csr(700, 90, 3, 7);
+        let src: Vec<u32> = (0..900u32)
+            .map(|i| if i % 13 == 5 { u32::MAX } else { (i * 7) % 700 })
+            .collect();
+        let (pi, pv): (Vec<u32>, Vec<f32>) = p
+            .idx
+            .iter()
+            .zip(&p.val)
+            .map(|(&j, &v)| (j as u32, v as f32))
+            .unzip();
+        let (mut gp, mut gi, mut gv) = (vec![9; 3], vec![7u32; 5], vec![1.0f32; 2]);
+        gather_rows(&p.ptr, &pi, &pv, &src, &mut gp, &mut gi, &mut gv);
+        let mut full = Csr {
+            nrows: 900,
+            ncols: 90,
+            ..Csr::default()
+        };
+        gather_rows(
+            &p.ptr,
+            &p.idx,
+            &p.val,
+            &src,
+            &mut full.ptr,
+            &mut full.idx,
+            &mut full.val,
+        );
+        assert_eq!(gp, full.ptr);
+        assert!(gi.iter().zip(&full.idx).all(|(&a, &b)| a as usize == b));
+        assert!(gv.iter().zip(&full.val).all(|(&a, &b)| a == b as f32));
+        let (mut tp, mut ti, mut tv) = (Vec::new(), Vec::new(), Vec::new());
+        transpose_into(90, &gp, &gi, &gv, &mut tp, &mut ti, &mut tv);
+        let t = full.transpose();
+        assert_eq!(tp, t.ptr);
+        assert!(ti.iter().zip(&t.idx).all(|(&a, &b)| a as usize == b));
+        assert!(tv.iter().zip(&t.val).all(|(&a, &b)| a == b as f32));
+        assert_eq!(ti.len(), t.idx.len());
     }
 
     #[test]

@@ -74,8 +74,8 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Par, Side};
 
 use crate::amg::{
-    for_each_row, for_each_row2, par_dot as dot, spmv_parts, transpose_structure, Amg, AmgOptions,
-    Csr,
+    for_each_row, for_each_row2, par_dot as dot, product_plus_into, spmv_parts,
+    transpose_structure_into, Amg, AmgOptions, Csr, ProductScratch,
 };
 use crate::solver::{
     DirectSolver, LinearSolver, SolveReport, SolverWork, SplitSystem, Workspace,
@@ -204,6 +204,13 @@ pub struct BlockSolver {
     /// The multigrid path's CSR blocks, kept across the solves of one
     /// pattern generation.
     blocks: Blocks,
+    /// The last pressure matrix `Ŝ` formed, kept for its arrays: the next
+    /// one is formed into them (`product_plus_into`).
+    schur_matrix: Csr,
+    /// The chunks of the product that forms `Ŝ`, kept for their arrays.
+    product_scratch: ProductScratch,
+    /// The stabilised iteration's vectors, kept for their arrays.
+    solve_scratch: SolveScratch,
     /// The last stabilised multigrid solve ran on a carried hierarchy.
     used_carried: bool,
     /// The caller's accuracy ([`LinearSolver::set_accuracy`]): the
@@ -957,6 +964,9 @@ impl Default for BlockSolver {
             accuracy: None,
             used_carried: false,
             blocks: Blocks::default(),
+            schur_matrix: Csr::default(),
+            product_scratch: ProductScratch::default(),
+            solve_scratch: SolveScratch::default(),
             direct: DirectSolver::default(),
             work: SolverWork::default(),
             stats: BlockStats::default(),
@@ -1155,7 +1165,15 @@ impl BlockSolver {
                     }
                     None => (&none[..], &[][..], &[][..], 1.0),
                 };
-                let s = crate::amg::product_plus(c, Some(&inv), ct, Some(l));
+                let mut s = std::mem::take(&mut self.schur_matrix);
+                product_plus_into(
+                    c,
+                    Some(&inv),
+                    ct,
+                    Some(l),
+                    &mut s,
+                    &mut self.product_scratch,
+                );
                 // What carrying the hierarchy over needs (`carry`).
                 if let Some(st) = sys.stabilisation {
                     ids = st.row_ids.map(<[u32]>::to_vec).unwrap_or_default();
@@ -1195,7 +1213,9 @@ impl BlockSolver {
                             && sys.stabilisation.is_some_and(|st| st.row_ids.is_some())),
                     ..self.amg.clone()
                 };
-                let schur = Amg::new(&s, None, &opts).map_err(|e| amg_err("pressure", e))?;
+                let schur = Amg::new(&s, None, &opts).map_err(|e| amg_err("pressure", e));
+                self.schur_matrix = s;
+                let schur = schur?;
                 Prec::Blocks {
                     velocity: Box::new(velocity),
                     schur: Box::new(schur),
@@ -1375,19 +1395,34 @@ impl BlockSolver {
         };
         let apply_p = |r: &[f64], z: &mut [f64]| apply_blocks(velocity, schur, n, r, z);
         let nt = n + m;
-        let mut b = Vec::with_capacity(nt);
+        // The solve's vectors, in the arrays the last solve used.
+        let mut scratch = std::mem::take(&mut self.solve_scratch);
+        let SolveScratch {
+            basis,
+            b,
+            y,
+            tmp,
+            r,
+            d,
+        } = &mut scratch;
+        let fresh = |v: &mut Vec<f64>, len: usize| {
+            v.clear();
+            v.resize(len, 0.0);
+        };
+        b.clear();
         b.extend_from_slice(sys.rhs);
         b.extend_from_slice(st.offset);
-        let den = dot(&b, &b).sqrt();
-        let mut y = vec![0.0; nt];
+        let b = &*b;
+        let den = dot(b, b).sqrt();
+        fresh(y, nt);
         y[..n].copy_from_slice(x);
         // The last Picard iterate's `q` on the same pattern.
         if self.last_q.0 == generation && self.last_q.1.len() == m {
             y[n..].copy_from_slice(&self.last_q.1);
         }
-        let mut tmp = vec![0.0; n];
-        let mut r = vec![0.0; nt];
-        let mut d = vec![0.0; nt];
+        fresh(tmp, n);
+        fresh(r, nt);
+        fresh(d, nt);
         let residual_of = |y: &[f64], r: &mut [f64], tmp: &mut [f64]| {
             apply_k(y, r, tmp);
             for_each_row(r, |i, r| *r = b[i] - *r);
@@ -1398,7 +1433,8 @@ impl BlockSolver {
                 num
             }
         };
-        let mut residual = residual_of(&y, &mut r, &mut tmp);
+        let (y, tmp, r, d) = (&mut y[..], &mut tmp[..], &mut r[..], &mut d[..]);
+        let mut residual = residual_of(y, r, tmp);
         let mut iterations = 0;
         let apply_t = |r: &[f64], z: &mut [f64], tmp: &mut [f64]| {
             apply_upper(velocity, schur, ct, n, r, z, tmp)
@@ -1409,33 +1445,34 @@ impl BlockSolver {
         let target = self.target();
         let absolute = target * if den > 0.0 { den } else { 1.0 };
         while residual > target && iterations < self.max_iterations {
-            for_each_row(&mut d, |_, v| *v = 0.0);
+            for_each_row(d, |_, v| *v = 0.0);
             let left = self.max_iterations - iterations;
             let it = match self.krylov {
                 Krylov::Gmres => gmres(
                     &apply_k,
                     &apply_t,
                     Some(&apply_tk),
-                    &r,
-                    &mut d,
-                    &mut tmp,
+                    r,
+                    d,
+                    tmp,
                     absolute,
                     self.restart,
                     left,
+                    basis,
                 ),
                 Krylov::Minres => minres(
                     &apply_k,
                     &apply_p,
-                    &r,
-                    &mut d,
-                    &mut tmp,
+                    r,
+                    d,
+                    tmp,
                     pass_tolerance(target, residual),
                     left,
                 ),
             };
             iterations += it.max(1);
-            for_each_row(&mut y, |i, y| *y += d[i]);
-            let new = residual_of(&y, &mut r, &mut tmp);
+            for_each_row(y, |i, y| *y += d[i]);
+            let new = residual_of(y, r, tmp);
             if new.is_nan() || new >= residual {
                 residual = new;
                 break;
@@ -1452,11 +1489,12 @@ impl BlockSolver {
         }
         self.setup = Some(setup);
         self.blocks = blocks;
-        self.finish(t1, iterations, residual, target, &y)?;
+        self.finish(t1, iterations, residual, target, y)?;
         x.copy_from_slice(&y[..n]);
         self.last_q.0 = generation;
         self.last_q.1.clear();
         self.last_q.1.extend_from_slice(&y[n..]);
+        self.solve_scratch = scratch;
         Ok(SolveReport {
             residual,
             iterations,
@@ -1511,8 +1549,18 @@ impl BlockSolver {
         }
         let rho = scale / old.scale;
         let l = (st.l_ptr, st.l_idx, st.l_val, 1.0);
-        let s = crate::amg::product_plus(c, Some(&inv), ct, Some(l));
-        let schur = schur.with_finest(&s, &from, rho)?;
+        let mut s = std::mem::take(&mut self.schur_matrix);
+        product_plus_into(
+            c,
+            Some(&inv),
+            ct,
+            Some(l),
+            &mut s,
+            &mut self.product_scratch,
+        );
+        let schur = schur.with_finest(&s, &from, rho);
+        self.schur_matrix = s;
+        let schur = schur?;
         Some(Setup {
             generation,
             n: a.nrows,
@@ -1728,16 +1776,21 @@ fn pass_tolerance(target: f64, residual: f64) -> f64 {
 
 /// The CSR blocks of a split system, `A_v`, `C`, `Cᵀ` and `L̃`, kept
 /// across the solves of one pattern generation (the Picard iterates of a
-/// step): their structures, and where each entry comes from, are found
-/// once; a solve refreshes the values only (at 58k particles in 3D the
-/// conversion took 0.2 s of each 0.8 s solve, session 21).
+/// step): their structures, and where each entry of `Cᵀ` comes from, are
+/// found once; a solve refreshes the values only (at 58k particles in 3D
+/// the conversion took 0.2 s of each 0.8 s solve, session 21). A new
+/// pattern is written into the arrays the last one used (session 31: at
+/// 289k particles in 3D, fresh arrays for each step's pattern cost 1.2–3.1 s
+/// a step, most of it the system zeroing new pages).
 #[derive(Debug, Default)]
 struct Blocks {
     /// The generation the structures belong to (`None`: none yet).
     generation: Option<u64>,
     /// `A_v`'s column pointers in CSC, to recognise the same pattern.
     a_col_ptr: Vec<usize>,
-    /// `A_v` as CSR, entry `k` from CSC value `a_from[k]`.
+    /// `A_v` as CSR. `A_v` is symmetric ([`SplitSystem::a_v`]), so its
+    /// rows are its CSC columns: the CSC arrays themselves, gathered when
+    /// the columns are not contiguous (`a_from`, empty when they are).
     a: Csr,
     a_from: Vec<usize>,
     /// `C` as CSR (its own arrays copied).
@@ -1749,18 +1802,42 @@ struct Blocks {
     l: Csr,
 }
 
+/// The vectors of one stabilised solve ([`BlockSolver`]'s
+/// `iterate_stabilised`), kept from solve to solve for their allocations:
+/// new ones each solve (twelve a step at 289k particles in 3D, the Krylov
+/// basis a hundred megabytes) had the system zero their pages again.
+#[derive(Debug, Default)]
+struct SolveScratch {
+    /// The Krylov basis (GMRES).
+    basis: Vec<f64>,
+    /// The right-hand side `[f; o]`.
+    b: Vec<f64>,
+    /// The iterate `[V; q]`.
+    y: Vec<f64>,
+    /// Scratch of the velocity size.
+    tmp: Vec<f64>,
+    /// The residual.
+    r: Vec<f64>,
+    /// A pass's correction.
+    d: Vec<f64>,
+}
+
+/// `dst ← src`, in the allocation `dst` already holds.
+fn copy_into<T: Copy>(dst: &mut Vec<T>, src: &[T]) {
+    dst.clear();
+    dst.extend_from_slice(src);
+}
+
 impl Blocks {
     /// Brings the blocks to `sys`: the structures when the generation or
     /// the pattern changed, the values always.
     fn refresh(&mut self, sys: &SplitSystem<'_>, generation: u64) {
         let a_v = sys.a_v;
         let n = a_v.nrows();
-        let col_nnz = |j: usize| match a_v.col_nnz() {
-            Some(nnz) => nnz[j],
-            None => a_v.col_ptr()[j + 1] - a_v.col_ptr()[j],
-        };
+        let col_ptr = a_v.col_ptr();
+        let col_nnz = a_v.col_nnz();
         let same = self.generation == Some(generation)
-            && self.a_col_ptr == a_v.col_ptr()
+            && self.a_col_ptr == col_ptr
             && self.a.nrows == n
             && self.c.ptr == sys.c_ptr
             && self.c.idx == sys.c_idx
@@ -1771,62 +1848,81 @@ impl Blocks {
                 None => self.l.nrows == 0 && self.l.idx.is_empty(),
             };
         if !same {
-            // `A_v`: its CSC arrays are the CSR rows of `A_vᵀ`; transposed,
-            // with where each entry comes from.
-            let col_ptr = a_v.col_ptr();
-            let (ptr, idx, from) = transpose_structure(
-                a_v.ncols(),
+            // `A_v`: symmetric, so row `i` of its CSR is column `i` of its
+            // CSC, entry for entry (the structure is symmetric and the
+            // values are).
+            copy_into(&mut self.a_col_ptr, col_ptr);
+            self.a.nrows = n;
+            self.a.ncols = a_v.ncols();
+            self.a_from.clear();
+            match col_nnz {
+                None => {
+                    copy_into(&mut self.a.ptr, col_ptr);
+                    copy_into(&mut self.a.idx, &a_v.row_idx()[..col_ptr[n]]);
+                }
+                Some(nnz) => {
+                    self.a.ptr.clear();
+                    self.a.ptr.push(0);
+                    self.a.idx.clear();
+                    for j in 0..n {
+                        let range = col_ptr[j]..col_ptr[j] + nnz[j];
+                        self.a.idx.extend_from_slice(&a_v.row_idx()[range.clone()]);
+                        self.a_from.extend(range);
+                        self.a.ptr.push(self.a.idx.len());
+                    }
+                }
+            }
+            self.a.val.clear();
+            self.a.val.resize(self.a.idx.len(), 0.0);
+            self.c.nrows = sys.c_rows();
+            self.c.ncols = n;
+            copy_into(&mut self.c.ptr, sys.c_ptr);
+            copy_into(&mut self.c.idx, sys.c_idx);
+            self.c.val.clear();
+            self.c.val.resize(sys.c_idx.len(), 0.0);
+            let c = &self.c;
+            transpose_structure_into(
+                c.nrows,
                 n,
-                |j| col_ptr[j]..col_ptr[j] + col_nnz(j),
-                a_v.row_idx(),
+                |r| c.ptr[r]..c.ptr[r + 1],
+                &c.idx,
+                &mut self.ct.ptr,
+                &mut self.ct.idx,
+                &mut self.ct_from,
             );
-            let a = Csr {
-                nrows: n,
-                ncols: a_v.ncols(),
-                val: vec![0.0; idx.len()],
-                ptr,
-                idx,
-            };
-            let c = Csr {
-                nrows: sys.c_rows(),
-                ncols: n,
-                ptr: sys.c_ptr.to_vec(),
-                idx: sys.c_idx.to_vec(),
-                val: vec![0.0; sys.c_idx.len()],
-            };
-            let (ct_ptr, ct_idx, ct_from) =
-                transpose_structure(c.nrows, n, |r| c.ptr[r]..c.ptr[r + 1], &c.idx);
-            self.ct = Csr {
-                nrows: n,
-                ncols: c.nrows,
-                val: vec![0.0; ct_idx.len()],
-                ptr: ct_ptr,
-                idx: ct_idx,
-            };
-            self.ct_from = ct_from;
-            self.l = match sys.stabilisation {
-                Some(st) => Csr {
-                    nrows: c.nrows,
-                    ncols: c.nrows,
-                    ptr: st.l_ptr.to_vec(),
-                    idx: st.l_idx.to_vec(),
-                    val: vec![0.0; st.l_idx.len()],
-                },
-                None => Csr::default(),
-            };
-            self.a_col_ptr = col_ptr.to_vec();
-            self.a_from = from;
-            self.a = a;
-            self.c = c;
+            self.ct.nrows = n;
+            self.ct.ncols = c.nrows;
+            self.ct.val.clear();
+            self.ct.val.resize(self.ct.idx.len(), 0.0);
+            match sys.stabilisation {
+                Some(st) => {
+                    self.l.nrows = sys.c_rows();
+                    self.l.ncols = sys.c_rows();
+                    copy_into(&mut self.l.ptr, st.l_ptr);
+                    copy_into(&mut self.l.idx, st.l_idx);
+                    self.l.val.clear();
+                    self.l.val.resize(st.l_idx.len(), 0.0);
+                }
+                None => self.l = Csr::default(),
+            }
             self.generation = Some(generation);
         }
         let values = a_v.val();
-        let a_from = &self.a_from;
-        self.a
-            .val
-            .par_chunks_mut(8192)
-            .zip(a_from.par_chunks(8192))
-            .for_each(|(v, f)| v.iter_mut().zip(f).for_each(|(v, &k)| *v = values[k]));
+        if self.a_from.is_empty() {
+            let values = &values[..self.a.val.len()];
+            self.a
+                .val
+                .par_chunks_mut(8192)
+                .zip(values.par_chunks(8192))
+                .for_each(|(v, src)| v.copy_from_slice(src));
+        } else {
+            let a_from = &self.a_from;
+            self.a
+                .val
+                .par_chunks_mut(8192)
+                .zip(a_from.par_chunks(8192))
+                .for_each(|(v, f)| v.iter_mut().zip(f).for_each(|(v, &k)| *v = values[k]));
+        }
         self.c.val.copy_from_slice(sys.c_val);
         let c_val = sys.c_val;
         self.ct
@@ -1958,7 +2054,8 @@ type Fused<'a> = &'a dyn Fn(&[f64], &mut [f64], &mut [f64], &mut [f64]);
 /// right preconditioning leaves unweighted, falls to `target` (absolute),
 /// or after `max_iter` iterations. Returns the iterations done.
 /// `apply_pk`, when given, does `apply_p` and then `apply_k` of the
-/// basis vector in one call.
+/// basis vector in one call. `basis` holds the Krylov basis; its
+/// allocation is the caller's, kept from solve to solve.
 #[allow(clippy::too_many_arguments)]
 fn gmres(
     apply_k: Operator<'_>,
@@ -1970,14 +2067,18 @@ fn gmres(
     target: f64,
     restart: usize,
     max_iter: usize,
+    basis: &mut Vec<f64>,
 ) -> usize {
     let nt = b.len();
     // More basis vectors than iterations or unknowns are never used; a
     // huge `restart` ("never restart") must not allocate them.
     let restart = restart.min(max_iter).min(nt).max(1);
-    // The basis, vector `i` at `i nt..(i + 1) nt`: one allocation for the
-    // solve, reused by every restart (pages are touched as vectors come).
-    let mut basis: Vec<f64> = Vec::with_capacity((restart + 1) * nt);
+    // The basis, vector `i` at `i nt..(i + 1) nt`: one allocation, reused
+    // by every restart and, through the caller, every solve (pages are
+    // touched as vectors come; a new allocation each solve had the system
+    // zero them again, session 31).
+    basis.clear();
+    basis.reserve((restart + 1) * nt);
     let mut h = vec![vec![0.0; restart]; restart + 1];
     let (mut cs, mut sn) = (vec![0.0; restart], vec![0.0; restart]);
     let mut g = vec![0.0; restart + 1];
@@ -2001,7 +2102,7 @@ fn gmres(
         }
         basis.clear();
         basis.resize(nt, 0.0);
-        for_each_row(&mut basis, |i, v| *v = w[i] / beta);
+        for_each_row(basis, |i, v| *v = w[i] / beta);
         g.iter_mut().for_each(|v| *v = 0.0);
         g[0] = beta;
         let mut k = 0;
@@ -2304,6 +2405,33 @@ mod tests {
                 assert_eq!(blocks.l, Csr::default(), "round {round}");
             }
         }
+        // Columns with room between them (`col_nnz`): gathered, on a new
+        // pattern and then with new values on it.
+        let n = 20;
+        let (ptr, idx, val) = csc(n, 1.0);
+        let (mut gptr, mut gidx, mut gval, mut nnz) = (vec![0], Vec::new(), Vec::new(), Vec::new());
+        for j in 0..n {
+            gidx.extend_from_slice(&idx[ptr[j]..ptr[j + 1]]);
+            gval.extend_from_slice(&val[ptr[j]..ptr[j + 1]]);
+            nnz.push(ptr[j + 1] - ptr[j]);
+            // Two slots of slack, with values that must not be read.
+            gidx.extend_from_slice(&[0, 0]);
+            gval.extend_from_slice(&[f64::NAN, f64::NAN]);
+            gptr.push(gidx.len());
+        }
+        let (c, _) = sample(n / 3, n, 5);
+        let (coords, rhs) = (vec![0.0; n], vec![1.0; n]);
+        for (generation, factor) in [(3, 1.0), (3, -2.0)] {
+            let vals: Vec<f64> = gval.iter().map(|v| v * factor).collect();
+            let sym =
+                faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &gptr, Some(&nnz), &gidx);
+            let a_v = faer::sparse::SparseColMatRef::new(sym, &vals);
+            blocks.refresh(&split(a_v, &c, None, &coords, &rhs), generation);
+            let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
+            let want: Vec<f64> = val.iter().map(|v| v * factor).collect();
+            let compact = faer::sparse::SparseColMatRef::new(sym, &want);
+            assert_eq!(blocks.a, Csr::from_faer_csc(compact), "factor {factor}");
+        }
     }
 
     /// The product on a kept pattern equals the general sparse product
@@ -2388,7 +2516,9 @@ mod tests {
             }
         };
         let norm_b = dot(&b, &b).sqrt();
-        // `usize::MAX` ("never restart") overflowed the basis' size.
+        // `usize::MAX` ("never restart") overflowed the basis' size. One
+        // basis serves every solve, as the solver's does.
+        let mut basis = Vec::new();
         for restart in [50, 4, usize::MAX] {
             let mut y = vec![1.0; n];
             let mut tmp = vec![0.0; n];
@@ -2402,6 +2532,7 @@ mod tests {
                 1e-12 * norm_b,
                 restart,
                 500,
+                &mut basis,
             );
             let mut r = vec![0.0; n];
             a.spmv(&y, &mut r);

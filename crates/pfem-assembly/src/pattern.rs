@@ -22,6 +22,11 @@ pub struct BlockPattern {
     pub col_ptr: Vec<usize>,
     /// CSC row indices of the dof-level matrix.
     pub row_idx: Vec<usize>,
+    /// The unsorted neighbour lists while building, kept for their
+    /// allocation: a new pattern every step is then written into memory
+    /// already held instead of fresh pages (about 16 entries a tetrahedron,
+    /// a hundred megabytes at 289k particles in 3D).
+    scratch: Vec<u32>,
 }
 
 impl BlockPattern {
@@ -43,7 +48,9 @@ impl BlockPattern {
             ptr[i + 1] = ptr[i] + count[i];
         }
         let mut fill = ptr.clone();
-        let mut idx = vec![0u32; ptr[n]];
+        let mut idx = std::mem::take(&mut self.scratch);
+        idx.clear();
+        idx.resize(ptr[n], 0);
         groups(&mut |g: &[u32]| {
             for &a in g {
                 let f = &mut fill[a as usize];
@@ -74,6 +81,7 @@ impl BlockPattern {
             }
             self.adj_ptr.push(self.adj_idx.len());
         }
+        self.scratch = idx;
         // Dof-level CSC.
         self.col_ptr.clear();
         self.row_idx.clear();
