@@ -382,6 +382,13 @@ where
     /// weights.
     stab_pi: Vec<Vector<D>>,
     stab_weight: Vec<f64>,
+    /// Scratch of the stabilisation: per element `τ V`, `grad pⁿ` and `V`
+    /// (kept for its allocation: tens of megabytes at 10⁶ elements,
+    /// written at every Picard iterate).
+    stab_per: Vec<Option<(f64, Vector<D>, f64)>>,
+    /// Scratch of the nodal patches' unsorted lists (kept for its
+    /// allocation: about 16 entries a tetrahedron, every step).
+    patch_scratch: Vec<u32>,
     /// The factor of `I + L̃` ([`Assembler::stabilised_pressure_increments`]).
     l_factor: crate::block::QuasiDefinite,
     /// 3D: the multigrid hierarchy of the last `I + L̃` (CG for the
@@ -783,7 +790,9 @@ where
             ptr[a + 1] = ptr[a] + count[a];
         }
         let mut fill = ptr.clone();
-        let mut raw = vec![0u32; ptr[ns]];
+        let mut raw = std::mem::take(&mut self.patch_scratch);
+        raw.clear();
+        raw.resize(ptr[ns], 0);
         self.node_fluid_material.clear();
         self.node_fluid_material.resize(ns, u16::MAX);
         for e in 0..ne {
@@ -820,6 +829,7 @@ where
             }
             self.patch_ptr.push(self.patch_nodes.len());
         }
+        self.patch_scratch = raw;
         // Pattern: element couplings, plus patch × patch for the nodal
         // volumetric term and the pressure coupling.
         let (elem_sys, patch_ptr, patch_nodes) =
@@ -1418,43 +1428,42 @@ where
             .collect();
         // Per fluid element: τ V, grad pⁿ and the element's measure V (None
         // for an element that carries none), in parallel.
-        let per: Vec<Option<(f64, Vector<D>, f64)>> = (0..self.n_elements)
-            .into_par_iter()
-            .map(|e| {
-                if !self.elem_fluid[e] {
-                    return None;
-                }
-                let st = &self.states[e];
-                let vol = st.volume * self.share(e);
-                if vol <= 0.0 {
-                    return None;
-                }
-                // A sliver kept in shape (deviation 13) whose shape at `tⁿ`
-                // is flat carries none: on a nearly flat tetrahedron
-                // `τ V ∇W_a·∇W_b` grows as the inverse of its height, with
-                // couplings of the wrong sign (positive off-diagonals up to
-                // 2.6 times the diagonal in the running 3D column), which
-                // stalled the pressure multigrid (43–50 CG iterations on
-                // `Ŝ + L̃` against 10). Left out of `L`, of `π` and of the
-                // offset alike, the term still vanishes for a linear
-                // pressure. One of fair shape at `tⁿ` (foreseen to flatten,
-                // or just below the sliver quality) carries it on that
-                // shape ([`Assembler::set_sliver_stabilisation`]).
-                if self.frozen_bare.get(e).copied().unwrap_or(false) {
-                    return None;
-                }
-                let mat = &input.materials[self.elem_material[e] as usize];
-                let h2 = (fact * st.volume).powf(2.0 / D as f64);
-                let tau = self.stabilisation
-                    / (input.inertia.mass_factor * mat.density() + 8.0 * self.unified[e].mu / h2);
-                let mut gp = Vector::<D>::zeros();
-                for a in 0..nv {
-                    let part = self.particle_of[self.elem_sys[e * nv + a] as usize] as usize;
-                    gp += st.grads[a] * input.pressure_n[part];
-                }
-                Some((tau * vol, gp, vol))
-            })
-            .collect();
+        let mut per = std::mem::take(&mut self.stab_per);
+        per.clear();
+        per.par_extend((0..self.n_elements).into_par_iter().map(|e| {
+            if !self.elem_fluid[e] {
+                return None;
+            }
+            let st = &self.states[e];
+            let vol = st.volume * self.share(e);
+            if vol <= 0.0 {
+                return None;
+            }
+            // A sliver kept in shape (deviation 13) whose shape at `tⁿ`
+            // is flat carries none: on a nearly flat tetrahedron
+            // `τ V ∇W_a·∇W_b` grows as the inverse of its height, with
+            // couplings of the wrong sign (positive off-diagonals up to
+            // 2.6 times the diagonal in the running 3D column), which
+            // stalled the pressure multigrid (43–50 CG iterations on
+            // `Ŝ + L̃` against 10). Left out of `L`, of `π` and of the
+            // offset alike, the term still vanishes for a linear
+            // pressure. One of fair shape at `tⁿ` (foreseen to flatten,
+            // or just below the sliver quality) carries it on that
+            // shape ([`Assembler::set_sliver_stabilisation`]).
+            if self.frozen_bare.get(e).copied().unwrap_or(false) {
+                return None;
+            }
+            let mat = &input.materials[self.elem_material[e] as usize];
+            let h2 = (fact * st.volume).powf(2.0 / D as f64);
+            let tau = self.stabilisation
+                / (input.inertia.mass_factor * mat.density() + 8.0 * self.unified[e].mu / h2);
+            let mut gp = Vector::<D>::zeros();
+            for a in 0..nv {
+                let part = self.particle_of[self.elem_sys[e * nv + a] as usize] as usize;
+                gp += st.grads[a] * input.pressure_n[part];
+            }
+            Some((tau * vol, gp, vol))
+        }));
         // The nodal projection π, then `L̃` into the pattern's slots and
         // `S τ (L pⁿ − P π)` per row: node by node in the parts of the
         // scatter, each part visiting its elements in order (each entry
@@ -1537,6 +1546,7 @@ where
             });
         self.stab_pi = pi;
         self.stab_weight = weight;
+        self.stab_per = per;
         // o = −(c₀ + r).
         for (o, c0) in self.c_offset.iter_mut().zip(&self.c_fixed) {
             *o = -(c0 + *o);
