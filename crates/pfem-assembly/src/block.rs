@@ -75,7 +75,7 @@ use faer::{Conj, Par, Side};
 
 use crate::amg::{
     for_each_row, for_each_row2, par_dot as dot, product_plus_into, spmv_parts,
-    transpose_structure_into, Amg, AmgOptions, Csr, ProductScratch,
+    transpose_structure_into, Addend, Amg, AmgOptions, Csr, ProductScratch,
 };
 use crate::solver::{
     DirectSolver, LinearSolver, SolveReport, SolverWork, SplitSystem, Workspace,
@@ -1165,15 +1165,7 @@ impl BlockSolver {
                     }
                     None => (&none[..], &[][..], &[][..], 1.0),
                 };
-                let mut s = std::mem::take(&mut self.schur_matrix);
-                product_plus_into(
-                    c,
-                    Some(&inv),
-                    ct,
-                    Some(l),
-                    &mut s,
-                    &mut self.product_scratch,
-                );
+                let s = self.form_schur(c, &inv, ct, l);
                 // What carrying the hierarchy over needs (`carry`).
                 if let Some(st) = sys.stabilisation {
                     ids = st.row_ids.map(<[u32]>::to_vec).unwrap_or_default();
@@ -1501,6 +1493,15 @@ impl BlockSolver {
         })
     }
 
+    /// `Ŝ = I + L̃ + C Â⁻¹ Cᵀ` (`inv` the inverse of `Â`, `l` the
+    /// addend `I + L̃`), formed into the arrays of the last `Ŝ`, which the
+    /// caller hands back to `schur_matrix` once the hierarchy is built.
+    fn form_schur(&mut self, c: &Csr, inv: &[f64], ct: &Csr, l: Addend<'_>) -> Csr {
+        let mut s = std::mem::take(&mut self.schur_matrix);
+        product_plus_into(c, Some(inv), ct, Some(l), &mut s, &mut self.product_scratch);
+        s
+    }
+
     /// The last step's pressure hierarchy carried over to this pattern
     /// (`Amg::with_finest`), when the rows name their particles and most
     /// of them had a row before: the velocity block's Jacobi and `Ŝ` are
@@ -1549,15 +1550,7 @@ impl BlockSolver {
         }
         let rho = scale / old.scale;
         let l = (st.l_ptr, st.l_idx, st.l_val, 1.0);
-        let mut s = std::mem::take(&mut self.schur_matrix);
-        product_plus_into(
-            c,
-            Some(&inv),
-            ct,
-            Some(l),
-            &mut s,
-            &mut self.product_scratch,
-        );
+        let s = self.form_schur(c, &inv, ct, l);
         let schur = schur.with_finest(&s, &from, rho);
         self.schur_matrix = s;
         let schur = schur?;
