@@ -1655,22 +1655,9 @@ impl LevelMatrix {
         }
     }
 
-    /// [`LevelMatrix::new`] of a copy of `a`: a lean matrix is converted
-    /// from `a` itself, without the whole `f64` copy first.
-    fn of(a: &Csr, lean: bool) -> LevelMatrix {
-        if !Self::can_be_lean(a, lean) {
-            return LevelMatrix::Full(a.clone());
-        }
-        LevelMatrix::Lean {
-            nrows: a.nrows,
-            idx: a.idx.par_iter().map(|&j| j as u32).collect(),
-            val: a.val.par_iter().map(|&v| v as f32).collect(),
-            ptr: a.ptr.clone(),
-        }
-    }
-
-    /// [`LevelMatrix::of`], written into the arrays of a lean matrix no
-    /// longer needed (a carried hierarchy's former finest operator).
+    /// [`LevelMatrix::new`] of a copy of `a`, a lean one written into the
+    /// arrays of a lean matrix no longer needed (a carried hierarchy's
+    /// former finest operator) without the whole `f64` copy first.
     fn refill(
         a: &Csr,
         lean: bool,
@@ -2068,7 +2055,7 @@ impl Amg {
         let lmax = estimate_lambda_max(a, &dinv);
         let fine = match old.a {
             LevelMatrix::Lean { ptr, idx, val, .. } => LevelMatrix::refill(a, lean, ptr, idx, val),
-            LevelMatrix::Full(_) => LevelMatrix::of(a, lean),
+            LevelMatrix::Full(_) => LevelMatrix::new(a.clone(), lean),
         };
         self.levels.insert(
             0,
