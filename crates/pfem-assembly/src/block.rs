@@ -22,9 +22,20 @@
 //!   and differs from `A` only by the off-diagonal part of `A_v`, so a few
 //!   iterations reach the direct solver's residual; the factor is `D`
 //!   times smaller in unknowns and `D³` in flops than the whole system's.
-//!   The set-up (`Â`, `C`, the factor) is kept for the Picard iterates of
-//!   a step ([`BlockSolver::reuse_setup`]): an older `M` is still symmetric
-//!   positive definite, only a little further from `A`.
+//!   An older `M` is still symmetric positive definite, only further from
+//!   `A`: with water's volumetric term `10⁶` times the rest, a relative
+//!   move `δ` of `C` perturbs `M` by about `10⁶ δ` against `Â`. So a
+//!   later Picard iterate of the same pattern keeps the factor of an
+//!   earlier one only while `C` has moved by at most
+//!   [`BlockSolver::keep_factor_below`] since it: on the column on a
+//!   cylinder at a/20, the loop's second and third iterates move it by
+//!   10⁻²–10⁻³ (an old factor took 140–2 000 iterations), its fourth by
+//!   about 10⁻⁴ (6–13 on the third's factor), later ones by 10⁻⁵ and
+//!   less (3–6 on the fourth's), against 2 on a factor of their own
+//!   (session 32). A kept factor whose iteration has
+//!   not converged in [`BlockSolver::kept_factor_iterations`] is renewed
+//!   and the iteration goes on. ([`BlockSolver::reuse_setup`] keeps the
+//!   set-up for every iterate of a step, whatever the move.)
 //! - **[`PressureSolve::Multigrid`]**: MINRES on the equivalent
 //!   saddle-point system `[A_v Cᵀ; C −I] [V; q] = [f; 0]` (`q = C V`, the
 //!   scaled nodal pressure increment; eliminating `q` gives eq. 55 back)
@@ -171,6 +182,19 @@ pub struct BlockSolver {
     /// Keep the preconditioners across solves with the same pattern
     /// generation (the Picard iterates of one step).
     pub reuse_setup: bool,
+    /// The Cholesky path: a later Picard iterate of the same pattern runs
+    /// its conjugate gradient on the factor of an earlier one while the
+    /// volumetric rows have moved by at most this since it,
+    /// `‖C − C_f‖ / ‖C_f‖` (0: a new factor for every solve). The loop's
+    /// first iterates move `C` by 10⁻²–10⁻³ and an old factor would cost
+    /// hundreds of iterations; its last ones by 10⁻⁵ and less (module
+    /// docs). Default [`KEEP_FACTOR_BELOW`].
+    pub keep_factor_below: f64,
+    /// The Cholesky path: conjugate gradient iterations on a kept factor
+    /// ([`BlockSolver::keep_factor_below`]) after which the factor is
+    /// renewed and the solve goes on from where it stands. Default
+    /// [`KEPT_FACTOR_ITERATIONS`].
+    pub kept_factor_iterations: usize,
     /// The stabilised multigrid path: keep the multigrid set-up across
     /// solves with the same pattern generation (the Picard iterates of a
     /// step).
@@ -240,6 +264,12 @@ pub struct BlockStats {
     /// Set-ups that kept stiff (solid) rows whole
     /// ([`PressureSolve::Cholesky`]).
     pub stiff_setups: u64,
+    /// Cholesky-path solves that ran on a factor kept from an earlier
+    /// Picard iterate ([`BlockSolver::keep_factor_below`]).
+    pub kept_factors: u64,
+    /// Of those, solves whose kept factor was renewed midway
+    /// ([`BlockSolver::kept_factor_iterations`]).
+    pub kept_renewed: u64,
     /// Solves handed to the direct solver because the iteration could
     /// not set up or did not converge.
     pub fallbacks: u64,
@@ -717,6 +747,28 @@ impl Woodbury {
         ))
     }
 
+    /// How far the volumetric rows of `sys` (mesh `generation`) are from
+    /// those this set-up was factored with, `‖C − C_f‖ / ‖C_f‖`; infinite
+    /// for another mesh or pattern.
+    fn moved(&self, sys: &SplitSystem<'_>, generation: u64) -> f64 {
+        if !self.plan.fits(generation, sys.c_ptr, sys.c_idx) || self.c_val.len() != sys.c_val.len()
+        {
+            return f64::INFINITY;
+        }
+        let (mut d2, mut c2) = (0.0, 0.0);
+        for (a, b) in self.c_val.iter().zip(sys.c_val) {
+            d2 += (a - b) * (a - b);
+            c2 += a * a;
+        }
+        if c2 > 0.0 {
+            (d2 / c2).sqrt()
+        } else if d2 == 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// `z ← M⁻¹ r`.
     fn apply(&mut self, r: &[f64], z: &mut [f64]) -> Result<(), SolveError> {
         let ns = self.stiff.len();
@@ -954,6 +1006,8 @@ impl Default for BlockSolver {
             dominance_limit: 0.5,
             amg: AmgOptions::default(),
             reuse_setup: false,
+            keep_factor_below: KEEP_FACTOR_BELOW,
+            kept_factor_iterations: KEPT_FACTOR_ITERATIONS,
             stabilised_reuse: true,
             carry_steps: CARRY_STEPS,
             krylov: Krylov::Gmres,
@@ -1049,6 +1103,20 @@ pub(crate) fn rows_from(old: &[u32], new: &[u32]) -> Option<Vec<u32>> {
     let missing = from.iter().filter(|&&k| k == u32::MAX).count();
     (missing * 20 <= from.len()).then_some(from)
 }
+
+/// Default [`BlockSolver::keep_factor_below`]. From checkpoints at a/20,
+/// the same steps with each threshold (`docs/benchmarks.md`, session 32):
+/// the column on a cylinder's solve took 0.857 s a step with a new factor
+/// for every solve, 0.631 s with 10⁻⁵, 0.597 s with 3·10⁻⁵ and 0.599 s
+/// with 10⁻⁴; the water column's 0.480, 0.417 (3·10⁻⁵) and 0.441 s
+/// (10⁻⁴).
+pub const KEEP_FACTOR_BELOW: f64 = 3e-5;
+
+/// Default [`BlockSolver::kept_factor_iterations`]: a solve on a kept
+/// factor took 3–6 iterations (on the column on a cylinder at a/20),
+/// against 2 on a factor of its own, which cost about as much as 15
+/// there (0.09 s against 6 ms an iteration).
+pub const KEPT_FACTOR_ITERATIONS: usize = 15;
 
 /// Default [`BlockSolver::split_from`] (unknowns): measured in
 /// `docs/benchmarks.md` (session 18).
@@ -1619,11 +1687,25 @@ impl BlockSolver {
         }
         let abc = multigrid.then_some((&blocks.a, &blocks.c, &blocks.ct));
         let (n, m) = (sys.a_v.nrows(), sys.c_rows());
-        let keep = self.reuse_setup
-            && self
-                .setup
-                .as_ref()
-                .is_some_and(|s| s.generation == generation && s.n == n && s.m == m);
+        let same = self
+            .setup
+            .as_ref()
+            .is_some_and(|s| s.generation == generation && s.n == n && s.m == m);
+        // The Cholesky path: the factor of an earlier iterate while `C` has
+        // moved little since (`keep_factor_below`).
+        let mut stale = same
+            && !self.reuse_setup
+            && match self.setup.as_ref().map(|s| &s.prec) {
+                Some(Prec::Woodbury(w)) => {
+                    self.keep_factor_below > 0.0
+                        && w.moved(sys, generation) <= self.keep_factor_below
+                }
+                _ => false,
+            };
+        let keep = same && (self.reuse_setup || stale);
+        if stale {
+            self.stats.kept_factors += 1;
+        }
         if !keep {
             let s = self.build(pressure, abc, sys, generation)?;
             self.setup = Some(s);
@@ -1632,7 +1714,7 @@ impl BlockSolver {
         } else {
             self.work.resolves += 1;
         }
-        let t1 = Instant::now();
+        let mut t1 = Instant::now();
         self.stats.setup_seconds += (t1 - t0).as_secs_f64();
         // The residual of the eliminated system, the one the direct path
         // reports: `e ← f − (A_v + CᵀC) v`, returns ‖e‖/‖f‖.
@@ -1659,93 +1741,118 @@ impl BlockSolver {
             self.target
         };
         let (max_iterations, tolerance) = (self.max_iterations, self.tolerance);
-        let Some(setup) = self.setup.as_mut() else {
-            return Err(SolveError::Factorization {
-                solver: NAME,
-                detail: "no preconditioner".into(),
-            });
-        };
         let mut iterations = 0;
-        match &mut setup.prec {
-            Prec::Woodbury(w) => {
-                // Preconditioned conjugate gradient on A, with the true
-                // residual's recurrence.
-                let mut z = vec![0.0; n];
-                let mut d = vec![0.0; n];
-                let mut ad = vec![0.0; n];
-                if residual > target {
-                    w.apply(&r, &mut z)?;
-                    d.copy_from_slice(&z);
-                    let mut rz = dot(&r, &z);
-                    while iterations < max_iterations {
-                        sys.apply(&d, &mut ad, &mut q);
-                        let curvature = dot(&d, &ad);
-                        if curvature.is_nan() || curvature <= 0.0 {
-                            break;
-                        }
-                        let alpha = rz / curvature;
-                        x.iter_mut().zip(&d).for_each(|(x, d)| *x += alpha * d);
-                        r.iter_mut().zip(&ad).for_each(|(r, a)| *r -= alpha * a);
-                        iterations += 1;
-                        let rn = dot(&r, &r).sqrt();
-                        residual = if den > 0.0 { rn / den } else { rn };
-                        if residual <= target {
-                            break;
-                        }
+        loop {
+            let Some(setup) = self.setup.as_mut() else {
+                return Err(SolveError::Factorization {
+                    solver: NAME,
+                    detail: "no preconditioner".into(),
+                });
+            };
+            match &mut setup.prec {
+                Prec::Woodbury(w) => {
+                    // Preconditioned conjugate gradient on A, with the true
+                    // residual's recurrence; on a kept factor for at most
+                    // `kept_factor_iterations`.
+                    let limit = if stale {
+                        (iterations + self.kept_factor_iterations).min(max_iterations)
+                    } else {
+                        max_iterations
+                    };
+                    let mut z = vec![0.0; n];
+                    let mut d = vec![0.0; n];
+                    let mut ad = vec![0.0; n];
+                    if residual > target {
                         w.apply(&r, &mut z)?;
-                        let rz_new = dot(&r, &z);
-                        let beta = rz_new / rz;
-                        rz = rz_new;
-                        d.iter_mut().zip(&z).for_each(|(d, z)| *d = z + beta * *d);
+                        d.copy_from_slice(&z);
+                        let mut rz = dot(&r, &z);
+                        while iterations < limit {
+                            sys.apply(&d, &mut ad, &mut q);
+                            let curvature = dot(&d, &ad);
+                            if curvature.is_nan() || curvature <= 0.0 {
+                                break;
+                            }
+                            let alpha = rz / curvature;
+                            x.iter_mut().zip(&d).for_each(|(x, d)| *x += alpha * d);
+                            r.iter_mut().zip(&ad).for_each(|(r, a)| *r -= alpha * a);
+                            iterations += 1;
+                            let rn = dot(&r, &r).sqrt();
+                            residual = if den > 0.0 { rn / den } else { rn };
+                            if residual <= target {
+                                break;
+                            }
+                            w.apply(&r, &mut z)?;
+                            let rz_new = dot(&r, &z);
+                            let beta = rz_new / rz;
+                            rz = rz_new;
+                            d.iter_mut().zip(&z).for_each(|(d, z)| *d = z + beta * *d);
+                        }
+                        residual = eliminated(x, &mut r, &mut q);
                     }
-                    residual = eliminated(x, &mut r, &mut q);
+                    let unmet = residual.is_nan() || residual > target;
+                    if stale && unmet && iterations < max_iterations {
+                        // The kept factor is too far from this iterate: a new
+                        // one, and the iteration goes on from `x`.
+                        stale = false;
+                        self.stats.kept_renewed += 1;
+                        let tr = Instant::now();
+                        let s = self.build(pressure, None, sys, generation)?;
+                        self.setup = Some(s);
+                        self.work.factorizations += 1;
+                        self.stats.setups += 1;
+                        let spent = tr.elapsed();
+                        self.stats.setup_seconds += spent.as_secs_f64();
+                        t1 += spent;
+                        continue;
+                    }
                 }
-            }
-            Prec::Blocks { velocity, schur } => {
-                let Some((a, c, ct)) = abc else {
-                    return Err(SolveError::Factorization {
-                        solver: NAME,
-                        detail: "the multigrid iteration needs the blocks as CSR".into(),
-                    });
-                };
-                let apply_k = |y: &[f64], out: &mut [f64], tmp: &mut [f64]| {
-                    apply_saddle(a, c, ct, None, y, out, tmp);
-                };
-                let apply_p = |r: &[f64], z: &mut [f64]| apply_blocks(velocity, schur, n, r, z);
-                let nt = n + m;
-                let mut y = vec![0.0; nt];
-                let mut tmp = vec![0.0; n];
-                let mut rhs = vec![0.0; nt];
-                // Refinement on the eliminated system: each pass solves the
-                // saddle-point form for the correction of the current
-                // residual, `K [δV; δq] = [e; 0]`, to `tolerance` in the
-                // preconditioner's norm. That norm weighs the second row's
-                // residual lightly, and `Cᵀ` magnifies it in `e`, so one pass
-                // reaches a few digits of `e`, never all: the passes
-                // recompute `e` exactly.
-                while residual > target && iterations < max_iterations {
-                    rhs[..n].copy_from_slice(&r);
-                    rhs[n..].iter_mut().for_each(|v| *v = 0.0);
-                    y.iter_mut().for_each(|v| *v = 0.0);
-                    let it = minres(
-                        &apply_k,
-                        &apply_p,
-                        &rhs,
-                        &mut y,
-                        &mut tmp,
-                        tolerance,
-                        max_iterations - iterations,
-                    );
-                    iterations += it.max(1);
-                    x.iter_mut().zip(&y[..n]).for_each(|(x, d)| *x += d);
-                    let new = eliminated(x, &mut r, &mut q);
-                    if new.is_nan() || new >= residual {
+                Prec::Blocks { velocity, schur } => {
+                    let Some((a, c, ct)) = abc else {
+                        return Err(SolveError::Factorization {
+                            solver: NAME,
+                            detail: "the multigrid iteration needs the blocks as CSR".into(),
+                        });
+                    };
+                    let apply_k = |y: &[f64], out: &mut [f64], tmp: &mut [f64]| {
+                        apply_saddle(a, c, ct, None, y, out, tmp);
+                    };
+                    let apply_p = |r: &[f64], z: &mut [f64]| apply_blocks(velocity, schur, n, r, z);
+                    let nt = n + m;
+                    let mut y = vec![0.0; nt];
+                    let mut tmp = vec![0.0; n];
+                    let mut rhs = vec![0.0; nt];
+                    // Refinement on the eliminated system: each pass solves the
+                    // saddle-point form for the correction of the current
+                    // residual, `K [δV; δq] = [e; 0]`, to `tolerance` in the
+                    // preconditioner's norm. That norm weighs the second row's
+                    // residual lightly, and `Cᵀ` magnifies it in `e`, so one pass
+                    // reaches a few digits of `e`, never all: the passes
+                    // recompute `e` exactly.
+                    while residual > target && iterations < max_iterations {
+                        rhs[..n].copy_from_slice(&r);
+                        rhs[n..].iter_mut().for_each(|v| *v = 0.0);
+                        y.iter_mut().for_each(|v| *v = 0.0);
+                        let it = minres(
+                            &apply_k,
+                            &apply_p,
+                            &rhs,
+                            &mut y,
+                            &mut tmp,
+                            tolerance,
+                            max_iterations - iterations,
+                        );
+                        iterations += it.max(1);
+                        x.iter_mut().zip(&y[..n]).for_each(|(x, d)| *x += d);
+                        let new = eliminated(x, &mut r, &mut q);
+                        if new.is_nan() || new >= residual {
+                            residual = new;
+                            break;
+                        }
                         residual = new;
-                        break;
                     }
-                    residual = new;
                 }
             }
+            break;
         }
         self.blocks = blocks;
         self.finish(t1, iterations, residual, target, x)?;
@@ -2640,6 +2747,82 @@ mod tests {
             "{relaxed:?} against {full:?}"
         );
         assert_eq!(again, full);
+    }
+
+    /// The Cholesky path runs a later solve of the same pattern on the
+    /// factor of an earlier one while `C` moved by at most
+    /// `keep_factor_below`, factors anew when it moved more, and renews a
+    /// kept factor midway when it does not reach the target within
+    /// `kept_factor_iterations`; every answer meets the target and agrees
+    /// with a solve on a factor of its own.
+    #[test]
+    fn a_kept_factor_serves_while_the_volumetric_rows_move_little() {
+        // A mass-dominated velocity block (a path graph) and a volumetric
+        // term that dominates it, as water's does.
+        let n: usize = 1200;
+        let (mut ptr, mut idx, mut val) = (vec![0], Vec::new(), Vec::new());
+        for j in 0..n {
+            for i in j.saturating_sub(1)..(j + 2).min(n) {
+                idx.push(i);
+                val.push(if i == j { 3.0 } else { -1.0 });
+            }
+            ptr.push(idx.len());
+        }
+        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
+        let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
+        let (mut c, _) = sample(n / 3, n, 5);
+        c.val.iter_mut().for_each(|v| *v *= 300.0);
+        let coords: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        // `C` moved by about `by` relatively.
+        let moved = |by: f64| {
+            let mut m = c.clone();
+            m.val
+                .iter_mut()
+                .enumerate()
+                .for_each(|(k, v)| *v *= 1.0 + by * (k as f64 * 0.7).sin());
+            m
+        };
+        let solve = |solver: &mut BlockSolver, c: &Csr| {
+            let sys = split(a_v, c, None, &coords, &rhs);
+            let mut x = vec![0.0; n];
+            let r = solver.solve_split(&sys, 1, &mut x).unwrap();
+            assert!(r.residual <= solver.target, "{r:?}");
+            assert_eq!(solver.stats.fallbacks, 0);
+            // A solver of its own, a factor of its own.
+            let mut y = vec![0.0; n];
+            BlockSolver::default().solve_split(&sys, 1, &mut y).unwrap();
+            let (d, s) = x.iter().zip(&y).fold((0.0, 0.0), |(d, s), (a, b)| {
+                (d + (a - b) * (a - b), s + b * b)
+            });
+            assert!((d / s).sqrt() < 1e-6, "{}", (d / s).sqrt());
+            r
+        };
+        let mut solver = BlockSolver::default();
+        assert_eq!(
+            solver.pressure_for(&split(a_v, &c, None, &coords, &rhs)),
+            PressureSolve::Cholesky
+        );
+        solve(&mut solver, &c);
+        assert_eq!((solver.stats.setups, solver.stats.kept_factors), (1, 0));
+        // Moved by 10⁻⁶: the factor is kept.
+        let kept = solve(&mut solver, &moved(1e-6));
+        assert_eq!((solver.stats.setups, solver.stats.kept_factors), (1, 1));
+        assert!(kept.iterations >= 1, "{kept:?}");
+        // Moved by 10⁻²: a new factor.
+        solve(&mut solver, &moved(1e-2));
+        assert_eq!((solver.stats.setups, solver.stats.kept_factors), (2, 1));
+        // Kept whatever the move, one iteration allowed on it: a move of
+        // 30 % is not solved in one, and the factor is renewed midway.
+        solver.keep_factor_below = f64::INFINITY;
+        solver.kept_factor_iterations = 1;
+        solve(&mut solver, &moved(0.3));
+        assert_eq!(solver.stats.kept_factors, 2);
+        assert_eq!((solver.stats.kept_renewed, solver.stats.setups), (1, 3));
+        // Off: every solve factors.
+        solver.keep_factor_below = 0.0;
+        solve(&mut solver, &moved(0.3));
+        assert_eq!((solver.stats.kept_factors, solver.stats.setups), (2, 4));
     }
 
     /// The fused preconditioner-and-operator gives, bit for bit, the

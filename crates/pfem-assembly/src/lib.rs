@@ -20,8 +20,8 @@ pub use assembler::{
     StepMesh, SurfaceCuts,
 };
 pub use block::{
-    BlockSolver, BlockStats, Krylov, PressureSolve, VelocityBlock, CARRY_STEPS, MULTIGRID_FROM,
-    SPLIT_FROM,
+    BlockSolver, BlockStats, Krylov, PressureSolve, VelocityBlock, CARRY_STEPS, KEEP_FACTOR_BELOW,
+    KEPT_FACTOR_ITERATIONS, MULTIGRID_FROM, SPLIT_FROM,
 };
 pub use error::{AssemblyError, SolveError};
 pub use export::MatrixExport;
