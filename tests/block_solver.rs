@@ -211,6 +211,9 @@ impl LinearSolver for Probe {
         self.asked = relative_residual;
         self.inner.set_accuracy(relative_residual);
     }
+    fn begin_loop(&mut self) {
+        self.inner.begin_loop();
+    }
 }
 
 /// The stabilised pressure increments start from the last solve's `q`

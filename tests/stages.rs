@@ -234,7 +234,7 @@ fn rejected_attempts_are_counted_and_timed() {
 
 /// Measured by work done, not by flags: a solid-only scene builds its
 /// sparsity pattern and symbolic analysis once (its mesh never changes) and
-/// factorises once per Picard solve; every assembly covers exactly its
+/// factorises at least once per Picard loop; every assembly covers exactly its
 /// elements. A fluid scene remeshes and builds a pattern every step.
 #[test]
 fn work_done_follows_the_scene() {
@@ -251,7 +251,16 @@ fn work_done_follows_the_scene() {
     assert_eq!(w.remeshes, 0);
     assert_eq!(w.patterns_built, 1, "the pattern is kept from step to step");
     assert_eq!(w.symbolic_analyses, 1, "so is the symbolic analysis");
-    assert_eq!(w.factorizations, sim.stats().solve.0);
+    // At least one factorisation per Picard loop (a step's attempt), at
+    // most one per solve: a later iterate may run on its loop's factor
+    // (`BlockSolver::keep_factor_below`).
+    let loops = sim.steps() + sim.stats().rejected.0;
+    assert!(
+        w.factorizations >= loops && w.factorizations <= sim.stats().solve.0,
+        "{} factorisations, {loops} loops, {} solves",
+        w.factorizations,
+        sim.stats().solve.0
+    );
     // Assemblies: the initial acceleration's one and one per iterate.
     assert_eq!(w.elements_assembled, n_el * (sim.stats().assemble.0 + 1));
 

@@ -185,7 +185,9 @@ pub struct BlockSolver {
     /// The Cholesky path: a later Picard iterate of the same pattern runs
     /// its conjugate gradient on the factor of an earlier one while the
     /// volumetric rows have moved by at most this since it,
-    /// `‖C − C_f‖ / ‖C_f‖` (0: a new factor for every solve). The loop's
+    /// `‖C − C_f‖ / ‖C_f‖`, and so has `A_v` between the stiff (solid)
+    /// dofs the factor keeps whole (0: a new factor for every solve); never
+    /// across Picard loops ([`LinearSolver::begin_loop`]). The loop's
     /// first iterates move `C` by 10⁻²–10⁻³ and an old factor would cost
     /// hundreds of iterations; its last ones by 10⁻⁵ and less (module
     /// docs). Default [`KEEP_FACTOR_BELOW`].
@@ -237,6 +239,9 @@ pub struct BlockSolver {
     solve_scratch: SolveScratch,
     /// The last stabilised multigrid solve ran on a carried hierarchy.
     used_carried: bool,
+    /// The Cholesky path's factor was built in the current Picard loop
+    /// ([`LinearSolver::begin_loop`]) and may be kept.
+    keepable: bool,
     /// The caller's accuracy ([`LinearSolver::set_accuracy`]): the
     /// multigrid iterations stop at the looser of it and
     /// [`BlockSolver::target`] (the Cholesky path keeps its target).
@@ -604,6 +609,9 @@ struct Woodbury {
     c_val: Vec<f64>,
     ct_val: Vec<f64>,
     s_val: Vec<f64>,
+    /// The values of `A_v` between stiff dofs it was factored with, in
+    /// the order of [`stiff_entries`].
+    a_ss: Vec<f64>,
     factor: QuasiDefinite,
     /// Scratch: reduced right-hand side, `C`'s rows, dofs.
     red: Vec<f64>,
@@ -664,6 +672,8 @@ impl Woodbury {
             }
         }
         let ns = stiff.len();
+        let mut a_ss = Vec::new();
+        stiff_entries(a, &pos, |_, _, v| a_ss.push(v));
         let inv: Vec<f64> = (0..n)
             .map(|i| if pos[i] == NONE { 1.0 / diag[i] } else { 0.0 })
             .collect();
@@ -700,16 +710,7 @@ impl Woodbury {
             // The reduced matrix, both triangles.
             let (ptr, idx) = &plan.full;
             let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(idx.len() + 2 * c_val.len());
-            for j in 0..a.ncols() {
-                if pos[j] == NONE {
-                    continue;
-                }
-                for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
-                    if pos[i] != NONE {
-                        t.push((pos[i], pos[j], v));
-                    }
-                }
-            }
+            stiff_entries(a, &pos, |i, j, v| t.push((i, j, v)));
             for r in 0..m {
                 for p in sys.c_ptr[r]..sys.c_ptr[r + 1] {
                     let j = sys.c_idx[p];
@@ -738,6 +739,7 @@ impl Woodbury {
                 c_val,
                 ct_val,
                 s_val,
+                a_ss,
                 factor,
                 red: vec![0.0; ns + m],
                 t: vec![0.0; m],
@@ -747,26 +749,42 @@ impl Woodbury {
         ))
     }
 
-    /// How far the volumetric rows of `sys` (mesh `generation`) are from
-    /// those this set-up was factored with, `‖C − C_f‖ / ‖C_f‖`; infinite
-    /// for another mesh or pattern.
+    /// How far `sys` (mesh `generation`) is from what this set-up was
+    /// factored with: the larger relative move of the volumetric rows,
+    /// `‖C − C_f‖ / ‖C_f‖`, and of `A_v` between stiff dofs (a solid's
+    /// stiffness, kept whole in the factor); infinite for another mesh or
+    /// pattern.
     fn moved(&self, sys: &SplitSystem<'_>, generation: u64) -> f64 {
         if !self.plan.fits(generation, sys.c_ptr, sys.c_idx) || self.c_val.len() != sys.c_val.len()
         {
             return f64::INFINITY;
         }
+        let relative = |d2: f64, c2: f64| {
+            if c2 > 0.0 {
+                (d2 / c2).sqrt()
+            } else if d2 == 0.0 {
+                0.0
+            } else {
+                f64::INFINITY
+            }
+        };
         let (mut d2, mut c2) = (0.0, 0.0);
         for (a, b) in self.c_val.iter().zip(sys.c_val) {
             d2 += (a - b) * (a - b);
             c2 += a * a;
         }
-        if c2 > 0.0 {
-            (d2 / c2).sqrt()
-        } else if d2 == 0.0 {
-            0.0
-        } else {
-            f64::INFINITY
+        let (mut e2, mut s2, mut k) = (0.0, 0.0, 0);
+        stiff_entries(sys.a_v, &self.pos, |_, _, v| {
+            if let Some(&a) = self.a_ss.get(k) {
+                e2 += (a - v) * (a - v);
+                s2 += a * a;
+            }
+            k += 1;
+        });
+        if k != self.a_ss.len() {
+            return f64::INFINITY;
         }
+        relative(d2, c2).max(relative(e2, s2))
     }
 
     /// `z ← M⁻¹ r`.
@@ -805,6 +823,25 @@ impl Woodbury {
             };
         }
         Ok(())
+    }
+}
+
+/// Visits the entries of `a` (CSC, symmetric) between stiff dofs (`pos`
+/// not [`NONE`]), column by column: `f(pos[i], pos[j], a_ij)`.
+fn stiff_entries(
+    a: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    pos: &[usize],
+    mut f: impl FnMut(usize, usize, f64),
+) {
+    for j in 0..a.ncols() {
+        if pos[j] == NONE {
+            continue;
+        }
+        for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+            if pos[i] != NONE {
+                f(pos[i], pos[j], v);
+            }
+        }
     }
 }
 
@@ -1017,6 +1054,7 @@ impl Default for BlockSolver {
             last_q: (u64::MAX, Vec::new()),
             accuracy: None,
             used_carried: false,
+            keepable: false,
             blocks: Blocks::default(),
             schur_matrix: Csr::default(),
             product_scratch: ProductScratch::default(),
@@ -1111,6 +1149,10 @@ pub(crate) fn rows_from(old: &[u32], new: &[u32]) -> Option<Vec<u32>> {
 /// with 10⁻⁴; the water column's 0.480, 0.417 (3·10⁻⁵) and 0.441 s
 /// (10⁻⁴).
 pub const KEEP_FACTOR_BELOW: f64 = 3e-5;
+
+/// A solve on a kept factor ([`BlockSolver::keep_factor_below`]) iterates
+/// to this fraction of the target (and is accepted at the target).
+const KEPT_FACTOR_AIM: f64 = 0.01;
 
 /// Default [`BlockSolver::kept_factor_iterations`]: a solve on a kept
 /// factor took 3–6 iterations (on the column on a cylinder at a/20),
@@ -1375,6 +1417,10 @@ impl LinearSolver for BlockSolver {
 
     fn set_accuracy(&mut self, relative_residual: Option<f64>) {
         self.accuracy = relative_residual.filter(|a| a.is_finite() && *a > 0.0);
+    }
+
+    fn begin_loop(&mut self) {
+        self.keepable = false;
     }
 
     fn saddle_increment(&self, generation: u64) -> Option<&[f64]> {
@@ -1694,6 +1740,7 @@ impl BlockSolver {
         // The Cholesky path: the factor of an earlier iterate while `C` has
         // moved little since (`keep_factor_below`).
         let mut stale = same
+            && self.keepable
             && !self.reuse_setup
             && match self.setup.as_ref().map(|s| &s.prec) {
                 Some(Prec::Woodbury(w)) => {
@@ -1708,6 +1755,7 @@ impl BlockSolver {
         }
         if !keep {
             let s = self.build(pressure, abc, sys, generation)?;
+            self.keepable = true;
             self.setup = Some(s);
             self.work.factorizations += 1;
             self.stats.setups += 1;
@@ -1759,10 +1807,20 @@ impl BlockSolver {
                     } else {
                         max_iterations
                     };
+                    // A kept factor's iteration aims where a new factor's
+                    // lands (two iterations overshoot the target about a
+                    // hundredfold): at the target itself, the inflow of
+                    // `tests/hooks.rs` filled 2.76 % too fast against
+                    // 1.08 % (session 32).
+                    let aim = if stale {
+                        target * KEPT_FACTOR_AIM
+                    } else {
+                        target
+                    };
                     let mut z = vec![0.0; n];
                     let mut d = vec![0.0; n];
                     let mut ad = vec![0.0; n];
-                    if residual > target {
+                    if residual > aim {
                         w.apply(&r, &mut z)?;
                         d.copy_from_slice(&z);
                         let mut rz = dot(&r, &z);
@@ -1778,7 +1836,7 @@ impl BlockSolver {
                             iterations += 1;
                             let rn = dot(&r, &r).sqrt();
                             residual = if den > 0.0 { rn / den } else { rn };
-                            if residual <= target {
+                            if residual <= aim {
                                 break;
                             }
                             w.apply(&r, &mut z)?;
@@ -2753,8 +2811,9 @@ mod tests {
     /// factor of an earlier one while `C` moved by at most
     /// `keep_factor_below`, factors anew when it moved more, and renews a
     /// kept factor midway when it does not reach the target within
-    /// `kept_factor_iterations`; every answer meets the target and agrees
-    /// with a solve on a factor of its own.
+    /// `kept_factor_iterations`; a new Picard loop starts with a new
+    /// factor; every answer meets the target and agrees with a solve on a
+    /// factor of its own.
     #[test]
     fn a_kept_factor_serves_while_the_volumetric_rows_move_little() {
         // A mass-dominated velocity block (a path graph) and a volumetric
@@ -2809,20 +2868,24 @@ mod tests {
         let kept = solve(&mut solver, &moved(1e-6));
         assert_eq!((solver.stats.setups, solver.stats.kept_factors), (1, 1));
         assert!(kept.iterations >= 1, "{kept:?}");
+        // A new Picard loop: a new factor, however little `C` moved.
+        solver.begin_loop();
+        solve(&mut solver, &moved(1e-6));
+        assert_eq!((solver.stats.setups, solver.stats.kept_factors), (2, 1));
         // Moved by 10⁻²: a new factor.
         solve(&mut solver, &moved(1e-2));
-        assert_eq!((solver.stats.setups, solver.stats.kept_factors), (2, 1));
+        assert_eq!((solver.stats.setups, solver.stats.kept_factors), (3, 1));
         // Kept whatever the move, one iteration allowed on it: a move of
         // 30 % is not solved in one, and the factor is renewed midway.
         solver.keep_factor_below = f64::INFINITY;
         solver.kept_factor_iterations = 1;
         solve(&mut solver, &moved(0.3));
         assert_eq!(solver.stats.kept_factors, 2);
-        assert_eq!((solver.stats.kept_renewed, solver.stats.setups), (1, 3));
+        assert_eq!((solver.stats.kept_renewed, solver.stats.setups), (1, 4));
         // Off: every solve factors.
         solver.keep_factor_below = 0.0;
         solve(&mut solver, &moved(0.3));
-        assert_eq!((solver.stats.kept_factors, solver.stats.setups), (2, 4));
+        assert_eq!((solver.stats.kept_factors, solver.stats.setups), (2, 5));
     }
 
     /// The fused preconditioner-and-operator gives, bit for bit, the

@@ -122,6 +122,10 @@ impl LinearSolver for MatrixExport {
         self.inner.set_accuracy(relative_residual);
     }
 
+    fn begin_loop(&mut self) {
+        self.inner.begin_loop();
+    }
+
     fn saddle_increment(&self, generation: u64) -> Option<&[f64]> {
         self.inner.saddle_increment(generation)
     }

@@ -102,6 +102,14 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
     /// residual up to it. A direct solver ignores it (the default).
     fn set_accuracy(&mut self, _relative_residual: Option<f64>) {}
 
+    /// A Picard loop begins (a step's attempt): what a solver keeps for
+    /// the iterates of one loop (`BlockSolver`'s kept factor,
+    /// `BlockSolver::keep_factor_below`) ends here, so that the solves
+    /// of a step never depend on an earlier step's (a run restarted from
+    /// a checkpoint then repeats the whole run's solves bit for bit).
+    /// Nothing by default.
+    fn begin_loop(&mut self) {}
+
     /// The second field `q` of the last stabilised saddle-point solve
     /// ([`SplitSystem::stabilisation`]) on the pattern `generation`, when
     /// the solver keeps it: the starting guess of

@@ -884,6 +884,8 @@ where
         // guess changes nothing), so it cannot end the loop.
         let mut loose = false;
         rep.assemble_seconds = tp.elapsed().as_secs_f64();
+        // What the solver keeps for a loop's iterates starts here.
+        self.solver.begin_loop();
         for it in 1..=self.params.max_picard_iterations {
             let ta = std::time::Instant::now();
             let ainput = AssemblyInput {
