@@ -32,9 +32,11 @@
 //!   10⁻²–10⁻³ (an old factor took 140–2 000 iterations), its fourth by
 //!   about 10⁻⁴ (6–13 on the third's factor), later ones by 10⁻⁵ and
 //!   less (3–6 on the fourth's), against 2 on a factor of their own
-//!   (session 32). A kept factor whose iteration has
-//!   not converged in [`BlockSolver::kept_factor_iterations`] is renewed
-//!   and the iteration goes on. ([`BlockSolver::reuse_setup`] keeps the
+//!   (session 32). A kept factor's iteration aims at a hundredth of the
+//!   target, where a new factor's two iterations land; one that has not
+//!   converged in [`BlockSolver::kept_factor_iterations`] is renewed and
+//!   the iteration goes on. Nothing is kept from one Picard loop to the
+//!   next ([`LinearSolver::begin_loop`]). ([`BlockSolver::reuse_setup`] keeps the
 //!   set-up for every iterate of a step, whatever the move.)
 //! - **[`PressureSolve::Multigrid`]**: MINRES on the equivalent
 //!   saddle-point system `[A_v Cᵀ; C −I] [V; q] = [f; 0]` (`q = C V`, the
