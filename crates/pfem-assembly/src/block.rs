@@ -2758,6 +2758,20 @@ mod tests {
         }
     }
 
+    /// A mass-dominated velocity block on `n` dofs (a path graph: 3 on the
+    /// diagonal, −1 beside it), as CSC arrays.
+    fn path_graph(n: usize) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+        let (mut ptr, mut idx, mut val) = (vec![0], Vec::new(), Vec::new());
+        for j in 0..n {
+            for i in j.saturating_sub(1)..(j + 2).min(n) {
+                idx.push(i);
+                val.push(if i == j { 3.0 } else { -1.0 });
+            }
+            ptr.push(idx.len());
+        }
+        (ptr, idx, val)
+    }
+
     /// The caller's accuracy ([`LinearSolver::set_accuracy`]): a solve
     /// asked for less stops earlier, at a residual within what it was
     /// asked, and is accepted although that is above the residual limit;
@@ -2767,14 +2781,7 @@ mod tests {
         // A mass-dominated velocity block (a path graph), `C` and a
         // stabilisation Laplacian `L̃ = ε C Cᵀ` on 400 pressure rows.
         let n: usize = 1200;
-        let (mut ptr, mut idx, mut val) = (vec![0], Vec::new(), Vec::new());
-        for j in 0..n {
-            for i in j.saturating_sub(1)..(j + 2).min(n) {
-                idx.push(i);
-                val.push(if i == j { 3.0 } else { -1.0 });
-            }
-            ptr.push(idx.len());
-        }
+        let (ptr, idx, val) = path_graph(n);
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
         let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
         let (mut c, _) = sample(n / 3, n, 5);
@@ -2823,14 +2830,7 @@ mod tests {
         // A mass-dominated velocity block (a path graph) and a volumetric
         // term that dominates it, as water's does.
         let n: usize = 1200;
-        let (mut ptr, mut idx, mut val) = (vec![0], Vec::new(), Vec::new());
-        for j in 0..n {
-            for i in j.saturating_sub(1)..(j + 2).min(n) {
-                idx.push(i);
-                val.push(if i == j { 3.0 } else { -1.0 });
-            }
-            ptr.push(idx.len());
-        }
+        let (ptr, idx, val) = path_graph(n);
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
         let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
         let (mut c, _) = sample(n / 3, n, 5);
