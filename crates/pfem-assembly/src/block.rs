@@ -674,8 +674,8 @@ impl Woodbury {
             }
         }
         let ns = stiff.len();
+        // `A_v` between stiff dofs, as factored (none without stiff dofs).
         let mut a_ss = Vec::new();
-        stiff_entries(a, &pos, |_, _, v| a_ss.push(v));
         let inv: Vec<f64> = (0..n)
             .map(|i| if pos[i] == NONE { 1.0 / diag[i] } else { 0.0 })
             .collect();
@@ -713,6 +713,7 @@ impl Woodbury {
             let (ptr, idx) = &plan.full;
             let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(idx.len() + 2 * c_val.len());
             stiff_entries(a, &pos, |i, j, v| t.push((i, j, v)));
+            a_ss.extend(t.iter().map(|e| e.2));
             for r in 0..m {
                 for p in sys.c_ptr[r]..sys.c_ptr[r + 1] {
                     let j = sys.c_idx[p];
