@@ -644,6 +644,18 @@ impl Csr {
         ncols: usize,
         triplets: &[(usize, usize, f64)],
     ) -> Result<Csr, AmgError> {
+        Self::try_from_triplets_mapped(nrows, ncols, triplets).map(|(a, _)| a)
+    }
+
+    /// [`Csr::try_from_triplets`], also giving where each triplet went:
+    /// `map[k]` is the position in `val` that triplet `k` was summed
+    /// into, so that the same triplets with new values refill the matrix
+    /// (`val` zeroed, then `val[map[k]] += v_k`) without a sort.
+    pub fn try_from_triplets_mapped(
+        nrows: usize,
+        ncols: usize,
+        triplets: &[(usize, usize, f64)],
+    ) -> Result<(Csr, Vec<usize>), AmgError> {
         let mut count = vec![0usize; nrows + 1];
         for &(r, c, _) in triplets {
             if r >= nrows || c >= ncols {
@@ -655,28 +667,43 @@ impl Csr {
             count[i + 1] += count[i];
         }
         let mut next = count.clone();
-        let mut pairs = vec![(0usize, 0.0f64); triplets.len()];
-        for &(r, c, v) in triplets {
-            pairs[next[r]] = (c, v);
+        // (column, triplet) per row.
+        let mut pairs = vec![(0usize, 0usize); triplets.len()];
+        for (k, &(r, c, _)) in triplets.iter().enumerate() {
+            pairs[next[r]] = (c, k);
             next[r] += 1;
         }
         let mut ptr = Vec::with_capacity(nrows + 1);
         let mut idx = Vec::with_capacity(triplets.len());
-        let mut val = Vec::with_capacity(triplets.len());
+        let mut val: Vec<f64> = Vec::with_capacity(triplets.len());
+        let mut map = vec![0usize; triplets.len()];
         ptr.push(0);
         for i in 0..nrows {
             let row = &mut pairs[count[i]..count[i + 1]];
-            row.sort_unstable_by_key(|p| p.0);
-            push_merged(row.iter().copied(), &mut idx, &mut val);
+            row.sort_unstable();
+            let row_start = idx.len();
+            for &(c, k) in row.iter() {
+                if idx.len() > row_start && idx[idx.len() - 1] == c {
+                    let last = val.len() - 1;
+                    val[last] += triplets[k].2;
+                } else {
+                    idx.push(c);
+                    val.push(triplets[k].2);
+                }
+                map[k] = val.len() - 1;
+            }
             ptr.push(idx.len());
         }
-        Ok(Csr {
-            nrows,
-            ncols,
-            ptr,
-            idx,
-            val,
-        })
+        Ok((
+            Csr {
+                nrows,
+                ncols,
+                ptr,
+                idx,
+                val,
+            },
+            map,
+        ))
     }
 
     /// Converts a faer compressed-sparse-column matrix (any shape, possibly
@@ -2951,6 +2978,37 @@ mod tests {
         let mut z = [0.0];
         amg.apply(&[4.0], &mut z);
         assert!((z[0] - 2.0).abs() < 1e-12);
+    }
+
+    /// The mapped build sums duplicates as the plain one does, and its
+    /// map refills the matrix with new values to the same bits.
+    #[test]
+    fn mapped_triplets_refill_the_matrix() {
+        let t = vec![
+            (1, 2, 1.0),
+            (0, 0, 2.0),
+            (1, 0, -1.0),
+            (1, 2, 0.25),
+            (2, 1, 3.0),
+            (0, 0, 0.5),
+            (2, 2, 0.0),
+        ];
+        let (a, map) = Csr::try_from_triplets_mapped(3, 3, &t).unwrap();
+        assert_eq!(a, Csr::try_from_triplets(3, 3, &t).unwrap());
+        assert_eq!((a.idx.len(), map.len()), (5, t.len()));
+        // An explicit zero stays in the pattern.
+        assert_eq!((a.idx[a.ptr[3] - 1], a.val[a.ptr[3] - 1]), (2, 0.0));
+        let t2: Vec<_> = t
+            .iter()
+            .enumerate()
+            .map(|(k, &(r, c, v))| (r, c, v * (k as f64 - 2.5)))
+            .collect();
+        let mut b = a.clone();
+        b.val.iter_mut().for_each(|v| *v = 0.0);
+        for (k, e) in t2.iter().enumerate() {
+            b.val[map[k]] += e.2;
+        }
+        assert_eq!(b, Csr::try_from_triplets(3, 3, &t2).unwrap());
     }
 
     fn dense(a: &Csr) -> Vec<Vec<f64>> {

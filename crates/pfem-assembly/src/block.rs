@@ -614,6 +614,12 @@ struct Woodbury {
     /// The values of `A_v` between stiff dofs it was factored with, in
     /// the order of [`stiff_entries`].
     a_ss: Vec<f64>,
+    /// The reduced system with stiff rows (both triangles; empty without
+    /// them) and where each of its entries from [`reduced_entries`] goes
+    /// in it: refilled, not rebuilt, while the mesh and the stiff set are
+    /// the same.
+    reduced: Csr,
+    reduced_map: Vec<usize>,
     factor: QuasiDefinite,
     /// Scratch: reduced right-hand side, `C`'s rows, dofs.
     red: Vec<f64>,
@@ -679,10 +685,12 @@ impl Woodbury {
         let inv: Vec<f64> = (0..n)
             .map(|i| if pos[i] == NONE { 1.0 / diag[i] } else { 0.0 })
             .collect();
-        let (plan, mut factor, mut c_val, mut ct_val, mut s_val) = match old {
+        let (plan, mut factor, mut c_val, mut ct_val, mut s_val, kept) = match old {
             Some(w) if w.plan.fits(generation, sys.c_ptr, sys.c_idx) => {
                 let w = *w;
-                (w.plan, w.factor, w.c_val, w.ct_val, w.s_val)
+                // The reduced pattern also needs the same stiff set.
+                let kept = (w.stiff == stiff).then_some((w.reduced, w.reduced_map));
+                (w.plan, w.factor, w.c_val, w.ct_val, w.s_val, kept)
             }
             old => (
                 SchurProduct::new(generation, sys.c_ptr, sys.c_idx, n),
@@ -690,8 +698,10 @@ impl Woodbury {
                 Vec::new(),
                 Vec::new(),
                 Vec::new(),
+                None,
             ),
         };
+        let (mut reduced, mut reduced_map) = kept.unwrap_or_default();
         c_val.clear();
         c_val.extend_from_slice(sys.c_val);
         plan.transpose_values(&c_val, &mut ct_val);
@@ -709,25 +719,39 @@ impl Woodbury {
                 .factorise_parts(m, ptr, idx, &s_val, None, work)
                 .map_err(fail)?;
         } else {
-            // The reduced matrix, both triangles.
-            let (ptr, idx) = &plan.full;
-            let mut t: Vec<(usize, usize, f64)> = Vec::with_capacity(idx.len() + 2 * c_val.len());
-            stiff_entries(a, &pos, |i, j, v| t.push((i, j, v)));
-            a_ss.extend(t.iter().map(|e| e.2));
-            for r in 0..m {
-                for p in sys.c_ptr[r]..sys.c_ptr[r + 1] {
-                    let j = sys.c_idx[p];
-                    if pos[j] != NONE && c_val[p] != 0.0 {
-                        t.push((ns + r, pos[j], c_val[p]));
-                        t.push((pos[j], ns + r, c_val[p]));
+            // The reduced matrix, both triangles: refilled through the
+            // kept map on the same mesh and stiff set, else built anew.
+            let parts = ReducedParts {
+                a,
+                pos: &pos,
+                c_ptr: sys.c_ptr,
+                c_idx: sys.c_idx,
+                c_val: &c_val,
+                s: &plan.full,
+                s_val: &s_val,
+                ns,
+            };
+            let mut refilled = !reduced_map.is_empty();
+            if refilled {
+                reduced.val.iter_mut().for_each(|v| *v = 0.0);
+                let mut k = 0;
+                parts.visit(&mut a_ss, |_, _, v| {
+                    match reduced_map.get(k) {
+                        Some(&q) => reduced.val[q] += v,
+                        None => refilled = false,
                     }
-                }
-                for p in ptr[r]..ptr[r + 1] {
-                    t.push((ns + r, ns + idx[p], -s_val[p]));
-                }
+                    k += 1;
+                });
+                refilled &= k == reduced_map.len();
             }
-            let reduced =
-                Csr::try_from_triplets(ns + m, ns + m, &t).map_err(|e| fail(e.to_string()))?;
+            if !refilled {
+                a_ss.clear();
+                let mut t: Vec<(usize, usize, f64)> =
+                    Vec::with_capacity(plan.full.1.len() + 2 * c_val.len());
+                parts.visit(&mut a_ss, |i, j, v| t.push((i, j, v)));
+                (reduced, reduced_map) = Csr::try_from_triplets_mapped(ns + m, ns + m, &t)
+                    .map_err(|e| fail(e.to_string()))?;
+            }
             let signs: Vec<i8> = (0..ns + m).map(|k| if k < ns { 1 } else { -1 }).collect();
             factor
                 .factorise(&reduced, Some(&signs), work)
@@ -743,6 +767,8 @@ impl Woodbury {
                 ct_val,
                 s_val,
                 a_ss,
+                reduced,
+                reduced_map,
                 factor,
                 red: vec![0.0; ns + m],
                 t: vec![0.0; m],
@@ -826,6 +852,48 @@ impl Woodbury {
             };
         }
         Ok(())
+    }
+}
+
+/// What the reduced system with stiff rows is made of (`Woodbury::new`):
+/// `[A_SS  C_Sᵀ; C_S  −Ŝ_F]`, the `ns` stiff dofs first.
+struct ReducedParts<'a> {
+    a: faer::sparse::SparseColMatRef<'a, usize, f64>,
+    pos: &'a [usize],
+    c_ptr: &'a [usize],
+    c_idx: &'a [usize],
+    c_val: &'a [f64],
+    /// `Ŝ_F`'s pattern (both triangles) and values.
+    s: &'a (Vec<usize>, Vec<usize>),
+    s_val: &'a [f64],
+    ns: usize,
+}
+
+impl ReducedParts<'_> {
+    /// Visits the entries, `f(row, column, value)`, in an order fixed by
+    /// the patterns and the stiff set alone (every entry of `C` on a
+    /// stiff column, zero or not, so that the pattern does not change
+    /// with the values, which cost a new ordering each time it did); the
+    /// `A_SS` entries come first and are also pushed to `a_ss`.
+    fn visit(&self, a_ss: &mut Vec<f64>, mut f: impl FnMut(usize, usize, f64)) {
+        let (ns, pos) = (self.ns, self.pos);
+        stiff_entries(self.a, pos, |i, j, v| {
+            a_ss.push(v);
+            f(i, j, v);
+        });
+        let (ptr, idx) = self.s;
+        for r in 0..ptr.len() - 1 {
+            for p in self.c_ptr[r]..self.c_ptr[r + 1] {
+                let j = self.c_idx[p];
+                if pos[j] != NONE {
+                    f(ns + r, pos[j], self.c_val[p]);
+                    f(pos[j], ns + r, self.c_val[p]);
+                }
+            }
+            for p in ptr[r]..ptr[r + 1] {
+                f(ns + r, ns + idx[p], -self.s_val[p]);
+            }
+        }
     }
 }
 
@@ -2891,6 +2959,64 @@ mod tests {
         solver.keep_factor_below = 0.0;
         solve(&mut solver, &moved(0.3));
         assert_eq!((solver.stats.kept_factors, solver.stats.setups), (2, 5));
+    }
+
+    /// The reduced system with stiff rows keeps one pattern on one mesh
+    /// whatever the values: an entry of `C` on a stiff column that is
+    /// exactly zero in one Picard iterate and not in the next once cost a
+    /// new ordering and symbolic analysis (1–3 a step on the a/20 column
+    /// on a cylinder). Refilled on the kept pattern, the solve is bit for
+    /// bit the one of a solver set up afresh.
+    #[test]
+    fn the_reduced_system_keeps_its_pattern_whatever_its_values() {
+        // Dofs 0..200 mass-dominated, 201..299 stiff (off-diagonal weight
+        // above `dominance_limit` of the diagonal).
+        let n: usize = 300;
+        let (mut ptr, mut idx, mut val) = (vec![0], Vec::new(), Vec::new());
+        for j in 0..n {
+            let stiff = j >= 200;
+            for i in j.saturating_sub(1)..(j + 2).min(n) {
+                idx.push(i);
+                val.push(match (i == j, stiff && i >= 200) {
+                    (true, true) => 3.0,
+                    (true, false) => 10.0,
+                    (false, true) => -1.0,
+                    (false, false) => -0.1,
+                });
+            }
+            ptr.push(idx.len());
+        }
+        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
+        let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
+        let (c, _) = sample(n / 3, n, 3);
+        // An entry of `C` on a stiff column.
+        let k = (0..c.idx.len())
+            .find(|&k| (201..n - 1).contains(&c.idx[k]))
+            .expect("a stiff column in C");
+        let coords: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let fresh = || BlockSolver {
+            keep_factor_below: 0.0,
+            ..BlockSolver::default()
+        };
+        let mut solver = fresh();
+        for (round, value) in [0.0, 0.7, 0.0, -1.3].into_iter().enumerate() {
+            let mut c = c.clone();
+            c.val[k] = value;
+            c.val
+                .iter_mut()
+                .for_each(|v| *v *= 1.0 + 0.01 * round as f64);
+            let sys = split(a_v, &c, None, &coords, &rhs);
+            assert_eq!(solver.pressure_for(&sys), PressureSolve::Cholesky);
+            let mut x = vec![0.0; n];
+            solver.solve_split(&sys, 1, &mut x).unwrap();
+            assert_eq!(solver.work().symbolic_analyses, 1, "round {round}");
+            let mut y = vec![0.0; n];
+            fresh().solve_split(&sys, 1, &mut y).unwrap();
+            assert_eq!(x, y, "round {round}");
+        }
+        assert_eq!((solver.stats.setups, solver.stats.stiff_setups), (4, 4));
+        assert_eq!(solver.stats.fallbacks, 0);
     }
 
     /// The fused preconditioner-and-operator gives, bit for bit, the
