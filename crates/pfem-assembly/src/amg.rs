@@ -644,18 +644,30 @@ impl Csr {
         ncols: usize,
         triplets: &[(usize, usize, f64)],
     ) -> Result<Csr, AmgError> {
-        Self::try_from_triplets_mapped(nrows, ncols, triplets).map(|(a, _)| a)
+        Self::from_triplets_into(nrows, ncols, triplets, None)
     }
 
     /// [`Csr::try_from_triplets`], also giving where each triplet went:
     /// `map[k]` is the position in `val` that triplet `k` was summed
     /// into, so that the same triplets with new values refill the matrix
-    /// (`val` zeroed, then `val[map[k]] += v_k`) without a sort.
+    /// (`val` set to `−0.0`, then `val[map[k]] += v_k`, which gives the
+    /// same bits) without a sort.
     pub fn try_from_triplets_mapped(
         nrows: usize,
         ncols: usize,
         triplets: &[(usize, usize, f64)],
     ) -> Result<(Csr, Vec<usize>), AmgError> {
+        let mut map = vec![0usize; triplets.len()];
+        Self::from_triplets_into(nrows, ncols, triplets, Some(&mut map)).map(|a| (a, map))
+    }
+
+    /// Duplicates are summed in the triplets' order.
+    fn from_triplets_into(
+        nrows: usize,
+        ncols: usize,
+        triplets: &[(usize, usize, f64)],
+        mut map: Option<&mut [usize]>,
+    ) -> Result<Csr, AmgError> {
         let mut count = vec![0usize; nrows + 1];
         for &(r, c, _) in triplets {
             if r >= nrows || c >= ncols {
@@ -667,43 +679,41 @@ impl Csr {
             count[i + 1] += count[i];
         }
         let mut next = count.clone();
-        // (column, triplet) per row.
-        let mut pairs = vec![(0usize, 0usize); triplets.len()];
-        for (k, &(r, c, _)) in triplets.iter().enumerate() {
-            pairs[next[r]] = (c, k);
+        // (column, triplet, value) per row.
+        let mut pairs = vec![(0usize, 0usize, 0.0f64); triplets.len()];
+        for (k, &(r, c, v)) in triplets.iter().enumerate() {
+            pairs[next[r]] = (c, k, v);
             next[r] += 1;
         }
         let mut ptr = Vec::with_capacity(nrows + 1);
         let mut idx = Vec::with_capacity(triplets.len());
         let mut val: Vec<f64> = Vec::with_capacity(triplets.len());
-        let mut map = vec![0usize; triplets.len()];
         ptr.push(0);
         for i in 0..nrows {
             let row = &mut pairs[count[i]..count[i + 1]];
-            row.sort_unstable();
+            row.sort_unstable_by_key(|p| (p.0, p.1));
             let row_start = idx.len();
-            for &(c, k) in row.iter() {
+            for &(c, k, v) in row.iter() {
                 if idx.len() > row_start && idx[idx.len() - 1] == c {
                     let last = val.len() - 1;
-                    val[last] += triplets[k].2;
+                    val[last] += v;
                 } else {
                     idx.push(c);
-                    val.push(triplets[k].2);
+                    val.push(v);
                 }
-                map[k] = val.len() - 1;
+                if let Some(map) = map.as_deref_mut() {
+                    map[k] = val.len() - 1;
+                }
             }
             ptr.push(idx.len());
         }
-        Ok((
-            Csr {
-                nrows,
-                ncols,
-                ptr,
-                idx,
-                val,
-            },
-            map,
-        ))
+        Ok(Csr {
+            nrows,
+            ncols,
+            ptr,
+            idx,
+            val,
+        })
     }
 
     /// Converts a faer compressed-sparse-column matrix (any shape, possibly
@@ -3004,11 +3014,28 @@ mod tests {
             .map(|(k, &(r, c, v))| (r, c, v * (k as f64 - 2.5)))
             .collect();
         let mut b = a.clone();
-        b.val.iter_mut().for_each(|v| *v = 0.0);
+        b.val.iter_mut().for_each(|v| *v = -0.0);
         for (k, e) in t2.iter().enumerate() {
             b.val[map[k]] += e.2;
         }
-        assert_eq!(b, Csr::try_from_triplets(3, 3, &t2).unwrap());
+        let fresh = Csr::try_from_triplets(3, 3, &t2).unwrap();
+        assert_eq!((&b.ptr, &b.idx), (&fresh.ptr, &fresh.idx));
+        let bits = |a: &Csr| a.val.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&b), bits(&fresh));
+        // Three terms are summed in the triplets' order (the last two
+        // first would give 1), and a −0.0 entry keeps its sign on a
+        // refill.
+        let t3 = vec![(0, 1, 1e16), (0, 0, -0.0), (0, 1, 1.0), (0, 1, -1e16)];
+        let (a, map) = Csr::try_from_triplets_mapped(1, 2, &t3).unwrap();
+        let in_order = (1e16f64 + 1.0) + -1e16;
+        assert_ne!(in_order, 1.0);
+        assert_eq!(bits(&a), vec![(-0.0f64).to_bits(), in_order.to_bits()]);
+        let mut b = a.clone();
+        b.val.iter_mut().for_each(|v| *v = -0.0);
+        for (k, e) in t3.iter().enumerate() {
+            b.val[map[k]] += e.2;
+        }
+        assert_eq!(bits(&b), bits(&a));
     }
 
     fn dense(a: &Csr) -> Vec<Vec<f64>> {

@@ -271,6 +271,10 @@ pub struct BlockStats {
     /// Set-ups that kept stiff (solid) rows whole
     /// ([`PressureSolve::Cholesky`]).
     pub stiff_setups: u64,
+    /// Of those, set-ups whose reduced system was refilled on the kept
+    /// pattern of the same mesh and stiff set (not built and sorted
+    /// anew).
+    pub stiff_refills: u64,
     /// Cholesky-path solves that ran on a factor kept from an earlier
     /// Picard iterate ([`BlockSolver::keep_factor_below`]).
     pub kept_factors: u64,
@@ -615,9 +619,9 @@ struct Woodbury {
     /// the order of [`stiff_entries`].
     a_ss: Vec<f64>,
     /// The reduced system with stiff rows (both triangles; empty without
-    /// them) and where each of its entries from [`reduced_entries`] goes
-    /// in it: refilled, not rebuilt, while the mesh and the stiff set are
-    /// the same.
+    /// them) and where each of its entries from [`ReducedParts::visit`]
+    /// goes in it: refilled, not rebuilt, while the mesh and the stiff set
+    /// are the same.
     reduced: Csr,
     reduced_map: Vec<usize>,
     factor: QuasiDefinite,
@@ -631,14 +635,17 @@ impl Woodbury {
     /// The set-up from the split system itself: `A_v` is read in its CSC
     /// form (no CSR copy), and `Ŝ_F` is refilled on the patterns of the
     /// `old` set-up (with its factor's symbolic analysis and its storage)
-    /// while the mesh `generation` and `C`'s pattern are the same.
+    /// while the mesh `generation` and `C`'s pattern are the same; so is
+    /// the reduced system with stiff rows while the stiff set is also the
+    /// same. Returns the set-up, its number of stiff dofs and whether the
+    /// reduced system was refilled.
     fn new(
         sys: &SplitSystem<'_>,
         generation: u64,
         old: Option<Box<Woodbury>>,
         limit: f64,
         work: &mut SolverWork,
-    ) -> Result<(Box<Self>, usize), SolveError> {
+    ) -> Result<(Box<Self>, usize, bool), SolveError> {
         let a = sys.a_v;
         let n = a.nrows();
         let m = sys.c_rows();
@@ -702,6 +709,7 @@ impl Woodbury {
             ),
         };
         let (mut reduced, mut reduced_map) = kept.unwrap_or_default();
+        let mut refilled = false;
         c_val.clear();
         c_val.extend_from_slice(sys.c_val);
         plan.transpose_values(&c_val, &mut ct_val);
@@ -731,14 +739,20 @@ impl Woodbury {
                 s_val: &s_val,
                 ns,
             };
-            let mut refilled = !reduced_map.is_empty();
+            // Each entry where the map says, checked against the kept
+            // pattern (a rebuild if any is not); `−0.0 + v` is `v` to the
+            // bit, zeros' signs included, as a fresh build stores it.
+            refilled = !reduced_map.is_empty();
             if refilled {
-                reduced.val.iter_mut().for_each(|v| *v = 0.0);
+                reduced.val.iter_mut().for_each(|v| *v = -0.0);
                 let mut k = 0;
-                parts.visit(&mut a_ss, |_, _, v| {
+                let (ptr, idx) = (&reduced.ptr, &reduced.idx);
+                parts.visit(&mut a_ss, |i, j, v| {
                     match reduced_map.get(k) {
-                        Some(&q) => reduced.val[q] += v,
-                        None => refilled = false,
+                        Some(&q) if (ptr[i]..ptr[i + 1]).contains(&q) && idx[q] == j => {
+                            reduced.val[q] += v;
+                        }
+                        _ => refilled = false,
                     }
                     k += 1;
                 });
@@ -775,6 +789,7 @@ impl Woodbury {
                 u: vec![0.0; n],
             }),
             ns,
+            refilled,
         ))
     }
 
@@ -1308,10 +1323,13 @@ impl BlockSolver {
                     Some(Prec::Woodbury(w)) => Some(w),
                     _ => None,
                 };
-                let (w, ns) =
+                let (w, ns, refilled) =
                     Woodbury::new(sys, generation, old, self.dominance_limit, &mut self.work)?;
                 if ns > 0 {
                     self.stats.stiff_setups += 1;
+                }
+                if refilled {
+                    self.stats.stiff_refills += 1;
                 }
                 Prec::Woodbury(w)
             }
@@ -2966,7 +2984,8 @@ mod tests {
     /// exactly zero in one Picard iterate and not in the next once cost a
     /// new ordering and symbolic analysis (1–3 a step on the a/20 column
     /// on a cylinder). Refilled on the kept pattern, the solve is bit for
-    /// bit the one of a solver set up afresh.
+    /// bit the one of a solver set up afresh; another stiff set on the
+    /// same mesh is built anew.
     #[test]
     fn the_reduced_system_keeps_its_pattern_whatever_its_values() {
         // Dofs 0..200 mass-dominated, 201..299 stiff (off-diagonal weight
@@ -2999,23 +3018,56 @@ mod tests {
             keep_factor_below: 0.0,
             ..BlockSolver::default()
         };
+        // The same dofs less stiff from 250 on: another stiff set on the
+        // same pattern.
+        let softer: Vec<f64> = (0..n)
+            .flat_map(|j| (ptr[j]..ptr[j + 1]).map(move |p| (j, p)))
+            .map(|(j, p)| {
+                if idx[p] == j && j >= 250 {
+                    30.0
+                } else {
+                    val[p]
+                }
+            })
+            .collect();
+        let a_soft = faer::sparse::SparseColMatRef::new(sym, &softer);
+        let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         let mut solver = fresh();
-        for (round, value) in [0.0, 0.7, 0.0, -1.3].into_iter().enumerate() {
+        let rounds = [
+            (0.0, a_v),
+            (0.7, a_v),
+            (0.0, a_v),
+            (-1.3, a_v),
+            (0.2, a_soft),
+        ];
+        for (round, (value, a)) in rounds.into_iter().enumerate() {
             let mut c = c.clone();
             c.val[k] = value;
             c.val
                 .iter_mut()
                 .for_each(|v| *v *= 1.0 + 0.01 * round as f64);
-            let sys = split(a_v, &c, None, &coords, &rhs);
+            let sys = split(a, &c, None, &coords, &rhs);
             assert_eq!(solver.pressure_for(&sys), PressureSolve::Cholesky);
             let mut x = vec![0.0; n];
             solver.solve_split(&sys, 1, &mut x).unwrap();
-            assert_eq!(solver.work().symbolic_analyses, 1, "round {round}");
+            // One ordering for the first stiff set, one for the second.
+            let analyses = if round < 4 { 1 } else { 2 };
+            assert_eq!(solver.work().symbolic_analyses, analyses, "round {round}");
             let mut y = vec![0.0; n];
             fresh().solve_split(&sys, 1, &mut y).unwrap();
-            assert_eq!(x, y, "round {round}");
+            assert_eq!(bits(&x), bits(&y), "round {round}");
+            // What `moved` compares against: `A_v`'s stiff block as set up.
+            let Some(Prec::Woodbury(w)) = solver.setup.as_ref().map(|s| &s.prec) else {
+                panic!("the Cholesky path");
+            };
+            let mut a_ss = Vec::new();
+            stiff_entries(a, &w.pos, |_, _, v| a_ss.push(v));
+            assert_eq!(bits(&w.a_ss), bits(&a_ss), "round {round}");
+            assert!(!a_ss.is_empty());
         }
-        assert_eq!((solver.stats.setups, solver.stats.stiff_setups), (4, 4));
+        assert_eq!((solver.stats.setups, solver.stats.stiff_setups), (5, 5));
+        // Rounds 1–3 refilled; round 4 (another stiff set) built anew.
+        assert_eq!(solver.stats.stiff_refills, 3);
         assert_eq!(solver.stats.fallbacks, 0);
     }
 
