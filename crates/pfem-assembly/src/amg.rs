@@ -693,16 +693,11 @@ impl Csr {
             let row = &mut pairs[count[i]..count[i + 1]];
             row.sort_unstable_by_key(|p| (p.0, p.1));
             let row_start = idx.len();
-            for &(c, k, v) in row.iter() {
-                if idx.len() > row_start && idx[idx.len() - 1] == c {
-                    let last = val.len() - 1;
-                    val[last] += v;
-                } else {
-                    idx.push(c);
-                    val.push(v);
-                }
-                if let Some(map) = map.as_deref_mut() {
-                    map[k] = val.len() - 1;
+            push_merged(row.iter().map(|&(c, _, v)| (c, v)), &mut idx, &mut val);
+            if let Some(map) = map.as_deref_mut() {
+                let cols = &idx[row_start..];
+                for &(c, k, _) in row.iter() {
+                    map[k] = row_start + cols.partition_point(|&x| x < c);
                 }
             }
             ptr.push(idx.len());
