@@ -1307,6 +1307,23 @@ impl BlockSolver {
     /// The preconditioner for `sys`: the Cholesky path reads the split
     /// system itself, the multigrid path its blocks as CSR (`A_v`, `C`,
     /// `Cᵀ`; [`Blocks`]).
+    /// A new set-up ([`BlockSolver::build`]) for the solves that follow,
+    /// counted, which later iterates of the same Picard loop may keep.
+    fn set_up(
+        &mut self,
+        pressure: PressureSolve,
+        blocks: Option<(&Csr, &Csr, &Csr)>,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+    ) -> Result<(), SolveError> {
+        let s = self.build(pressure, blocks, sys, generation)?;
+        self.setup = Some(s);
+        self.keepable = true;
+        self.work.factorizations += 1;
+        self.stats.setups += 1;
+        Ok(())
+    }
+
     fn build(
         &mut self,
         pressure: PressureSolve,
@@ -1845,11 +1862,7 @@ impl BlockSolver {
             self.stats.kept_factors += 1;
         }
         if !keep {
-            let s = self.build(pressure, abc, sys, generation)?;
-            self.keepable = true;
-            self.setup = Some(s);
-            self.work.factorizations += 1;
-            self.stats.setups += 1;
+            self.set_up(pressure, abc, sys, generation)?;
         } else {
             self.work.resolves += 1;
         }
@@ -1945,10 +1958,7 @@ impl BlockSolver {
                         stale = false;
                         self.stats.kept_renewed += 1;
                         let tr = Instant::now();
-                        let s = self.build(pressure, None, sys, generation)?;
-                        self.setup = Some(s);
-                        self.work.factorizations += 1;
-                        self.stats.setups += 1;
+                        self.set_up(pressure, None, sys, generation)?;
                         let spent = tr.elapsed();
                         self.stats.setup_seconds += spent.as_secs_f64();
                         t1 += spent;
