@@ -207,7 +207,7 @@ pub(crate) fn spmv_parts(ptr: &[usize], idx: &[usize], val: &[f64], x: &[f64], y
 }
 
 /// Row `i` of `A` (CSR arrays) times `x`, summed in order.
-fn row_dot_parts(ptr: &[usize], idx: &[usize], val: &[f64], i: usize, x: &[f64]) -> f64 {
+pub(crate) fn row_dot_parts(ptr: &[usize], idx: &[usize], val: &[f64], i: usize, x: &[f64]) -> f64 {
     let mut s = 0.0;
     for k in ptr[i]..ptr[i + 1] {
         s += val[k] * x[idx[k]];

@@ -87,7 +87,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Par, Side};
 
 use crate::amg::{
-    for_each_row, for_each_row2, par_dot as dot, product_plus_into, spmv_parts,
+    for_each_row, for_each_row2, par_dot as dot, product_plus_into, row_dot_parts, spmv_parts,
     transpose_structure_into, Addend, Amg, AmgOptions, Csr, ProductScratch,
 };
 use crate::solver::{
@@ -322,7 +322,8 @@ impl std::fmt::Debug for QuasiDefinite {
 }
 
 impl QuasiDefinite {
-    /// Factors the symmetric `r` (CSR of both triangles); `signs` gives the
+    /// Factors the symmetric `r` (CSR of both triangles or of the upper
+    /// one: the factorisation reads only that); `signs` gives the
     /// expected sign of each pivot (+1 velocity, −1 pressure), `None` for
     /// a positive definite `r` (Cholesky, faster). Counts a new symbolic
     /// analysis in `work`.
@@ -618,7 +619,7 @@ struct Woodbury {
     /// The values of `A_v` between stiff dofs it was factored with, in
     /// the order of [`stiff_entries`].
     a_ss: Vec<f64>,
-    /// The reduced system with stiff rows (both triangles; empty without
+    /// The reduced system with stiff rows (its upper triangle; empty without
     /// them) and where each of its entries from [`ReducedParts::visit`]
     /// goes in it: refilled, not rebuilt, while the mesh and the stiff set
     /// are the same.
@@ -649,20 +650,19 @@ impl Woodbury {
         let a = sys.a_v;
         let n = a.nrows();
         let m = sys.c_rows();
-        // Diagonal and off-diagonal weight of each row. `A_v`'s columns are
-        // visited in increasing order, so each row's sum runs over its
-        // columns in increasing order.
+        // Diagonal and off-diagonal weight of each row, from its column
+        // (`A_v` is symmetric), in parallel.
         let mut diag = vec![0.0; n];
         let mut off = vec![0.0; n];
-        for j in 0..a.ncols() {
+        for_each_row2(&mut diag, &mut off, |j, d, o| {
             for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
                 if i == j {
-                    diag[j] += v;
+                    *d += v;
                 } else {
-                    off[i] += v.abs();
+                    *o += v.abs();
                 }
             }
-        }
+        });
         if let Some(i) = diag.iter().position(|&v| !(v > 0.0 && v.is_finite())) {
             return Err(SolveError::Factorization {
                 solver: NAME,
@@ -720,14 +720,14 @@ impl Woodbury {
         // Ŝ_F = I + C_F Â_F⁻¹ C_Fᵀ (the S columns weigh 0 in `inv`); with no
         // stiff rows `Ŝ_F s = C_F Â_F⁻¹ r_F`, positive definite, and its
         // upper triangle is all the factorisation reads.
-        plan.product(&c_val, &ct_val, &inv, ns == 0, &mut s_val);
+        plan.product(&c_val, &ct_val, &inv, &mut s_val);
         if ns == 0 {
             let (ptr, idx) = &plan.upper;
             factor
                 .factorise_parts(m, ptr, idx, &s_val, None, work)
                 .map_err(fail)?;
         } else {
-            // The reduced matrix, both triangles: refilled through the
+            // The reduced matrix's upper triangle: refilled through the
             // kept map on the same mesh and stiff set, else built anew.
             let parts = ReducedParts {
                 a,
@@ -735,7 +735,7 @@ impl Woodbury {
                 c_ptr: sys.c_ptr,
                 c_idx: sys.c_idx,
                 c_val: &c_val,
-                s: &plan.full,
+                s: &plan.upper,
                 s_val: &s_val,
                 ns,
             };
@@ -761,7 +761,7 @@ impl Woodbury {
             if !refilled {
                 a_ss.clear();
                 let mut t: Vec<(usize, usize, f64)> =
-                    Vec::with_capacity(plan.full.1.len() + 2 * c_val.len());
+                    Vec::with_capacity(plan.upper.1.len() + c_val.len());
                 parts.visit(&mut a_ss, |i, j, v| t.push((i, j, v)));
                 (reduced, reduced_map) = Csr::try_from_triplets_mapped(ns + m, ns + m, &t)
                     .map_err(|e| fail(e.to_string()))?;
@@ -831,6 +831,45 @@ impl Woodbury {
         relative(d2, c2).max(relative(e2, s2))
     }
 
+    /// `y = (A_v + Cᵀ C) x` for `sys` of mesh `generation`, as
+    /// [`SplitSystem::apply`] but row by row in parallel: `A_v` is
+    /// symmetric, so its CSC columns are its rows, and `Cᵀ`'s rows are
+    /// this set-up's plan with `sys`'s values. Each row is summed in an
+    /// order fixed by the patterns, the same for any number of threads.
+    /// Another mesh than the plan's: [`SplitSystem::apply`].
+    fn product(
+        &self,
+        sys: &SplitSystem<'_>,
+        generation: u64,
+        x: &[f64],
+        y: &mut [f64],
+        q: &mut Vec<f64>,
+    ) {
+        let plan = &self.plan;
+        if plan.generation != generation
+            || plan.ct_src.len() != sys.c_val.len()
+            || plan.ct_ptr.len() != y.len() + 1
+        {
+            sys.apply(x, y, q);
+            return;
+        }
+        q.resize(sys.c_rows(), 0.0);
+        for_each_row(q, |r, qr| {
+            *qr = row_dot_parts(sys.c_ptr, sys.c_idx, sys.c_val, r, x)
+        });
+        let (a, q) = (sys.a_v, &*q);
+        for_each_row(y, |j, yj| {
+            let mut s = 0.0;
+            for (i, &v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+                s += v * x[i];
+            }
+            for k in plan.ct_ptr[j]..plan.ct_ptr[j + 1] {
+                s += sys.c_val[plan.ct_src[k]] * q[plan.ct_idx[k]];
+            }
+            *yj = s;
+        });
+    }
+
     /// `z ← M⁻¹ r`.
     fn apply(&mut self, r: &[f64], z: &mut [f64]) -> Result<(), SolveError> {
         let ns = self.stiff.len();
@@ -871,37 +910,41 @@ impl Woodbury {
 }
 
 /// What the reduced system with stiff rows is made of (`Woodbury::new`):
-/// `[A_SS  C_Sᵀ; C_S  −Ŝ_F]`, the `ns` stiff dofs first.
+/// `[A_SS  C_Sᵀ; C_S  −Ŝ_F]`, the `ns` stiff dofs first, of which the
+/// factorisation reads the upper triangle alone (CSR rows read as CSC
+/// columns: the lower triangle of its transpose, the same matrix).
 struct ReducedParts<'a> {
     a: faer::sparse::SparseColMatRef<'a, usize, f64>,
     pos: &'a [usize],
     c_ptr: &'a [usize],
     c_idx: &'a [usize],
     c_val: &'a [f64],
-    /// `Ŝ_F`'s pattern (both triangles) and values.
+    /// `Ŝ_F`'s upper triangle's pattern and values.
     s: &'a (Vec<usize>, Vec<usize>),
     s_val: &'a [f64],
     ns: usize,
 }
 
 impl ReducedParts<'_> {
-    /// Visits the entries, `f(row, column, value)`, in an order fixed by
-    /// the patterns and the stiff set alone (every entry of `C` on a
-    /// stiff column, zero or not, so that the pattern does not change
-    /// with the values, which cost a new ordering each time it did); the
-    /// `A_SS` entries come first and are also pushed to `a_ss`.
+    /// Visits the entries of the upper triangle, `f(row, column, value)`,
+    /// in an order fixed by the patterns and the stiff set alone (every
+    /// entry of `C` on a stiff column, zero or not, so that the pattern
+    /// does not change with the values, which cost a new ordering each
+    /// time it did); the `A_SS` entries come first, and all of them, both
+    /// triangles, are pushed to `a_ss`.
     fn visit(&self, a_ss: &mut Vec<f64>, mut f: impl FnMut(usize, usize, f64)) {
         let (ns, pos) = (self.ns, self.pos);
         stiff_entries(self.a, pos, |i, j, v| {
             a_ss.push(v);
-            f(i, j, v);
+            if i <= j {
+                f(i, j, v);
+            }
         });
         let (ptr, idx) = self.s;
         for r in 0..ptr.len() - 1 {
             for p in self.c_ptr[r]..self.c_ptr[r + 1] {
                 let j = self.c_idx[p];
                 if pos[j] != NONE {
-                    f(ns + r, pos[j], self.c_val[p]);
                     f(pos[j], ns + r, self.c_val[p]);
                 }
             }
@@ -945,9 +988,8 @@ struct SchurProduct {
     ct_ptr: Vec<usize>,
     ct_idx: Vec<usize>,
     ct_src: Vec<usize>,
-    /// `Ŝ`'s pattern (sorted rows, the diagonal always present), whole and
-    /// upper triangle.
-    full: (Vec<usize>, Vec<usize>),
+    /// `Ŝ`'s upper triangle (sorted rows, the diagonal always present):
+    /// all the symmetric factorisations read.
     upper: (Vec<usize>, Vec<usize>),
 }
 
@@ -956,7 +998,7 @@ impl std::fmt::Debug for SchurProduct {
         f.debug_struct("SchurProduct")
             .field("generation", &self.generation)
             .field("rows", &self.c_ptr.len().saturating_sub(1))
-            .field("nnz", &self.full.1.len())
+            .field("upper_nnz", &self.upper.1.len())
             .finish()
     }
 }
@@ -983,27 +1025,50 @@ impl SchurProduct {
                 next[j] += 1;
             }
         }
-        let mut marker = vec![usize::MAX; m];
-        let mut cols = Vec::new();
-        let mut full = (vec![0usize], Vec::new());
-        let mut upper = (vec![0usize], Vec::new());
-        for i in 0..m {
-            cols.clear();
-            marker[i] = i;
-            cols.push(i);
-            for &k in &c_idx[c_ptr[i]..c_ptr[i + 1]] {
-                for &j in &ct_idx[ct_ptr[k]..ct_ptr[k + 1]] {
-                    if marker[j] != i {
-                        marker[j] = i;
-                        cols.push(j);
+        // Each row's columns `j ≥ i` in parallel row ranges, joined in
+        // order: the same pattern for any number of threads. `Cᵀ`'s rows
+        // are sorted, so the columns below `i` are a prefix skipped.
+        let (ct_p, ct_i) = (&ct_ptr, &ct_idx);
+        let chunks = if m > 4096 {
+            (rayon::current_num_threads() * 4).max(1)
+        } else {
+            1
+        };
+        let rows = m.div_ceil(chunks).max(1);
+        let parts: Vec<(Vec<usize>, Vec<usize>)> = (0..m.div_ceil(rows))
+            .into_par_iter()
+            .map(|c| {
+                let (r0, r1) = (c * rows, ((c + 1) * rows).min(m));
+                let mut marker = vec![usize::MAX; m];
+                let mut lens = Vec::with_capacity(r1 - r0);
+                let mut idx = Vec::new();
+                for i in r0..r1 {
+                    let row0 = idx.len();
+                    marker[i] = i;
+                    idx.push(i);
+                    for &k in &c_idx[c_ptr[i]..c_ptr[i + 1]] {
+                        let col = &ct_i[ct_p[k]..ct_p[k + 1]];
+                        for &j in &col[col.partition_point(|&j| j <= i)..] {
+                            if marker[j] != i {
+                                marker[j] = i;
+                                idx.push(j);
+                            }
+                        }
                     }
+                    idx[row0..].sort_unstable();
+                    lens.push(idx.len() - row0);
                 }
+                (lens, idx)
+            })
+            .collect();
+        let mut upper = (Vec::with_capacity(m + 1), Vec::new());
+        upper.0.push(0);
+        for (lens, idx) in &parts {
+            for &l in lens {
+                let last = upper.0[upper.0.len() - 1];
+                upper.0.push(last + l);
             }
-            cols.sort_unstable();
-            full.1.extend_from_slice(&cols);
-            full.0.push(full.1.len());
-            upper.1.extend(cols.iter().copied().filter(|&j| j >= i));
-            upper.0.push(upper.1.len());
+            upper.1.extend_from_slice(idx);
         }
         Self {
             generation,
@@ -1012,7 +1077,6 @@ impl SchurProduct {
             ct_ptr,
             ct_idx,
             ct_src,
-            full,
             upper,
         }
     }
@@ -1028,12 +1092,11 @@ impl SchurProduct {
         out.extend(self.ct_src.iter().map(|&k| c_val[k]));
     }
 
-    /// The values of `I + C diag(d) Cᵀ` on the whole pattern or on its
-    /// upper triangle, into `out`; `ct_val` from
-    /// [`SchurProduct::transpose_values`]. Each entry sums its terms in the
-    /// order of `C`'s row, as [`Csr::matmul`] does.
-    fn product(&self, c_val: &[f64], ct_val: &[f64], d: &[f64], upper: bool, out: &mut Vec<f64>) {
-        let (ptr, idx) = if upper { &self.upper } else { &self.full };
+    /// The values of `I + C diag(d) Cᵀ` on its upper triangle, into
+    /// `out`; `ct_val` from [`SchurProduct::transpose_values`]. Each entry
+    /// sums its terms in the order of `C`'s row, as [`Csr::matmul`] does.
+    fn product(&self, c_val: &[f64], ct_val: &[f64], d: &[f64], out: &mut Vec<f64>) {
+        let (ptr, idx) = &self.upper;
         let (c_ptr, c_idx, ct_ptr, ct_idx) = (&self.c_ptr, &self.c_idx, &self.ct_ptr, &self.ct_idx);
         let m = ptr.len() - 1;
         out.clear();
@@ -1062,12 +1125,12 @@ impl SchurProduct {
                 for ka in c_ptr[i]..c_ptr[i + 1] {
                     let k = c_idx[ka];
                     let a = c_val[ka] * d[k];
-                    for kb in ct_ptr[k]..ct_ptr[k + 1] {
-                        let j = ct_idx[kb];
-                        if upper && j < i {
-                            continue;
-                        }
-                        acc[j] += a * ct_val[kb];
+                    // `Cᵀ`'s rows are sorted: the columns below `i` are
+                    // a prefix.
+                    let (b0, b1) = (ct_ptr[k], ct_ptr[k + 1]);
+                    let from = b0 + ct_idx[b0..b1].partition_point(|&j| j < i);
+                    for kb in from..b1 {
+                        acc[ct_idx[kb]] += a * ct_val[kb];
                     }
                 }
                 for p in ptr[i]..ptr[i + 1] {
@@ -1870,10 +1933,11 @@ impl BlockSolver {
         self.stats.setup_seconds += (t1 - t0).as_secs_f64();
         // The residual of the eliminated system, the one the direct path
         // reports: `e ← f − (A_v + CᵀC) v`, returns ‖e‖/‖f‖.
+        // (`e` holds `(A_v + CᵀC) v` on entry; the Cholesky path's set-up
+        // forms that product in parallel, `Woodbury::product`.)
         let den = dot(sys.rhs, sys.rhs).sqrt();
-        let eliminated = |v: &[f64], e: &mut [f64], q: &mut Vec<f64>| {
-            sys.apply(v, e, q);
-            e.iter_mut().zip(sys.rhs).for_each(|(e, b)| *e = b - *e);
+        let eliminated = |e: &mut [f64]| {
+            for_each_row(e, |i, e| *e = sys.rhs[i] - *e);
             let num = dot(e, e).sqrt();
             if den > 0.0 {
                 num / den
@@ -1883,7 +1947,11 @@ impl BlockSolver {
         };
         let mut r = vec![0.0; n];
         let mut q = Vec::new();
-        let mut residual = eliminated(x, &mut r, &mut q);
+        match self.setup.as_ref().map(|s| &s.prec) {
+            Some(Prec::Woodbury(w)) => w.product(sys, generation, x, &mut r, &mut q),
+            _ => sys.apply(x, &mut r, &mut q),
+        }
+        let mut residual = eliminated(&mut r);
         // The caller's accuracy relaxes the multigrid iteration only: the
         // Cholesky path's CG is nearly a direct solve (one or two
         // iterations), with nothing to save.
@@ -1929,7 +1997,7 @@ impl BlockSolver {
                         d.copy_from_slice(&z);
                         let mut rz = dot(&r, &z);
                         while iterations < limit {
-                            sys.apply(&d, &mut ad, &mut q);
+                            w.product(sys, generation, &d, &mut ad, &mut q);
                             let curvature = dot(&d, &ad);
                             if curvature.is_nan() || curvature <= 0.0 {
                                 break;
@@ -1949,7 +2017,8 @@ impl BlockSolver {
                             rz = rz_new;
                             d.iter_mut().zip(&z).for_each(|(d, z)| *d = z + beta * *d);
                         }
-                        residual = eliminated(x, &mut r, &mut q);
+                        w.product(sys, generation, x, &mut r, &mut q);
+                        residual = eliminated(&mut r);
                     }
                     let unmet = residual.is_nan() || residual > target;
                     if stale && unmet && iterations < max_iterations {
@@ -2002,7 +2071,8 @@ impl BlockSolver {
                         );
                         iterations += it.max(1);
                         x.iter_mut().zip(&y[..n]).for_each(|(x, d)| *x += d);
-                        let new = eliminated(x, &mut r, &mut q);
+                        sys.apply(x, &mut r, &mut q);
+                        let new = eliminated(&mut r);
                         if new.is_nan() || new >= residual {
                             residual = new;
                             break;
@@ -2709,8 +2779,9 @@ mod tests {
         }
     }
 
-    /// The product on a kept pattern equals the general sparse product
-    /// `I + (C D) Cᵀ` bit for bit, whole and as its upper triangle, and
+    /// The product on a kept pattern equals the upper triangle of the
+    /// general sparse product `I + (C D) Cᵀ` bit for bit, pattern and
+    /// values, in one row range and in parallel ones (5 000 rows), and
     /// stays right when `C`'s values change on the same pattern.
     #[test]
     fn the_kept_product_pattern_gives_the_general_product() {
@@ -2733,16 +2804,7 @@ mod tests {
                 let empty = vec![0; rows + 1];
                 let identity = Some((&empty[..], &[][..], &[][..], 1.0));
                 let want = crate::amg::product_plus(&c, Some(&d), &ct, identity);
-                plan.product(&c.val, &ct_val, &d, false, &mut val);
-                let full = Csr {
-                    nrows: rows,
-                    ncols: rows,
-                    ptr: plan.full.0.clone(),
-                    idx: plan.full.1.clone(),
-                    val: val.clone(),
-                };
-                assert_eq!(full, want);
-                plan.product(&c.val, &ct_val, &d, true, &mut val);
+                plan.product(&c.val, &ct_val, &d, &mut val);
                 let upper = Csr {
                     nrows: rows,
                     ncols: rows,
@@ -2760,6 +2822,7 @@ mod tests {
                         .collect();
                     assert_eq!(got, row, "row {i}");
                 }
+                assert_eq!(upper.ptr[rows], upper.idx.len());
             }
         }
     }
