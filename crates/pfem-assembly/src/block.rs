@@ -620,11 +620,9 @@ struct Woodbury {
     /// the order of [`stiff_entries`].
     a_ss: Vec<f64>,
     /// The reduced system with stiff rows (its upper triangle; empty without
-    /// them) and where each of its entries from [`ReducedParts::visit`]
-    /// goes in it: refilled, not rebuilt, while the mesh and the stiff set
-    /// are the same.
+    /// them): refilled, not rebuilt, while the mesh and the stiff set are
+    /// the same ([`ReducedParts::rows`]).
     reduced: Csr,
-    reduced_map: Vec<usize>,
     factor: QuasiDefinite,
     /// Scratch: reduced right-hand side, `C`'s rows, dofs.
     red: Vec<f64>,
@@ -696,7 +694,7 @@ impl Woodbury {
             Some(w) if w.plan.fits(generation, sys.c_ptr, sys.c_idx) => {
                 let w = *w;
                 // The reduced pattern also needs the same stiff set.
-                let kept = (w.stiff == stiff).then_some((w.reduced, w.reduced_map));
+                let kept = (w.stiff == stiff).then_some(w.reduced);
                 (w.plan, w.factor, w.c_val, w.ct_val, w.s_val, kept)
             }
             old => (
@@ -708,7 +706,7 @@ impl Woodbury {
                 None,
             ),
         };
-        let (mut reduced, mut reduced_map) = kept.unwrap_or_default();
+        let mut reduced = kept.unwrap_or_default();
         let mut refilled = false;
         c_val.clear();
         c_val.extend_from_slice(sys.c_val);
@@ -727,44 +725,53 @@ impl Woodbury {
                 .factorise_parts(m, ptr, idx, &s_val, None, work)
                 .map_err(fail)?;
         } else {
-            // The reduced matrix's upper triangle: refilled through the
-            // kept map on the same mesh and stiff set, else built anew.
+            stiff_entries(a, &pos, |_, _, v| a_ss.push(v));
+            // The reduced matrix's upper triangle, written row by row in
+            // its CSR order: refilled in place on the same mesh and stiff
+            // set (each entry checked against the kept pattern, a rebuild
+            // if any differs), else built anew.
             let parts = ReducedParts {
                 a,
+                stiff: &stiff,
                 pos: &pos,
-                c_ptr: sys.c_ptr,
-                c_idx: sys.c_idx,
-                c_val: &c_val,
-                s: &plan.upper,
+                plan: &plan,
+                ct_val: &ct_val,
                 s_val: &s_val,
-                ns,
             };
-            // Each entry where the map says, checked against the kept
-            // pattern (a rebuild if any is not); `−0.0 + v` is `v` to the
-            // bit, zeros' signs included, as a fresh build stores it.
-            refilled = !reduced_map.is_empty();
+            refilled = reduced.nrows == ns + m && !reduced.ptr.is_empty();
             if refilled {
-                reduced.val.iter_mut().for_each(|v| *v = -0.0);
-                let mut k = 0;
-                let (ptr, idx) = (&reduced.ptr, &reduced.idx);
-                parts.visit(&mut a_ss, |i, j, v| {
-                    match reduced_map.get(k) {
-                        Some(&q) if (ptr[i]..ptr[i + 1]).contains(&q) && idx[q] == j => {
-                            reduced.val[q] += v;
-                        }
-                        _ => refilled = false,
+                let (mut k, mut row) = (0, 0);
+                let Csr { ptr, idx, val, .. } = &mut reduced;
+                parts.rows(|end, j, v| {
+                    if end {
+                        row += 1;
+                        refilled &= ptr.get(row) == Some(&k);
+                    } else if idx.get(k) == Some(&j) {
+                        val[k] = v;
+                        k += 1;
+                    } else {
+                        refilled = false;
                     }
-                    k += 1;
                 });
-                refilled &= k == reduced_map.len();
+                refilled &= k == idx.len();
             }
             if !refilled {
-                a_ss.clear();
-                let mut t: Vec<(usize, usize, f64)> =
-                    Vec::with_capacity(plan.upper.1.len() + c_val.len());
-                parts.visit(&mut a_ss, |i, j, v| t.push((i, j, v)));
-                (reduced, reduced_map) = Csr::try_from_triplets_mapped(ns + m, ns + m, &t)
-                    .map_err(|e| fail(e.to_string()))?;
+                reduced = Csr {
+                    nrows: ns + m,
+                    ncols: ns + m,
+                    ptr: vec![0],
+                    idx: Vec::with_capacity(plan.upper.1.len() + c_val.len()),
+                    val: Vec::with_capacity(plan.upper.1.len() + c_val.len()),
+                };
+                let Csr { ptr, idx, val, .. } = &mut reduced;
+                parts.rows(|end, j, v| {
+                    if end {
+                        ptr.push(idx.len());
+                    } else {
+                        idx.push(j);
+                        val.push(v);
+                    }
+                });
             }
             let signs: Vec<i8> = (0..ns + m).map(|k| if k < ns { 1 } else { -1 }).collect();
             factor
@@ -782,7 +789,6 @@ impl Woodbury {
                 s_val,
                 a_ss,
                 reduced,
-                reduced_map,
                 factor,
                 red: vec![0.0; ns + m],
                 t: vec![0.0; m],
@@ -915,42 +921,44 @@ impl Woodbury {
 /// columns: the lower triangle of its transpose, the same matrix).
 struct ReducedParts<'a> {
     a: faer::sparse::SparseColMatRef<'a, usize, f64>,
+    /// The stiff dofs, and each dof's place among them (or [`NONE`]).
+    stiff: &'a [usize],
     pos: &'a [usize],
-    c_ptr: &'a [usize],
-    c_idx: &'a [usize],
-    c_val: &'a [f64],
-    /// `Ŝ_F`'s upper triangle's pattern and values.
-    s: &'a (Vec<usize>, Vec<usize>),
+    /// `Cᵀ`'s pattern (every entry of `C` on a stiff column, zero or not,
+    /// so that the pattern does not change with the values, which cost a
+    /// new ordering each time it did) and `Ŝ_F`'s upper triangle.
+    plan: &'a SchurProduct,
+    ct_val: &'a [f64],
     s_val: &'a [f64],
-    ns: usize,
 }
 
 impl ReducedParts<'_> {
-    /// Visits the entries of the upper triangle, `f(row, column, value)`,
-    /// in an order fixed by the patterns and the stiff set alone (every
-    /// entry of `C` on a stiff column, zero or not, so that the pattern
-    /// does not change with the values, which cost a new ordering each
-    /// time it did); the `A_SS` entries come first, and all of them, both
-    /// triangles, are pushed to `a_ss`.
-    fn visit(&self, a_ss: &mut Vec<f64>, mut f: impl FnMut(usize, usize, f64)) {
-        let (ns, pos) = (self.ns, self.pos);
-        stiff_entries(self.a, pos, |i, j, v| {
-            a_ss.push(v);
-            if i <= j {
-                f(i, j, v);
-            }
-        });
-        let (ptr, idx) = self.s;
-        for r in 0..ptr.len() - 1 {
-            for p in self.c_ptr[r]..self.c_ptr[r + 1] {
-                let j = self.c_idx[p];
-                if pos[j] != NONE {
-                    f(pos[j], ns + r, self.c_val[p]);
+    /// Writes the upper triangle row by row in CSR order, columns
+    /// increasing, in an order fixed by the patterns and the stiff set
+    /// alone: `f(false, column, value)` for each entry, `f(true, 0, 0.0)`
+    /// at the end of each row. A stiff row `s` (dof `j`) holds `A_v`
+    /// between `j` and the stiff dofs from `j` on (read from column `j`:
+    /// `A_v` is symmetric), then `C_Sᵀ`'s row `j`; a pressure row, `−Ŝ_F`'s
+    /// upper row.
+    fn rows(&self, mut f: impl FnMut(bool, usize, f64)) {
+        let (ns, pos, plan) = (self.stiff.len(), self.pos, self.plan);
+        for &j in self.stiff {
+            for (i, &v) in self.a.row_idx_of_col(j).zip(self.a.val_of_col(j)) {
+                if i >= j && pos[i] != NONE {
+                    f(false, pos[i], v);
                 }
             }
-            for p in ptr[r]..ptr[r + 1] {
-                f(ns + r, ns + idx[p], -self.s_val[p]);
+            for p in plan.ct_ptr[j]..plan.ct_ptr[j + 1] {
+                f(false, ns + plan.ct_idx[p], self.ct_val[p]);
             }
+            f(true, 0, 0.0);
+        }
+        let (ptr, idx) = &plan.upper;
+        for r in 0..ptr.len() - 1 {
+            for p in ptr[r]..ptr[r + 1] {
+                f(false, ns + idx[p], -self.s_val[p]);
+            }
+            f(true, 0, 0.0);
         }
     }
 }
@@ -988,6 +996,9 @@ struct SchurProduct {
     ct_ptr: Vec<usize>,
     ct_idx: Vec<usize>,
     ct_src: Vec<usize>,
+    /// For each entry `(i, k)` of `C`, where `Cᵀ`'s row `k` holds it: its
+    /// columns from `i` on (rows of `Cᵀ` are sorted) start there.
+    ct_of: Vec<usize>,
     /// `Ŝ`'s upper triangle (sorted rows, the diagonal always present):
     /// all the symmetric factorisations read.
     upper: (Vec<usize>, Vec<usize>),
@@ -1017,18 +1028,20 @@ impl SchurProduct {
         let mut next = ct_ptr.clone();
         let mut ct_idx = vec![0usize; c_idx.len()];
         let mut ct_src = vec![0usize; c_idx.len()];
+        let mut ct_of = vec![0usize; c_idx.len()];
         for i in 0..m {
             for k in c_ptr[i]..c_ptr[i + 1] {
                 let j = c_idx[k];
                 ct_idx[next[j]] = i;
                 ct_src[next[j]] = k;
+                ct_of[k] = next[j];
                 next[j] += 1;
             }
         }
         // Each row's columns `j ≥ i` in parallel row ranges, joined in
         // order: the same pattern for any number of threads. `Cᵀ`'s rows
         // are sorted, so the columns below `i` are a prefix skipped.
-        let (ct_p, ct_i) = (&ct_ptr, &ct_idx);
+        let (ct_p, ct_i, ct_o) = (&ct_ptr, &ct_idx, &ct_of);
         let chunks = if m > 4096 {
             (rayon::current_num_threads() * 4).max(1)
         } else {
@@ -1046,9 +1059,9 @@ impl SchurProduct {
                     let row0 = idx.len();
                     marker[i] = i;
                     idx.push(i);
-                    for &k in &c_idx[c_ptr[i]..c_ptr[i + 1]] {
-                        let col = &ct_i[ct_p[k]..ct_p[k + 1]];
-                        for &j in &col[col.partition_point(|&j| j <= i)..] {
+                    for ka in c_ptr[i]..c_ptr[i + 1] {
+                        let k = c_idx[ka];
+                        for &j in &ct_i[ct_o[ka] + 1..ct_p[k + 1]] {
                             if marker[j] != i {
                                 marker[j] = i;
                                 idx.push(j);
@@ -1077,6 +1090,7 @@ impl SchurProduct {
             ct_ptr,
             ct_idx,
             ct_src,
+            ct_of,
             upper,
         }
     }
@@ -1098,6 +1112,7 @@ impl SchurProduct {
     fn product(&self, c_val: &[f64], ct_val: &[f64], d: &[f64], out: &mut Vec<f64>) {
         let (ptr, idx) = &self.upper;
         let (c_ptr, c_idx, ct_ptr, ct_idx) = (&self.c_ptr, &self.c_idx, &self.ct_ptr, &self.ct_idx);
+        let ct_of = &self.ct_of;
         let m = ptr.len() - 1;
         out.clear();
         out.resize(idx.len(), 0.0);
@@ -1125,11 +1140,8 @@ impl SchurProduct {
                 for ka in c_ptr[i]..c_ptr[i + 1] {
                     let k = c_idx[ka];
                     let a = c_val[ka] * d[k];
-                    // `Cᵀ`'s rows are sorted: the columns below `i` are
-                    // a prefix.
-                    let (b0, b1) = (ct_ptr[k], ct_ptr[k + 1]);
-                    let from = b0 + ct_idx[b0..b1].partition_point(|&j| j < i);
-                    for kb in from..b1 {
+                    // `Cᵀ`'s rows are sorted: its columns from `i` on.
+                    for kb in ct_of[ka]..ct_ptr[k + 1] {
                         acc[ct_idx[kb]] += a * ct_val[kb];
                     }
                 }
