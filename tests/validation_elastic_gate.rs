@@ -52,18 +52,16 @@ fn run(h: f64, gate_h: f64, plane_stress: bool) -> (f64, f64) {
         StepParams::default(),
     )
     .unwrap();
-    let mut out = StandardOutput::new(
-        std::env::temp_dir().join(format!(
-            "pfem-test-gate-{h}-{gate_h}-{plane_stress}-{}",
-            std::process::id()
-        )),
-        false,
-        case.probes(),
-        true,
-    )
-    .overwrite(true);
+    let dir = std::env::temp_dir().join(format!(
+        "pfem-test-gate-{h}-{gate_h}-{plane_stress}-{}",
+        std::process::id()
+    ));
+    let mut out = StandardOutput::new(&dir, false, case.probes(), true).overwrite(true);
     sim.run(&mut [&mut out]).unwrap();
     let p = peak(&out.probe_series("ux_tip"));
+    // Nothing is left behind in the temporary directory.
+    drop(out);
+    std::fs::remove_dir_all(&dir).ok();
     eprintln!(
         "gate (water h = {h} m, gate h = {gate_h} m, {}): peak ux {:.2} mm at {:.3} s",
         if plane_stress {

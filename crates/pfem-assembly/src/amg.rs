@@ -60,8 +60,8 @@
 //!
 //! The matrix must be symmetric positive (semi)definite; symmetry is assumed,
 //! not checked. Sparse matrix-vector products run in parallel with rayon for
-//! matrices with more than 20 000 rows; sparse matrix-matrix products are
-//! parallel over row chunks.
+//! matrices with more than 20 000 rows or 100 000 entries; sparse
+//! matrix-matrix products are parallel over row chunks.
 #![allow(clippy::needless_range_loop)]
 
 use rayon::prelude::*;
@@ -70,6 +70,12 @@ use std::sync::{Mutex, TryLockError};
 
 /// Number of rows above which sparse matrix-vector products run in parallel.
 const PAR_ROWS: usize = 20_000;
+/// Number of stored entries above which a sparse matrix-vector product
+/// runs in parallel whatever its rows (a few thousand rows of a
+/// neighbours'-neighbours stencil: `C` of a 3D run, the coarse levels).
+const PAR_NNZ: usize = 100_000;
+/// Rows per parallel chunk of such a product.
+const NNZ_CHUNK: usize = 512;
 /// Number of rows per parallel chunk of a sparse matrix-vector product.
 const SPMV_CHUNK: usize = 4096;
 /// Largest coarsest-level operator that is factorised densely. Larger
@@ -203,11 +209,12 @@ pub struct Csr {
 /// [`Csr::spmv`]: in parallel row chunks above 20 000 rows, each row
 /// summed in order.
 pub(crate) fn spmv_parts(ptr: &[usize], idx: &[usize], val: &[f64], x: &[f64], y: &mut [f64]) {
-    for_each_row(y, |i, yi| *yi = row_dot_parts(ptr, idx, val, i, x));
+    let nnz = ptr.last().copied().unwrap_or(0);
+    for_each_row_of(y, nnz, |i, yi| *yi = row_dot_parts(ptr, idx, val, i, x));
 }
 
 /// Row `i` of `A` (CSR arrays) times `x`, summed in order.
-pub(crate) fn row_dot_parts(ptr: &[usize], idx: &[usize], val: &[f64], i: usize, x: &[f64]) -> f64 {
+fn row_dot_parts(ptr: &[usize], idx: &[usize], val: &[f64], i: usize, x: &[f64]) -> f64 {
     let mut s = 0.0;
     for k in ptr[i]..ptr[i + 1] {
         s += val[k] * x[idx[k]];
@@ -253,6 +260,22 @@ pub(crate) fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
         for (i, yi) in y.iter_mut().enumerate() {
             f(i, yi);
         }
+    }
+}
+
+/// [`for_each_row`] for rows that hold `nnz` entries in all: also in
+/// parallel (chunks of `NNZ_CHUNK` rows) when they hold more than
+/// `PAR_NNZ`, however few the rows. The same for any number of threads.
+pub(crate) fn for_each_row_of(y: &mut [f64], nnz: usize, f: impl Fn(usize, &mut f64) + Sync) {
+    if y.len() <= PAR_ROWS && nnz > PAR_NNZ {
+        y.par_chunks_mut(NNZ_CHUNK).enumerate().for_each(|(c, ys)| {
+            let base = c * NNZ_CHUNK;
+            for (j, yi) in ys.iter_mut().enumerate() {
+                f(base + j, yi);
+            }
+        });
+    } else {
+        for_each_row(y, f);
     }
 }
 

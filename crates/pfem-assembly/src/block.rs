@@ -87,7 +87,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, Par, Side};
 
 use crate::amg::{
-    for_each_row, for_each_row2, par_dot as dot, product_plus_into, row_dot_parts, spmv_parts,
+    for_each_row, for_each_row2, par_dot as dot, product_plus_into, spmv_parts,
     transpose_structure_into, Addend, Amg, AmgOptions, Csr, ProductScratch,
 };
 use crate::solver::{
@@ -624,6 +624,8 @@ struct Woodbury {
     /// the same ([`ReducedParts::rows`]).
     reduced: Csr,
     factor: QuasiDefinite,
+    /// `Cᵀ`'s values now ([`Woodbury::follow`]).
+    ct_now: Vec<f64>,
     /// Scratch: reduced right-hand side, `C`'s rows, dofs.
     red: Vec<f64>,
     t: Vec<f64>,
@@ -790,6 +792,7 @@ impl Woodbury {
                 a_ss,
                 reduced,
                 factor,
+                ct_now: Vec::new(),
                 red: vec![0.0; ns + m],
                 t: vec![0.0; m],
                 u: vec![0.0; n],
@@ -837,12 +840,23 @@ impl Woodbury {
         relative(d2, c2).max(relative(e2, s2))
     }
 
+    /// Takes `sys`'s values of `C` (transposed, [`Woodbury::product`]
+    /// reads them), which may have moved since the set-up (a kept factor).
+    fn follow(&mut self, sys: &SplitSystem<'_>) {
+        if self.plan.ct_src.len() == sys.c_val.len() {
+            self.plan.transpose_values(sys.c_val, &mut self.ct_now);
+        } else {
+            self.ct_now.clear();
+        }
+    }
+
     /// `y = (A_v + Cᵀ C) x` for `sys` of mesh `generation`, as
     /// [`SplitSystem::apply`] but row by row in parallel: `A_v` is
     /// symmetric, so its CSC columns are its rows, and `Cᵀ`'s rows are
-    /// this set-up's plan with `sys`'s values. Each row is summed in an
-    /// order fixed by the patterns, the same for any number of threads.
-    /// Another mesh than the plan's: [`SplitSystem::apply`].
+    /// this set-up's plan with the values [`Woodbury::follow`] took from
+    /// `sys`. Each row is summed in an order fixed by the patterns, the
+    /// same for any number of threads. Another mesh than the plan's:
+    /// [`SplitSystem::apply`].
     fn product(
         &self,
         sys: &SplitSystem<'_>,
@@ -851,18 +865,17 @@ impl Woodbury {
         y: &mut [f64],
         q: &mut Vec<f64>,
     ) {
-        let plan = &self.plan;
+        let (plan, ct_now) = (&self.plan, &self.ct_now);
         if plan.generation != generation
             || plan.ct_src.len() != sys.c_val.len()
+            || ct_now.len() != sys.c_val.len()
             || plan.ct_ptr.len() != y.len() + 1
         {
             sys.apply(x, y, q);
             return;
         }
         q.resize(sys.c_rows(), 0.0);
-        for_each_row(q, |r, qr| {
-            *qr = row_dot_parts(sys.c_ptr, sys.c_idx, sys.c_val, r, x)
-        });
+        spmv_parts(sys.c_ptr, sys.c_idx, sys.c_val, x, q);
         let (a, q) = (sys.a_v, &*q);
         for_each_row(y, |j, yj| {
             let mut s = 0.0;
@@ -870,7 +883,7 @@ impl Woodbury {
                 s += v * x[i];
             }
             for k in plan.ct_ptr[j]..plan.ct_ptr[j + 1] {
-                s += sys.c_val[plan.ct_src[k]] * q[plan.ct_idx[k]];
+                s += ct_now[k] * q[plan.ct_idx[k]];
             }
             *yj = s;
         });
@@ -1959,8 +1972,11 @@ impl BlockSolver {
         };
         let mut r = vec![0.0; n];
         let mut q = Vec::new();
-        match self.setup.as_ref().map(|s| &s.prec) {
-            Some(Prec::Woodbury(w)) => w.product(sys, generation, x, &mut r, &mut q),
+        match self.setup.as_mut().map(|s| &mut s.prec) {
+            Some(Prec::Woodbury(w)) => {
+                w.follow(sys);
+                w.product(sys, generation, x, &mut r, &mut q);
+            }
             _ => sys.apply(x, &mut r, &mut q),
         }
         let mut residual = eliminated(&mut r);
@@ -1983,6 +1999,7 @@ impl BlockSolver {
             };
             match &mut setup.prec {
                 Prec::Woodbury(w) => {
+                    w.follow(sys);
                     // Preconditioned conjugate gradient on A, with the true
                     // residual's recurrence; on a kept factor for at most
                     // `kept_factor_iterations`.
