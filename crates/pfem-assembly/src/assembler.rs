@@ -1187,6 +1187,14 @@ where
                         }
                         let p = elem_blocks[e * nv * nv + a * nv + b];
                         let pj = particle_of[j as usize] as usize;
+                        // The block's place in this part's values (entry
+                        // `(kk, l)` at `base + l · stride + kk`).
+                        let (base, stride) = if own_j {
+                            let (base, stride) = pattern.block_layout(p, j);
+                            (base - value0, stride)
+                        } else {
+                            (0, 0)
+                        };
                         for kk in 0..D {
                             if constraints.is_fixed(pi, kk) {
                                 continue;
@@ -1198,7 +1206,7 @@ where
                                         rhs[ri * D + kk] -= val * constraints.velocity[pj][l];
                                     }
                                 } else if own_j {
-                                    values[pattern.value_index(p, j, kk, l) - value0] += val;
+                                    values[base + l * stride + kk] += val;
                                 }
                             }
                         }

@@ -128,11 +128,21 @@ impl BlockPattern {
     /// (see [`BlockPattern::block`]).
     #[inline]
     pub fn value_index(&self, p: u32, j: u32, k: usize, l: usize) -> usize {
+        let (base, stride) = self.block_layout(p, j);
+        base + l * stride + k
+    }
+
+    /// Where the block `p` of node column `j` lies in the values: entry
+    /// `(k, l)` of the block is at `base + l · stride + k`
+    /// ([`BlockPattern::value_index`], for a caller that writes a whole
+    /// block).
+    #[inline]
+    pub fn block_layout(&self, p: u32, j: u32) -> (usize, usize) {
         let j = j as usize;
         let s = self.adj_ptr[j];
         let deg = self.adj_ptr[j + 1] - s;
         let d = self.dim;
-        s * d * d + l * deg * d + (p as usize - s) * d + k
+        (s * d * d + (p as usize - s) * d, deg * d)
     }
 }
 
