@@ -206,8 +206,8 @@ pub struct Csr {
 }
 
 /// `y = A x` for the CSR arrays of `A` (`y.len()` rows), as
-/// [`Csr::spmv`]: in parallel row chunks above 20 000 rows, each row
-/// summed in order.
+/// [`Csr::spmv`]: in parallel row chunks above 20 000 rows or 100 000
+/// entries ([`for_each_row_of`]), each row summed in order.
 pub(crate) fn spmv_parts(ptr: &[usize], idx: &[usize], val: &[f64], x: &[f64], y: &mut [f64]) {
     let nnz = ptr.last().copied().unwrap_or(0);
     for_each_row_of(y, nnz, |i, yi| *yi = row_dot_parts(ptr, idx, val, i, x));
@@ -248,14 +248,7 @@ fn sum4<V: Copy, J: Copy>(val: &[V], idx: &[J], term: impl Fn(V, J) -> f64) -> f
 /// threads.
 pub(crate) fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
     if y.len() > PAR_ROWS {
-        y.par_chunks_mut(SPMV_CHUNK)
-            .enumerate()
-            .for_each(|(c, ys)| {
-                let base = c * SPMV_CHUNK;
-                for (j, yi) in ys.iter_mut().enumerate() {
-                    f(base + j, yi);
-                }
-            });
+        rows_in_chunks(y, SPMV_CHUNK, f);
     } else {
         for (i, yi) in y.iter_mut().enumerate() {
             f(i, yi);
@@ -268,15 +261,20 @@ pub(crate) fn for_each_row(y: &mut [f64], f: impl Fn(usize, &mut f64) + Sync) {
 /// `PAR_NNZ`, however few the rows. The same for any number of threads.
 pub(crate) fn for_each_row_of(y: &mut [f64], nnz: usize, f: impl Fn(usize, &mut f64) + Sync) {
     if y.len() <= PAR_ROWS && nnz > PAR_NNZ {
-        y.par_chunks_mut(NNZ_CHUNK).enumerate().for_each(|(c, ys)| {
-            let base = c * NNZ_CHUNK;
-            for (j, yi) in ys.iter_mut().enumerate() {
-                f(base + j, yi);
-            }
-        });
+        rows_in_chunks(y, NNZ_CHUNK, f);
     } else {
         for_each_row(y, f);
     }
+}
+
+/// `f(i, &mut y[i])` for every row, in parallel chunks of `chunk` rows.
+fn rows_in_chunks(y: &mut [f64], chunk: usize, f: impl Fn(usize, &mut f64) + Sync) {
+    y.par_chunks_mut(chunk).enumerate().for_each(|(c, ys)| {
+        let base = c * chunk;
+        for (j, yi) in ys.iter_mut().enumerate() {
+            f(base + j, yi);
+        }
+    });
 }
 
 /// [`for_each_row`] over two vectors of one length in step:
@@ -661,35 +659,12 @@ impl Csr {
     }
 
     /// Fallible version of [`Csr::from_triplets`]: returns
-    /// [`AmgError::IndexOutOfBounds`] instead of panicking.
+    /// [`AmgError::IndexOutOfBounds`] instead of panicking. Duplicates are
+    /// summed in the triplets' order.
     pub fn try_from_triplets(
         nrows: usize,
         ncols: usize,
         triplets: &[(usize, usize, f64)],
-    ) -> Result<Csr, AmgError> {
-        Self::from_triplets_into(nrows, ncols, triplets, None)
-    }
-
-    /// [`Csr::try_from_triplets`], also giving where each triplet went:
-    /// `map[k]` is the position in `val` that triplet `k` was summed
-    /// into, so that the same triplets with new values refill the matrix
-    /// (`val` set to `−0.0`, then `val[map[k]] += v_k`, which gives the
-    /// same bits) without a sort.
-    pub fn try_from_triplets_mapped(
-        nrows: usize,
-        ncols: usize,
-        triplets: &[(usize, usize, f64)],
-    ) -> Result<(Csr, Vec<usize>), AmgError> {
-        let mut map = vec![0usize; triplets.len()];
-        Self::from_triplets_into(nrows, ncols, triplets, Some(&mut map)).map(|a| (a, map))
-    }
-
-    /// Duplicates are summed in the triplets' order.
-    fn from_triplets_into(
-        nrows: usize,
-        ncols: usize,
-        triplets: &[(usize, usize, f64)],
-        mut map: Option<&mut [usize]>,
     ) -> Result<Csr, AmgError> {
         let mut count = vec![0usize; nrows + 1];
         for &(r, c, _) in triplets {
@@ -710,19 +685,12 @@ impl Csr {
         }
         let mut ptr = Vec::with_capacity(nrows + 1);
         let mut idx = Vec::with_capacity(triplets.len());
-        let mut val: Vec<f64> = Vec::with_capacity(triplets.len());
+        let mut val = Vec::with_capacity(triplets.len());
         ptr.push(0);
         for i in 0..nrows {
             let row = &mut pairs[count[i]..count[i + 1]];
             row.sort_unstable_by_key(|p| (p.0, p.1));
-            let row_start = idx.len();
             push_merged(row.iter().map(|&(c, _, v)| (c, v)), &mut idx, &mut val);
-            if let Some(map) = map.as_deref_mut() {
-                let cols = &idx[row_start..];
-                for &(c, k, _) in row.iter() {
-                    map[k] = row_start + cols.partition_point(|&x| x < c);
-                }
-            }
             ptr.push(idx.len());
         }
         Ok(Csr {
@@ -3008,10 +2976,10 @@ mod tests {
         assert!((z[0] - 2.0).abs() < 1e-12);
     }
 
-    /// The mapped build sums duplicates as the plain one does, and its
-    /// map refills the matrix with new values to the same bits.
+    /// Triplets keep an explicit zero in the pattern, sum duplicates in
+    /// their own order, and a lone `−0.0` keeps its sign.
     #[test]
-    fn mapped_triplets_refill_the_matrix() {
+    fn triplets_sum_duplicates_in_their_order() {
         let t = vec![
             (1, 2, 1.0),
             (0, 0, 2.0),
@@ -3021,39 +2989,17 @@ mod tests {
             (0, 0, 0.5),
             (2, 2, 0.0),
         ];
-        let (a, map) = Csr::try_from_triplets_mapped(3, 3, &t).unwrap();
-        assert_eq!(a, Csr::try_from_triplets(3, 3, &t).unwrap());
-        assert_eq!((a.idx.len(), map.len()), (5, t.len()));
-        // An explicit zero stays in the pattern.
+        let a = Csr::try_from_triplets(3, 3, &t).unwrap();
+        assert_eq!(a.idx.len(), 5);
         assert_eq!((a.idx[a.ptr[3] - 1], a.val[a.ptr[3] - 1]), (2, 0.0));
-        let t2: Vec<_> = t
-            .iter()
-            .enumerate()
-            .map(|(k, &(r, c, v))| (r, c, v * (k as f64 - 2.5)))
-            .collect();
-        let mut b = a.clone();
-        b.val.iter_mut().for_each(|v| *v = -0.0);
-        for (k, e) in t2.iter().enumerate() {
-            b.val[map[k]] += e.2;
-        }
-        let fresh = Csr::try_from_triplets(3, 3, &t2).unwrap();
-        assert_eq!((&b.ptr, &b.idx), (&fresh.ptr, &fresh.idx));
         let bits = |a: &Csr| a.val.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&b), bits(&fresh));
         // Three terms are summed in the triplets' order (the last two
-        // first would give 1), and a −0.0 entry keeps its sign on a
-        // refill.
+        // first would give 1).
         let t3 = vec![(0, 1, 1e16), (0, 0, -0.0), (0, 1, 1.0), (0, 1, -1e16)];
-        let (a, map) = Csr::try_from_triplets_mapped(1, 2, &t3).unwrap();
+        let a = Csr::try_from_triplets(1, 2, &t3).unwrap();
         let in_order = (1e16f64 + 1.0) + -1e16;
         assert_ne!(in_order, 1.0);
         assert_eq!(bits(&a), vec![(-0.0f64).to_bits(), in_order.to_bits()]);
-        let mut b = a.clone();
-        b.val.iter_mut().for_each(|v| *v = -0.0);
-        for (k, e) in t3.iter().enumerate() {
-            b.val[map[k]] += e.2;
-        }
-        assert_eq!(bits(&b), bits(&a));
     }
 
     fn dense(a: &Csr) -> Vec<Vec<f64>> {

@@ -624,7 +624,9 @@ struct Woodbury {
     /// the same ([`ReducedParts::rows`]).
     reduced: Csr,
     factor: QuasiDefinite,
-    /// `Cᵀ`'s values now ([`Woodbury::follow`]).
+    /// `Cᵀ`'s values of the system being solved ([`Woodbury::product`]):
+    /// the set-up's own, until [`Woodbury::follow`] takes a later
+    /// iterate's for a kept factor.
     ct_now: Vec<f64>,
     /// Scratch: reduced right-hand side, `C`'s rows, dofs.
     red: Vec<f64>,
@@ -740,7 +742,7 @@ impl Woodbury {
                 ct_val: &ct_val,
                 s_val: &s_val,
             };
-            refilled = reduced.nrows == ns + m && !reduced.ptr.is_empty();
+            refilled = reduced.nrows == ns + m;
             if refilled {
                 let (mut k, mut row) = (0, 0);
                 let Csr { ptr, idx, val, .. } = &mut reduced;
@@ -780,6 +782,7 @@ impl Woodbury {
                 .factorise(&reduced, Some(&signs), work)
                 .map_err(fail)?;
         }
+        let ct_now = ct_val.clone();
         Ok((
             Box::new(Self {
                 inv,
@@ -792,7 +795,7 @@ impl Woodbury {
                 a_ss,
                 reduced,
                 factor,
-                ct_now: Vec::new(),
+                ct_now,
                 red: vec![0.0; ns + m],
                 t: vec![0.0; m],
                 u: vec![0.0; n],
@@ -841,7 +844,8 @@ impl Woodbury {
     }
 
     /// Takes `sys`'s values of `C` (transposed, [`Woodbury::product`]
-    /// reads them), which may have moved since the set-up (a kept factor).
+    /// reads them), which have moved since the set-up when its factor is
+    /// kept for a later iterate.
     fn follow(&mut self, sys: &SplitSystem<'_>) {
         if self.plan.ct_src.len() == sys.c_val.len() {
             self.plan.transpose_values(sys.c_val, &mut self.ct_now);
@@ -867,7 +871,6 @@ impl Woodbury {
     ) {
         let (plan, ct_now) = (&self.plan, &self.ct_now);
         if plan.generation != generation
-            || plan.ct_src.len() != sys.c_val.len()
             || ct_now.len() != sys.c_val.len()
             || plan.ct_ptr.len() != y.len() + 1
         {
@@ -995,6 +998,17 @@ fn stiff_entries(
     }
 }
 
+/// Rows per range when `m` rows of `Ŝ` are shared among the threads:
+/// four ranges a thread above 4 096 rows, one range below.
+fn rows_per_range(m: usize) -> usize {
+    let ranges = if m > 4096 {
+        (rayon::current_num_threads() * 4).max(1)
+    } else {
+        1
+    };
+    m.div_ceil(ranges).max(1)
+}
+
 /// The patterns of `C`, of `Cᵀ` and of `Ŝ = I + C D Cᵀ` (`D` diagonal)
 /// for one mesh: built once per pattern generation, so that each Picard
 /// iterate only refills values (Gustavson's product with the pattern
@@ -1055,12 +1069,7 @@ impl SchurProduct {
         // order: the same pattern for any number of threads. `Cᵀ`'s rows
         // are sorted, so the columns below `i` are a prefix skipped.
         let (ct_p, ct_i, ct_o) = (&ct_ptr, &ct_idx, &ct_of);
-        let chunks = if m > 4096 {
-            (rayon::current_num_threads() * 4).max(1)
-        } else {
-            1
-        };
-        let rows = m.div_ceil(chunks).max(1);
+        let rows = rows_per_range(m);
         let parts: Vec<(Vec<usize>, Vec<usize>)> = (0..m.div_ceil(rows))
             .into_par_iter()
             .map(|c| {
@@ -1130,13 +1139,8 @@ impl SchurProduct {
         out.clear();
         out.resize(idx.len(), 0.0);
         // Row ranges of about equal work, each filling its own slice.
-        let chunks = if m > 4096 {
-            (rayon::current_num_threads() * 4).max(1)
-        } else {
-            1
-        };
-        let rows = m.div_ceil(chunks).max(1);
-        let mut parts = Vec::with_capacity(chunks);
+        let rows = rows_per_range(m);
+        let mut parts = Vec::with_capacity(m.div_ceil(rows));
         let mut rest = out.as_mut_slice();
         let mut r0 = 0;
         while r0 < m {
@@ -1392,9 +1396,6 @@ impl BlockSolver {
         }
     }
 
-    /// The preconditioner for `sys`: the Cholesky path reads the split
-    /// system itself, the multigrid path its blocks as CSR (`A_v`, `C`,
-    /// `Cᵀ`; [`Blocks`]).
     /// A new set-up ([`BlockSolver::build`]) for the solves that follow,
     /// counted, which later iterates of the same Picard loop may keep.
     fn set_up(
@@ -1412,6 +1413,9 @@ impl BlockSolver {
         Ok(())
     }
 
+    /// The preconditioner for `sys`: the Cholesky path reads the split
+    /// system itself, the multigrid path its blocks as CSR (`A_v`, `C`,
+    /// `Cᵀ`; [`Blocks`]).
     fn build(
         &mut self,
         pressure: PressureSolve,
@@ -1958,8 +1962,8 @@ impl BlockSolver {
         self.stats.setup_seconds += (t1 - t0).as_secs_f64();
         // The residual of the eliminated system, the one the direct path
         // reports: `e ← f − (A_v + CᵀC) v`, returns ‖e‖/‖f‖.
-        // (`e` holds `(A_v + CᵀC) v` on entry; the Cholesky path's set-up
-        // forms that product in parallel, `Woodbury::product`.)
+        // (`e` holds `(A_v + CᵀC) v` on entry: `Woodbury::product` on the
+        // Cholesky path, in parallel rows.)
         let den = dot(sys.rhs, sys.rhs).sqrt();
         let eliminated = |e: &mut [f64]| {
             for_each_row(e, |i, e| *e = sys.rhs[i] - *e);
@@ -1974,7 +1978,9 @@ impl BlockSolver {
         let mut q = Vec::new();
         match self.setup.as_mut().map(|s| &mut s.prec) {
             Some(Prec::Woodbury(w)) => {
-                w.follow(sys);
+                if keep {
+                    w.follow(sys);
+                }
                 w.product(sys, generation, x, &mut r, &mut q);
             }
             _ => sys.apply(x, &mut r, &mut q),
@@ -1999,7 +2005,6 @@ impl BlockSolver {
             };
             match &mut setup.prec {
                 Prec::Woodbury(w) => {
-                    w.follow(sys);
                     // Preconditioned conjugate gradient on A, with the true
                     // residual's recurrence; on a kept factor for at most
                     // `kept_factor_iterations`.
