@@ -264,6 +264,52 @@ fn foreign_damaged_and_future_checkpoints_are_refused() {
     assert!(err.to_string().contains("dimension"), "{err}");
 }
 
+/// A checkpoint edited by hand (its checksum made to match: the checksum
+/// guards against damage, not against edits) whose time, or a particle's
+/// state, is not a number is refused; before session 35 a time of NaN ran
+/// on and wrote `"simulated_time": null`.
+#[test]
+fn a_checkpoint_whose_time_or_state_is_not_finite_is_refused() {
+    let mut sim = dam_break();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let section = ck.section(SIMULATION).unwrap().to_vec();
+    let replaced = |value: f64, by: f64| -> Checkpoint {
+        let from = value.to_bits().to_le_bytes();
+        let at = section
+            .windows(8)
+            .position(|w| w == from)
+            .expect("the value is in the section");
+        let mut edited = section.clone();
+        edited[at..at + 8].copy_from_slice(&by.to_bits().to_le_bytes());
+        let mut c = ck.clone();
+        c.set(SIMULATION, edited);
+        Checkpoint::decode(&c.encode()).unwrap()
+    };
+    let mut fresh = dam_break();
+    for (value, by, says) in [
+        (sim.time(), f64::NAN, "time"),
+        (sim.time(), -1.0, "time"),
+        (sim.time(), f64::INFINITY, "time"),
+        (sim.particles().x()[0][1], f64::NAN, "not finite"),
+        (
+            sim.particles().v().last().unwrap()[0],
+            f64::INFINITY,
+            "not finite",
+        ),
+    ] {
+        let err = fresh.restore(&replaced(value, by)).unwrap_err();
+        assert!(
+            matches!(err, RunError::Checkpoint(CheckpointError::Corrupt(_)))
+                && err.to_string().contains(says),
+            "{value} → {by}: {err}"
+        );
+        assert_eq!(fresh.time(), 0.0, "a refused checkpoint changes nothing");
+    }
+    fresh.restore(&ck).unwrap();
+    assert_eq!(fresh.time(), sim.time());
+}
+
 /// A scene whose material changed since the checkpoint (the gate's Young's
 /// modulus doubled) is refused with the material named; before, only the
 /// number of materials was compared, and the run went on as another

@@ -45,6 +45,25 @@ pub enum RunError {
     /// A checkpoint could not be read or does not fit this simulation.
     #[error(transparent)]
     Checkpoint(#[from] crate::checkpoint::CheckpointError),
+    /// The Courant bound asks for a step below the smallest step allowed:
+    /// a particle this fast would cross many elements within the smallest
+    /// step, so the run would crawl at that step (or blow up) instead of
+    /// ending (a Courant number of 10⁻³⁰⁰, a flow that has blown up).
+    #[error("at t = {time} s the Courant step {courant:e} × {crossing:e} s (the smallest spacing over speed, particle {particle} at {speed:e} m/s) is below the smallest step {min_dt:e} s: a flow this fast cannot be followed (has it blown up? is the Courant number too small?)")]
+    CourantStepTooSmall {
+        /// Time (s).
+        time: f64,
+        /// The Courant number.
+        courant: f64,
+        /// `min_i h_i / |v_i|` (s).
+        crossing: f64,
+        /// The particle that sets it.
+        particle: usize,
+        /// Its speed (m/s).
+        speed: f64,
+        /// The smallest step (s), `StepParams::min_dt`.
+        min_dt: f64,
+    },
     /// A particle position became non-finite.
     #[error("particle {particle} has a non-finite position at t = {time} s")]
     NonFinite {

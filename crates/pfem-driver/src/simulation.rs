@@ -889,6 +889,24 @@ where
         } else {
             f64::INFINITY
         };
+        if crossing.is_finite() && self.controller.courant * crossing < self.controller.dt_min {
+            let p = &self.particles;
+            let particle = (0..p.len())
+                .filter(|&i| p.kind()[i] != ParticleKind::Wall)
+                .min_by(|&a, &b| {
+                    let t = |i: usize| p.spacing()[i] / p.v()[i].norm();
+                    t(a).total_cmp(&t(b))
+                })
+                .unwrap_or(0);
+            return Err(RunError::CourantStepTooSmall {
+                time: self.clock.time,
+                courant: self.controller.courant,
+                crossing,
+                particle,
+                speed: p.v().get(particle).map_or(f64::NAN, |v| v.norm()),
+                min_dt: self.controller.dt_min,
+            });
+        }
         let mut dt = if crossing.is_finite() {
             self.controller.next(crossing, 1.0, self.clock.dt)
         } else {
@@ -1347,7 +1365,29 @@ where
             rejected: d.u64()?,
             rejected_by_cause: (d.u64()?, d.u64()?),
         };
+        // A checksum guards against damage, not against an edited file:
+        // a time or a state that is not a number would run on as one.
+        if !(clock.time.is_finite() && clock.time >= 0.0 && clock.dt.is_finite() && clock.dt >= 0.0)
+        {
+            return Err(CheckpointError::Corrupt(format!(
+                "its time {} s and step {} s must be finite, not negative",
+                clock.time, clock.dt
+            ))
+            .into());
+        }
         let particles = Particles::<D>::decode(&mut d)?;
+        let finite = |v: &[Vector<D>]| v.iter().position(|v| !v.iter().all(|c| c.is_finite()));
+        if let Some(i) = finite(particles.x())
+            .or_else(|| finite(particles.initial_positions()))
+            .or_else(|| finite(particles.v()))
+            .or_else(|| finite(particles.a()))
+            .or_else(|| particles.pressure().iter().position(|p| !p.is_finite()))
+        {
+            return Err(CheckpointError::Corrupt(format!(
+                "particle {i}'s position, initial position, velocity, acceleration or pressure is not finite"
+            ))
+            .into());
+        }
         // Walls and solids keep their indices for the whole run.
         let fixed = |p: &Particles<D>| {
             p.kind()

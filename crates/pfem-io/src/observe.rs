@@ -98,11 +98,19 @@ pub const OUTPUT_SECTION: &str = "output";
 /// directory.
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
 
-/// Reads a checkpoint file ([`pfem_driver::checkpoint`]).
+/// Reads a checkpoint file ([`pfem_driver::checkpoint`]); a path that is
+/// not a regular file (a device, a pipe) is refused.
 pub fn read_checkpoint(path: impl AsRef<std::path::Path>) -> Result<Checkpoint, RunError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path)
-        .map_err(|e| RunError::Output(Box::new(crate::output::OutputError::io(path, e))))?;
+    let io = |e| RunError::Output(Box::new(crate::output::OutputError::io(path, e)));
+    // A device or a pipe (`/dev/zero`) would be read without end.
+    if !std::fs::metadata(path).map_err(io)?.is_file() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file",
+        )));
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
     Ok(Checkpoint::decode(&bytes)?)
 }
 
@@ -250,8 +258,21 @@ where
     /// previous run's files from it when overwriting.
     fn prepare_dir(&self, name: &str) -> Result<(), crate::output::OutputError> {
         use crate::output::OutputError;
-        let Ok(entries) = std::fs::read_dir(&self.dir) else {
-            return Ok(()); // does not exist yet
+        // An empty path names no directory: reading it fails, and writing
+        // into it writes into the working directory, past the check below.
+        if self.dir.as_os_str().is_empty() {
+            return Err(OutputError::io(
+                &self.dir,
+                std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    "the output directory is an empty path: name one (`.` for the working directory)",
+                ),
+            ));
+        }
+        let entries = match std::fs::read_dir(&self.dir) {
+            Ok(entries) => entries,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()), // made later
+            Err(e) => return Err(OutputError::io(&self.dir, e)),
         };
         let names: Vec<std::ffi::OsString> = entries.flatten().map(|e| e.file_name()).collect();
         if names.is_empty() {

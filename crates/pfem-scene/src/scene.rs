@@ -539,7 +539,13 @@ where
     /// geometries and spacings, without placing a particle.
     pub fn estimate(&self) -> Estimate {
         let mut particles = 0.0;
+        // A surface's fill stores a (line, facet) pair for each lattice
+        // line near each facet (`ClosedSurface::fill_work`).
+        let mut fill_bytes = 0.0;
         for b in &self.bodies {
+            if let Geometry::Surface(s) = &b.geometry {
+                fill_bytes += 16.0 * s.fill_work(b.spacing);
+            }
             let h = b.spacing;
             particles += match &b.geometry {
                 Geometry::Box { min, max } => (0..D)
@@ -573,7 +579,7 @@ where
         };
         Estimate {
             particles,
-            bytes: particles * per_particle,
+            bytes: particles * per_particle + fill_bytes,
         }
     }
 

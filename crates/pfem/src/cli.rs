@@ -81,6 +81,12 @@ impl Args {
                         ))
                     })?;
                     match name.as_str() {
+                        "out" if value.is_empty() => {
+                            return Err(ArgsError(
+                                "--out needs a directory, got an empty one (`.` for the working directory)"
+                                    .into(),
+                            ))
+                        }
                         "out" => out.out = Some(PathBuf::from(value)),
                         "spacing" => out.spacing = Some(parse_positive(&name, &value)?),
                         "end-time" => out.end_time = Some(parse_positive(&name, &value)?),

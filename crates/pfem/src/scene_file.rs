@@ -263,10 +263,20 @@ pub struct ContactSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionSpec {
-    /// The two bodies.
+    /// The two bodies (exactly two names).
+    #[serde(deserialize_with = "two_names")]
     pub bodies: [String; 2],
     /// Coulomb coefficient (≥ 0).
     pub mu: f64,
+}
+
+/// Exactly two names: a sequence of any other length is refused (read as
+/// `[String; 2]`, the extra names were dropped unseen).
+fn two_names<'de, De: serde::Deserializer<'de>>(d: De) -> Result<[String; 2], De::Error> {
+    let names = Vec::<String>::deserialize(d)?;
+    let n = names.len();
+    <[String; 2]>::try_from(names)
+        .map_err(|_| serde::de::Error::custom(format!("expected exactly 2 body names, got {n}")))
 }
 
 /// An axis-aligned box `{ min = [..], max = [..] }` (m).
@@ -491,8 +501,12 @@ impl std::fmt::Debug for LoadedScene {
     }
 }
 
+/// Largest scene file [`SceneFile::read`] reads (bytes): 256 MiB.
+pub const MAX_SCENE_FILE_BYTES: u64 = 256 << 20;
+
 impl SceneFile {
-    /// Reads and parses the file at `path`.
+    /// Reads and parses the file at `path`: a regular file of at most
+    /// [`MAX_SCENE_FILE_BYTES`].
     ///
     /// # Errors
     ///
@@ -500,10 +514,22 @@ impl SceneFile {
     /// line and the field).
     pub fn read(path: impl AsRef<Path>) -> Result<Self, SceneError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::File {
+        let fail = |why: String| SceneError::File {
             path: path.display().to_string(),
-            why: e.to_string(),
-        })?;
+            why,
+        };
+        // A device or a pipe (`/dev/zero`) would be read without end.
+        let meta = std::fs::metadata(path).map_err(|e| fail(e.to_string()))?;
+        if !meta.is_file() {
+            return Err(fail("not a regular file".into()));
+        }
+        if meta.len() > MAX_SCENE_FILE_BYTES {
+            return Err(fail(format!(
+                "{} bytes, more than a scene file's {MAX_SCENE_FILE_BYTES} (particles and fields this large belong in files of their own)",
+                meta.len()
+            )));
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
         let mut file = Self::parse(&text, &path.display().to_string())?;
         if file.name.is_none() {
             file.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());

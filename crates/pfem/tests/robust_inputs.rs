@@ -331,6 +331,68 @@ geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Found by session 35's review: an empty `--out` wrote into the working
+/// directory, past the check that refuses a used folder, and replaced the
+/// `probes.csv` there; a device given as a checkpoint was read until
+/// memory ran out. Both are refused before anything is written.
+#[test]
+fn an_empty_output_path_and_a_device_checkpoint_are_refused() {
+    let bin = env!("CARGO_BIN_EXE_pfem");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/scenes/hydrostatic_2d.toml");
+    let empty = Command::new(bin)
+        .args(["run", scene.to_str().unwrap(), "--out", "", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(!empty.status.success());
+    let text = String::from_utf8_lossy(&empty.stderr);
+    assert!(text.contains("--out needs a directory"), "{text}");
+    // The library refuses it too.
+    let mut sim = build(puddle("empty")).unwrap();
+    let mut out = StandardOutput::new("", false, vec![], true);
+    let err = sim.run(&mut [&mut out]).expect_err("an empty path");
+    assert!(err.to_string().contains("empty path"), "{err}");
+    if std::path::Path::new("/dev/zero").exists() {
+        let dir = std::env::temp_dir().join(format!("pfem-test-devzero-{}", std::process::id()));
+        let zero = Command::new(bin)
+            .args([
+                "run",
+                scene.to_str().unwrap(),
+                "--restart",
+                "/dev/zero",
+                "--out",
+                dir.to_str().unwrap(),
+                "--quiet",
+            ])
+            .output()
+            .unwrap();
+        assert!(!zero.status.success());
+        let text = String::from_utf8_lossy(&zero.stderr);
+        assert!(text.contains("not a regular file"), "{text}");
+        assert!(!dir.exists(), "nothing written");
+    }
+}
+
+/// A Courant number so small that the step it asks for is below the
+/// smallest step (`StepParams::min_dt`) stops the run with a typed error
+/// once the water moves, instead of crawling at that smallest step (the
+/// review's 10⁻³⁰⁰ ran 134 000 steps in 30 s to reach half its end time).
+#[test]
+fn a_courant_step_below_the_smallest_step_stops_the_run() {
+    let mut s = puddle("crawl");
+    s.settings.courant = 1e-300;
+    let mut sim = build(s).expect("at rest, no Courant bound to check yet");
+    let err = sim.run(&mut []).expect_err("the water falls");
+    match &err {
+        RunError::CourantStepTooSmall { courant, speed, .. } => {
+            assert_eq!(*courant, 1e-300);
+            assert!(*speed > 0.0 && speed.is_finite());
+        }
+        other => panic!("expected CourantStepTooSmall, got {other}"),
+    }
+    assert!(sim.time() < 0.02 && sim.steps() < 10, "{} s", sim.time());
+}
+
 /// The bundled wave-paddle scene runs end to end through `pfem run`: the
 /// paddle follows its sinusoidal law, and the force and point probes
 /// appear in `probes.csv` with finite values.

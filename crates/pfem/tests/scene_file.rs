@@ -546,6 +546,33 @@ clamp = {clamp}
     )
 }
 
+/// A friction pair names exactly two bodies (session 35's review: a third
+/// name, or a number, was dropped unseen), and a scene file must be a
+/// regular file (`/dev/zero` was read until memory ran out).
+#[test]
+fn friction_names_two_bodies_and_a_scene_file_is_a_file() {
+    let contact = |bodies: &str| {
+        puddle("", "end_time = 0.01", WATER)
+            + &format!("\n[contact]\nfriction = [{{ bodies = {bodies}, mu = 0.1 }}]\n")
+    };
+    let why = file_error(&contact(r#"["water", "floor", "floor"]"#));
+    assert!(why.contains("exactly 2 body names, got 3"), "{why}");
+    let why = file_error(&contact(r#"["floor"]"#));
+    assert!(why.contains("exactly 2 body names, got 1"), "{why}");
+    let why = file_error(&contact(r#"["floor", 42]"#));
+    assert!(why.contains("expected a string"), "{why}");
+    for special in ["/dev/zero", "/dev/urandom"] {
+        if std::path::Path::new(special).exists() {
+            match SceneFile::read(special) {
+                Err(SceneError::File { why, .. }) => {
+                    assert!(why.contains("not a regular file"), "{why}")
+                }
+                other => panic!("{special}: {other:?}"),
+            }
+        }
+    }
+}
+
 /// Found by an adversarial review (session 26): each of these ran as if
 /// the mistake were not there (a clamp beside its solid let the block fall
 /// through the floor, a flat fluid ran with no fluid, a bowtie polygon was
