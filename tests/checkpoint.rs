@@ -310,6 +310,60 @@ fn a_checkpoint_whose_time_or_state_is_not_finite_is_refused() {
     assert_eq!(fresh.time(), sim.time());
 }
 
+/// A restart under other settings is refused with the first one that
+/// differs named: another time scheme, another linear solver, another
+/// largest step (session 35's review: `--scheme euler`, `--solver lu` and
+/// `--pressure-stabilisation 1` were accepted, and the run went on as
+/// another run while claiming to continue this one). The same settings
+/// are accepted, whatever the memory budget (it follows the machine).
+#[test]
+fn a_restart_under_other_settings_is_refused() {
+    let mut sim = dam_break();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let case = || DamBreak {
+        spacing: 0.05715 / 8.0,
+        end_time: 0.06,
+        ..Default::default()
+    };
+    let euler = StepParams {
+        scheme: pfem::time::Scheme::BackwardEuler,
+        ..StepParams::default()
+    };
+    let mut other = Simulation::new(case().scene(), Box::new(Delaunay2::default()), euler).unwrap();
+    let err = other.restore(&ck).unwrap_err();
+    assert!(
+        matches!(err, RunError::Checkpoint(CheckpointError::Mismatch { .. }))
+            && err.to_string().contains("Bossak")
+            && err.to_string().contains("BackwardEuler"),
+        "{err}"
+    );
+    println!("another scheme: {err}");
+    let mut other = dam_break();
+    other.set_solver(Box::new(pfem::assembly::DirectSolver::default()));
+    let err = other.restore(&ck).unwrap_err();
+    assert!(err.to_string().contains("solver"), "{err}");
+    println!("another solver: {err}");
+    let mut scene = case().scene();
+    scene.settings.max_dt *= 0.5;
+    let mut other = sim2(scene);
+    let err = other.restore(&ck).unwrap_err();
+    assert!(err.to_string().contains("dt_max"), "{err}");
+    let options = Options {
+        memory_budget: 1e12,
+        ..Options::default()
+    };
+    let mut same = Simulation::with_options(
+        case().scene(),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+        options,
+    )
+    .unwrap();
+    same.restore(&ck).unwrap();
+    assert_eq!(same.time(), sim.time());
+}
+
 /// A scene whose material changed since the checkpoint (the gate's Young's
 /// modulus doubled) is refused with the material named; before, only the
 /// number of materials was compared, and the run went on as another

@@ -67,6 +67,11 @@ pub const SIMULATION: &str = "simulation";
 /// between two runs of the same scene; the state does not).
 pub const TIMINGS: &str = "timings";
 
+/// The driver's section: its time-integration, step-control, solver and
+/// driver settings, printed (session 35; a checkpoint without it is read
+/// as before, unchecked).
+pub const SETTINGS: &str = "settings";
+
 /// Why a checkpoint could not be read or applied.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]

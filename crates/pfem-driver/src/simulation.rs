@@ -11,7 +11,9 @@ use pfem_geometry::{
 };
 use pfem_time::{CourantController, Integrator, StepInput, StepParams};
 
-use crate::checkpoint::{Checkpoint, CheckpointError, Decoder, Encoder, SIMULATION, TIMINGS};
+use crate::checkpoint::{
+    Checkpoint, CheckpointError, Decoder, Encoder, SETTINGS, SIMULATION, TIMINGS,
+};
 use crate::elements::Elements;
 use crate::hooks::{FreeSurfacePressureZero, Hook, HookContext, VolumeCorrection};
 use crate::particles::{Particles, NO_MATERIAL};
@@ -356,6 +358,9 @@ where
     cut_against: Vec<bool>,
     /// [`Options::free_solids_start_rigid`].
     start_rigid: bool,
+    /// The driver options the simulation was built with (their print goes
+    /// into checkpoints: [`Simulation::settings_print`]).
+    options: Options,
     stepper: Stepper<D>,
     contact: ContactSetup<D>,
 }
@@ -548,6 +553,7 @@ where
             },
             cut_against,
             start_rigid: options.free_solids_start_rigid,
+            options,
             stepper: Stepper {
                 tessellator,
                 integrator: Integrator::new(params),
@@ -1201,9 +1207,32 @@ impl<const D: usize> Simulation<D>
 where
     Const<D>: Dim,
 {
+    /// What decides a run's path besides its scene and state: the time
+    /// integration's parameters, the step controller, the linear solver
+    /// and the driver options, printed. A restart under other settings
+    /// (`--scheme`, `--solver`, `--pressure-stabilisation`, a changed
+    /// `max_dt`) would not continue the run it claims to, so
+    /// [`Simulation::restore`] refuses it.
+    /// (The memory budget is left out: it follows the machine's memory,
+    /// and a run may continue on another machine.)
+    fn settings_print(&self) -> String {
+        let options = Options {
+            memory_budget: 0.0,
+            ..self.options
+        };
+        format!(
+            "{:?}; {:?}; solver {}; {:?}",
+            self.stepper.integrator.params,
+            self.controller,
+            self.stepper.integrator.solver_name(),
+            options
+        )
+    }
+
     /// The run's state as a checkpoint ([`crate::checkpoint`]): sections
     /// [`SIMULATION`] (particles, materials, solid histories, clock, volume ledger,
-    /// body force, hook states) and [`TIMINGS`]. Add an observer's own
+    /// body force, hook states), [`TIMINGS`] and [`SETTINGS`] (the settings the run must be
+    /// continued under). Add an observer's own
     /// sections, encode and write it; [`Simulation::restore`] continues a
     /// simulation built from the same scene and options from it, bit for
     /// bit.
@@ -1277,6 +1306,9 @@ where
         let mut ck = Checkpoint::default();
         ck.set(SIMULATION, e.finish());
         ck.set(TIMINGS, t.finish());
+        let mut st = Encoder::new();
+        st.str(&self.settings_print());
+        ck.set(SETTINGS, st.finish());
         ck
     }
 
@@ -1356,6 +1388,33 @@ where
                     )
                 };
                 return Err(mismatch("a material", show(&saved), show(&now)));
+            }
+        }
+        // The settings (format 3 checkpoints of session 35 on; older
+        // ones have no such section and are not checked).
+        if let Some(bytes) = checkpoint.section(SETTINGS) {
+            let mut sd = Decoder::new(bytes);
+            let saved = sd.str()?.to_string();
+            sd.end()?;
+            let now = self.settings_print();
+            if saved != now {
+                // The first setting that differs, `name: value` each.
+                let split = |s: &str| -> Vec<String> {
+                    s.split([';', ',', '{', '}'])
+                        .map(|t| t.trim().to_string())
+                        .filter(|t| !t.is_empty())
+                        .collect()
+                };
+                let (a, b) = (split(&saved), split(&now));
+                let at = (0..a.len().max(b.len()))
+                    .find(|&i| a.get(i) != b.get(i))
+                    .unwrap_or(0);
+                let show = |v: &[String]| v.get(at).cloned().unwrap_or_default();
+                return Err(mismatch(
+                    "a time-integration, solver or driver setting",
+                    show(&a),
+                    show(&b),
+                ));
             }
         }
         let clock = Clock {

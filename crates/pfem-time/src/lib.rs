@@ -639,6 +639,11 @@ where
         self.solver.work()
     }
 
+    /// The linear solver's name ([`LinearSolver::name`]).
+    pub fn solver_name(&self) -> &str {
+        self.solver.name()
+    }
+
     /// Sets the accelerations consistent with the state at `t₀`:
     /// `M A⁰ = F + f_int(σ⁰, V⁰)` with the lumped mass, so that Newmark's
     /// first step (eq. 48) starts from the right acceleration instead of

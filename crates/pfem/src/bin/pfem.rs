@@ -57,7 +57,7 @@ Options:
                   and at the end (atomically; the last one is kept)
   --restart CHECKPOINT
                   continue the run that wrote CHECKPOINT (same FILE and
-                  options; DIR its output folder): the result is the
+                  options, other ones refused; DIR its output folder): the result is the
                   uninterrupted run's, bit for bit. With a later
                   --end-time, a finished run goes on
   --scheme S      bossak (default, α_B = -0.3), newmark (the paper's
