@@ -274,6 +274,11 @@ pub const BYTES_PER_PARTICLE_2D: f64 = 20e3;
 /// factor's fill grows with size in 3D; 50 KB is a conservative bound.
 pub const BYTES_PER_PARTICLE_3D: f64 = 50e3;
 
+/// A body whose coordinates reach farther from the origin than this many
+/// of its spacings is refused (`2³²`: there a double resolves positions to
+/// about `2.4·10⁻⁷` of the spacing).
+pub const MAX_COORDINATE_SPACINGS: f64 = 4_294_967_296.0;
+
 /// A scene's estimated size ([`Scene::estimate`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Estimate {
@@ -686,12 +691,45 @@ where
                     why: "non-finite or empty geometry".into(),
                 });
             }
+            // Far from the origin a double cannot tell lattice nodes apart
+            // (at 10¹⁵ m its spacing is 0.125 m): a body there would run
+            // with particles merged or misplaced.
+            let far = lo
+                .iter()
+                .chain(hi.iter())
+                .fold(0.0f64, |a, v| a.max(v.abs()));
+            if far > MAX_COORDINATE_SPACINGS * b.spacing {
+                return Err(SceneError::InvalidGeometry {
+                    body: b.name.clone(),
+                    why: format!(
+                        "a coordinate of {far:e} m is more than {MAX_COORDINATE_SPACINGS:e} spacings ({:e} m) from the origin, where a double resolves positions only to {:e} m: move the scene nearer the origin",
+                        b.spacing,
+                        far * f64::EPSILON
+                    ),
+                });
+            }
             if let Geometry::Box { min, max } = &b.geometry {
                 if (0..D).any(|k| max[k] < min[k]) {
                     return Err(SceneError::InvalidGeometry {
                         body: b.name.clone(),
                         why: "box max below min".into(),
                     });
+                }
+                // A solid box thinner than half a spacing is one layer of
+                // particles: no element holds them (a free one then ran to
+                // a NaN residual).
+                if b.kind == ParticleKind::Solid {
+                    if let Some(k) = (0..D).find(|&k| ((max[k] - min[k]) / b.spacing).round() < 1.0)
+                    {
+                        return Err(SceneError::InvalidGeometry {
+                            body: b.name.clone(),
+                            why: format!(
+                                "a solid box spans {:e} m along axis {k}, less than its spacing {:e} m: one layer of particles makes no element",
+                                max[k] - min[k],
+                                b.spacing
+                            ),
+                        });
+                    }
                 }
             }
             let extent = (hi - lo).max();

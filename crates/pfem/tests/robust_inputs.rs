@@ -373,6 +373,48 @@ fn an_empty_output_path_and_a_device_checkpoint_are_refused() {
     }
 }
 
+/// A body 10¹⁵ m from the origin (where a double resolves positions to
+/// 0.125 m, five times the spacing) and a solid box thinner than its
+/// spacing (one layer of particles, no element) are refused by the check;
+/// session 35's review had the first fail mid-run with a misleading "too
+/// close" and the second run to a NaN residual.
+#[test]
+fn bodies_far_from_the_origin_or_too_thin_to_mesh_are_refused() {
+    let mut s = puddle("far");
+    for b in &mut s.bodies {
+        if let Geometry::Box { min, max } = &mut b.geometry {
+            min[0] += 1e15;
+            max[0] += 1e15;
+        }
+    }
+    match build(s) {
+        Err(SceneError::InvalidGeometry { why, .. }) => {
+            assert!(why.contains("nearer the origin"), "{why}")
+        }
+        other => panic!("expected InvalidGeometry, got {other:?}"),
+    }
+    let plate = |thickness: f64| {
+        puddle("plate").solid(
+            "plate",
+            Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.3),
+                max: Point::<2>::new(0.2, 0.3 + thickness),
+            },
+            0.05,
+            None,
+        )
+    };
+    match build(plate(0.0)) {
+        Err(SceneError::InvalidGeometry { body, why }) => {
+            assert_eq!(body, "plate");
+            assert!(why.contains("one layer"), "{why}");
+        }
+        other => panic!("expected InvalidGeometry, got {other:?}"),
+    }
+    assert!(build(plate(0.05)).is_ok());
+}
+
 /// A Courant number so small that the step it asks for is below the
 /// smallest step (`StepParams::min_dt`) stops the run with a typed error
 /// once the water moves, instead of crawling at that smallest step (the
