@@ -533,6 +533,21 @@ where
                 particles.pressure[i] = p;
             }
         }
+        // The Courant bound on the placed particles' initial speeds, each
+        // on its own spacing: `Scene::validate` bounds a body's uniform
+        // `velocity`; a `velocity_field` is known only here.
+        let rate = (0..particles.len())
+            .filter(|&i| particles.kind[i] != ParticleKind::Wall)
+            .map(|i| particles.v[i].norm() / particles.spacing[i])
+            .fold(0.0, f64::max);
+        let courant_steps = settings.end_time * rate / settings.courant;
+        if courant_steps > crate::scene::MAX_STEPS {
+            return Err(SceneError::CannotFinish {
+                what: "steps at the Courant limit of the placed particles' initial speeds".into(),
+                count: courant_steps,
+                limit: crate::scene::MAX_STEPS,
+            });
+        }
         // Contact: the default penalty is the stiffest solid's P-wave
         // modulus ρ c².
         let contact_stiffness = contact.stiffness.unwrap_or_else(|| {

@@ -83,6 +83,16 @@ fn settings_that_cannot_finish_are_refused() {
         Err(SceneError::CannotFinish { count, .. }) => assert!(count > 1e8),
         other => panic!("expected CannotFinish, got {other:?}"),
     }
+    // The same speed as a velocity field, known only once the particles
+    // are placed (session 35: it passed the check).
+    let mut s = puddle("field").with_velocity_field(|x| Vector::<2>::new(1e6 * (1.0 + x[0]), 0.0));
+    s.settings.end_time = 10.0;
+    match build(s) {
+        Err(SceneError::CannotFinish { what, count, .. }) => {
+            assert!(count > 1e8 && what.contains("placed particles"), "{what}")
+        }
+        other => panic!("expected CannotFinish, got {other:?}"),
+    }
 }
 
 /// A 1 m box at a spacing of 10⁻⁶ m (10¹² particles) is refused from its

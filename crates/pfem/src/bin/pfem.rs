@@ -230,18 +230,34 @@ where
         scene.settings.end_time,
         scene.settings.max_dt,
     );
+    let courant = scene.settings.courant;
     let built = scene.build(tessellator).map_err(|e| e.to_string())?;
+    // The step count's lower bound: the largest step, or the Courant
+    // limit of the initial speeds when that is tighter.
+    let c = &built.particles;
+    let rate = (0..c.x.len())
+        .filter(|&i| c.kind[i] != pfem::core::ParticleKind::Wall)
+        .map(|i| c.v[i].norm() / c.spacing[i])
+        .fold(0.0, f64::max);
+    let (steps, why) = if t * rate / courant > t / dt {
+        (
+            t * rate / courant,
+            "the Courant limit of the initial speeds",
+        )
+    } else {
+        (t / dt, "end time / max_dt")
+    };
     println!(
         "{}: valid {D}D scene `{name}`: {bodies} bodies, {probes} probe columns, end time {t} s",
         file.display()
     );
     println!(
-        "  {} particles placed (estimated {:.0}), memory about {:.1} MB of a {:.1} GB budget, at least {:.0} steps (end time / max_dt)",
+        "  {} particles placed (estimated {:.0}), memory about {:.1} MB of a {:.1} GB budget, at least {:.0} steps ({why})",
         built.particles.len(),
         estimate.particles,
         estimate.bytes / 1e6,
         budget / 1e9,
-        (t / dt).ceil()
+        steps.ceil()
     );
     for m in &built.merges {
         if m.dropped > 0 {
