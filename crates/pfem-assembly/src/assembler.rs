@@ -68,7 +68,13 @@ where
 
     /// Prescribes component `k` of the velocity of particle `i` (a slip
     /// wall normal to axis `k`).
+    ///
+    /// # Panics
+    ///
+    /// When `i` is not a particle of the constraints or `k` is not an axis
+    /// (`k ≥ D`).
     pub fn fix_component(&mut self, i: usize, k: usize, value: f64) {
+        assert!(k < D, "fix_component: axis {k} of a {D}D velocity");
         self.mask[i] |= 1 << k;
         self.velocity[i][k] = value;
     }
@@ -652,7 +658,15 @@ where
         }
         // Forget the last mesh first: a failed build must not be reused.
         self.last_mesh.3 = usize::MAX;
-        self.prepare_new(n_particles, mesh, materials)?;
+        if let Err(e) = self.prepare_new(n_particles, mesh, materials) {
+            // Nothing half-built may be assembled: an assembly now fits
+            // no input but an empty one (session 35's review: it indexed
+            // the half-built maps).
+            self.n_particles = 0;
+            self.n_elements = 0;
+            self.particle_of.clear();
+            return Err(e);
+        }
         self.ids_valid = !renumbered;
         self.work.patterns_built += 1;
         let last = &mut self.last_mesh;
@@ -971,6 +985,22 @@ where
         {
             return Err(AssemblyError::MeshMismatch {
                 what: "assembly input does not match the prepared mesh",
+            });
+        }
+        // The constraints index every particle, the materials every
+        // element's material (a `Constraints::default()`, or a shorter
+        // material list than the mesh's, panicked in the scatter).
+        if input.constraints.mask.len() != n || input.constraints.velocity.len() != n {
+            return Err(AssemblyError::MeshMismatch {
+                what: "the constraints do not have one entry per particle",
+            });
+        }
+        if self.elem_material[..ne.min(self.elem_material.len())]
+            .iter()
+            .any(|&m| m as usize >= input.materials.len())
+        {
+            return Err(AssemblyError::MeshMismatch {
+                what: "an element's material index is beyond the materials given",
             });
         }
         self.work.elements_assembled += ne as u64;
@@ -1600,6 +1630,12 @@ where
         if !self.is_stabilised() {
             return Ok(false);
         }
+        if v.len() < self.n_particles {
+            return Err(crate::SolveError::invalid(
+                "stabilised pressure increments",
+                "the velocities do not cover the prepared particles",
+            ));
+        }
         let m = self.c_node.len();
         let mut q = vec![0.0; m];
         for (r, qr) in q.iter_mut().enumerate() {
@@ -1857,6 +1893,11 @@ where
     /// the last assembly. `v` is indexed by particle.
     pub fn nodal_volumetric_rates(&self, v: &[Vector<D>], out: &mut Vec<NodalRate>) {
         out.clear();
+        // A velocity array that does not cover the prepared particles has
+        // no rates (session 35's review: it indexed past its end).
+        if v.len() < self.n_particles {
+            return;
+        }
         for a in 0..self.particle_of.len() {
             let (s, e) = (self.patch_ptr[a], self.patch_ptr[a + 1]);
             if s == e || self.vol_hat[a] <= 0.0 {
@@ -1879,8 +1920,28 @@ where
     /// Force the assembled system's element and nodal terms exert on each
     /// particle for a given velocity field, excluding inertia and body force:
     /// `−(K V − fσ̂)`, written per particle. Used for reactions on walls.
-    pub fn internal_force(&self, input: &AssemblyInput<'_, D>, out: &mut [Vector<D>]) {
+    ///
+    /// Errors: [`AssemblyError::MeshMismatch`] when `input`'s velocities
+    /// and pressures or `out` do not cover the prepared particles, or when
+    /// no assembly has run since the last [`Assembler::prepare`] (the
+    /// element states are the assembly's).
+    pub fn internal_force(
+        &self,
+        input: &AssemblyInput<'_, D>,
+        out: &mut [Vector<D>],
+    ) -> Result<(), AssemblyError> {
         let nv = <Const<D> as Dim>::NV;
+        let n = self.n_particles;
+        if input.v.len() < n || input.pressure_n.len() < n || out.len() < n {
+            return Err(AssemblyError::MeshMismatch {
+                what: "the velocities, pressures or forces do not cover the prepared particles",
+            });
+        }
+        if self.states.len() < self.n_elements || self.unified.len() < self.n_elements {
+            return Err(AssemblyError::MeshMismatch {
+                what: "no assembly since the mesh was prepared",
+            });
+        }
         out.iter_mut().for_each(|f| *f = Vector::<D>::zeros());
         let mut k = [0.0; MAX_LOCAL * MAX_LOCAL];
         let n_local = nv * D;
@@ -1932,6 +1993,7 @@ where
                 out[i] += self.w[slot] * p;
             }
         }
+        Ok(())
     }
 }
 

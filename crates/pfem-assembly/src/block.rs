@@ -537,6 +537,7 @@ fn solve_saddle_with(
     work: &mut SolverWork,
     x: &mut [f64],
 ) -> Result<SolveReport, SolveError> {
+    sys.check("saddle-point LDLᵀ", x)?;
     crate::solver::check_finite(sys.rhs)?;
     let n = sys.a_v.nrows();
     let (k, b) = saddle(sys)?;
@@ -1574,6 +1575,7 @@ impl LinearSolver for BlockSolver {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
+        sys.check(NAME, x)?;
         let pressure = self.pressure_for(sys);
         // A stabilised run whose size crossed `multigrid_from` keeps one
         // path's storage only.

@@ -91,4 +91,60 @@ pub enum SolveError {
         /// Iteration where it was found.
         iteration: usize,
     },
+    /// The parts of a split system do not fit together (`C`'s row
+    /// pointers, indices and values, its column indices against `A_v`, the
+    /// stabilisation's sizes).
+    #[error("{solver}: the split system is inconsistent: {why}")]
+    InvalidSystem {
+        /// Solver name.
+        solver: &'static str,
+        /// What does not fit.
+        why: &'static str,
+    },
+    /// The matrix is not square, or the right-hand side or the solution
+    /// vector does not have one entry per row.
+    #[error("{solver}: a {rows} × {cols} matrix with a right-hand side of {rhs} and a solution of {x} entries")]
+    DimensionMismatch {
+        /// Solver name.
+        solver: &'static str,
+        /// Matrix rows.
+        rows: usize,
+        /// Matrix columns.
+        cols: usize,
+        /// Right-hand side length.
+        rhs: usize,
+        /// Solution length.
+        x: usize,
+    },
+}
+
+impl SolveError {
+    /// [`SolveError::InvalidSystem`] for `solver`.
+    pub fn invalid(solver: &'static str, why: &'static str) -> Self {
+        SolveError::InvalidSystem { solver, why }
+    }
+
+    /// `Ok` when `a` is square and `b` and `x` have one entry per row;
+    /// [`SolveError::DimensionMismatch`] otherwise. Every solver of this
+    /// crate checks it first; a [`crate::LinearSolver`] of one's own
+    /// should too.
+    pub fn check_dimensions(
+        solver: &'static str,
+        rows: usize,
+        cols: usize,
+        rhs: usize,
+        x: usize,
+    ) -> Result<(), SolveError> {
+        if rows == cols && rhs == rows && x == rows {
+            Ok(())
+        } else {
+            Err(SolveError::DimensionMismatch {
+                solver,
+                rows,
+                cols,
+                rhs,
+                x,
+            })
+        }
+    }
 }

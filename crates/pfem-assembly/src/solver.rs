@@ -137,6 +137,7 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
+        sys.check("split system", x)?;
         if sys.stabilisation.is_some() {
             return crate::block::solve_saddle(sys, x);
         }
@@ -202,6 +203,45 @@ impl SplitSystem<'_> {
     /// Rows of `C`.
     pub fn c_rows(&self) -> usize {
         self.c_ptr.len().saturating_sub(1)
+    }
+
+    /// `Ok` when the parts fit together and `x` has one entry per row of
+    /// `A_v`: `A_v` square, `f` as long, `C`'s row pointers increasing
+    /// from 0 to the length of its indices and values, its indices within
+    /// `A_v`'s columns, the stabilisation's rows as many as `C`'s. Every
+    /// split solver of this crate checks it first (`O(nnz(C))`, against a
+    /// solve's many passes over it).
+    pub fn check(&self, solver: &'static str, x: &[f64]) -> Result<(), SolveError> {
+        let n = self.a_v.nrows();
+        SolveError::check_dimensions(solver, n, self.a_v.ncols(), self.rhs.len(), x.len())?;
+        let bad = |why| Err(SolveError::invalid(solver, why));
+        let nnz = self.c_idx.len();
+        if self.c_ptr.first().is_some_and(|&p| p != 0)
+            || self.c_ptr.last().is_some_and(|&p| p != nnz)
+            || self.c_val.len() != nnz
+            || self.c_ptr.windows(2).any(|w| w[1] < w[0])
+        {
+            return bad("C's row pointers, indices and values do not match");
+        }
+        if self.c_idx.iter().any(|&j| j >= n) {
+            return bad("a column index of C is beyond A_v's columns");
+        }
+        if let Some(st) = &self.stabilisation {
+            let m = self.c_rows();
+            let l_nnz = st.l_idx.len();
+            if st.offset.len() != m
+                || st.l_ptr.len() != m + 1
+                || st.l_ptr.first().is_some_and(|&p| p != 0)
+                || st.l_ptr.last().is_some_and(|&p| p != l_nnz)
+                || st.l_val.len() != l_nnz
+                || st.l_ptr.windows(2).any(|w| w[1] < w[0])
+                || st.l_idx.iter().any(|&j| j >= m)
+                || st.row_ids.is_some_and(|r| r.len() != m)
+            {
+                return bad("the stabilisation does not have C's rows");
+            }
+        }
+        Ok(())
     }
 
     /// `y = (A_v + Cᵀ C) x`; `q` is scratch of [`SplitSystem::c_rows`].
@@ -528,6 +568,8 @@ struct Direct<K: Kind> {
     numeric: K::Numeric,
     /// The numeric factors match `symbolic` and passed the residual check.
     factored: bool,
+    /// Rows of the matrix last solved (those `resolve` accepts).
+    n: usize,
     ws: Workspace,
     refine: RefineBuffers,
     work: SolverWork,
@@ -541,6 +583,7 @@ impl<K: Kind> Direct<K> {
             symbolic: None,
             numeric: K::Numeric::default(),
             factored: false,
+            n: 0,
             ws: Workspace::default(),
             refine: RefineBuffers::default(),
             work: SolverWork::default(),
@@ -554,8 +597,10 @@ impl<K: Kind> Direct<K> {
         b: &[f64],
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
+        SolveError::check_dimensions(self.name, a.nrows(), a.ncols(), b.len(), x.len())?;
         check_finite(b)?;
         self.factored = false;
+        self.n = a.nrows();
         if a.nrows() == 0 {
             return Ok(SolveReport {
                 residual: 0.0,
@@ -614,6 +659,9 @@ impl<K: Kind> Direct<K> {
     fn resolve(&mut self, b: &[f64], x: &mut [f64]) -> Option<Result<(), SolveError>> {
         if !self.factored {
             return None;
+        }
+        if let Err(e) = SolveError::check_dimensions(self.name, self.n, self.n, b.len(), x.len()) {
+            return Some(Err(e));
         }
         let (_, sym) = self.symbolic.as_ref()?;
         self.work.resolves += 1;
@@ -927,6 +975,7 @@ impl LinearSolver for DirectSolver {
                 Err(SolveError::NonFinite { index }) => {
                     return Err(SolveError::NonFinite { index })
                 }
+                Err(e @ SolveError::DimensionMismatch { .. }) => return Err(e),
                 Err(_) => self.lu_generation = Some(generation),
             }
         }
@@ -1072,6 +1121,7 @@ impl LinearSolver for ConjugateGradient {
         b: &[f64],
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
+        SolveError::check_dimensions("PCG (IC(0))", a.nrows(), a.ncols(), b.len(), x.len())?;
         check_finite(b)?;
         let n = b.len();
         if n == 0 {
@@ -1340,9 +1390,54 @@ mod tests {
             .solve(a.as_ref(), 1, &[1.0, 1.0], &mut x)
             .is_err());
         let a = laplacian(3);
+        let mut x = vec![0.0; 3];
         assert!(matches!(
             SparseLu::default().solve(a.as_ref(), 1, &[1.0, f64::NAN, 0.0], &mut x),
             Err(SolveError::NonFinite { index: 1 })
         ));
+    }
+
+    /// A matrix that is not square, or a right-hand side or solution of
+    /// another length, is a typed error for every solver, and so is a
+    /// resolve of another length (session 35's review: faer's asserts or
+    /// a slice copy panicked).
+    #[test]
+    fn mismatched_sizes_are_typed_errors() {
+        let a = laplacian(3);
+        let t = vec![Triplet::new(0, 0, 1.0), Triplet::new(1, 2, 1.0)];
+        let wide = SparseColMat::<usize, f64>::try_new_from_triplets(2, 3, &t).unwrap();
+        let solvers: Vec<Box<dyn LinearSolver>> = vec![
+            Box::new(SparseLu::default()),
+            Box::new(SparseCholesky::default()),
+            Box::new(DirectSolver::default()),
+            Box::new(ConjugateGradient::default()),
+            Box::new(crate::BlockSolver::default()),
+        ];
+        for mut s in solvers {
+            let mismatch = |r: Result<SolveReport, SolveError>| {
+                matches!(r, Err(SolveError::DimensionMismatch { .. }))
+            };
+            let name = s.name().to_string();
+            assert!(
+                mismatch(s.solve(a.as_ref(), 1, &[1.0; 2], &mut [0.0; 3])),
+                "{name}"
+            );
+            assert!(
+                mismatch(s.solve(a.as_ref(), 1, &[1.0; 3], &mut [0.0; 4])),
+                "{name}"
+            );
+            assert!(
+                mismatch(s.solve(wide.as_ref(), 1, &[1.0; 2], &mut [0.0; 2])),
+                "{name}"
+            );
+            let mut x = [0.0; 3];
+            s.solve(a.as_ref(), 2, &[1.0; 3], &mut x).unwrap();
+            if let Some(r) = s.resolve(&[1.0; 2], &mut x) {
+                assert!(
+                    matches!(r, Err(SolveError::DimensionMismatch { .. })),
+                    "{name}"
+                );
+            }
+        }
     }
 }

@@ -571,3 +571,74 @@ fn rows_name_no_particles_after_a_renumbering() {
     first.sort_unstable();
     assert_eq!(again, first);
 }
+
+/// Sizes that do not fit are typed errors, not panics (session 35's
+/// review): a solution vector of another length, a column index of `C`
+/// beyond `A_v`, and an assembly whose constraints or materials do not
+/// cover the mesh.
+#[test]
+fn parts_that_do_not_fit_are_typed_errors() {
+    let t = tank(4);
+    let split = assembled(&t, true);
+    let sys = split.split_system().unwrap();
+    let mut short = vec![0.0; split.dofs() - 1];
+    let r = BlockSolver::default().solve_split(&sys, 1, &mut short);
+    assert!(
+        matches!(r, Err(pfem_assembly::SolveError::DimensionMismatch { .. })),
+        "{r:?}"
+    );
+    let mut idx = sys.c_idx.to_vec();
+    idx[0] = split.dofs();
+    let bad = pfem_assembly::SplitSystem { c_idx: &idx, ..sys };
+    let mut x = vec![0.0; split.dofs()];
+    for r in [
+        BlockSolver::default().solve_split(&bad, 1, &mut x),
+        DirectSolver::default().solve_split(&bad, 1, &mut x),
+    ] {
+        assert!(
+            matches!(r, Err(pfem_assembly::SolveError::InvalidSystem { .. })),
+            "{r:?}"
+        );
+    }
+    let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
+    asm.prepare(
+        t.x.len(),
+        StepMesh {
+            elements: &t.tris,
+            element_material: &t.mat,
+            closures: &[],
+            surface_cuts: Default::default(),
+        },
+        &t.materials,
+    )
+    .unwrap();
+    let dt = 1e-3;
+    let none = Constraints::default();
+    for (constraints, materials) in [
+        (&none, &t.materials[..]),
+        (&t.constraints, &t.materials[..0]),
+    ] {
+        let r = asm.assemble(&AssemblyInput {
+            x: &t.x,
+            x_n: &t.x,
+            v: &t.v,
+            v_n: &t.v,
+            a_n: &t.a,
+            pressure_n: &t.p,
+            element_history: &t.history,
+            materials,
+            constraints,
+            body_force: None,
+            dt,
+            inertia: Inertia {
+                mass_factor: 2.0 / dt,
+                acceleration_factor: 1.0,
+                displacement_weight: 0.5 * dt,
+            },
+        });
+        assert!(
+            matches!(r, Err(pfem_assembly::AssemblyError::MeshMismatch { .. })),
+            "{r:?}"
+        );
+    }
+}

@@ -722,7 +722,8 @@ where
                 CONTACT_REACH,
                 CONTACT_MIN_GAP,
                 &mut cands,
-            );
+            )
+            .map_err(RunError::Geometry)?;
             let friction = &self.contact.friction;
             let mu = |a: u32, b: u32| {
                 friction

@@ -15,7 +15,7 @@
 
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 
-use crate::Tessellation;
+use crate::{GeometryError, Tessellation};
 
 /// One contact element.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,6 +39,12 @@ where
 /// contact (`in_contact[body]`, the free solids), every edge shorter than
 /// `reach` times the mean spacing of its nodes, and a gap above
 /// `min_gap` times that spacing (no slivers). In tessellation order.
+///
+/// Errors, before anything is written: [`GeometryError::LengthMismatch`]
+/// when `kinds`, `spacing` or `bodies` does not have one entry per point,
+/// [`GeometryError::InvalidSpacing`] for a spacing that is not a positive
+/// number, and [`GeometryError::InvalidConnectivity`] for a tessellation
+/// that is not one of `D + 1` in-range vertices per simplex.
 #[allow(clippy::too_many_arguments)]
 pub fn contact_elements<const D: usize>(
     points: &[Point<D>],
@@ -50,10 +56,20 @@ pub fn contact_elements<const D: usize>(
     reach: f64,
     min_gap: f64,
     out: &mut Vec<ContactCandidate<D>>,
-) where
+) -> Result<(), GeometryError>
+where
     Const<D>: Dim,
 {
     out.clear();
+    crate::alpha::check_particles(points, kinds, spacing)?;
+    if bodies.len() != points.len() {
+        return Err(GeometryError::LengthMismatch {
+            what: "bodies",
+            expected: points.len(),
+            found: bodies.len(),
+        });
+    }
+    crate::alpha::check_tessellation::<D>(delaunay, points.len())?;
     let nv = D + 1;
     for s in delaunay.simplices.chunks_exact(nv) {
         if s.iter().any(|&p| kinds[p as usize] == ParticleKind::Fluid)
@@ -107,6 +123,7 @@ pub fn contact_elements<const D: usize>(
             bodies: (master, other),
         });
     }
+    Ok(())
 }
 
 /// Gap and master normal of a simplex whose nodes `a` with `on(a)` are the
@@ -241,7 +258,8 @@ mod tests {
             1.6,
             0.05,
             &mut out,
-        );
+        )
+        .unwrap();
         assert!(out.len() >= 9, "{}", out.len());
         for c in &out {
             assert!((c.gap - h).abs() < 1e-12, "gap {}", c.gap);
@@ -259,7 +277,44 @@ mod tests {
             1.6,
             0.05,
             &mut out,
-        );
+        )
+        .unwrap();
         assert!(out.is_empty());
+        // Arrays of other lengths, or a tessellation of other points, are
+        // errors, not panics (session 35's review).
+        let short = &bodies[..bodies.len() - 1];
+        let err = contact_elements(
+            &x,
+            &kinds,
+            short,
+            &spacing,
+            &[true, true],
+            &t,
+            1.6,
+            0.05,
+            &mut out,
+        );
+        assert!(
+            matches!(
+                err,
+                Err(GeometryError::LengthMismatch { what: "bodies", .. })
+            ),
+            "{err:?}"
+        );
+        let err = contact_elements(
+            &x[..3],
+            &kinds[..3],
+            &bodies[..3],
+            &spacing[..3],
+            &[true, true],
+            &t,
+            1.6,
+            0.05,
+            &mut out,
+        );
+        assert!(
+            matches!(err, Err(GeometryError::InvalidConnectivity { .. })),
+            "{err:?}"
+        );
     }
 }

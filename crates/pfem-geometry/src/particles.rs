@@ -132,6 +132,12 @@ impl ParticleMap {
     /// Carries a per-particle field (velocity, pressure, stress…) to the new
     /// cloud: kept particles keep their value, inserted ones get the
     /// barycentric interpolation of their simplex's nodes.
+    ///
+    /// # Panics
+    ///
+    /// When `old` does not have one value per particle of the old cloud
+    /// (`old.len()` below the map's old count): a field of another cloud.
+    /// [`ParticleMap::try_apply`] returns an error instead.
     pub fn apply<T>(&self, old: &[T]) -> Vec<T>
     where
         T: Copy + Add<Output = T> + Mul<f64, Output = T>,
@@ -145,9 +151,29 @@ impl ParticleMap {
         })
     }
 
+    /// [`ParticleMap::apply`], or [`GeometryError::LengthMismatch`] when
+    /// `old` does not have one value per particle of the old cloud.
+    pub fn try_apply<T>(&self, old: &[T]) -> Result<Vec<T>, GeometryError>
+    where
+        T: Copy + Add<Output = T> + Mul<f64, Output = T>,
+    {
+        if old.len() != self.old_to_new.len() {
+            return Err(GeometryError::LengthMismatch {
+                what: "field carried by a particle map",
+                expected: self.old_to_new.len(),
+                found: old.len(),
+            });
+        }
+        Ok(self.apply(old))
+    }
+
     /// Like [`ParticleMap::apply`] with a custom rule for inserted
     /// particles: `interp(nodes, weights)` receives the `D + 1` old parent
     /// indices and their barycentric weights.
+    ///
+    /// # Panics
+    ///
+    /// As [`ParticleMap::apply`], when `old` is shorter than the old cloud.
     pub fn apply_with<T: Clone>(
         &self,
         old: &[T],
@@ -526,6 +552,12 @@ mod tests {
         let vel: Vec<Point<2>> = s.p.iter().map(|p| Point::<2>::new(p.y, -p.x)).collect();
         let moved = u.map.apply(&vel);
         assert!((moved[30] - Point::<2>::new(u.points[30].y, -u.points[30].x)).norm() < 1e-12);
+        // A field of another cloud is an error by `try_apply`.
+        assert_eq!(u.map.try_apply(&old), Ok(new));
+        assert!(matches!(
+            u.map.try_apply(&old[1..]),
+            Err(GeometryError::LengthMismatch { .. })
+        ));
     }
 
     #[test]

@@ -76,6 +76,11 @@ pub struct SchemeWeights {
 impl SchemeWeights {
     /// The weights of `scheme` (with `bossak_alpha` for [`Scheme::Bossak`])
     /// for a step of `dt` seconds.
+    ///
+    /// No check here: `dt` must be positive and finite and `bossak_alpha`
+    /// in `[−⅓, 0]`, the ranges [`StepParams::validate`] enforces (at
+    /// `α_B = ½`, `γ = 0` and the weights are infinite). The
+    /// [`Integrator`] validates both before it builds them.
     pub fn new(scheme: Scheme, bossak_alpha: f64, dt: f64) -> Self {
         let (gamma, beta, alpha_b, euler) = match scheme {
             Scheme::Newmark => (0.5, 0.25, 0.0, false),
@@ -693,7 +698,13 @@ where
                 source,
             })?;
         let mut f = vec![Vector::<D>::zeros(); n];
-        self.assembler.internal_force(&ainput, &mut f);
+        self.assembler
+            .internal_force(&ainput, &mut f)
+            .map_err(|source| StepError::Assembly {
+                time: 0.0,
+                dt,
+                source,
+            })?;
         let b = input.body_force.unwrap_or_else(Vector::<D>::zeros);
         for p in 0..n {
             let mut a = b;
