@@ -92,6 +92,18 @@ impl AlphaShapeParams {
                 reason: "must be in [0, 0.5) (the regular tetrahedron has 0.51)",
             });
         }
+        // A NaN or a zero `up` turned the dry-bridge test off unseen, a
+        // long one moved it (session 35's review).
+        if let Some(up) = self.up {
+            let norm = up.iter().map(|c| c * c).sum::<f64>().sqrt();
+            if !(up.iter().all(|c| c.is_finite()) && (norm - 1.0).abs() <= 1e-6) {
+                return Err(GeometryError::InvalidParameter {
+                    name: "up",
+                    value: norm,
+                    reason: "must be a finite unit vector (its length is the value)",
+                });
+            }
+        }
         Ok(())
     }
 }

@@ -212,6 +212,21 @@ fn alpha_parameter_is_validated_and_controls_the_shape() {
     bad_sp[3] = 0.0;
     assert!(alpha_shape(&p, &k, &bad_sp, &t, &AlphaShapeParams::default()).is_err());
     assert!(alpha_shape(&p, &k[..3], &sp, &t, &AlphaShapeParams::default()).is_err());
+    // `up` is a finite unit vector or nothing (session 35: a NaN turned
+    // the dry-bridge test off unseen).
+    for (up, ok) in [
+        ([0.0, 1.0, 0.0], true),
+        ([0.6, 0.8, 0.0], true),
+        ([0.0, f64::NAN, 0.0], false),
+        ([0.0, 0.0, 0.0], false),
+        ([0.0, 9.81, 0.0], false),
+    ] {
+        let params = AlphaShapeParams {
+            up: Some(up),
+            ..AlphaShapeParams::default()
+        };
+        assert_eq!(alpha_shape(&p, &k, &sp, &t, &params).is_ok(), ok, "{up:?}");
+    }
 }
 
 #[test]
