@@ -593,6 +593,67 @@ fn particle_management_every_zero_steps_is_refused() {
     assert!(err.contains("every"), "{err}");
 }
 
+/// Found by session 35's review of the driver's public API: a body force
+/// that is not a number, a wall-clock limit or a volume target that is not
+/// a number, and a particle map whose new particles do not match its old
+/// ones are typed errors; a fluid particle removed by hand before the first
+/// step is remeshed by that step (before, its elements named a particle
+/// that was gone, and the volume correction's start panicked).
+#[test]
+fn bad_hook_settings_and_a_set_changed_by_hand_are_handled() {
+    let mut sim = sim2(small_tank("nan gravity"), StepParams::default());
+    sim.add_hook(Box::new(FnHook::new("nan gravity").before_solve(
+        |ctx: &mut HookContext<'_, 2>| ctx.set_gravity(Some(Vector::<2>::new(0.0, f64::NAN))),
+    )));
+    let err = sim.run(&mut []).unwrap_err().to_string();
+    assert!(err.contains("not finite"), "{err}");
+    let mut sim = sim2(small_tank("nan clock"), StepParams::default());
+    sim.add_hook(Box::new(pfem::hooks::WallClockLimit::new(f64::NAN)));
+    let err = sim.run(&mut []).unwrap_err().to_string();
+    assert!(err.contains("NaN"), "{err}");
+    let mut sim = sim2(small_tank("nan target"), StepParams::default());
+    sim.add_hook(Box::new(
+        pfem::hooks::VolumeCorrection::new(1.0)
+            .unwrap()
+            .with_target_volume(f64::NAN),
+    ));
+    let err = sim.run(&mut []).unwrap_err().to_string();
+    assert!(err.contains("target volume"), "{err}");
+
+    use pfem::geometry::{Origin, ParticleMap, REMOVED};
+    let mut sim = sim2(small_tank("by hand"), StepParams::default());
+    let n = sim.particles().len();
+    assert_eq!(sim.particles().kind()[n - 1], ParticleKind::Fluid);
+    // Kept indices past the set, or no new particles at all.
+    for origin in [vec![Origin::Kept(n as u32 + 5)], vec![]] {
+        let map = ParticleMap {
+            old_to_new: (0..n as u32).collect(),
+            origin,
+        };
+        assert!(matches!(
+            sim.particles_mut().remap(&map),
+            Err(pfem::particles::RemapError::Inconsistent { .. })
+        ));
+    }
+    assert_eq!(sim.particles().len(), n, "a refused map changes nothing");
+    // The last fluid particle removed by hand, then a run.
+    let map = ParticleMap {
+        old_to_new: (0..n as u32)
+            .map(|i| if i + 1 == n as u32 { REMOVED } else { i })
+            .collect(),
+        origin: (0..n as u32 - 1).map(Origin::Kept).collect(),
+    };
+    sim.particles_mut().remap(&map).unwrap();
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.particles().len(), n - 1);
+    assert!(sim.fluid_volume() > 0.0);
+    let ledger = sim.volume();
+    assert!(
+        (ledger.accounted() - sim.fluid_volume()).abs() < 1e-12 * sim.fluid_volume(),
+        "{ledger:?}"
+    );
+}
+
 /// Counts its `start` calls and records the time of the first.
 struct Starts(std::sync::Arc<std::sync::Mutex<Vec<f64>>>);
 

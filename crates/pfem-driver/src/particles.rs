@@ -51,6 +51,17 @@ pub enum RemapError {
         "particle {0} is a wall or solid particle: only fluid particles may be removed or inserted"
     )]
     NotFluid(usize),
+    /// The map's new particles do not match its old ones: a kept particle
+    /// that is not an old one or not where `old_to_new` puts it, a kept old
+    /// particle missing from the new ones, or an inserted particle whose
+    /// parents are not old particles or whose weights are not finite.
+    #[error("the particle map is inconsistent at new particle {index}: {why}")]
+    Inconsistent {
+        /// The new particle (the map's length when one is missing).
+        index: usize,
+        /// What does not fit.
+        why: &'static str,
+    },
 }
 
 impl<const D: usize> Particles<D>
@@ -235,6 +246,39 @@ where
             if k != ParticleKind::Fluid && map.old_to_new[i] as usize != i {
                 return Err(RemapError::NotFluid(i));
             }
+        }
+        // The new particles against the old (a map built by hand; session
+        // 35's review: a kept index past the set panicked, an empty
+        // `origin` removed every particle).
+        let mut kept = 0usize;
+        for (j, o) in map.origin.iter().enumerate() {
+            let bad = |why| Err(RemapError::Inconsistent { index: j, why });
+            match o {
+                Origin::Kept(i) => {
+                    if *i as usize >= n || map.old_to_new[*i as usize] as usize != j {
+                        return bad("a kept particle is not the old one `old_to_new` puts here");
+                    }
+                    kept += 1;
+                }
+                Origin::Inserted { nodes, weights } => {
+                    if nodes.iter().any(|&q| q as usize >= n)
+                        || weights.iter().any(|w| !w.is_finite())
+                    {
+                        return bad("an inserted particle's parents or weights are not valid");
+                    }
+                }
+            }
+        }
+        let staying = map
+            .old_to_new
+            .iter()
+            .filter(|&&k| k != pfem_geometry::REMOVED)
+            .count();
+        if kept != staying {
+            return Err(RemapError::Inconsistent {
+                index: map.origin.len(),
+                why: "an old particle `old_to_new` keeps is not among the new ones",
+            });
         }
         let fluid_parent = |nodes: &[u32]| {
             nodes

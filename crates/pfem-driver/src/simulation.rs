@@ -361,6 +361,10 @@ where
     /// The driver options the simulation was built with (their print goes
     /// into checkpoints: [`Simulation::settings_print`]).
     options: Options,
+    /// The particles' generation the mesh was last made for: a set changed
+    /// by hand since ([`Simulation::particles_mut`]) is remeshed by the
+    /// next step.
+    meshed: u64,
     stepper: Stepper<D>,
     contact: ContactSetup<D>,
 }
@@ -554,6 +558,7 @@ where
             cut_against,
             start_rigid: options.free_solids_start_rigid,
             options,
+            meshed: u64::MAX,
             stepper: Stepper {
                 tessellator,
                 integrator: Integrator::new(params),
@@ -652,6 +657,7 @@ where
     /// Regenerates the fluid mesh: Delaunay of all particles, alpha shape
     /// (§8), one fluid material per element from its fluid nodes.
     fn remesh(&mut self) -> Result<(), RunError> {
+        self.meshed = self.particles.generation();
         if !self.stages.remesh {
             return Ok(());
         }
@@ -797,6 +803,15 @@ where
             let remesh = self.particles.generation() != generation;
             let moved = moved || remesh;
             if let Err(e) = r {
+                // A set changed before the hook failed keeps no mesh of
+                // the old set's indices (outputs written after the error
+                // read it).
+                if remesh {
+                    self.elements.clear_fluid();
+                    // Its own failure leaves the fluid range empty; the
+                    // hook's error is the one to report.
+                    let _ = self.remesh();
+                }
                 result = Err(e);
                 break;
             }
@@ -871,6 +886,16 @@ where
     }
 
     fn step_in_pool(&mut self) -> Result<(), RunError> {
+        // A set changed by hand since the last mesh (`particles_mut`) is
+        // meshed before any hook reads the elements.
+        if self.particles.generation() != self.meshed {
+            self.elements.clear_fluid();
+            self.remesh()?;
+            // Booked as remeshing: the ledger still closes.
+            let after = self.fluid_volume();
+            self.volume.remeshing += after - self.volume_now;
+            self.volume_now = after;
+        }
         self.start_hooks()?;
         // The fluid volume at the end of the last step is `volume_now`; it is
         // measured once after remeshing and once after the solution.
@@ -1055,7 +1080,16 @@ where
 
     /// The particles, to change by hand between steps (a hook is the
     /// structured way). After changing velocities or pressures before the
-    /// first step, call [`Simulation::initialize_acceleration`].
+    /// first step, call [`Simulation::initialize_acceleration`]. A set
+    /// changed in number ([`Particles::remap`], [`Particles::push`]) is
+    /// remeshed by the next step, its first included; until then the
+    /// elements are the old set's.
+    ///
+    /// # Panics
+    ///
+    /// [`Simulation::fluid_volume`] and
+    /// [`Simulation::meshed_fluid_particles`] panic between a removal by
+    /// hand and the next step (the elements name particles that are gone).
     pub fn particles_mut(&mut self) -> &mut Particles<D> {
         &mut self.particles
     }

@@ -41,7 +41,7 @@ where
 
     fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let s = ((ctx.time() + ctx.dt()) / self.duration).min(1.0);
-        ctx.set_gravity(Some(self.target * s));
+        ctx.set_gravity(Some(self.target * s))?;
         Ok(())
     }
 }

@@ -38,7 +38,14 @@ impl Args {
     /// `--version` the version, and both exit the process; `--threads N`
     /// sizes the worker pool (before any parallel work).
     pub fn from_env() -> Result<Self, ArgsError> {
-        let args: Vec<String> = std::env::args().skip(1).collect();
+        // `std::env::args` panics on an argument that is not UTF-8.
+        let args = std::env::args_os()
+            .skip(1)
+            .map(|a| {
+                a.into_string()
+                    .map_err(|a| ArgsError(format!("argument {a:?} is not valid UTF-8")))
+            })
+            .collect::<Result<Vec<String>, ArgsError>>()?;
         if args.iter().any(|a| a == "-h" || a == "--help") {
             println!("{USAGE}");
             std::process::exit(0);

@@ -236,8 +236,21 @@ where
     }
 
     /// Sets the body force per unit mass (m/s²) from now on.
-    pub fn set_gravity(&mut self, g: Option<Vector<D>>) {
+    ///
+    /// Errors: [`RunError::Hook`] for a non-finite component (a ramp
+    /// `g t / t_ramp` with `t_ramp = 0`), which would reach the solve as a
+    /// misleading step failure; the body force is then unchanged.
+    pub fn set_gravity(&mut self, g: Option<Vector<D>>) -> Result<(), RunError> {
+        if let Some(v) = g {
+            if v.iter().any(|c| !c.is_finite()) {
+                return Err(RunError::Hook {
+                    hook: "set_gravity".into(),
+                    why: format!("a body force of {:?} m/s² is not finite", v.as_slice()),
+                });
+            }
+        }
         *self.gravity = g;
+        Ok(())
     }
 
     /// Asks the run to stop after this step, for `reason`:
@@ -281,12 +294,18 @@ where
                 why: format!("no material {} or body {}", p.material, p.body),
             });
         }
-        if !(p.spacing > 0.0 && p.spacing.is_finite())
+        if !(p.spacing > 0.0 && p.spacing.is_finite() && p.pressure.is_finite())
             || p.x.iter().chain(p.v.iter()).any(|c| !c.is_finite())
         {
             return Err(RunError::Hook {
                 hook: "insert_fluid".into(),
-                why: "non-finite position or velocity, or non-positive spacing".into(),
+                why: "non-finite position, velocity or pressure, or non-positive spacing".into(),
+            });
+        }
+        if self.materials[p.material as usize].kind() != pfem_constitutive::MaterialKind::Fluid {
+            return Err(RunError::Hook {
+                hook: "insert_fluid".into(),
+                why: format!("material {} is not a fluid's", p.material),
             });
         }
         self.moved = true;
@@ -409,7 +428,9 @@ pub struct WallClockLimit {
 }
 
 impl WallClockLimit {
-    /// A limit of `seconds` of wall time.
+    /// A limit of `seconds` of wall time. A limit that is not a number
+    /// stops the run at once when it starts ([`Hook::start`] refuses it
+    /// with [`RunError::Hook`]): it would never stop it.
     pub fn new(seconds: f64) -> Self {
         Self {
             limit: seconds,
@@ -426,6 +447,12 @@ where
         "wall-clock limit"
     }
     fn start(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        if self.limit.is_nan() {
+            return Err(RunError::Hook {
+                hook: "wall-clock limit".into(),
+                why: "a limit of NaN seconds would never stop the run".into(),
+            });
+        }
         self.started = Some(std::time::Instant::now());
         Ok(())
     }

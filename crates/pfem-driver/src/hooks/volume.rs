@@ -55,7 +55,8 @@ impl VolumeCorrection {
 
     /// Restores the fluid to `volume` (m³; m² in 2D) instead of its
     /// intended volume (the volume at the start plus what inflows added,
-    /// [`HookContext::intended_fluid_volume`]).
+    /// [`HookContext::intended_fluid_volume`]). A volume that is not
+    /// positive and finite is refused when the run starts.
     pub fn with_target_volume(mut self, volume: f64) -> Self {
         self.target_volume = Some(volume);
         self
@@ -109,6 +110,17 @@ where
     }
 
     fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        // A target that is not a positive number would switch the
+        // correction off unseen (NaN) or shrink the fluid every step.
+        if let Some(v) = self.target_volume {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(RunError::InvalidSetting {
+                    name: "volume correction target volume",
+                    value: v,
+                    reason: "must be a positive finite volume (m³; m² in 2D)",
+                });
+            }
+        }
         // The target: the fluid's intended volume plus its elastic
         // compression at the start.
         self.compression0 = Some(fluid_compression(ctx));

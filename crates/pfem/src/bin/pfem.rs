@@ -80,7 +80,17 @@ Units are SI (m, s, kg, Pa).
 ";
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    // `std::env::args` panics on an argument that is not UTF-8.
+    let mut args = Vec::new();
+    for a in std::env::args_os().skip(1) {
+        match a.into_string() {
+            Ok(a) => args.push(a),
+            Err(a) => {
+                eprintln!("error: argument {a:?} is not valid UTF-8");
+                return ExitCode::FAILURE;
+            }
+        }
+    }
     // A panic inside the solver is a bug; still end with status 1 and a
     // message rather than the default 101.
     let result = std::panic::catch_unwind(|| run(args));
