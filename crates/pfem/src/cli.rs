@@ -32,6 +32,32 @@ pub struct Args {
 #[error("{0}")]
 pub struct ArgsError(pub String);
 
+/// Whether `args` ask for one of `names` (`-h`, `--version`): `-h` as an
+/// option's value (`--out -h`) is that value, not a request.
+pub fn asks(args: &[String], names: [&str; 2]) -> bool {
+    let mut value = false;
+    for a in args {
+        if std::mem::take(&mut value) {
+            continue;
+        }
+        if names.contains(&a.as_str()) {
+            return true;
+        }
+        value = a.starts_with("--") && !FLAGS.contains(&a.as_str());
+    }
+    false
+}
+
+/// The options that take no value.
+pub const FLAGS: [&str; 6] = [
+    "--quiet",
+    "-q",
+    "--no-vtu",
+    "--overwrite",
+    "--help",
+    "--version",
+];
+
 impl Args {
     /// Parses `std::env::args()` (skipping the program name), for the
     /// bundled examples: `-h`/`--help` prints the common options and
@@ -46,11 +72,12 @@ impl Args {
                     .map_err(|a| ArgsError(format!("argument {a:?} is not valid UTF-8")))
             })
             .collect::<Result<Vec<String>, ArgsError>>()?;
-        if args.iter().any(|a| a == "-h" || a == "--help") {
+        let asked = |names: [&str; 2]| asks(&args, names);
+        if asked(["-h", "--help"]) {
             println!("{USAGE}");
             std::process::exit(0);
         }
-        if args.iter().any(|a| a == "--version" || a == "-V") {
+        if asked(["--version", "-V"]) {
             println!("pfem {}", env!("CARGO_PKG_VERSION"));
             std::process::exit(0);
         }
@@ -71,7 +98,8 @@ impl Args {
         Ok(())
     }
 
-    /// Parses the given arguments.
+    /// Parses the given arguments (options take a value, except the
+    /// [`FLAGS`]).
     pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Self, ArgsError> {
         let mut out = Args::default();
         let mut it = args.into_iter();
@@ -456,6 +484,24 @@ fn parse_threads(v: &str) -> Result<usize, ArgsError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `-h` asks for the help, except as an option's value (session 35's
+    /// review: `--out -h` printed the help and exited).
+    #[test]
+    fn help_is_asked_only_where_it_is_no_value() {
+        let v = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let help = ["-h", "--help"];
+        assert!(asks(&v(&["-h"]), help));
+        assert!(asks(&v(&["--quiet", "-h"]), help));
+        assert!(asks(&v(&["--out", "d", "--help"]), help));
+        assert!(!asks(&v(&["--out", "-h"]), help));
+        assert!(!asks(
+            &v(&["--spacing", "0.01", "--out", "-h", "--quiet"]),
+            help
+        ));
+        assert!(asks(&v(&["--no-vtu", "--version"]), ["--version", "-V"]));
+        assert!(!asks(&v(&["--out", "--version"]), ["--version", "-V"]));
+    }
 
     /// A huge `--threads` spent a tiny run creating threads (10 000 did
     /// not finish in 100 s, session 26's review): refused with the limit.

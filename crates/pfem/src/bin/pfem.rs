@@ -135,11 +135,11 @@ fn run(args: Vec<String>) -> Result<(), String> {
     if args.is_empty() {
         return Err(format!("no command given\n\n{HELP}"));
     }
-    if args[0] == "help" || args.iter().any(|a| a == "--help" || a == "-h") {
+    if args[0] == "help" || pfem::cli::asks(&args, ["--help", "-h"]) {
         print!("{HELP}");
         return Ok(());
     }
-    if args.iter().any(|a| a == "--version" || a == "-V") {
+    if pfem::cli::asks(&args, ["--version", "-V"]) {
         println!("pfem {}", env!("CARGO_PKG_VERSION"));
         return Ok(());
     }
