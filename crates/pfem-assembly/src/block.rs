@@ -526,6 +526,7 @@ pub fn saddle_system(
 /// `x` receives `V`. What the default [`LinearSolver::solve_split`] does
 /// with a stabilised system.
 pub fn solve_saddle(sys: &SplitSystem<'_>, x: &mut [f64]) -> Result<SolveReport, SolveError> {
+    sys.check("saddle-point LDLᵀ", x)?;
     let mut factor = QuasiDefinite::default();
     let mut work = SolverWork::default();
     solve_saddle_with(sys, &mut factor, &mut work, x)
@@ -537,7 +538,7 @@ fn solve_saddle_with(
     work: &mut SolverWork,
     x: &mut [f64],
 ) -> Result<SolveReport, SolveError> {
-    sys.check("saddle-point LDLᵀ", x)?;
+    // Its callers checked `sys` (`solve_saddle`, `BlockSolver::solve_split`).
     crate::solver::check_finite(sys.rhs)?;
     let n = sys.a_v.nrows();
     let (k, b) = saddle(sys)?;

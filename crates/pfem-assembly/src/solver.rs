@@ -137,10 +137,10 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
-        sys.check("split system", x)?;
         if sys.stabilisation.is_some() {
             return crate::block::solve_saddle(sys, x);
         }
+        sys.check("split system", x)?;
         let a = sys.to_matrix()?;
         self.solve(a.as_ref(), generation.wrapping_add(1 << 62), sys.rhs, x)
     }

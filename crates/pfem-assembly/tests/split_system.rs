@@ -94,9 +94,8 @@ fn assembled(t: &Tank, split: bool) -> Assembler<2> {
     assembled_with(t, split, 0.0)
 }
 
-/// [`assembled`] with the pressure stabilisation factor `alpha`.
-fn assembled_with(t: &Tank, split: bool, alpha: f64) -> Assembler<2> {
-    let dt = 1e-3;
+/// An assembler prepared for the tank's mesh, not yet assembled.
+fn prepared(t: &Tank, split: bool, alpha: f64) -> Assembler<2> {
     let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
     asm.set_split(split);
     asm.set_pressure_stabilisation(alpha);
@@ -111,6 +110,13 @@ fn assembled_with(t: &Tank, split: bool, alpha: f64) -> Assembler<2> {
         &t.materials,
     )
     .unwrap();
+    asm
+}
+
+/// [`assembled`] with the pressure stabilisation factor `alpha`.
+fn assembled_with(t: &Tank, split: bool, alpha: f64) -> Assembler<2> {
+    let dt = 1e-3;
+    let mut asm = prepared(t, split, alpha);
     asm.assemble(&AssemblyInput {
         x: &t.x,
         x_n: &t.x,
@@ -600,18 +606,7 @@ fn parts_that_do_not_fit_are_typed_errors() {
             "{r:?}"
         );
     }
-    let mut asm = Assembler::<2>::new(VolumetricTreatment::NodalAveraged);
-    asm.prepare(
-        t.x.len(),
-        StepMesh {
-            elements: &t.tris,
-            element_material: &t.mat,
-            closures: &[],
-            surface_cuts: Default::default(),
-        },
-        &t.materials,
-    )
-    .unwrap();
+    let mut asm = prepared(&t, false, 0.0);
     let dt = 1e-3;
     let none = Constraints::default();
     for (constraints, materials) in [

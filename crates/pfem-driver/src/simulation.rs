@@ -853,11 +853,21 @@ where
     /// `min_i h_i / |v_i|` (s); infinite when nothing moves. Wall particles
     /// are skipped.
     pub fn crossing_time(&self) -> f64 {
+        self.crossing().1
+    }
+
+    /// The particle (not a wall) of the smallest `hᵢ/|vᵢ|` and that time
+    /// (`(0, ∞)` when none is finite; a NaN is passed over, as `f64::min`
+    /// passes it over).
+    fn crossing(&self) -> (usize, f64) {
         let p = &self.particles;
         (0..p.len())
             .filter(|&i| p.kind()[i] != ParticleKind::Wall)
-            .map(|i| p.spacing()[i] / p.v()[i].norm())
-            .fold(f64::INFINITY, f64::min)
+            .map(|i| (i, p.spacing()[i] / p.v()[i].norm()))
+            .fold(
+                (0, f64::INFINITY),
+                |best, c| if c.1 < best.1 { c } else { best },
+            )
     }
 
     /// Largest particle speed (m/s).
@@ -922,20 +932,17 @@ where
             f64::INFINITY
         };
         if crossing.is_finite() && self.controller.courant * crossing < self.controller.dt_min {
-            let p = &self.particles;
-            let particle = (0..p.len())
-                .filter(|&i| p.kind()[i] != ParticleKind::Wall)
-                .min_by(|&a, &b| {
-                    let t = |i: usize| p.spacing()[i] / p.v()[i].norm();
-                    t(a).total_cmp(&t(b))
-                })
-                .unwrap_or(0);
+            let particle = self.crossing().0;
             return Err(RunError::CourantStepTooSmall {
                 time: self.clock.time,
                 courant: self.controller.courant,
                 crossing,
                 particle,
-                speed: p.v().get(particle).map_or(f64::NAN, |v| v.norm()),
+                speed: self
+                    .particles
+                    .v()
+                    .get(particle)
+                    .map_or(f64::NAN, |v| v.norm()),
                 min_dt: self.controller.dt_min,
             });
         }

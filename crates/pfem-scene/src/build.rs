@@ -64,6 +64,15 @@ impl<const D: usize> Cloud<D>
 where
     Const<D>: Dim,
 {
+    /// The largest `|vᵢ| / hᵢ` over the particles that are not walls
+    /// (1/s): the Courant bound asks for steps of at most `C` over it.
+    pub fn crossing_rate(&self) -> f64 {
+        (0..self.x.len())
+            .filter(|&i| self.kind[i] != ParticleKind::Wall)
+            .map(|i| self.v[i].norm() / self.spacing[i])
+            .fold(0.0, f64::max)
+    }
+
     fn push(&mut self, p: Particle<D>) -> usize {
         self.x.push(p.x);
         self.v.push(p.v);
@@ -536,10 +545,7 @@ where
         // The Courant bound on the placed particles' initial speeds, each
         // on its own spacing: `Scene::validate` bounds a body's uniform
         // `velocity`; a `velocity_field` is known only here.
-        let rate = (0..particles.len())
-            .filter(|&i| particles.kind[i] != ParticleKind::Wall)
-            .map(|i| particles.v[i].norm() / particles.spacing[i])
-            .fold(0.0, f64::max);
+        let rate = particles.crossing_rate();
         let courant_steps = settings.end_time * rate / settings.courant;
         if courant_steps > crate::scene::MAX_STEPS {
             return Err(SceneError::CannotFinish {

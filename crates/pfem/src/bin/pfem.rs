@@ -244,11 +244,7 @@ where
     let built = scene.build(tessellator).map_err(|e| e.to_string())?;
     // The step count's lower bound: the largest step, or the Courant
     // limit of the initial speeds when that is tighter.
-    let c = &built.particles;
-    let rate = (0..c.x.len())
-        .filter(|&i| c.kind[i] != pfem::core::ParticleKind::Wall)
-        .map(|i| c.v[i].norm() / c.spacing[i])
-        .fold(0.0, f64::max);
+    let rate = built.particles.crossing_rate();
     let (steps, why) = if t * rate / courant > t / dt {
         (
             t * rate / courant,
