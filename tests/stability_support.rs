@@ -1,7 +1,8 @@
 //! Shared checks of the hard-case suite (`tests/stability_*.rs`), a module
 //! of the test binary `tests/suite.rs` that each of them uses.
 
-use pfem::core::{simplex_measure, ParticleKind, Point};
+use pfem::core::{simplex_measure, Const, Dim, ParticleKind, Point};
+use pfem::geometry::Tessellator;
 use pfem::prelude::*;
 use pfem::RunError;
 
@@ -22,8 +23,8 @@ pub const VOLUME_STEP_TOL: f64 = 0.05;
 #[derive(Debug, Default, Clone)]
 pub struct Watch {
     /// Kinetic + gravitational potential energy of all non-wall particles
-    /// at the start (J per metre of depth), potential measured from the
-    /// lowest non-wall particle.
+    /// at the start (J per metre of depth in 2D, J in 3D), potential
+    /// measured from the lowest non-wall particle (`y` up in 2D and 3D).
     pub e0: f64,
     /// Largest energy seen.
     pub e_max: f64,
@@ -57,35 +58,45 @@ pub struct Watch {
     y_ref: f64,
 }
 
-/// Mass per particle (kg per metre of depth): `ρ h²` of its body; zero for
-/// walls.
-fn masses(sim: &Simulation<2>) -> Vec<f64> {
+/// Mass per particle: `ρ h^D` of its body (kg per metre of depth in 2D);
+/// zero for walls.
+fn masses<const D: usize>(sim: &Simulation<D>) -> Vec<f64>
+where
+    Const<D>: Dim,
+{
     (0..sim.particles().len())
         .map(|i| {
             if sim.particles().kind()[i] == ParticleKind::Wall {
                 0.0
             } else {
                 let rho = sim.materials()[sim.particles().material()[i] as usize].density();
-                rho * sim.particles().spacing()[i] * sim.particles().spacing()[i]
+                rho * sim.particles().spacing()[i].powi(D as i32)
             }
         })
         .collect()
 }
 
 impl Watch {
-    /// Kinetic + potential energy of the non-wall particles.
-    pub fn energy(&self, sim: &Simulation<2>) -> f64 {
-        let g = sim.gravity().map_or(0.0, |g| -g.y);
+    /// Kinetic + potential energy of the non-wall particles (gravity along
+    /// `−y`, as every scene of the suite has it).
+    pub fn energy<const D: usize>(&self, sim: &Simulation<D>) -> f64
+    where
+        Const<D>: Dim,
+    {
+        let g = sim.gravity().map_or(0.0, |g| -g[1]);
         (0..sim.particles().len())
             .map(|i| {
                 let m = self.mass[i];
                 m * (0.5 * sim.particles().v()[i].norm_squared()
-                    + g * (sim.particles().x()[i].y - self.y_ref))
+                    + g * (sim.particles().x()[i][1] - self.y_ref))
             })
             .sum()
     }
 
-    fn check(&mut self, sim: &Simulation<2>) {
+    fn check<const D: usize>(&mut self, sim: &Simulation<D>)
+    where
+        Const<D>: Dim,
+    {
         let e = self.energy(sim);
         if e > self.e_max {
             self.e_max = e;
@@ -132,12 +143,15 @@ impl Watch {
     }
 }
 
-impl Observer<2> for Watch {
-    fn start(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+impl<const D: usize> Observer<D> for Watch
+where
+    Const<D>: Dim,
+{
+    fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
         self.mass = masses(sim);
         self.y_ref = (0..sim.particles().len())
             .filter(|&i| sim.particles().kind()[i] != ParticleKind::Wall)
-            .map(|i| sim.particles().x()[i].y)
+            .map(|i| sim.particles().x()[i][1])
             .fold(f64::INFINITY, f64::min);
         self.e0 = self.energy(sim);
         self.e_max = self.e0;
@@ -145,29 +159,31 @@ impl Observer<2> for Watch {
         self.check(sim);
         Ok(())
     }
-    fn step(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+    fn step(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
         self.check(sim);
         Ok(())
     }
 }
 
-/// Fluid and solid elements whose signed area at the current positions is
+/// Fluid and solid elements whose signed measure at the current positions is
 /// not positive, counted as (those the step integrated on their current
 /// shape, which the integrator must never accept inverted; those it kept
 /// in their start-of-step shape, slivers and elements foreseen flat, which
 /// may end the step inverted and which the next remeshing replaces,
 /// ARCHITECTURE.md deviation 13).
-pub fn inverted_elements(sim: &Simulation<2>) -> (usize, usize) {
+pub fn inverted_elements<const D: usize>(sim: &Simulation<D>) -> (usize, usize)
+where
+    Const<D>: Dim,
+{
     let measure = |el: &[u32]| {
-        let p: [Point<2>; 3] = [
-            sim.particles().x()[el[0] as usize],
-            sim.particles().x()[el[1] as usize],
-            sim.particles().x()[el[2] as usize],
-        ];
-        simplex_measure::<2>(&p)
+        let p: Vec<Point<D>> = el
+            .iter()
+            .map(|&n| sim.particles().x()[n as usize])
+            .collect();
+        simplex_measure::<D>(&p)
     };
     let mut count = (0, 0);
-    for (e, el) in sim.elements().all().chunks_exact(3).enumerate() {
+    for (e, el) in sim.elements().all().chunks_exact(D + 1).enumerate() {
         if measure(el).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             if sim.kept_in_shape(e) {
                 count.1 += 1;
@@ -259,6 +275,18 @@ impl Outcome {
         );
     }
 
+    /// The run reached its end time: no typed error either (stricter than
+    /// [`Outcome::assert_stable`], which accepts one).
+    pub fn assert_completed(&self) {
+        assert!(
+            self.result.is_ok() && self.time >= self.end_time - 1e-9,
+            "the run stopped at t = {} s of {} s: {:?}",
+            self.time,
+            self.end_time,
+            self.result
+        );
+    }
+
     /// The fluid volume changed by at most `tol` (relative) over the run,
     /// end against start: issue 5's measure ("fluid volume change over
     /// each run below 1 %"). The per-step bound is [`Outcome::assert_volume`].
@@ -282,19 +310,75 @@ impl Outcome {
     }
 }
 
-/// Builds and runs a scene with the checks; `Simulation::new` must succeed.
+/// Builds and runs a 2D scene with the checks; `Simulation::new` must
+/// succeed.
 pub fn run_checked(scene: Scene<2>, params: StepParams) -> Outcome {
+    run_checked_with(scene, Box::new(Delaunay2::default()), params)
+}
+
+/// Builds and runs a 3D scene with the checks; `Simulation::new` must
+/// succeed.
+pub fn run_checked_3d(scene: Scene<3>, params: StepParams) -> Outcome {
+    run_checked_with(scene, Box::new(Delaunay3::default()), params)
+}
+
+/// Builds a scene with `tessellator` and runs it with the checks.
+pub fn run_checked_with<const D: usize>(
+    scene: Scene<D>,
+    tessellator: Box<dyn Tessellator<D>>,
+    params: StepParams,
+) -> Outcome
+where
+    Const<D>: Dim,
+{
     let end_time = scene.settings.end_time;
-    let mut sim =
-        Simulation::new(scene, Box::new(Delaunay2::default()), params).expect("scene builds");
+    let mut sim = Simulation::new(scene, tessellator, params).expect("scene builds");
     run_sim(&mut sim, end_time)
 }
 
 /// Runs a built simulation with the checks.
-pub fn run_sim(sim: &mut Simulation<2>, end_time: f64) -> Outcome {
+pub fn run_sim<const D: usize>(sim: &mut Simulation<D>, end_time: f64) -> Outcome
+where
+    Const<D>: Dim,
+{
+    run_sim_with(sim, end_time, None)
+}
+
+/// Calls its closure after the start and after every accepted step: a
+/// case's own measurements beside the common checks.
+pub struct Track<'a, const D: usize>(pub Box<dyn FnMut(&Simulation<D>) + 'a>)
+where
+    Const<D>: Dim;
+
+impl<const D: usize> Observer<D> for Track<'_, D>
+where
+    Const<D>: Dim,
+{
+    fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        (self.0)(sim);
+        Ok(())
+    }
+    fn step(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        (self.0)(sim);
+        Ok(())
+    }
+}
+
+/// [`run_sim`] with one more observer after the checks.
+pub fn run_sim_with<const D: usize>(
+    sim: &mut Simulation<D>,
+    end_time: f64,
+    more: Option<&mut dyn Observer<D>>,
+) -> Outcome
+where
+    Const<D>: Dim,
+{
     let mut watch = Watch::default();
     let t0 = std::time::Instant::now();
-    let result = sim.run(&mut [&mut watch]);
+    let result = match more {
+        Some(more) => sim.run(&mut [&mut watch, more]),
+        None => sim.run(&mut [&mut watch]),
+    };
     Outcome {
         watch,
         result,

@@ -1,0 +1,360 @@
+//! The hard cases of `stability_fluid.rs` and `stability_fsi.rs` in 3D,
+//! through the same code path: real water at Courant 1, a violent splash,
+//! steps far beyond the stable limit, a stiffness contrast (E = 1e9 Pa and
+//! E = 1e4 Pa posts in water; the 2D case's 1e3 Pa is a known gap in 3D,
+//! below), free solids 10× heavier and 10× lighter than water, and a thin
+//! plate (1:20) hit by a wave. Coarse (one to two thousand particles) so
+//! that the suite stays short (about 45 s on 2 cores); release mode:
+//! `cargo test --release --test suite stability_3d::`.
+//!
+//! Unlike the 2D suite, every case here must reach its end time
+//! ([`Outcome::assert_completed`]): none needs the typed error the 2D
+//! checks allow.
+//!
+//! Checks as in 2D (`stability_support.rs`): the run ends at its end time
+//! or with a typed error, no NaN, no inverted fluid or solid element after
+//! a step (but the slivers kept in their start-of-step shape), the kinetic
+//! and gravitational potential energy of the non-wall particles never above
+//! the initial total + `ENERGY_TOL`; with the default scheme, the fluid
+//! volume changes by at most `VOLUME_CHANGE_TOL` (1 %) over the run and
+//! deviates by at most `VOLUME_STEP_TOL` (5 %) after any step.
+
+use crate::stability_support::*;
+use pfem::cases3d::tank3d;
+use pfem::core::Point;
+use pfem::prelude::*;
+
+/// Energy growth allowed over the initial total: 5 %, as in 2D.
+const ENERGY_TOL: f64 = 0.05;
+
+/// Gravity (0, −9.81, 0): `y` up, as in every 3D case of the library.
+fn g3() -> Vector<3> {
+    Vector::<3>::new(0.0, -9.81, 0.0)
+}
+
+/// A box geometry.
+fn cuboid(min: [f64; 3], max: [f64; 3]) -> Geometry<3> {
+    Geometry::Box {
+        min: Point::<3>::from(min),
+        max: Point::<3>::from(max),
+    }
+}
+
+/// A clamp that holds a post's bottom row (`y ≤ y_top`) whatever its `x`
+/// and `z`.
+fn base_clamp(y_top: f64) -> Option<(Point<3>, Point<3>)> {
+    Some((
+        Point::<3>::new(-10.0, -10.0, -10.0),
+        Point::<3>::new(10.0, y_top + 1e-9, 10.0),
+    ))
+}
+
+/// A column of water 0.1 m × 0.1 m (`x`, `z`) and `height` tall released at
+/// the back of a tank `length` long and 0.1 m wide.
+fn column(name: &str, length: f64, height: f64, h: f64, end_time: f64, max_dt: f64) -> Scene<3> {
+    let s = Scene::<3>::new(name)
+        .gravity(g3())
+        .settings(settings(end_time, max_dt, 0.5));
+    tank3d(s, length, 0.1, height + 0.2, h, true).fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        cuboid([0.0, 0.0, 0.0], [0.1, height, 0.1]),
+        h,
+    )
+}
+
+/// Water with its real bulk modulus at Courant 1 (a particle may cross a
+/// whole element a step): a 0.1 m cube collapsing in a 0.3 m tank.
+/// Measured (5 December 2026): 30 steps (0 rejected), volume within
+/// 2.21 % at every step, +0.19 % at the end.
+#[test]
+fn real_bulk_modulus_at_courant_one_3d() {
+    let mut scene = column("courant_one_3d", 0.3, 0.1, 0.02, 0.15, 5e-3);
+    scene.settings.courant = 1.0;
+    let o = run_checked_3d(scene, StepParams::default());
+    o.report("3D bulk modulus, C = 1");
+    o.assert_completed();
+    o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
+    o.assert_volume(VOLUME_STEP_TOL);
+}
+
+/// A column 0.1 m × 0.25 m × 0.1 m released into a 0.25 m tank: it hits
+/// the far wall, runs up, and sheets of particles detach and fall back.
+/// Besides the common checks, the water runs up the far wall above the
+/// level it settles to (0.1 m). Measured (5 December 2026, 1 694
+/// particles): 250 steps (0 rejected), energy at most +0.03 %, fastest
+/// particle 2.66 m/s, run-up 0.118 m (coarse: six particles across the
+/// column), volume within 1.77 % at every step, 10 s.
+#[test]
+fn violent_splash_stays_bounded_3d() {
+    let scene = column("splash_3d", 0.25, 0.25, 0.02, 0.5, 2e-3);
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    let mut run_up: f64 = 0.0;
+    let mut track = Track::<3>(Box::new(|s: &Simulation<3>| {
+        for (p, k) in s.particles().x().iter().zip(s.particles().kind()) {
+            if *k == pfem::core::ParticleKind::Fluid && p[0] > 0.2 {
+                run_up = run_up.max(p[1]);
+            }
+        }
+    }));
+    let o = run_sim_with(&mut sim, 0.5, Some(&mut track));
+    drop(track);
+    o.report("3D splash");
+    eprintln!("run-up on the far wall: {run_up:.3} m");
+    assert!(
+        run_up > 0.1,
+        "the water did not run up the far wall: {run_up} m"
+    );
+    o.assert_completed();
+    o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
+    o.assert_volume(VOLUME_STEP_TOL);
+}
+
+/// Steps far beyond the stable limit (`max_dt` = 0.05 s, Courant 50): the
+/// integrator must reject them, halve, and still reach the end time.
+/// Measured (5 December 2026): 4 steps, 1 rejected, energy at most
+/// +0.11 %.
+#[test]
+fn oversized_steps_are_rejected_halved_and_recovered_3d() {
+    let mut scene = column("oversized_3d", 0.3, 0.1, 0.025, 0.12, 0.05);
+    scene.settings.courant = 50.0;
+    let mut sim = Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default())
+        .expect("scene builds");
+    let o = run_sim(&mut sim, 0.12);
+    o.report("3D oversized steps");
+    assert!(sim.rejected() > 0, "no step was rejected");
+    assert!(o.result.is_ok(), "did not recover: {:?}", o.result);
+    o.assert_stable(ENERGY_TOL);
+}
+
+/// A 0.1 m cube of water released in a 0.4 m tank onto two posts
+/// 0.04 m × 0.08 m × 0.06 m clamped at their base: E = 1e9 Pa at
+/// x = 0.2 m and `soft` at x = 0.3 m (ρ g H of the post's own weight is
+/// about 800 Pa).
+fn stiffness_contrast_3d(soft: f64) -> Scene<3> {
+    let h = 0.02;
+    let s = Scene::<3>::new("stiffness_contrast_3d")
+        .gravity(g3())
+        .settings(settings(0.3, 2e-3, 0.5));
+    let post = |s: Scene<3>, name: &str, x: f64, e: f64| {
+        let m = Hypoelastic::new(1000.0, e, 0.3).expect("valid solid");
+        s.solid(
+            name,
+            Box::new(m),
+            cuboid([x, h, 0.02], [x + 0.04, h + 0.08, 0.08]),
+            h,
+            base_clamp(h),
+        )
+    };
+    let s = tank3d(s, 0.4, 0.1, 0.3, h, true);
+    let s = post(s, "stiff", 0.2, 1e9);
+    let s = post(s, "soft", 0.3, soft);
+    s.fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        cuboid([0.0, 0.0, 0.0], [0.1, 0.1, 0.1]),
+        h,
+    )
+}
+
+/// Stiffness contrast with a soft post of E = 1e4 Pa (about 13 times the
+/// stress of its own weight): the wave bends both posts and the run
+/// reaches its end. Measured (5 December 2026, 2 178 particles): 150 steps
+/// (0 rejected), energy never above its start, volume within 1.74 % at
+/// every step and −0.00 % at the end, 3 s.
+#[test]
+fn stiffness_contrast_in_water_3d() {
+    let o = run_checked_3d(stiffness_contrast_3d(1e4), StepParams::default());
+    o.report("3D stiffness contrast");
+    o.assert_completed();
+    o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
+    o.assert_volume(VOLUME_STEP_TOL);
+}
+
+/// The 2D case's soft post (E = 1e3 Pa, softer than its own weight) in 3D:
+/// known gap. The wave crushes the post at t ≈ 0.125 s: one of its
+/// tetrahedra flattens faster than any step can follow (its measure falls
+/// from 2·10⁻² h³ to 7·10⁻⁹ h³ over 24 halvings) and the run stops with
+/// `StepTooSmall` naming the inverted element, while the post, spread
+/// sideways, has particles inside the tank's side wall (`z` = −0.015 m
+/// against the wall's face at 0): a clamped solid takes no part in
+/// contact (ARCHITECTURE.md, deviation 11), and with the contact of free
+/// solids its default penalty (the stiffest solid's P-wave modulus,
+/// 1.35·10⁹ Pa here) crushes the post at t = 0.024 s instead (tried with
+/// a temporary switch, not kept). With E = 3e3 Pa the run ends but the
+/// fluid volume strays 5.91 % for a step (bound 5 %).
+/// `cargo test --release --test suite stability_3d::a_post_softer -- --ignored --nocapture`
+#[test]
+#[ignore = "known gap: the wave crushes a 3D post softer than its own weight (typed error at t = 0.127 s)"]
+fn a_post_softer_than_its_weight_survives_the_wave_3d() {
+    let o = run_checked_3d(stiffness_contrast_3d(1e3), StepParams::default());
+    o.report("3D stiffness contrast, E = 1e3 Pa");
+    o.assert_completed();
+    o.assert_stable(ENERGY_TOL);
+    o.assert_volume(VOLUME_STEP_TOL);
+}
+
+/// Two free 0.04 m cubes (E = 1e6 Pa) released 0.02 m above the surface of
+/// a 0.4 m × 0.1 m × 0.1 m pool: ρ = 10 000 kg/m³ (sinks) and
+/// ρ = 100 kg/m³ (floats).
+fn density_ratio_3d() -> Scene<3> {
+    let h = 0.02;
+    let s = Scene::<3>::new("density_ratio_3d")
+        .gravity(g3())
+        .settings(settings(0.3, 2e-3, 0.5));
+    let s = tank3d(s, 0.4, 0.1, 0.3, h, true);
+    let heavy = Hypoelastic::new(10_000.0, 1e6, 0.3).expect("valid solid");
+    let light = Hypoelastic::new(100.0, 1e6, 0.3).expect("valid solid");
+    s.solid(
+        "heavy",
+        Box::new(heavy),
+        cuboid([0.08, 0.12, 0.03], [0.12, 0.16, 0.07]),
+        h,
+        None,
+    )
+    .solid(
+        "light",
+        Box::new(light),
+        cuboid([0.28, 0.12, 0.03], [0.32, 0.16, 0.07]),
+        h,
+        None,
+    )
+    .fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        cuboid([0.0, 0.0, 0.0], [0.4, 0.1, 0.1]),
+        h,
+    )
+}
+
+/// Density ratio: besides the common checks, the heavy cube sinks (its
+/// centre below 0.08 m at the end) without passing into the floor (its
+/// lowest particle above 0.9 h), and the light one stays afloat (its
+/// centre never below the water surface). Measured (5 December 2026,
+/// 1 874 particles): 150 steps (0 rejected); the heavy cube rests with its
+/// lowest particle 1.47 h above the floor, on a film of water one particle
+/// thick as in 2D (`stability_fsi.rs`); the light one's centre never below
+/// 0.1235 m; fluid volume within 4.26 % at every step, +0.91 % at the end;
+/// 5 s.
+#[test]
+fn density_ratio_free_solids_in_water_3d() {
+    let h = 0.02;
+    let mut sim = Simulation::new(
+        density_ratio_3d(),
+        Box::new(Delaunay3::default()),
+        StepParams::default(),
+    )
+    .expect("scene builds");
+    assert!(sim.stages().contact);
+    let heavy = sim.body_particles("heavy").unwrap();
+    let light = sim.body_particles("light").unwrap();
+    let mean_y = |s: &Simulation<3>, set: &[usize]| {
+        set.iter().map(|&i| s.particles().x()[i][1]).sum::<f64>() / set.len() as f64
+    };
+    let (mut lowest, mut heavy_end, mut light_low, mut light_end) =
+        (f64::INFINITY, 0.0, f64::INFINITY, 0.0);
+    let mut track = Track::<3>(Box::new(|s: &Simulation<3>| {
+        for &i in &heavy {
+            lowest = lowest.min(s.particles().x()[i][1]);
+        }
+        heavy_end = mean_y(s, &heavy);
+        light_end = mean_y(s, &light);
+        light_low = light_low.min(light_end);
+    }));
+    let o = run_sim_with(&mut sim, 0.3, Some(&mut track));
+    drop(track);
+    o.report("3D density ratio");
+    eprintln!(
+        "heavy: lowest particle {:.3} h above the floor, centre at {heavy_end:.4} m at the end; light: centre at {light_end:.4} m at the end, lowest {light_low:.4} m (water surface 0.1 m)",
+        lowest / h
+    );
+    assert!(lowest > 0.9 * h, "into the floor: {} h", lowest / h);
+    assert!(
+        heavy_end < 0.08,
+        "the heavy cube did not sink: {heavy_end} m"
+    );
+    assert!(
+        light_low > 0.1,
+        "the light cube sank: centre at {light_low} m"
+    );
+    o.assert_completed();
+    o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
+    o.assert_volume(VOLUME_STEP_TOL);
+}
+
+/// A plate 0.1 m high, 0.06 m wide and 0.005 m thick (1:20, one cell
+/// through the thickness at its spacing, E = 1e6 Pa, ρ = 1100 kg/m³)
+/// clamped at its base at x = 0.15 m, hit by the wave of a 0.08 m column
+/// (fluid spacing 0.01 m).
+fn thin_plate_3d() -> Scene<3> {
+    let hf = 0.01;
+    let hp = 0.005;
+    let s = Scene::<3>::new("thin_plate_3d")
+        .gravity(g3())
+        .settings(settings(0.25, 1e-3, 0.5));
+    let s = tank3d(s, 0.3, 0.1, 0.2, hf, true);
+    let plate = Hypoelastic::new(1100.0, 1e6, 0.4).expect("valid solid");
+    s.solid(
+        "plate",
+        Box::new(plate),
+        cuboid([0.15, hf, 0.02], [0.15 + hp, hf + 0.1, 0.08]),
+        hp,
+        base_clamp(hf),
+    )
+    .fluid(
+        "water",
+        Box::new(Newtonian::water()),
+        cuboid([0.0, 0.0, 0.0], [0.08, 0.08, 0.1]),
+        hf,
+    )
+}
+
+/// Thin plate: besides the common checks, the wave bends it (its top moves
+/// more than 2 mm along `x`). Measured (5 December 2026): 250 steps (0
+/// rejected), top displaced 11.1 mm at most, energy at most +0.03 %,
+/// volume within 0.22 % at every step, 19 s.
+#[test]
+fn thin_plate_hit_by_a_wave_3d() {
+    let mut sim = Simulation::new(
+        thin_plate_3d(),
+        Box::new(Delaunay3::default()),
+        StepParams::default(),
+    )
+    .expect("scene builds");
+    let plate = sim.body_particles("plate").unwrap();
+    let top_y = plate
+        .iter()
+        .map(|&i| sim.particles().x()[i][1])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let top: Vec<usize> = plate
+        .iter()
+        .copied()
+        .filter(|&i| sim.particles().x()[i][1] > top_y - 1e-9)
+        .collect();
+    let x0: f64 = top.iter().map(|&i| sim.particles().x()[i][0]).sum::<f64>() / top.len() as f64;
+    let mut largest: f64 = 0.0;
+    let mut track = Track::<3>(Box::new(|s: &Simulation<3>| {
+        let x = top.iter().map(|&i| s.particles().x()[i][0]).sum::<f64>() / top.len() as f64;
+        largest = largest.max(x - x0);
+    }));
+    let o = run_sim_with(&mut sim, 0.25, Some(&mut track));
+    drop(track);
+    o.report("3D thin plate");
+    eprintln!(
+        "plate top: largest displacement along x {:.2} mm",
+        1e3 * largest
+    );
+    assert!(
+        largest > 2e-3,
+        "the wave did not bend the plate: {largest} m"
+    );
+    o.assert_completed();
+    o.assert_stable(ENERGY_TOL);
+    o.assert_volume_change(VOLUME_CHANGE_TOL);
+    o.assert_volume(VOLUME_STEP_TOL);
+}
