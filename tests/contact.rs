@@ -423,3 +423,126 @@ fn a_free_block_rests_on_a_floor_in_3d() {
     assert!((h - worst) / h < 0.05);
     assert!((f / weight - 1.0).abs() < 0.01, "{f} vs {weight}");
 }
+
+/// A cantilever clamped at its left end, too soft to carry its own weight
+/// (Euler–Bernoulli's tip deflection 0.57 m), over a floor 0.03 m below
+/// it. With `contact_clamped(on)`.
+fn sagging_cantilever(on: bool) -> Scene<2> {
+    let h = 0.01;
+    Scene::<2>::new("sagging_cantilever")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.6,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.1, -h),
+                max: Point::<2>::new(0.6, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "beam",
+            Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.03),
+                max: Point::<2>::new(0.5, 0.07),
+            },
+            h,
+            Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(0.005, 1.0))),
+        )
+        .contact_clamped(on)
+}
+
+/// A clamped solid takes part in contact when the scene asks for it
+/// (`Scene::contact_clamped`): the sagging cantilever comes to rest on the
+/// floor (its lowest particle stays above half a spacing, the floor
+/// carries a force) instead of passing through it, as it does without.
+#[test]
+fn a_clamped_cantilever_rests_on_the_floor_when_asked() {
+    let h = 0.01;
+    for on in [false, true] {
+        let mut sim = sim(sagging_cantilever(on));
+        assert_eq!(sim.stages().contact, on);
+        let beam = sim.body_particles("beam").unwrap();
+        let mut lowest = f64::INFINITY;
+        let mut force: f64 = 0.0;
+        while sim.time() < sim.end_time() - 1e-12 {
+            sim.step().unwrap();
+            for &i in &beam {
+                let p = sim.particles().x()[i];
+                assert!(p.iter().all(|v| v.is_finite()));
+                lowest = lowest.min(p[1]);
+            }
+            if on {
+                force = force.max(sim.contact_force("beam", "floor").unwrap().normal);
+            }
+        }
+        println!(
+            "contact for clamped solids {on}: {} steps ({} rejected), lowest particle {:.3} h, largest floor force {force:.1} N/m (beam weight {:.1} N/m)",
+            sim.steps(),
+            sim.rejected(),
+            lowest / h,
+            1000.0 * 0.5 * 0.04 * G
+        );
+        if on {
+            assert!(lowest > 0.5 * h, "into the floor: {} h", lowest / h);
+            assert!(force > 0.0, "the floor carried nothing");
+        } else {
+            assert!(
+                lowest < 0.0,
+                "without contact it passes through: {} h",
+                lowest / h
+            );
+        }
+    }
+}
+
+/// Each contact element takes the penalty of the stiffest solid among its
+/// own bodies: a soft block (E = 1e4 Pa) and a stiff one (E = 1e8 Pa) on
+/// one floor meet it through two contact materials (one per penalty), the
+/// soft block's elements all through one, the stiff block's through the
+/// other; before session 36 every element took the stiff one's.
+#[test]
+fn each_contact_takes_the_penalty_of_its_own_stiffest_solid() {
+    let h = 0.02;
+    let scene = block_on_floor(h, 0.1, 0.1, 0.0, 0.0, 1e4).solid(
+        "stiff",
+        Box::new(Hypoelastic::new(1000.0, 1e8, 0.3).unwrap()),
+        Geometry::Box {
+            min: Point::<2>::new(0.5, h),
+            max: Point::<2>::new(0.6, h + 0.1),
+        },
+        h,
+        None,
+    );
+    let sim = sim(scene);
+    let n_scene_materials = 2;
+    assert_eq!(sim.materials().len(), n_scene_materials + 2);
+    let range = sim.elements().len() - sim.elements().n_contact();
+    let body = sim.particles().body();
+    let stiff = body[sim.body_particles("stiff").unwrap()[0]];
+    let (mut soft_m, mut stiff_m) = (Vec::new(), Vec::new());
+    for (el, &m) in sim
+        .elements()
+        .contact()
+        .chunks_exact(3)
+        .zip(&sim.elements().materials()[range..])
+    {
+        assert!(m as usize >= n_scene_materials);
+        if el.iter().any(|&p| body[p as usize] == stiff) {
+            stiff_m.push(m);
+        } else {
+            soft_m.push(m);
+        }
+    }
+    assert!(!soft_m.is_empty() && !stiff_m.is_empty());
+    assert!(soft_m.iter().all(|&m| m == soft_m[0]));
+    assert!(stiff_m.iter().all(|&m| m == stiff_m[0]));
+    assert_ne!(soft_m[0], stiff_m[0]);
+}

@@ -128,7 +128,7 @@ where
     }
 
     /// Appends the contact range (after the fluid range): one element per
-    /// candidate with `material`, its history's gap ratio (gap over the
+    /// candidate with `material(nodes)`, its history's gap ratio (gap over the
     /// mean spacing of its particles, the contact distance), friction
     /// (`friction(master, other)`) and normal set, and its tangential
     /// traction carried from the last contact range when the same
@@ -136,7 +136,7 @@ where
     pub(crate) fn set_contact(
         &mut self,
         candidates: &[pfem_geometry::ContactCandidate<D>],
-        material: u16,
+        material: &dyn Fn(&[u32]) -> u16,
         spacing: &[f64],
         friction: &dyn Fn(u32, u32) -> f64,
     ) {
@@ -164,7 +164,7 @@ where
         for c in candidates {
             let el = &c.nodes[..nv];
             self.conn.extend_from_slice(el);
-            self.material.push(material);
+            self.material.push(material(el));
             let g0 = el.iter().map(|&p| spacing[p as usize]).sum::<f64>() / nv as f64;
             let mut h = History::<D>::default();
             let (mut shear, mut count) = (pfem_core::Tensor::<D>::zeros(), 0u32);
@@ -261,7 +261,8 @@ where
     }
 
     /// The contact elements of the current step (flat): simplices joining
-    /// a free solid to a wall or another solid across a gap
+    /// a solid that takes part in contact (a free one, or any with
+    /// `ContactSettings::clamped`) to a wall or another solid across a gap
     /// (`pfem_geometry::contact`).
     pub fn contact(&self) -> &[u32] {
         &self.conn[(self.n_solid + self.n_fluid) * (D + 1)..]

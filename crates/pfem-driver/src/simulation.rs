@@ -375,10 +375,17 @@ struct ContactSetup<const D: usize>
 where
     Const<D>: Dim,
 {
-    /// Index of the contact material.
-    material: u16,
-    /// Per body: takes part in contact (free solids).
+    /// Per body: the index of the contact material it brings (the
+    /// penalty of its solid, [`pfem_scene::ContactSettings::stiffness`]),
+    /// `NO_MATERIAL` for a body without one; a pair takes the stiffer.
+    material: Vec<u16>,
+    /// Per body: its penalty stiffness (Pa), 0 for walls and fluids.
+    stiffness: Vec<f64>,
+    /// Per body: a free solid (no clamp, not welded).
     free: Vec<bool>,
+    /// Per body: takes part in contact (the free solids, and every solid
+    /// with [`pfem_scene::ContactSettings::clamped`]).
+    in_contact: Vec<bool>,
     /// Friction by pair of bodies.
     friction: Vec<(u32, u32, f64)>,
     /// The candidates of the step (buffer).
@@ -459,6 +466,7 @@ where
             merges: _,
             laws,
             free_solids,
+            in_contact,
             friction,
             contact_stiffness,
             contact_damping,
@@ -476,7 +484,7 @@ where
         let cut_dry_bridges = options.cut_dry_bridges && cut_against.contains(&true);
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);
         let has_solid = particles.kind().contains(&ParticleKind::Solid);
-        let contact = free_solids.iter().any(|&f| f) && can_touch;
+        let contact = in_contact.iter().any(|&f| f) && can_touch;
         let stages = Stages {
             remesh: has_fluid || contact,
             pressure: has_fluid,
@@ -486,16 +494,29 @@ where
             contact,
         };
         let mut materials = materials;
-        let contact_material = if contact {
-            materials.push(Box::new(pfem_constitutive::ContactPenalty {
-                normal_stiffness: contact_stiffness,
-                shear_stiffness: contact_stiffness,
-                damping: contact_damping,
-            }));
-            (materials.len() - 1) as u16
-        } else {
-            NO_MATERIAL
-        };
+        // One contact material per distinct penalty, in body order.
+        let mut contact_material = vec![NO_MATERIAL; contact_stiffness.len()];
+        if contact {
+            let mut made: Vec<(f64, u16)> = Vec::new();
+            for (b, &k) in contact_stiffness.iter().enumerate() {
+                if k <= 0.0 {
+                    continue;
+                }
+                contact_material[b] = match made.iter().find(|m| m.0 == k) {
+                    Some(m) => m.1,
+                    None => {
+                        materials.push(Box::new(pfem_constitutive::ContactPenalty {
+                            normal_stiffness: k,
+                            shear_stiffness: k,
+                            damping: contact_damping,
+                        }));
+                        let index = (materials.len() - 1) as u16;
+                        made.push((k, index));
+                        index
+                    }
+                };
+            }
+        }
         let controller = CourantController {
             courant: settings.courant,
             dt_max: settings.max_dt,
@@ -570,7 +591,9 @@ where
             },
             contact: ContactSetup {
                 material: contact_material,
+                stiffness: contact_stiffness,
                 free: free_solids,
+                in_contact,
                 friction,
                 candidates: Vec::new(),
             },
@@ -723,7 +746,7 @@ where
                 self.particles.kind(),
                 self.particles.body(),
                 self.particles.spacing(),
-                &self.contact.free,
+                &self.contact.in_contact,
                 &self.stepper.tess,
                 CONTACT_REACH,
                 CONTACT_MIN_GAP,
@@ -737,8 +760,21 @@ where
                     .find(|(x, y, _)| (*x == a && *y == b) || (*x == b && *y == a))
                     .map_or(0.0, |f| f.2)
             };
+            // The stiffest penalty among the element's bodies: a wall brings
+            // none, and an element may join three bodies (two walls at a
+            // corner and a solid) whatever its two named ones.
+            let (stiffness, material) = (&self.contact.stiffness, &self.contact.material);
+            let body = self.particles.body();
+            let element_material = |nodes: &[u32]| {
+                let stiffest = nodes
+                    .iter()
+                    .map(|&p| body[p as usize] as usize)
+                    .max_by(|&a, &b| stiffness[a].total_cmp(&stiffness[b]))
+                    .unwrap_or(0);
+                material[stiffest]
+            };
             self.elements
-                .set_contact(&cands, self.contact.material, self.particles.spacing(), &mu);
+                .set_contact(&cands, &element_material, self.particles.spacing(), &mu);
             self.contact.candidates = cands;
         }
         self.stats.remesh.0 += 1;

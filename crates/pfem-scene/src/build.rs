@@ -156,13 +156,18 @@ where
     /// Walls moving along a law of time, by name.
     #[allow(clippy::type_complexity)]
     pub laws: Vec<(String, std::sync::Arc<dyn crate::motion::MotionLaw<D>>)>,
-    /// Per body: a free solid (no clamp, not welded to a wall), which
-    /// takes part in contact.
+    /// Per body: a free solid (no clamp, not welded to a wall).
     pub free_solids: Vec<bool>,
+    /// Per body: takes part in contact (the free solids, and every solid
+    /// with [`crate::ContactSettings::clamped`]).
+    pub in_contact: Vec<bool>,
     /// Friction coefficients by pair of body indices.
     pub friction: Vec<(u32, u32, f64)>,
-    /// Normal penalty stiffness of contact (Pa).
-    pub contact_stiffness: f64,
+    /// Per body: the normal penalty stiffness of contact it brings (Pa):
+    /// the scene's [`crate::ContactSettings::stiffness`] for every body
+    /// if given, else a solid's P-wave modulus `ρ c²` (0 for walls and
+    /// fluids). A pair's is the larger of its two bodies'.
+    pub contact_stiffness: Vec<f64>,
     /// Normal damping of contact (steps).
     pub contact_damping: f64,
 }
@@ -554,15 +559,24 @@ where
                 limit: crate::scene::MAX_STEPS,
             });
         }
-        // Contact: the default penalty is the stiffest solid's P-wave
-        // modulus ρ c².
-        let contact_stiffness = contact.stiffness.unwrap_or_else(|| {
-            materials
-                .iter()
-                .filter(|m| m.kind() == pfem_constitutive::MaterialKind::Solid)
-                .map(|m| m.density() * m.wave_speed() * m.wave_speed())
-                .fold(0.0, f64::max)
-        });
+        // Contact: the default penalty of a pair is the larger P-wave
+        // modulus ρ c² of its solids.
+        let mut contact_stiffness = vec![0.0; bodies.len()];
+        let mut in_contact = free_solids.clone();
+        for ((&b, &m), k) in particles
+            .body
+            .iter()
+            .zip(&particles.material)
+            .zip(&particles.kind)
+        {
+            if *k == ParticleKind::Solid {
+                let m = &materials[m as usize];
+                contact_stiffness[b as usize] = contact
+                    .stiffness
+                    .unwrap_or(m.density() * m.wave_speed() * m.wave_speed());
+                in_contact[b as usize] |= contact.clamped;
+            }
+        }
         let friction = contact
             .friction
             .iter()
@@ -574,6 +588,7 @@ where
             .collect();
         Ok(Built {
             free_solids,
+            in_contact,
             friction,
             contact_stiffness,
             contact_damping: contact.damping,

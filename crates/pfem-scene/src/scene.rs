@@ -325,25 +325,37 @@ where
     pub pressure_stabilisation: f64,
 }
 
-/// Contact settings ([`Scene::friction`], [`Scene::contact_stiffness`]).
-/// Contact acts between a *free* solid (no clamp, not welded to a wall)
-/// and any wall or other solid it comes within reach of; a scene without
-/// a free solid near another body pays nothing for it.
+/// Contact settings ([`Scene::friction`], [`Scene::contact_stiffness`],
+/// [`Scene::contact_clamped`]). Contact acts between a *free* solid (no
+/// clamp, not welded to a wall) and any wall or other solid it comes
+/// within reach of, and with [`ContactSettings::clamped`] between every
+/// solid and what it reaches; a scene without such a solid near another
+/// body pays nothing for it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactSettings {
     /// Coulomb friction coefficients by pair of body names (order free);
     /// pairs not listed are frictionless.
     pub friction: Vec<(String, String, f64)>,
     /// Normal penalty stiffness `K_c` (Pa): the pressure that closes the
-    /// gap entirely. Default: the largest P-wave modulus `λ + 2μ` of the
-    /// scene's solids (the penetration under a stress `σ` is then `σ/K_c`
-    /// of the spacing, the solid's own strain).
+    /// gap entirely, for every pair of bodies. Default, for each pair: the
+    /// larger P-wave modulus `λ + 2μ` of its solids (a wall counts as
+    /// none), so the penetration under a stress `σ` is `σ/K_c` of the
+    /// spacing, the stiffer solid's own strain. (Before session 36 the
+    /// default was the scene's stiffest solid's for every pair: a soft
+    /// body then met a wall with a penalty many times its own stiffness.)
     pub stiffness: Option<f64>,
     /// Normal damping of the contact layer, in steps
     /// (`pfem_constitutive::ContactPenalty::damping`): damping ratio
     /// `c ω Δt / 2` on a contact mode of frequency `ω`. Default 0.1; 0
     /// for an undamped (energy-conserving) contact.
     pub damping: f64,
+    /// Clamped solids take part in contact too (default `false`): a
+    /// flexible structure that may bend or be pressed into a wall or
+    /// another solid (a flap against its stop, a soft post crushed onto
+    /// the floor). Off, a clamped solid passes through what it reaches;
+    /// on, every scene with a solid near another body remeshes each step,
+    /// solid-only ones included.
+    pub clamped: bool,
 }
 
 impl Default for ContactSettings {
@@ -352,6 +364,7 @@ impl Default for ContactSettings {
             friction: Vec::new(),
             stiffness: None,
             damping: 0.1,
+            clamped: false,
         }
     }
 }
@@ -390,6 +403,13 @@ where
     /// none).
     pub fn contact_damping(mut self, c: f64) -> Self {
         self.contact.damping = c;
+        self
+    }
+
+    /// Whether clamped solids take part in contact too
+    /// ([`ContactSettings::clamped`]; default `false`).
+    pub fn contact_clamped(mut self, on: bool) -> Self {
+        self.contact.clamped = on;
         self
     }
 

@@ -72,7 +72,7 @@
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`]; `pressure_stabilisation` (factor α ≥ 0, default 0: [`Scene::pressure_stabilisation`]) |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }`, `table = [[t, dx, dy], …]` or `rotation = { center, axis (3D), rate, amplitude, period, ramp }`, angles in rad), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
-//! | `[contact]` | `stiffness` (Pa), `damping`, `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`: contact of free solids (no clamp) with walls and other solids |
+//! | `[contact]` | `stiffness` (Pa), `damping`, `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
 //!
@@ -242,13 +242,13 @@ pub enum MaterialSpec {
     },
 }
 
-/// The `[contact]` table: `stiffness` (Pa), `damping`, and `friction =
-/// [{ bodies = ["a", "b"], mu = 0.3 }, …]`.
+/// The `[contact]` table: `stiffness` (Pa), `damping`, `friction =
+/// [{ bodies = ["a", "b"], mu = 0.3 }, …]` and `clamped`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
-    /// Normal penalty stiffness (Pa); default the stiffest solid's P-wave
-    /// modulus (`pfem::scene::ContactSettings::stiffness`).
+    /// Normal penalty stiffness (Pa); default, for each pair, the larger
+    /// P-wave modulus of its solids (`pfem::scene::ContactSettings::stiffness`).
     #[serde(default)]
     pub stiffness: Option<f64>,
     /// Normal damping (steps), default 0.1.
@@ -257,6 +257,10 @@ pub struct ContactSpec {
     /// Friction coefficients by pair of bodies.
     #[serde(default)]
     pub friction: Vec<FrictionSpec>,
+    /// Clamped solids take part in contact too
+    /// (`pfem::scene::ContactSettings::clamped`), default `false`.
+    #[serde(default)]
+    pub clamped: bool,
 }
 
 /// `{ bodies = ["a", "b"], mu = 0.3 }`.
@@ -828,6 +832,7 @@ impl SceneFile {
             if let Some(d) = spec.damping {
                 scene = scene.contact_damping(d);
             }
+            scene = scene.contact_clamped(spec.clamped);
         }
         scene.validate()?;
         Ok(scene)

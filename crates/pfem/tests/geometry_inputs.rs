@@ -230,7 +230,7 @@ fn a_flap_hinged_on_the_floor_follows_its_rotation_law() {
 }
 
 /// The `[contact]` table of a scene file: friction by pair, stiffness,
-/// damping; a pair naming no body is an error with its line.
+/// damping, clamped; a pair naming no body is an error with its line.
 #[test]
 fn the_contact_table_sets_friction_stiffness_and_damping() {
     let LoadedScene::Two(scene, _) =
@@ -243,6 +243,7 @@ fn the_contact_table_sets_friction_stiffness_and_damping() {
         vec![("block".to_string(), "floor".to_string(), 0.1)]
     );
     assert_eq!(scene.contact.damping, 0.1);
+    assert!(!scene.contact.clamped);
     let text = std::fs::read_to_string(scenes().join("dam_break_block_2d.toml")).unwrap();
     let bad = text.replace(
         "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }]",
@@ -257,7 +258,7 @@ fn the_contact_table_sets_friction_stiffness_and_damping() {
     assert!(err.contains("flor") && err.contains("line"), "{err}");
     let good = text.replace(
         "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }]",
-        "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }]\nstiffness = 5e7\ndamping = 0.0",
+        "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }]\nstiffness = 5e7\ndamping = 0.0\nclamped = true",
     );
     let LoadedScene::Two(scene, _) = SceneFile::parse(&good, "good.toml")
         .unwrap()
@@ -268,6 +269,7 @@ fn the_contact_table_sets_friction_stiffness_and_damping() {
     };
     assert_eq!(scene.contact.stiffness, Some(5e7));
     assert_eq!(scene.contact.damping, 0.0);
+    assert!(scene.contact.clamped);
 }
 
 /// Friction pairs that mean nothing are refused (session 26's review: they
