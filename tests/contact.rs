@@ -546,3 +546,15 @@ fn each_contact_takes_the_penalty_of_its_own_stiffest_solid() {
     assert!(stiff_m.iter().all(|&m| m == stiff_m[0]));
     assert_ne!(soft_m[0], stiff_m[0]);
 }
+
+/// The sagging cantilever's landing on the floor through contact gains
+/// no energy and inverts nothing (the hard cases' checks,
+/// `stability_support.rs`). Measured (5 December 2026): 459 steps (85
+/// rejected), energy never above its start.
+#[test]
+fn a_clamped_cantilever_lands_without_gaining_energy() {
+    let o = crate::stability_support::run_checked(sagging_cantilever(true), StepParams::default());
+    o.report("sagging cantilever on the floor");
+    o.assert_completed();
+    o.assert_stable(0.0);
+}

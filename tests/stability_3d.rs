@@ -362,3 +362,35 @@ fn thin_plate_hit_by_a_wave_3d() {
     o.assert_volume_change(VOLUME_CHANGE_TOL);
     o.assert_volume(VOLUME_STEP_TOL);
 }
+
+/// Contact for clamped solids (`Scene::contact_clamped`) is refused in 3D
+/// (`SceneError::NotInDimension`), a known gap. Measured with it allowed
+/// (5 December 2026, a temporary build): a stiff post (E = 1e9 Pa)
+/// clamped on the floor, alone in the tank, had 35–70 contact elements
+/// from the start (the floor under its clamped base row, the side walls
+/// one spacing away); Picard failed on them from t = 2.5 ms (136 of 591
+/// attempts rejected over 0.1 s, steps down to 10⁻⁶ s), a particle of the
+/// post was kicked to 8.1 m/s at t = 2.9 ms and the energy rose 433 %
+/// before it settled; with the post 1.5 spacings from the side walls the
+/// steps fell to 10⁻⁶ s at t = 42 ms. A post of 1e3 Pa ran (the penalty
+/// follows its stiffness). In 2D the stiffness contrast with
+/// `contact_clamped(true)` runs to its end (402 steps, 1 rejected, no
+/// energy gain) and a sagging cantilever lands on the floor
+/// (`tests/contact.rs`).
+#[test]
+fn contact_for_clamped_solids_is_refused_in_3d() {
+    let s = stiffness_contrast_3d(1e4).contact_clamped(true);
+    let err =
+        Simulation::new(s, Box::new(Delaunay3::default()), StepParams::default()).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            pfem::SceneError::NotInDimension {
+                setting: "contact.clamped",
+                dim: 3,
+                ..
+            }
+        ),
+        "{err}"
+    );
+}

@@ -119,6 +119,16 @@ pub enum SceneError {
         /// The budget (bytes).
         budget: f64,
     },
+    /// A setting the scene's dimension does not support (yet).
+    #[error("setting `{setting}` is not supported in {dim}D: {why}")]
+    NotInDimension {
+        /// The setting.
+        setting: &'static str,
+        /// The scene's dimension.
+        dim: usize,
+        /// Why.
+        why: &'static str,
+    },
     /// The initial mesh could not be made.
     #[error("the initial mesh could not be made: {why}")]
     Mesh {
