@@ -365,17 +365,18 @@ fn thin_plate_hit_by_a_wave_3d() {
 
 /// Contact for clamped solids (`Scene::contact_clamped`) is refused in 3D
 /// (`SceneError::NotInDimension`), a known gap. Measured with it allowed
-/// (5 December 2026, a temporary build): a stiff post (E = 1e9 Pa)
-/// clamped on the floor, alone in the tank, had 35–70 contact elements
-/// from the start (the floor under its clamped base row, the side walls
-/// one spacing away); Picard failed on them from t = 2.5 ms (136 of 591
-/// attempts rejected over 0.1 s, steps down to 10⁻⁶ s), a particle of the
-/// post was kicked to 8.1 m/s at t = 2.9 ms and the energy rose 433 %
-/// before it settled; with the post 1.5 spacings from the side walls the
-/// steps fell to 10⁻⁶ s at t = 42 ms. A post of 1e3 Pa ran (the penalty
-/// follows its stiffness). In 2D the stiffness contrast with
-/// `contact_clamped(true)` runs to its end (402 steps, 1 rejected, no
-/// energy gain) and a sagging cantilever lands on the floor
+/// (5 December 2026, temporary builds): a stiff post (E = 1e9 Pa) clamped
+/// on the floor, alone in the tank. Before this session's two fixes of 3D
+/// contact elements (slivers and three-body corners,
+/// `pfem_geometry::contact`): Picard failed from t = 2.5 ms (136 of 591
+/// attempts rejected over 0.1 s), a particle was kicked to 8.1 m/s and
+/// the energy rose 433 %. After them, one spacing from the side walls:
+/// 0.1 s in 76 steps (10 rejected), no energy gained; but 1.5 spacings
+/// from the side walls, its lattice half a spacing off the floor's:
+/// 66 197 steps (21 315 rejected, Picard) for 0.1 s, 440 s. A free block
+/// in the same place takes 80 steps (11 rejected). In 2D the stiffness
+/// contrast with `contact_clamped(true)` runs to its end (402 steps, 1
+/// rejected, no energy gain) and a sagging cantilever lands on the floor
 /// (`tests/contact.rs`).
 #[test]
 fn contact_for_clamped_solids_is_refused_in_3d() {
@@ -393,4 +394,33 @@ fn contact_for_clamped_solids_is_refused_in_3d() {
         ),
         "{err}"
     );
+}
+
+/// A stiff free block (E = 1e9 Pa) standing on the floor one spacing from
+/// both side walls stays at rest: no energy gained, no particle kicked.
+/// Bug fixed (session 36): flat contact tetrahedra (a row of the block
+/// over a row of the floor) measured their gap along the arbitrary common
+/// normal of two nearly parallel edges, and corner tetrahedra of three
+/// bodies along a plane across the corner; elements started at 0.68 of
+/// their gap, under pressure, and a particle left at 169 m/s within
+/// 0.1 ms (energy ×4 000). Now: energy never above its start, fastest
+/// particle below 1 mm/s.
+#[test]
+fn a_stiff_free_block_beside_the_side_walls_stays_at_rest_3d() {
+    let h = 0.02;
+    let s = Scene::<3>::new("block_beside_walls")
+        .gravity(g3())
+        .settings(settings(0.02, 2e-3, 0.5));
+    let s = tank3d(s, 0.4, 0.1, 0.3, h, true).solid(
+        "block",
+        Box::new(Hypoelastic::new(1000.0, 1e9, 0.3).expect("valid solid")),
+        cuboid([0.3, h, 0.02], [0.34, h + 0.08, 0.08]),
+        h,
+        None,
+    );
+    let o = run_checked_3d(s, StepParams::default());
+    o.report("3D stiff block beside the side walls");
+    o.assert_completed();
+    o.assert_stable(1e-3);
+    assert!(o.watch.v_max.0 < 1e-2, "kicked: {} m/s", o.watch.v_max.0);
 }
