@@ -3,7 +3,7 @@
 //! steps far beyond the stable limit, a stiffness contrast (E = 1e9 Pa and
 //! E = 1e4 Pa posts in water; the 2D case's 1e3 Pa is a known gap in 3D,
 //! below), free solids 10× heavier and 10× lighter than water, and a thin
-//! plate (1:20) hit by a wave. Coarse (one to two thousand particles) so
+//! plate (1:20) hit by a wave. Coarse (1 100 to 5 300 particles) so
 //! that the suite stays short (about 45 s on 2 cores); release mode:
 //! `cargo test --release --test suite stability_3d::`.
 //!
@@ -82,7 +82,7 @@ fn real_bulk_modulus_at_courant_one_3d() {
 /// A column 0.1 m × 0.25 m × 0.1 m released into a 0.25 m tank: it hits
 /// the far wall, runs up, and sheets of particles detach and fall back.
 /// Besides the common checks, the water runs up the far wall above the
-/// level it settles to (0.1 m). Measured (5 December 2026, 1 694
+/// level it settles to (0.1 m). Measured (5 December 2026, 2 376
 /// particles): 250 steps (0 rejected), energy at most +0.03 %, fastest
 /// particle 2.66 m/s, run-up 0.118 m (coarse: six particles across the
 /// column), volume within 1.77 % at every step, 10 s.
@@ -162,7 +162,7 @@ fn stiffness_contrast_3d(soft: f64) -> Scene<3> {
 
 /// Stiffness contrast with a soft post of E = 1e4 Pa (about 13 times the
 /// stress of its own weight): the wave bends both posts and the run
-/// reaches its end. Measured (5 December 2026, 2 178 particles): 150 steps
+/// reaches its end. Measured (5 December 2026, 2 208 particles): 150 steps
 /// (0 rejected), energy never above its start, volume within 1.74 % at
 /// every step and −0.00 % at the end, 3 s.
 #[test]
@@ -239,7 +239,7 @@ fn density_ratio_3d() -> Scene<3> {
 /// centre below 0.08 m at the end) without passing into the floor (its
 /// lowest particle above 0.9 h), and the light one stays afloat (its
 /// centre never below the water surface). Measured (5 December 2026,
-/// 1 874 particles): 150 steps (0 rejected); the heavy cube rests with its
+/// 2 422 particles): 150 steps (0 rejected); the heavy cube rests with its
 /// lowest particle 1.47 h above the floor, on a film of water one particle
 /// thick as in 2D (`stability_fsi.rs`); the light one's centre never below
 /// 0.1235 m; fluid volume within 4.26 % at every step, +0.91 % at the end;
