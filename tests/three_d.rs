@@ -520,18 +520,11 @@ impl Cantilever3d {
     /// Free vibration with the default scheme: gravity switched on at
     /// `t = 0`, 1.5 periods of 40 steps each; the frequency from the
     /// zero crossings of the tip's deflection about the mean of its
-    /// extremes (as `pfem::exact::Cantilever::run_vibration`).
+    /// extremes (`pfem::exact::frequency_about_mean`, as the 2D case).
     fn frequency(&self) -> f64 {
         let period = 2.0 * std::f64::consts::PI / self.omega();
         let (series, _) = self.series(1.5 * period, period / 40.0, StepParams::default());
-        let (lo, hi) = series
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
-                (a.min(q.1), b.max(q.1))
-            });
-        let mid = 0.5 * (lo + hi);
-        let centred: Vec<(f64, f64)> = series.iter().map(|&(t, y)| (t, y - mid)).collect();
-        pfem::exact::StandingWave::frequency(&centred, false)
+        pfem::exact::frequency_about_mean(&series)
     }
 
     /// The tip's vertical displacement after every step, and the particle

@@ -836,14 +836,7 @@ impl Cantilever {
         let tip = self.tip(&sim);
         let y0 = sim.initial_position(tip).y;
         let (series, wall) = run_series(&mut sim, |s| s.particles().x()[tip].y - y0)?;
-        let (lo, hi) = series
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
-                (a.min(q.1), b.max(q.1))
-            });
-        let mid = 0.5 * (lo + hi);
-        let centred: Vec<(f64, f64)> = series.iter().map(|&(t, y)| (t, y - mid)).collect();
-        let w = StandingWave::frequency(&centred, false);
+        let w = frequency_about_mean(&series);
         Ok(ExactRun {
             second_error: f64::NAN,
             error: (w / self.omega() - 1.0).abs(),
@@ -852,6 +845,21 @@ impl Cantilever {
             sim,
         })
     }
+}
+
+/// Angular frequency (rad/s) of a vibration recorded as `(t, y)`: the
+/// zero crossings of `y` about the mean of its extremes
+/// ([`StandingWave::frequency`] of the centred series). What
+/// [`Cantilever::run_vibration`] reads, for other vibrating cases too.
+pub fn frequency_about_mean(series: &[(f64, f64)]) -> f64 {
+    let (lo, hi) = series
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+            (a.min(q.1), b.max(q.1))
+        });
+    let mid = 0.5 * (lo + hi);
+    let centred: Vec<(f64, f64)> = series.iter().map(|&(t, y)| (t, y - mid)).collect();
+    StandingWave::frequency(&centred, false)
 }
 
 /// The 2D dam break ([`crate::cases::DamBreak`], n² = 2) for a
