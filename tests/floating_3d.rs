@@ -9,8 +9,18 @@
 //! √(gH) over the whole run, pressure 0.36 % RMS (with a stress-free start
 //! of the block: +0.28 %, 4.4·10⁻³ after the first 0.1 s, 0.29 %).
 //!
+//! Known gap since `402cd7d` (3 December, slivers keep their start-of-step
+//! shape, ARCHITECTURE.md deviation 13), found by a bisection in session
+//! 36: the water's largest speed is 5.44·10⁻³ √(gH) (bound 5·10⁻³; it
+//! stays near 4.3–5.4·10⁻³ from 0.5 s on, no single event), draft
+//! +0.30 %, pressure 0.35 % RMS. The same run with
+//! `StepParams::sliver_quality_3d = 0` gives 4.72·10⁻³, +0.31 %, 0.36 %.
+//! Exempting the slivers that touch a solid (the 2D rule, tried with a
+//! temporary switch) makes it
+//! 5.74·10⁻³. The test keeps the defaults and fails.
+//!
 //! `cargo test --release --test suite floating_3d:: -- --ignored --nocapture`
-//! (about 3 minutes on 2 cores).
+//! (about 70 s on 2 cores).
 
 use pfem::cases::rest_figures;
 use pfem::cases3d::tank3d;
@@ -20,7 +30,7 @@ use pfem::prelude::*;
 const G: f64 = 9.81;
 
 #[test]
-#[ignore = "about 3 minutes: cargo test --release --test suite floating_3d:: -- --ignored --nocapture"]
+#[ignore = "known gap since slivers keep their shape (deviation 13): largest water speed 5.44e-3 sqrt(gH), bound 5e-3; about 70 s: cargo test --release --test suite floating_3d:: -- --ignored --nocapture"]
 fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
     let h = 0.025;
     let (length, width, depth) = (0.6, 0.4, 0.2);
