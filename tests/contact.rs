@@ -542,7 +542,7 @@ fn each_contact_takes_the_penalty_of_its_own_stiffest_solid() {
         .chunks_exact(3)
         .zip(&sim.elements().materials()[range..])
     {
-        assert!(m as usize >= n_scene_materials);
+        assert!((n_scene_materials..sim.materials().len()).contains(&(m as usize)));
         if el.iter().any(|&p| body[p as usize] == stiff) {
             stiff_m.push(m);
         } else {
@@ -553,6 +553,17 @@ fn each_contact_takes_the_penalty_of_its_own_stiffest_solid() {
     assert!(soft_m.iter().all(|&m| m == soft_m[0]));
     assert!(stiff_m.iter().all(|&m| m == stiff_m[0]));
     assert_ne!(soft_m[0], stiff_m[0]);
+    // Each penalty is its block's P-wave modulus ρ c².
+    for (m, block) in [(soft_m[0], "block"), (stiff_m[0], "stiff")] {
+        let p = sim.body_particles(block).unwrap()[0];
+        let solid = &sim.materials()[sim.particles().material()[p] as usize];
+        let k = solid.density() * solid.wave_speed() * solid.wave_speed();
+        let penalty = format!("{:?}", sim.materials()[m as usize]);
+        assert!(
+            penalty.contains(&format!("normal_stiffness: {k:?}")),
+            "{block}: {penalty} against {k}"
+        );
+    }
 }
 
 /// The sagging cantilever's landing on the floor through contact gains
@@ -565,4 +576,58 @@ fn a_clamped_cantilever_lands_without_gaining_energy() {
     o.report("sagging cantilever on the floor");
     o.assert_completed();
     o.assert_stable(0.0);
+}
+
+/// A user's solid whose P-wave modulus `ρ c²` (the default contact
+/// penalty) overflows, though its density and wave speed are finite, is
+/// refused when a scene with contact is built, not left to give its
+/// contact elements no usable material (review of session 36).
+#[test]
+fn a_solid_whose_penalty_is_not_finite_is_refused() {
+    use pfem::constitutive::{History, Kinematics, Material, MaterialKind, Unified};
+    #[derive(Debug)]
+    struct Infinite(Hypoelastic);
+    impl Material<2> for Infinite {
+        fn name(&self) -> &str {
+            "infinite"
+        }
+        fn kind(&self) -> MaterialKind {
+            MaterialKind::Solid
+        }
+        fn density(&self) -> f64 {
+            1e300
+        }
+        fn wave_speed(&self) -> f64 {
+            1e5
+        }
+        fn unified(&self, kin: &Kinematics<2>, history: &History<2>) -> Unified<2> {
+            Material::<2>::unified(&self.0, kin, history)
+        }
+        fn update_history(&self, kin: &Kinematics<2>, history: &mut History<2>) {
+            Material::<2>::update_history(&self.0, kin, history)
+        }
+    }
+    let h = 0.02;
+    let scene = block_on_floor(h, 0.1, 0.1, 0.0, 0.0, 1e6).solid(
+        "infinite",
+        Box::new(Infinite(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap())),
+        Geometry::Box {
+            min: Point::<2>::new(0.5, h),
+            max: Point::<2>::new(0.6, h + 0.1),
+        },
+        h,
+        None,
+    );
+    let err =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            pfem::SceneError::InvalidSetting {
+                setting: "contact_stiffness",
+                ..
+            }
+        ),
+        "{err}"
+    );
 }

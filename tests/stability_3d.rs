@@ -4,7 +4,7 @@
 //! E = 1e4 Pa posts in water; the 2D case's 1e3 Pa is a known gap in 3D,
 //! below), free solids 10× heavier and 10× lighter than water, and a thin
 //! plate (1:20) hit by a wave. Coarse (1 100 to 5 300 particles) so
-//! that the suite stays short (about 45 s on 2 cores); release mode:
+//! that the suite stays short (about 25 s on 2 cores); release mode:
 //! `cargo test --release --test suite stability_3d::`.
 //!
 //! Unlike the 2D suite, every case here must reach its end time
@@ -15,9 +15,9 @@
 //! or with a typed error, no NaN, no inverted fluid or solid element after
 //! a step (but the slivers kept in their start-of-step shape), the kinetic
 //! and gravitational potential energy of the non-wall particles never above
-//! the initial total + `ENERGY_TOL`; with the default scheme, the fluid
-//! volume changes by at most `VOLUME_CHANGE_TOL` (1 %) over the run and
-//! deviates by at most `VOLUME_STEP_TOL` (5 %) after any step.
+//! the initial total + `ENERGY_TOL`; the fluid volume deviates by at most
+//! `VOLUME_STEP_TOL` (5 %) after any step and (but the oversized steps,
+//! as in 2D) changes by at most `VOLUME_CHANGE_TOL` (1 %) over the run.
 
 use crate::stability_support::*;
 use pfem::cases3d::tank3d;
@@ -116,7 +116,9 @@ fn violent_splash_stays_bounded_3d() {
 /// Steps far beyond the stable limit (`max_dt` = 0.05 s, Courant 50): the
 /// integrator must reject them, halve, and still reach the end time.
 /// Measured (5 December 2026): 4 steps, 1 rejected, energy at most
-/// +0.11 %.
+/// +0.11 %, volume within 3.15 % at every step. Exempt from the 1 % over
+/// the run, as in 2D: four steps leave the volume correction no time
+/// (+1.73 % at the end).
 #[test]
 fn oversized_steps_are_rejected_halved_and_recovered_3d() {
     let mut scene = column("oversized_3d", 0.3, 0.1, 0.025, 0.12, 0.05);
@@ -128,6 +130,7 @@ fn oversized_steps_are_rejected_halved_and_recovered_3d() {
     assert!(sim.rejected() > 0, "no step was rejected");
     assert!(o.result.is_ok(), "did not recover: {:?}", o.result);
     o.assert_stable(ENERGY_TOL);
+    o.assert_volume(VOLUME_STEP_TOL);
 }
 
 /// A 0.1 m cube of water released in a 0.4 m tank onto two posts
@@ -176,10 +179,10 @@ fn stiffness_contrast_in_water_3d() {
 }
 
 /// The 2D case's soft post (E = 1e3 Pa, softer than its own weight) in 3D:
-/// known gap. The wave crushes the post at t ≈ 0.125 s: one of its
+/// known gap. The wave crushes the post from t ≈ 0.125 s: one of its
 /// tetrahedra flattens faster than any step can follow (its measure falls
 /// from 2·10⁻² h³ to 7·10⁻⁹ h³ over 24 halvings) and the run stops with
-/// `StepTooSmall` naming the inverted element, while the post, spread
+/// `StepTooSmall` at t = 0.127 s naming the inverted element, while the post, spread
 /// sideways, has particles inside the tank's side wall (`z` = −0.015 m
 /// against the wall's face at 0): by default a clamped solid takes no
 /// part in contact (ARCHITECTURE.md, deviation 11). With
@@ -403,8 +406,8 @@ fn contact_for_clamped_solids_is_refused_in_3d() {
 /// normal of two nearly parallel edges, and corner tetrahedra of three
 /// bodies along a plane across the corner; elements started at 0.68 of
 /// their gap, under pressure, and a particle left at 169 m/s within
-/// 0.1 ms (energy ×4 000). Now: energy never above its start, fastest
-/// particle below 1 mm/s.
+/// 0.1 ms (energy ×4 000). Now (measured): energy never above its start
+/// (asserted), fastest particle 1.6 mm/s (asserted below 1 cm/s).
 #[test]
 fn a_stiff_free_block_beside_the_side_walls_stays_at_rest_3d() {
     let h = 0.02;
@@ -420,7 +423,12 @@ fn a_stiff_free_block_beside_the_side_walls_stays_at_rest_3d() {
     );
     let o = run_checked_3d(s, StepParams::default());
     o.report("3D stiff block beside the side walls");
+    eprintln!(
+        "energy growth {:e}, fastest particle {:e} m/s",
+        o.watch.energy_growth(),
+        o.watch.v_max.0
+    );
     o.assert_completed();
-    o.assert_stable(1e-3);
+    o.assert_stable(0.0);
     assert!(o.watch.v_max.0 < 1e-2, "kicked: {} m/s", o.watch.v_max.0);
 }

@@ -850,7 +850,8 @@ impl Cantilever {
 /// Angular frequency (rad/s) of a vibration recorded as `(t, y)`: the
 /// zero crossings of `y` about the mean of its extremes
 /// ([`StandingWave::frequency`] of the centred series). What
-/// [`Cantilever::run_vibration`] reads, for other vibrating cases too.
+/// [`Cantilever::run_vibration`] reads, for other vibrating cases too;
+/// `NaN` with fewer than two crossings (or no samples).
 pub fn frequency_about_mean(series: &[(f64, f64)]) -> f64 {
     let (lo, hi) = series
         .iter()

@@ -59,9 +59,11 @@ pub struct Stages {
     /// Flying-particle handling: particles outside every element fly
     /// ballistically (scenes with a fluid that has a free surface).
     pub free_surface: bool,
-    /// Contact elements between free solids and walls or other solids
-    /// (scenes with a free solid and another solid or a wall); the
-    /// particles are tessellated every step for it, fluid or not.
+    /// Contact elements between solids that take part in contact (free
+    /// ones, and in 2D clamped ones when the scene asks,
+    /// `ContactSettings::clamped`) and walls or other solids (scenes with
+    /// such a solid and another solid or a wall); the particles are
+    /// tessellated every step for it, fluid or not.
     pub contact: bool,
 }
 
@@ -738,8 +740,9 @@ where
         self.stats.free_surface.0 += 1;
         self.stats.free_surface.1 += ts.elapsed().as_secs_f64();
         if self.stages.contact {
-            // Contact elements: simplices joining a free solid to a wall
-            // or another solid, no fluid between (pfem_geometry::contact).
+            // Contact elements: simplices joining a solid in contact (free,
+            // or clamped when asked) to a wall or another solid, no fluid
+            // between (pfem_geometry::contact).
             let mut cands = std::mem::take(&mut self.contact.candidates);
             pfem_geometry::contact_elements(
                 self.particles.x(),

@@ -1,8 +1,10 @@
 //! Contact elements: the simplices of the particles' Delaunay tessellation
 //! that join two bodies with no fluid between them (the contact-domain idea
 //! of the PFEM solid-mechanics codes). The tessellation finds the contact:
-//! where a free solid comes within reach of a wall or another solid, the
-//! simplices spanning the gap become interface elements, and the driver
+//! where a solid that takes part in contact (a free one; in 2D also a
+//! clamped one when the scene asks) comes within reach of a wall or
+//! another solid, the simplices spanning the gap become interface
+//! elements, and the driver
 //! gives them a penalty material that resists the closing of the gap
 //! (`pfem_constitutive::ContactPenalty`).
 //!
@@ -11,7 +13,10 @@
 //! facet (2D: the lone node's distance to the master edge; 3D, three nodes
 //! on one body: the distance to their triangle; two and two: the distance
 //! between the two edges), its normal the master facet's, pointing from
-//! the master body towards the other.
+//! the master body towards the other. In 3D a tetrahedron whose smallest
+//! height is below `min_gap` spacings is no contact element, and one where
+//! three or four bodies meet takes the gap and normal of its nearest pair
+//! of particles of different bodies, one of a body in contact.
 
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 
@@ -36,9 +41,13 @@ where
 
 /// The contact elements of `delaunay`: simplices with no fluid node, with
 /// nodes of at least two bodies of which at least one takes part in
-/// contact (`in_contact[body]`, the free solids), every edge shorter than
-/// `reach` times the mean spacing of its nodes, and a gap above
-/// `min_gap` times that spacing (no slivers). In tessellation order.
+/// contact (`in_contact[body]`: the free solids, and in 2D the clamped
+/// ones when the scene asks), every edge shorter than `reach` times the
+/// mean spacing of its nodes, and a gap above `min_gap` times that
+/// spacing (no slivers; in 3D also a smallest height above it). Where
+/// three or four bodies meet in 3D, the gap, normal and `bodies` are those
+/// of the nearest pair of particles of different bodies, one of a body in
+/// contact. In tessellation order.
 ///
 /// Errors, before anything is written: [`GeometryError::LengthMismatch`]
 /// when `kinds`, `spacing` or `bodies` does not have one entry per point,
@@ -116,11 +125,15 @@ where
         }
         // Master: the body with most nodes (the first such).
         group[..ng].sort_by_key(|g| std::cmp::Reverse(g.1));
-        let master = group[0].0;
-        let other = group[1].0;
+        let (mut master, mut other) = (group[0].0, group[1].0);
         let on = |a: usize| bodies[s[a] as usize] == master;
         let found = if D == 3 && ng >= 3 {
-            nearest_pair::<D>(&x, &on)
+            let body = |a: usize| bodies[s[a] as usize];
+            let takes_part = |a: usize| in_contact.get(body(a) as usize).copied().unwrap_or(false);
+            nearest_pair::<D>(&x, &body, &takes_part, master).map(|(gap, n, pair)| {
+                (master, other) = pair;
+                (gap, n)
+            })
         } else {
             gap_and_normal::<D>(&x, &on, group[0].1)
         };
@@ -142,35 +155,49 @@ where
     Ok(())
 }
 
-/// Gap and normal of a tetrahedron where three or four bodies meet (a
-/// solid in the corner of two walls): the shortest distance from a master
-/// node to a node of another body, along that pair. A plane through the
-/// master's nodes, or an edge against an edge of two other bodies, puts
-/// the corner's diagonal nearer than either body really is: a free block
-/// standing one spacing from a floor and a side wall then started under a
-/// penalty pressure at rest, and a particle left at 169 m/s (session 36).
-/// Between lattices one spacing apart this gap is the spacing, so the
-/// element starts open, as the two-body ones do.
+/// Gap, normal and bodies of a tetrahedron where three or four bodies meet
+/// (a solid in the corner of two walls): the shortest distance between two
+/// of its particles of different bodies, one of them of a body in contact
+/// (`takes_part`), along that pair, from the `master` body's particle if
+/// the pair has one (else from the body in contact's), and the pair's
+/// bodies in that order. A plane through the master's nodes, or an edge
+/// against an edge of two other bodies, puts the corner's diagonal nearer
+/// than either body really is: a free block standing one spacing from a
+/// floor and a side wall then started under a penalty pressure at rest,
+/// and a particle left at 169 m/s (session 36). Between lattices one
+/// spacing apart this gap is the spacing, so the element starts open, as
+/// the two-body ones do.
 fn nearest_pair<const D: usize>(
     x: &dyn Fn(usize) -> Point<D>,
-    on: &dyn Fn(usize) -> bool,
-) -> Option<(f64, Vector<D>)>
+    body: &dyn Fn(usize) -> u32,
+    takes_part: &dyn Fn(usize) -> bool,
+    master: u32,
+) -> Option<(f64, Vector<D>, (u32, u32))>
 where
     Const<D>: Dim,
 {
     let nv = D + 1;
-    let mut best: Option<(f64, Vector<D>)> = None;
-    for a in (0..nv).filter(|&a| on(a)) {
-        for b in (0..nv).filter(|&b| !on(b)) {
-            let d = x(b) - x(a);
-            let len = d.norm();
+    let mut best: Option<(f64, usize, usize)> = None;
+    for a in 0..nv {
+        for b in a + 1..nv {
+            if body(a) == body(b) || !(takes_part(a) || takes_part(b)) {
+                continue;
+            }
+            let len = (x(b) - x(a)).norm();
             if best.as_ref().is_none_or(|q| len < q.0) {
-                best = Some((len, d));
+                best = Some((len, a, b));
             }
         }
     }
-    let (gap, d) = best?;
-    (gap.is_finite() && gap > 0.0).then(|| (gap, d / gap))
+    let (gap, a, b) = best?;
+    // From the master's particle, or else from the body in contact's.
+    let (from, to) = if body(b) == master || (body(a) != master && takes_part(b) && !takes_part(a))
+    {
+        (b, a)
+    } else {
+        (a, b)
+    };
+    (gap.is_finite() && gap > 0.0).then(|| (gap, (x(to) - x(from)) / gap, (body(from), body(to))))
 }
 
 /// The smallest height of a tetrahedron (`3 V` over its largest face);
@@ -459,5 +486,23 @@ mod tests {
         assert_eq!(c.len(), 1);
         assert!((c[0].gap - 1.0).abs() < 1e-12, "{}", c[0].gap);
         assert!((c[0].normal.norm() - 1.0).abs() < 1e-12);
+        assert_eq!(c[0].bodies.0, 1);
+        // The master a wall (two floor nodes): the pair is still the
+        // solid's, never the floor against the side wall, which cannot
+        // close; the bodies name the solid.
+        // (The floor–wall pair comes first and is as near: it must not be
+        // taken.)
+        let x = [
+            Point::<3>::new(0.0, 0.0, 0.0),
+            Point::<3>::new(1.0, 0.0, 0.0),
+            Point::<3>::new(0.0, 0.0, 1.0),
+            Point::<3>::new(0.0, 1.0, 0.0),
+        ];
+        let bodies = [0, 0, 2, 1];
+        let c = tets_3d(&x, &bodies, &[[0, 1, 2, 3]]);
+        assert_eq!(c.len(), 1);
+        assert!((c[0].gap - 1.0).abs() < 1e-12, "{}", c[0].gap);
+        assert_eq!(c[0].bodies, (0, 1));
+        assert!((c[0].normal - Vector::<3>::new(0.0, 1.0, 0.0)).norm() < 1e-12);
     }
 }

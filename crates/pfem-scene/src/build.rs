@@ -164,9 +164,9 @@ where
     /// Friction coefficients by pair of body indices.
     pub friction: Vec<(u32, u32, f64)>,
     /// Per body: the normal penalty stiffness of contact it brings (Pa):
-    /// the scene's [`crate::ContactSettings::stiffness`] for every body
-    /// if given, else a solid's P-wave modulus `ρ c²` (0 for walls and
-    /// fluids). A pair's is the larger of its two bodies'.
+    /// for a solid body, the scene's [`crate::ContactSettings::stiffness`]
+    /// if given, else its P-wave modulus `ρ c²`; 0 for walls and fluids. A
+    /// contact element takes the largest among its particles' bodies.
     pub contact_stiffness: Vec<f64>,
     /// Normal damping of contact (steps).
     pub contact_damping: f64,
@@ -559,8 +559,8 @@ where
                 limit: crate::scene::MAX_STEPS,
             });
         }
-        // Contact: the default penalty of a pair is the larger P-wave
-        // modulus ρ c² of its solids.
+        // Contact: a contact element's default penalty is the largest
+        // P-wave modulus ρ c² among its particles' solids.
         let mut contact_stiffness = vec![0.0; bodies.len()];
         let mut in_contact = free_solids.clone();
         for ((&b, &m), k) in particles
@@ -575,6 +575,16 @@ where
                     .stiffness
                     .unwrap_or(m.density() * m.wave_speed() * m.wave_speed());
                 in_contact[b as usize] |= contact.clamped;
+            }
+        }
+        // A solid in contact needs a penalty a contact element can use
+        // (ρ c² can overflow, or vanish, for absurd but finite constants).
+        for (b, &k) in contact_stiffness.iter().enumerate() {
+            if in_contact[b] && !(k.is_finite() && k > 0.0) {
+                return Err(SceneError::InvalidSetting {
+                    setting: "contact_stiffness",
+                    value: k,
+                });
             }
         }
         let friction = contact

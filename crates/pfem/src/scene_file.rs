@@ -72,7 +72,7 @@
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`]; `pressure_stabilisation` (factor α ≥ 0, default 0: [`Scene::pressure_stabilisation`]) |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }`, `table = [[t, dx, dy], …]` or `rotation = { center, axis (3D), rate, amplitude, period, ramp }`, angles in rad), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
-//! | `[contact]` | `stiffness` (Pa), `damping`, `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
+//! | `[contact]` | `stiffness` (Pa), `damping`, `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, 2D only, default `false`): contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
 //!
@@ -124,8 +124,8 @@ pub struct SceneFile {
     /// The probes written to `probes.csv`, in order.
     #[serde(default)]
     pub probes: Vec<Spanned<ProbeSpec>>,
-    /// Contact between free solids and walls or solids (the `[contact]`
-    /// table).
+    /// Contact between free solids (in 2D also clamped ones with
+    /// `clamped = true`) and walls or solids (the `[contact]` table).
     #[serde(default)]
     pub contact: Option<Spanned<ContactSpec>>,
     /// The file's text, to turn spans into line numbers.
@@ -873,6 +873,7 @@ impl SceneFile {
             }
             SceneError::CannotFinish { .. } => &["max_dt", "end_time"],
             SceneError::TooLarge { .. } => &["spacing"],
+            SceneError::NotInDimension { .. } => &["clamped"],
             _ => &[],
         };
         let at = keys

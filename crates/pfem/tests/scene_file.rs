@@ -717,3 +717,48 @@ fn a_fluid_displacement_probe_survives_removed_particles() {
         "{ux:?}"
     );
 }
+
+/// `[contact] clamped = true` in a 3D file is refused (2D only for now,
+/// `SceneError::NotInDimension`), and `pfem` points at the line of its
+/// key (`SceneFile::locate`).
+#[test]
+fn contact_for_clamped_solids_in_3d_names_its_line() {
+    let text = r#"name = "post_3d"
+dimension = 3
+gravity = [0.0, -9.81, 0.0]
+spacing = 0.05
+
+[run]
+end_time = 0.1
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = { min = [0.0, -0.05, 0.0], max = [0.5, 0.0, 0.5] }
+
+[[body]]
+name = "post"
+kind = "solid"
+material.hypoelastic = { density = 1000.0, young = 1e6, poisson = 0.3 }
+geometry.box = { min = [0.2, 0.05, 0.2], max = [0.3, 0.2, 0.3] }
+clamp = { min = [0.0, 0.0, 0.0], max = [1.0, 0.06, 1.0] }
+
+[contact]
+clamped = true
+"#;
+    let file = SceneFile::parse(text, "post_3d.toml").unwrap();
+    let err = file.build().map(|_| ()).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            SceneError::NotInDimension {
+                setting: "contact.clamped",
+                dim: 3,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    let line = text.lines().position(|l| l == "clamped = true").unwrap() + 1;
+    assert_eq!(file.locate(&err), Some(format!("line {line}")));
+}
