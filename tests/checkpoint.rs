@@ -401,7 +401,9 @@ fn a_checkpoint_of_another_material_is_refused() {
 /// What the material trait does not expose is compared through the
 /// materials' responses: a contact damping or a water viscosity changed
 /// since the checkpoint (same names, densities and wave speeds) is
-/// refused; before, the run went on with the new value.
+/// refused; before, the run went on with the new value. A friction
+/// coefficient, which no material holds, is compared through the
+/// checkpoint's contact section.
 #[test]
 fn a_checkpoint_of_another_viscosity_or_contact_law_is_refused() {
     use pfem::constitutive::Newtonian;
@@ -422,6 +424,22 @@ fn a_checkpoint_of_another_viscosity_or_contact_law_is_refused() {
     println!("another contact law: {err}");
     assert!(refused(err));
     sliding_block().restore(&ck).unwrap();
+    // Friction is no material's: the checkpoint's contact section
+    // (session 36) refuses another coefficient.
+    let mut scene = sliding_block_scene();
+    scene.contact.friction[0].2 = 0.3;
+    let err = sim2(scene).restore(&ck).unwrap_err();
+    println!("another friction: {err}");
+    assert!(
+        matches!(
+            err,
+            RunError::Checkpoint(CheckpointError::Mismatch {
+                what: "the contact settings",
+                ..
+            })
+        ),
+        "{err}"
+    );
 
     let water = |mu: f64| {
         sim2(

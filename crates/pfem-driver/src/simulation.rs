@@ -12,7 +12,7 @@ use pfem_geometry::{
 use pfem_time::{CourantController, Integrator, StepInput, StepParams};
 
 use crate::checkpoint::{
-    Checkpoint, CheckpointError, Decoder, Encoder, SETTINGS, SIMULATION, TIMINGS,
+    Checkpoint, CheckpointError, Decoder, Encoder, CONTACT, SETTINGS, SIMULATION, TIMINGS,
 };
 use crate::elements::Elements;
 use crate::hooks::{FreeSurfacePressureZero, Hook, HookContext, VolumeCorrection};
@@ -1390,7 +1390,19 @@ where
         let mut st = Encoder::new();
         st.str(&self.settings_print());
         ck.set(SETTINGS, st.finish());
+        let mut cs = Encoder::new();
+        cs.str(&self.contact_print());
+        ck.set(CONTACT, cs.finish());
         ck
+    }
+
+    /// Which bodies take part in contact and the friction by pair, as the
+    /// checkpoint's [`CONTACT`] section records them.
+    fn contact_print(&self) -> String {
+        format!(
+            "in contact {:?}; friction {:?}",
+            self.contact.in_contact, self.contact.friction
+        )
     }
 
     /// Continues from `checkpoint` ([`Simulation::checkpoint`]): this
@@ -1469,6 +1481,18 @@ where
                     )
                 };
                 return Err(mismatch("a material", show(&saved), show(&now)));
+            }
+        }
+        // Contact (checkpoints of session 36 on): a restart that turned
+        // contact for clamped solids on or off, or changed a friction
+        // pair, would otherwise go on as another run.
+        if let Some(bytes) = checkpoint.section(CONTACT) {
+            let mut cd = Decoder::new(bytes);
+            let saved = cd.str()?.to_string();
+            cd.end()?;
+            let now = self.contact_print();
+            if saved != now {
+                return Err(mismatch("the contact settings", saved, now));
             }
         }
         // The settings (format 3 checkpoints of session 35 on; older
