@@ -768,13 +768,17 @@ where
             // corner and a solid) whatever its two named ones.
             let (stiffness, material) = (&self.contact.stiffness, &self.contact.material);
             let body = self.particles.body();
+            // (A body past the scene's, from particles pushed by hand,
+            // brings none; an element with no penalty at all gets
+            // `NO_MATERIAL`, which the assembly refuses with a typed error.)
+            let k = |b: usize| stiffness.get(b).copied().unwrap_or(0.0);
             let element_material = |nodes: &[u32]| {
-                let stiffest = nodes
+                nodes
                     .iter()
                     .map(|&p| body[p as usize] as usize)
-                    .max_by(|&a, &b| stiffness[a].total_cmp(&stiffness[b]))
-                    .unwrap_or(0);
-                material[stiffest]
+                    .max_by(|&a, &b| k(a).total_cmp(&k(b)))
+                    .and_then(|b| material.get(b).copied())
+                    .unwrap_or(NO_MATERIAL)
             };
             self.elements
                 .set_contact(&cands, &element_material, self.particles.spacing(), &mu);
