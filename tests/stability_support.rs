@@ -176,11 +176,11 @@ where
     Const<D>: Dim,
 {
     let measure = |el: &[u32]| {
-        let p: Vec<Point<D>> = el
-            .iter()
-            .map(|&n| sim.particles().x()[n as usize])
-            .collect();
-        simplex_measure::<D>(&p)
+        let mut p = [Point::<D>::zeros(); pfem::core::MAX_NV];
+        for (p, &n) in p.iter_mut().zip(el) {
+            *p = sim.particles().x()[n as usize];
+        }
+        simplex_measure::<D>(&p[..el.len()])
     };
     let mut count = (0, 0);
     for (e, el) in sim.elements().all().chunks_exact(D + 1).enumerate() {

@@ -484,25 +484,28 @@ impl Cantilever3d {
     const POISSON: f64 = 0.3;
     const GRAVITY: f64 = 2.0;
 
-    fn exact(&self) -> f64 {
-        let (l, t) = (self.length, self.side);
-        let q = Self::DENSITY * Self::GRAVITY * t * t;
-        let i = t.powi(4) / 12.0;
-        let shear = Self::YOUNG / (2.0 * (1.0 + Self::POISSON));
-        q * l.powi(4) / (8.0 * Self::YOUNG * i) + q * l * l / (2.0 * 5.0 / 6.0 * shear * t * t)
+    /// The beam for Timoshenko's closed forms (`pfem::exact::BeamSection`,
+    /// shared with the 2D case): square section, bending modulus `E`.
+    fn section(&self) -> pfem::exact::BeamSection {
+        let t = self.side;
+        pfem::exact::BeamSection {
+            length: self.length,
+            area: t * t,
+            second_moment: t.powi(4) / 12.0,
+            bending_modulus: Self::YOUNG,
+            shear_modulus: Self::YOUNG / (2.0 * (1.0 + Self::POISSON)),
+            density: Self::DENSITY,
+        }
     }
 
-    /// First bending frequency with the first-order shear and rotary
-    /// inertia correction (rad/s), as the 2D case's.
+    fn exact(&self) -> f64 {
+        let t = self.side;
+        self.section()
+            .tip_deflection(Self::DENSITY * Self::GRAVITY * t * t)
+    }
+
     fn omega(&self) -> f64 {
-        let (l, t) = (self.length, self.side);
-        let beta = 1.875_104_068_711_96;
-        let i = t.powi(4) / 12.0;
-        let e = Self::YOUNG;
-        let shear = e / (2.0 * (1.0 + Self::POISSON));
-        let w1 = beta * beta * (e * i / (Self::DENSITY * t * t * l.powi(4))).sqrt();
-        let r2 = i / (t * t);
-        w1 * (1.0 - 0.5 * beta * beta * r2 / (l * l) * (1.0 + e / (5.0 / 6.0 * shear)))
+        self.section().first_frequency()
     }
 
     /// Quasi-static run (backward Euler, steps of 5 s to 40 s, as the 2D

@@ -632,24 +632,28 @@ impl Cantilever {
     /// Timoshenko's static tip deflection under the beam's weight (m,
     /// positive down).
     pub fn static_deflection(&self) -> f64 {
-        let (l, t) = (self.length, self.thickness);
-        let q = self.density * self.gravity * t;
-        let i = t.powi(3) / 12.0;
-        q * l.powi(4) / (8.0 * self.bending_modulus() * i)
-            + q * l * l / (2.0 * 5.0 / 6.0 * self.shear_modulus() * t)
+        let t = self.thickness;
+        self.section()
+            .tip_deflection(self.density * self.gravity * t)
+    }
+
+    /// The beam per unit depth: rectangle `thickness` × 1.
+    fn section(&self) -> BeamSection {
+        let t = self.thickness;
+        BeamSection {
+            length: self.length,
+            area: t,
+            second_moment: t.powi(3) / 12.0,
+            bending_modulus: self.bending_modulus(),
+            shear_modulus: self.shear_modulus(),
+            density: self.density,
+        }
     }
 
     /// First bending frequency with the first-order shear and rotary
     /// inertia correction (rad/s).
     pub fn omega(&self) -> f64 {
-        let (l, t) = (self.length, self.thickness);
-        let beta = 1.875_104_068_711_96;
-        let i = t.powi(3) / 12.0;
-        let e = self.bending_modulus();
-        let w1 = beta * beta * (e * i / (self.density * t * l.powi(4))).sqrt();
-        let r2 = i / t;
-        w1 * (1.0
-            - 0.5 * beta * beta * r2 / (l * l) * (1.0 + e / (5.0 / 6.0 * self.shear_modulus())))
+        self.section().first_frequency()
     }
 
     /// The scene: the beam clamped at `x = 0`, gravity switched on at
@@ -694,6 +698,44 @@ impl Cantilever {
                     .total_cmp(&(sim.initial_position(b) - target).norm())
             })
             .unwrap_or(0)
+    }
+}
+
+/// A clamped-free beam for Timoshenko's closed forms (shear factor 5/6):
+/// the 2D [`Cantilever`] per unit depth, or a 3D beam of any section.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BeamSection {
+    /// Length (m).
+    pub length: f64,
+    /// Cross-section area (m², or m per unit depth in 2D).
+    pub area: f64,
+    /// Second moment of the section about its bending axis (m⁴, or m³).
+    pub second_moment: f64,
+    /// Bending modulus (Pa): `E`, or `E / (1 − ν²)` in plane strain.
+    pub bending_modulus: f64,
+    /// Shear modulus `G` (Pa).
+    pub shear_modulus: f64,
+    /// Density (kg/m³).
+    pub density: f64,
+}
+
+impl BeamSection {
+    /// Static tip deflection under a uniform load `q` per unit length (m,
+    /// along the load): bending plus shear.
+    pub fn tip_deflection(&self, q: f64) -> f64 {
+        let (l, e, i) = (self.length, self.bending_modulus, self.second_moment);
+        q * l.powi(4) / (8.0 * e * i)
+            + q * l * l / (2.0 * 5.0 / 6.0 * self.shear_modulus * self.area)
+    }
+
+    /// First bending frequency with the first-order shear and rotary
+    /// inertia correction (rad/s).
+    pub fn first_frequency(&self) -> f64 {
+        let (l, e, i) = (self.length, self.bending_modulus, self.second_moment);
+        let beta = 1.875_104_068_711_96;
+        let w1 = beta * beta * (e * i / (self.density * self.area * l.powi(4))).sqrt();
+        let r2 = i / self.area;
+        w1 * (1.0 - 0.5 * beta * beta * r2 / (l * l) * (1.0 + e / (5.0 / 6.0 * self.shear_modulus)))
     }
 }
 

@@ -379,7 +379,8 @@ where
 {
     /// Per body: the index of the contact material it brings (the
     /// penalty of its solid, [`pfem_scene::ContactSettings::stiffness`]),
-    /// `NO_MATERIAL` for a body without one; a pair takes the stiffer.
+    /// `NO_MATERIAL` for a body without one; an element takes its
+    /// stiffest body's.
     material: Vec<u16>,
     /// Per body: its penalty stiffness (Pa), 0 for walls and fluids.
     stiffness: Vec<f64>,

@@ -222,7 +222,8 @@ where
 }
 
 /// Gap and master normal of a simplex whose nodes `a` with `on(a)` are the
-/// master body's (`m` of them).
+/// master body's (`m` of them): any triangle in 2D; in 3D a tetrahedron of
+/// two bodies (three or four bodies: [`nearest_pair`]).
 fn gap_and_normal<const D: usize>(
     x: &dyn Fn(usize) -> Point<D>,
     on: &dyn Fn(usize) -> bool,
@@ -277,20 +278,9 @@ where
         }
         orient(n, x(mine[0]))
     } else {
-        // Three or four bodies meet: the largest face's normal.
-        let mut best: Option<(f64, Vector<D>, Point<D>)> = None;
-        for skip in 0..nv {
-            let f: Vec<usize> = (0..nv).filter(|&a| a != skip).collect();
-            let n = cross3::<D>(&(x(f[1]) - x(f[0])), &(x(f[2]) - x(f[0])));
-            if best.as_ref().is_none_or(|b| n.norm() > b.0) {
-                best = Some((n.norm(), n, x(f[0])));
-            }
-        }
-        let (a, n, p) = best?;
-        if a == 0.0 {
-            return None;
-        }
-        orient(n, p)
+        // 3D with three or four bodies: `nearest_pair` measures those, and
+        // two bodies split a tetrahedron 3 + 1 or 2 + 2.
+        return None;
     };
     // The gap: the largest distance of a non-master node from the master's
     // plane through its first node (for edge-edge, the edges' distance).
