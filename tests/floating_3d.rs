@@ -19,6 +19,16 @@
 //! temporary switch) makes it
 //! 5.74·10⁻³. The test keeps the defaults and fails.
 //!
+//! Where the speed is (session 37, a scratch driver printing the fastest
+//! water particles): not at the surface or the walls but under the
+//! block, two spacings below its bottom, where the set-up leaves a gap of
+//! 1.5 spacings: the rows there rise steadily (one particle at 5·10⁻³
+//! √(gH), 1 cm in 1.8 s; its neighbours at 2–4·10⁻³), with and without the
+//! sliver rule (the same particle leads both runs), while the block tilts
+//! by 2–3 mrad. The speed follows the block's compliance: over the first
+//! 0.8 s it is 5.4·10⁻³ √(gH) with E = 10⁷ Pa, 4.7·10⁻⁴ with 10⁸ and
+//! 1.9·10⁻⁴ with 10⁹. Not yet understood; the test keeps the 10⁷ Pa block.
+//!
 //! `cargo test --release --test suite floating_3d:: -- --ignored --nocapture`
 //! (about 70 s on 2 cores).
 

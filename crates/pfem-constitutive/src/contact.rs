@@ -8,7 +8,11 @@
 //! the iterate follows the element's volume, `g/g₀ = J rⁿ`. The normal
 //! pressure is the penalty
 //!
-//! `p = K_c max(0, 1 − g/g₀)`,
+//! `p = K_c s_δ(1 − g/g₀)`, `s_δ(x) = 0` for `x ≤ 0`, `x²/(2δ)` for
+//! `0 < x < δ`, `x − δ/2` beyond: the penalty's kink at the contact
+//! distance rounded over the first `δ` of the closure, so that `p` and its
+//! slope are continuous and both vanish at `g = g₀`
+//! ([`ContactPenalty::onset`] `δ`; `δ = 0` is the plain `max(0, x)`).
 //!
 //! and the tangential traction `τ` is elastic with stiffness `G_c` on the
 //! shear strain of the layer, `τⁿ⁺¹ = τⁿ + G_c γ`, `γ = 2 (Δε n − (n·Δε n) n)`,
@@ -46,6 +50,14 @@ pub struct ContactPenalty {
     /// chatter that the step does not resolve (`ω Δt ≫ 1`), weak on
     /// motions it does (a bounce over many steps). 0 for none.
     pub damping: f64,
+    /// Width `δ` of the penalty's rounded onset, as a fraction of the
+    /// contact distance (dimensionless, `[0, ½]`): the pressure starts at
+    /// `g = g₀` with zero slope, which grows linearly to `K_c` at
+    /// `g = (1 − δ) g₀` (module docs). Bodies at rest sit within `σ/K_c`
+    /// of `g₀`, the penalty's kink with `δ = 0`: any ringing then switched
+    /// the layer's stiffness between 0 and `K_c` from one Picard iterate
+    /// to the next. 0 for the kink.
+    pub onset: f64,
 }
 
 /// What a contact element carries at an iterate.
@@ -85,7 +97,7 @@ impl ContactPenalty {
             None => nn,
         };
         let n = if n.norm() > 0.0 { n / n.norm() } else { n };
-        let p_elastic = self.normal_stiffness * (1.0 - r);
+        let (p_elastic, slope) = self.rounded(1.0 - r);
         if p_elastic <= 0.0 || n.norm() == 0.0 {
             return State { normal: n, ..zero };
         }
@@ -123,8 +135,21 @@ impl ContactPenalty {
             traction,
             tangent: (
                 self.shear_stiffness * w * slip,
-                self.normal_stiffness * r * w + c,
+                self.normal_stiffness * slope * r * w + c,
             ),
+        }
+    }
+
+    /// The elastic normal pressure `K_c s_δ(x)` of a closure `x = 1 − g/g₀`
+    /// and the slope `s_δ'(x)` (module docs).
+    fn rounded(&self, x: f64) -> (f64, f64) {
+        let d = self.onset;
+        if x >= d {
+            (self.normal_stiffness * (x - 0.5 * d), 1.0)
+        } else if x <= 0.0 {
+            (0.0, 0.0)
+        } else {
+            (self.normal_stiffness * x * x / (2.0 * d), x / d)
         }
     }
 
@@ -194,6 +219,58 @@ mod tests {
             normal_stiffness: 1e6,
             shear_stiffness: 1e6,
             damping: 0.0,
+            onset: 0.0,
+        }
+    }
+
+    #[test]
+    fn the_rounded_onset_is_continuous_with_its_slope() {
+        let d = 0.01;
+        let m = ContactPenalty {
+            onset: d,
+            ..penalty()
+        };
+        let k = m.normal_stiffness;
+        // Continuous, with a continuous slope, at both ends of the band.
+        for x0 in [0.0, d] {
+            let (below, s_below) = m.rounded(x0 - 1e-12);
+            let (above, s_above) = m.rounded(x0 + 1e-12);
+            assert!(
+                (below - above).abs() < 1e-5 * k * d,
+                "{x0}: {below} {above}"
+            );
+            assert!(
+                (s_below - s_above).abs() < 1e-8,
+                "{x0}: {s_below} {s_above}"
+            );
+        }
+        // The slope is the pressure's derivative inside the band.
+        for x in [0.1 * d, 0.5 * d, 0.9 * d, 2.0 * d] {
+            let e = 1e-7 * d;
+            let fd = (m.rounded(x + e).0 - m.rounded(x - e).0) / (2.0 * e);
+            assert!((fd / k - m.rounded(x).1).abs() < 1e-6, "{x}");
+        }
+        // At the contact distance nothing pushes, as with the kink: bodies
+        // set one spacing apart start unloaded.
+        assert_eq!(m.rounded(0.0), (0.0, 0.0));
+        assert_eq!(m.rounded(-0.5 * d), (0.0, 0.0));
+        // Half-way through the band: K_c δ/8, half the stiffness.
+        assert!((m.rounded(0.5 * d).0 - 0.125 * d * k).abs() < 1e-9 * k);
+        assert_eq!(m.rounded(0.5 * d).1, 0.5);
+        // Beyond the band, the plain penalty less K_c δ/2.
+        let (p, slope) = m.rounded(0.05);
+        assert!((p - k * (0.05 - 0.5 * d)).abs() < 1e-9 * k && slope == 1.0);
+        // Through the element: closed by 0.5 δ, the layer is stiff where
+        // the kink's is too; closed by 0.01 δ, it is nearly free where the
+        // kink's already has all of `K_c`.
+        let h = layer(1.0, 0.0);
+        for (closed, ratio) in [(0.5 * d, 0.5), (0.01 * d, 0.01)] {
+            let f = Tensor::<2>::new(1.0, 0.0, 0.0, 1.0 - closed);
+            let rounded = m.state(&kin(f), &h);
+            let kink = penalty().state(&kin(f), &h);
+            assert!(rounded.pressure > 0.0);
+            let r = rounded.tangent.1 / kink.tangent.1;
+            assert!((r - ratio).abs() < 1e-6, "{closed}: {r}");
         }
     }
 

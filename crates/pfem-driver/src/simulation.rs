@@ -473,6 +473,7 @@ where
             friction,
             contact_stiffness,
             contact_damping,
+            contact_onset,
         } = built;
         let can_touch = cloud.solid_can_touch();
         let particles = Particles::from_cloud(cloud);
@@ -512,6 +513,7 @@ where
                             normal_stiffness: k,
                             shear_stiffness: k,
                             damping: contact_damping,
+                            onset: contact_onset,
                         }));
                         let index = (materials.len() - 1) as u16;
                         made.push((k, index));

@@ -170,6 +170,9 @@ where
     pub contact_stiffness: Vec<f64>,
     /// Normal damping of contact (steps).
     pub contact_damping: f64,
+    /// Width of the contact penalty's rounded onset (fraction of the
+    /// contact distance).
+    pub contact_onset: f64,
 }
 
 /// What [`Scene::build`] did to one body's particles that fell on another
@@ -602,6 +605,7 @@ where
             friction,
             contact_stiffness,
             contact_damping: contact.damping,
+            contact_onset: contact.onset,
             name,
             particles,
             materials,

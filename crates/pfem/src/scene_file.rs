@@ -242,7 +242,7 @@ pub enum MaterialSpec {
     },
 }
 
-/// The `[contact]` table: `stiffness` (Pa), `damping`, `friction =
+/// The `[contact]` table: `stiffness` (Pa), `damping`, `onset`, `friction =
 /// [{ bodies = ["a", "b"], mu = 0.3 }, …]` and `clamped`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -254,6 +254,11 @@ pub struct ContactSpec {
     /// Normal damping (steps), default 0.1.
     #[serde(default)]
     pub damping: Option<f64>,
+    /// Width of the penalty's rounded onset, a fraction of the contact
+    /// distance in `[0, 0.5]` (`pfem::scene::ContactSettings::onset`),
+    /// default 1e-2; 0 for the plain penalty.
+    #[serde(default)]
+    pub onset: Option<f64>,
     /// Friction coefficients by pair of bodies.
     #[serde(default)]
     pub friction: Vec<FrictionSpec>,
@@ -832,6 +837,9 @@ impl SceneFile {
             if let Some(d) = spec.damping {
                 scene = scene.contact_damping(d);
             }
+            if let Some(d) = spec.onset {
+                scene = scene.contact_onset(d);
+            }
             scene = scene.contact_clamped(spec.clamped);
         }
         scene.validate()?;
@@ -859,11 +867,17 @@ impl SceneFile {
             let (line, col) = line_col(&self.source, spec.span().start);
             return Some(format!("line {line}, column {col}"));
         }
-        // Settings: the line of their key, else of the `[run]` table.
+        // Settings: the line of their key, else of the `[run]` table. The
+        // `[contact]` table's keys drop the `contact_` of the setting's name.
         let keys: &[&str] = match e {
             SceneError::InvalidSetting { setting, .. }
             | SceneError::OutOfRange { setting, .. }
-            | SceneError::NonFinite { setting } => &[setting],
+            | SceneError::NonFinite { setting } => match *setting {
+                "contact_damping" => &["damping"],
+                "contact_onset" => &["onset"],
+                "contact_stiffness" => &["stiffness"],
+                _ => std::slice::from_ref(setting),
+            },
             SceneError::InvalidName { .. } => &["name"],
             SceneError::CannotFinish { what, .. } if what.contains("output frames") => {
                 &["output_interval", "end_time"]

@@ -762,3 +762,57 @@ clamped = true
     let line = text.lines().position(|l| l == "clamped = true").unwrap() + 1;
     assert_eq!(file.locate(&err), Some(format!("line {line}")));
 }
+
+/// `[contact] onset` sets the width of the penalty's rounded onset
+/// (`ContactSettings::onset`); outside `[0, 0.5]` it is refused and `pfem`
+/// points at its line, as at `damping`'s (the file's keys drop the
+/// setting's `contact_`).
+#[test]
+fn contact_onset_is_read_checked_and_located() {
+    let text = |onset: &str, damping: &str| {
+        format!(
+            r#"name = "block"
+dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.05
+
+[run]
+end_time = 0.1
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = {{ min = [0.0, -0.05], max = [1.0, 0.0] }}
+
+[[body]]
+name = "block"
+kind = "solid"
+material.hypoelastic = {{ density = 1000.0, young = 1e6, poisson = 0.3 }}
+geometry.box = {{ min = [0.2, 0.05], max = [0.5, 0.2] }}
+
+[contact]
+onset = {onset}
+damping = {damping}
+"#
+        )
+    };
+    let file = SceneFile::parse(&text("0.01", "0.1"), "block.toml").unwrap();
+    let scene = file.scene::<2>().unwrap();
+    assert_eq!(scene.contact.onset, 0.01);
+    assert_eq!(scene.contact.damping, 0.1);
+    for (onset, damping, setting, key) in [
+        ("0.6", "0.1", "contact_onset", "onset = 0.6"),
+        ("-1e-3", "0.1", "contact_onset", "onset = -1e-3"),
+        ("0.01", "-1.0", "contact_damping", "damping = -1.0"),
+    ] {
+        let t = text(onset, damping);
+        let file = SceneFile::parse(&t, "block.toml").unwrap();
+        let err = file.build().map(|_| ()).unwrap_err();
+        assert!(
+            matches!(err, SceneError::OutOfRange { setting: s, .. } if s == setting),
+            "{err:?}"
+        );
+        let line = t.lines().position(|l| l == key).unwrap() + 1;
+        assert_eq!(file.locate(&err), Some(format!("line {line}")), "{key}");
+    }
+}
