@@ -423,6 +423,19 @@ fn a_checkpoint_of_another_viscosity_or_contact_law_is_refused() {
     let err = damped.restore(&ck).unwrap_err();
     println!("another contact law: {err}");
     assert!(refused(err));
+    // The penalty's rounded onset (session 37) is the material's too: a
+    // checkpoint written with the kink (`onset = 0`, the law before
+    // session 37) restores only into a scene that asks for it.
+    let mut kink = sim2(sliding_block_scene().contact_onset(0.0));
+    let err = kink.restore(&ck).unwrap_err();
+    println!("another contact onset: {err}");
+    assert!(refused(err));
+    kink.step().unwrap();
+    let old = kink.checkpoint();
+    assert!(refused(sliding_block().restore(&old).unwrap_err()));
+    sim2(sliding_block_scene().contact_onset(0.0))
+        .restore(&old)
+        .unwrap();
     sliding_block().restore(&ck).unwrap();
     // Friction is no material's: the checkpoint's contact section
     // (session 36) refuses another coefficient.

@@ -39,7 +39,9 @@ pub const TRACTION: usize = 5;
 /// The penalty material of contact elements (module docs). Massless.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactPenalty {
-    /// Normal penalty `K_c` (Pa): the pressure of a gap closed entirely.
+    /// Normal penalty `K_c` (Pa): the slope of the pressure against the
+    /// gap's closure `1 − g/g₀` beyond the rounded onset (a gap closed
+    /// entirely: `K_c (1 − δ/2)`).
     pub normal_stiffness: f64,
     /// Tangential stiffness `G_c` (Pa) of the layer while it sticks.
     pub shear_stiffness: f64,
@@ -143,11 +145,12 @@ impl ContactPenalty {
     /// The elastic normal pressure `K_c s_δ(x)` of a closure `x = 1 − g/g₀`
     /// and the slope `s_δ'(x)` (module docs).
     fn rounded(&self, x: f64) -> (f64, f64) {
-        let d = self.onset;
-        if x >= d {
-            (self.normal_stiffness * (x - 0.5 * d), 1.0)
-        } else if x <= 0.0 {
+        // A public struct: a negative or NaN width is the kink.
+        let d = self.onset.max(0.0);
+        if x <= 0.0 {
             (0.0, 0.0)
+        } else if x >= d {
+            (self.normal_stiffness * (x - 0.5 * d), 1.0)
         } else {
             (self.normal_stiffness * x * x / (2.0 * d), x / d)
         }
@@ -254,6 +257,16 @@ mod tests {
         // set one spacing apart start unloaded.
         assert_eq!(m.rounded(0.0), (0.0, 0.0));
         assert_eq!(m.rounded(-0.5 * d), (0.0, 0.0));
+        // A negative or NaN width (the struct is public) is the kink: no
+        // pressure while the gap is open.
+        for bad in [-d, f64::NAN] {
+            let b = ContactPenalty {
+                onset: bad,
+                ..penalty()
+            };
+            assert_eq!(b.rounded(-0.25 * d), (0.0, 0.0));
+            assert_eq!(b.rounded(0.05), penalty().rounded(0.05));
+        }
         // Half-way through the band: K_c δ/8, half the stiffness.
         assert!((m.rounded(0.5 * d).0 - 0.125 * d * k).abs() < 1e-9 * k);
         assert_eq!(m.rounded(0.5 * d).1, 0.5);

@@ -74,8 +74,8 @@ pub const SETTINGS: &str = "settings";
 
 /// The driver's section: which bodies take part in contact and the
 /// friction between them, printed (session 36; a checkpoint without it is
-/// read as before, unchecked). The penalty and damping are the contact
-/// materials', compared with the materials.
+/// read as before, unchecked). The penalty, damping and rounded onset are
+/// the contact materials', compared with the materials.
 pub const CONTACT: &str = "contact";
 
 /// Why a checkpoint could not be read or applied.

@@ -358,7 +358,7 @@ pub const PICARD_FORCING: f64 = 1e-3;
 /// a rounded contact onset) moved at 2.4·10⁻⁸ m/s with changes stalled at
 /// 5–9·10⁻¹⁴ m/s (3–8·10⁻¹¹ `g Δt`), above 10⁻⁶ of its speed, and the
 /// loop rejected every step down to `Δt` = 2·10⁻⁵ s. Against this floor
-/// a change of 10⁻⁹ `g Δt` passes, 12 to 30 times the stall.
+/// a change of 10⁻⁹ `g Δt` passes, 12 to 33 times the stall.
 pub const BODY_FORCE_FLOOR: f64 = 1e-3;
 
 impl Default for StepParams {
