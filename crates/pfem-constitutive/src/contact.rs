@@ -112,18 +112,24 @@ impl ContactPenalty {
         let old = old - n * n.dot(&old);
         let trial = old + gamma * self.shear_stiffness;
         let cap = h.internal[FRICTION].max(0.0) * p;
-        // Return to the Coulomb cone; the linearisation takes the secant
-        // `G_c |τ|/|τ_trial|` (0 without friction). The elastic tangent
-        // `G_c` while slipping was tried: a frictionless block resting on
-        // a floor then took 2 471 steps (798 rejected by Picard) for 0.5 s
-        // against 250 (none).
-        let (traction, slip) = if trial.norm() > cap {
+        // Return to the Coulomb cone. While slipping, the traction's
+        // derivative is `G_c |τ|/|τ_trial|` across the slip direction and 0
+        // along it; the linearisation, one scalar for every shear, takes 0
+        // in 2D (one tangential direction: the consistent tangent) and the
+        // secant `G_c |τ|/|τ_trial|` in 3D (0 without friction either way).
+        // The elastic tangent `G_c` while slipping was tried: a
+        // frictionless block resting on a floor then took 2 471 steps (798
+        // rejected by Picard) for 0.5 s against 250 (none). The secant in
+        // 2D (before session 37) converged slowly on the slip direction: a
+        // block at 20° with μ = 0.5 took 4 066 steps (1 311 rejected) for
+        // 1 s, against 1 748 (557) with 0.
+        let (traction, shear_factor) = if trial.norm() > cap {
             let s = if trial.norm() > 0.0 {
                 cap / trial.norm()
             } else {
                 0.0
             };
-            (trial * s, s)
+            (trial * s, if D == 2 { 0.0 } else { s })
         } else {
             (trial, 1.0)
         };
@@ -136,7 +142,7 @@ impl ContactPenalty {
             normal: n,
             traction,
             tangent: (
-                self.shear_stiffness * w * slip,
+                self.shear_stiffness * w * shear_factor,
                 self.normal_stiffness * slope * r * w + c,
             ),
         }
@@ -318,12 +324,39 @@ mod tests {
         let s = m.state(&kin(f), &h);
         assert!(s.traction.norm() < 0.5 * s.pressure);
         assert!(s.traction.norm() > 0.0);
+        // Sticking, the linearisation's shear stiffness is the layer's.
+        assert_eq!(s.tangent.0, m.shear_stiffness * 1e-3);
         // A shear ten times larger reaches the cone: |τ| = μ p.
         let f = Tensor::<2>::new(1.0, 2e-2, 0.0, 0.99);
         let s = m.state(&kin(f), &h);
         assert!((s.traction.norm() - 0.5 * s.pressure).abs() < 1e-6 * s.pressure);
+        // Slipping in 2D: the traction does not change along the one
+        // tangential direction, and neither does the linearisation.
+        assert_eq!(s.tangent.0, 0.0);
         // Without friction no traction.
         let s = m.state(&kin(f), &layer(1.0, 0.0));
         assert_eq!(s.traction.norm(), 0.0);
+    }
+
+    #[test]
+    fn slipping_in_3d_keeps_the_secant_across_the_slip() {
+        let m = penalty();
+        let mut h = History::<3>::default();
+        h.internal[GAP_RATIO] = 1.0;
+        h.internal[FRICTION] = 0.5;
+        h.internal[NORMAL + 1] = 1.0;
+        let mut k = Kinematics::<3>::at_rest(1e-3);
+        k.f = Tensor::<3>::new(1.0, 2e-2, 0.0, 0.0, 0.99, 0.0, 0.0, 0.0, 1.0);
+        k.j = k.f.determinant();
+        k.displacement_weight = 1e-3;
+        let s = m.state(&k, &h);
+        let trial = m.shear_stiffness * 2.0 * k.strain_increment()[(0, 1)];
+        assert!((s.traction.norm() - 0.5 * s.pressure).abs() < 1e-6 * s.pressure);
+        let secant = m.shear_stiffness * 1e-3 * s.traction.norm() / trial.abs();
+        assert!(
+            (s.tangent.0 / secant - 1.0).abs() < 1e-9,
+            "{} {secant}",
+            s.tangent.0
+        );
     }
 }
