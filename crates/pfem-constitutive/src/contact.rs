@@ -113,16 +113,19 @@ impl ContactPenalty {
         let trial = old + gamma * self.shear_stiffness;
         let cap = h.internal[FRICTION].max(0.0) * p;
         // Return to the Coulomb cone. While slipping, the traction's
-        // derivative is `G_c |τ|/|τ_trial|` across the slip direction and 0
-        // along it; the linearisation, one scalar for every shear, takes 0
-        // in 2D (one tangential direction: the consistent tangent) and the
-        // secant `G_c |τ|/|τ_trial|` in 3D (0 without friction either way).
-        // The elastic tangent `G_c` while slipping was tried: a
-        // frictionless block resting on a floor then took 2 471 steps (798
-        // rejected by Picard) for 0.5 s against 250 (none). The secant in
-        // 2D (before session 37) converged slowly on the slip direction: a
-        // block at 20° with μ = 0.5 took 4 066 steps (1 311 rejected) for
-        // 1 s, against 1 748 (557) with 0.
+        // derivative by the shear is `G_c |τ|/|τ_trial|` across the slip
+        // direction and 0 along it; the linearisation, one scalar for every
+        // shear, takes 0 in 2D (one tangential direction: the consistent
+        // shear–shear entry) and the secant `G_c |τ|/|τ_trial|` in 3D (0
+        // without friction). The cap's dependence on the volume change
+        // (`μ p'`) and the normal's turning with the shear have no place in
+        // the isotropic form and were never included. The elastic tangent
+        // `G_c` while slipping was tried: a frictionless block resting on
+        // a floor then took 2 471 steps (798 rejected by Picard) for 0.5 s
+        // against 250 (none). The secant in 2D (until session 37's change,
+        // with the rounded onset) converged slowly along the slip: a block
+        // at 20° with μ = 0.5 took 4 066 steps (1 311 rejected) for 1 s,
+        // against 1 748 (557) with 0.
         let (traction, shear_factor) = if trial.norm() > cap {
             let s = if trial.norm() > 0.0 {
                 cap / trial.norm()
@@ -339,7 +342,7 @@ mod tests {
     }
 
     #[test]
-    fn slipping_in_3d_keeps_the_secant_across_the_slip() {
+    fn slipping_in_3d_keeps_the_secant() {
         let m = penalty();
         let mut h = History::<3>::default();
         h.internal[GAP_RATIO] = 1.0;
@@ -351,7 +354,9 @@ mod tests {
         k.displacement_weight = 1e-3;
         let s = m.state(&k, &h);
         let trial = m.shear_stiffness * 2.0 * k.strain_increment()[(0, 1)];
+        // It slips: on the cone, well inside the trial.
         assert!((s.traction.norm() - 0.5 * s.pressure).abs() < 1e-6 * s.pressure);
+        assert!(trial.abs() > 2.0 * s.traction.norm());
         let secant = m.shear_stiffness * 1e-3 * s.traction.norm() / trial.abs();
         assert!(
             (s.tangent.0 / secant - 1.0).abs() < 1e-9,
