@@ -197,6 +197,39 @@ fn friction_holds_near_the_friction_angle() {
     assert!(dx.abs() < 1e-3 * 0.2, "θ = {theta_deg}°: slid {dx} m");
 }
 
+/// The same block with Aitken's relaxation of the Picard iterates
+/// (`StepParams::picard_relaxation`, opt-in, session 37): it sticks as
+/// well (8.8·10⁻⁶ m in 1 s) and Picard rejects 6 of 507 steps instead of
+/// 557 of 1 748, the iterates converging linearly at a rate near 0.6
+/// without it. About 1 s.
+#[test]
+fn aitken_relaxation_makes_a_sticking_block_cheap() {
+    let (h, mu, theta) = (0.02, 0.5, 20.0f64.to_radians());
+    let params = StepParams {
+        picard_relaxation: true,
+        ..StepParams::default()
+    };
+    let mut s = Simulation::new(
+        block_on_floor(h, 0.2, 0.1, theta, mu, 1e7),
+        Box::new(Delaunay2::default()),
+        params,
+    )
+    .unwrap();
+    let x0 = centroid(&s, "block")[0];
+    s.run(&mut []).unwrap();
+    let dx = centroid(&s, "block")[0] - x0;
+    println!(
+        "relaxed, 20°: moved {dx:.2e} m in 1 s, {} steps ({} rejected), {} Picard iterates",
+        s.steps(),
+        s.rejected(),
+        s.stats().assemble.0
+    );
+    assert!(dx.abs() < 1e-3 * 0.2, "slid {dx} m");
+    // Without it: 1 748 steps, 557 rejected (the test above).
+    assert!(s.rejected() <= 20, "{} rejected steps", s.rejected());
+    assert!(s.steps() <= 600, "{} steps", s.steps());
+}
+
 fn fit_acceleration(series: &[(f64, f64)]) -> f64 {
     // Least squares for x = a + b t + c t²/2: normal equations, Cramer.
     let mut m = [[0.0f64; 3]; 3];

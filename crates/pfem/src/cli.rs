@@ -146,7 +146,8 @@ impl Args {
 
     /// Time-integration parameters from `--scheme newmark|bossak|euler`,
     /// `--picard-tol TOL`, `--picard-stop change|estimate`
-    /// (`StepParams::picard_error_estimate`) and `--picard-forcing F`
+    /// (`StepParams::picard_error_estimate`), `--picard-relaxation
+    /// none|aitken` (`StepParams::picard_relaxation`) and `--picard-forcing F`
     /// (`StepParams::picard_forcing`; defaults: Bossak with α_B = −0.3,
     /// tolerance 1e-6, `change`, 1e-3).
     pub fn step_params(&self) -> Result<pfem_time::StepParams, ArgsError> {
@@ -168,6 +169,15 @@ impl Args {
             Some(other) => {
                 return Err(ArgsError(format!(
                     "--picard-stop must be change or estimate, got `{other}`"
+                )))
+            }
+        }
+        match self.options.get("picard-relaxation").map(String::as_str) {
+            None | Some("none") => p.picard_relaxation = false,
+            Some("aitken") => p.picard_relaxation = true,
+            Some(other) => {
+                return Err(ArgsError(format!(
+                    "--picard-relaxation must be none or aitken, got `{other}`"
                 )))
             }
         }
@@ -382,7 +392,7 @@ impl Args {
         for k in self.options.keys() {
             if !known.contains(&k.as_str()) && !COMMON.contains(&k.as_str()) {
                 return Err(ArgsError(format!(
-                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --picard-forcing --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-stabilised-3d --sliver-quality-2d --sliver-prediction --first-iterate --far-walls{})",
+                    "unknown option --{k} (known: --out --spacing --end-time --quiet --no-vtu --overwrite --scheme --picard-tol --picard-stop --picard-relaxation --picard-forcing --solver --volume-correction --pressure-stabilisation --memory-budget --max-wall-time --threads --max-dt --min-quality-3d --sliver-quality-3d --sliver-stabilised-3d --sliver-quality-2d --sliver-prediction --first-iterate --far-walls{})",
                     known.iter().map(|k| format!(" --{k}")).collect::<String>()
                 )));
             }
@@ -393,10 +403,11 @@ impl Args {
 
 /// Value options every program accepts besides `--out`, `--spacing` and
 /// `--end-time`.
-const COMMON: [&str; 18] = [
+const COMMON: [&str; 19] = [
     "scheme",
     "picard-tol",
     "picard-stop",
+    "picard-relaxation",
     "picard-forcing",
     "pressure-stabilisation",
     "solver",
@@ -426,6 +437,8 @@ Options common to the bundled examples and `pfem run`:
   --scheme S            bossak (default), newmark or euler
   --picard-tol X        Picard tolerance (default 1e-6)
   --picard-stop S       change (default) or estimate (also stop on the estimated error)
+  --picard-relaxation R none (default) or aitken (relax the Picard iterates: sticking
+                        frictional contact)
   --picard-forcing F    iterative solvers solve a Picard iterate to F times the last
                         change (default 1e-3; 0: every iterate to the solver's target)
   --solver S            block (default), block-amg (multigrid), direct, lu, cholesky, cg
@@ -587,6 +600,10 @@ mod tests {
         let e = args(&["--picard-stop", "estimate"]);
         assert!(e.reject_unknown(&[]).is_ok());
         assert!(e.step_params().unwrap().picard_error_estimate);
+        assert!(!a.step_params().unwrap().picard_relaxation);
+        let r = args(&["--picard-relaxation", "aitken"]);
+        assert!(r.reject_unknown(&[]).is_ok());
+        assert!(r.step_params().unwrap().picard_relaxation);
         assert!(a.step_params().unwrap().sliver_prediction);
         let off = args(&["--sliver-prediction", "off"]);
         assert!(off.reject_unknown(&[]).is_ok());
@@ -633,6 +650,7 @@ mod tests {
             &["--sliver-stabilised-3d", "0.5"],
             &["--sliver-stabilised-3d", "nan"],
             &["--picard-stop", "never"],
+            &["--picard-relaxation", "steffensen"],
         ] {
             let a = args(bad);
             assert!(a.validate_options().is_err(), "{bad:?}");
