@@ -119,20 +119,27 @@ fn a_free_block_rests_on_the_floor_without_sinking_through_it() {
     assert!(s.rejected() <= 2, "{} rejected steps", s.rejected());
 }
 
+/// The 0.2 × 0.1 m block on the floor tilted by `theta_deg` with friction
+/// `mu`, run for 1 s with `params`: how far its centroid moved (m) and the
+/// simulation.
+fn creep(theta_deg: f64, mu: f64, params: StepParams) -> (f64, Simulation<2>) {
+    let scene = block_on_floor(0.02, 0.2, 0.1, theta_deg.to_radians(), mu, 1e7);
+    let mut s = Simulation::new(scene, Box::new(Delaunay2::default()), params).unwrap();
+    let x0 = centroid(&s, "block")[0];
+    s.run(&mut []).unwrap();
+    (centroid(&s, "block")[0] - x0, s)
+}
+
 /// Below the friction angle the block sticks; above it, it slides with
 /// the acceleration g (sin θ − μ cos θ).
 #[test]
 fn friction_holds_below_the_friction_angle_and_lets_go_above_it() {
     let (h, mu) = (0.02, 0.5);
     for theta_deg in [10.0f64, 15.0] {
-        let theta = theta_deg.to_radians();
-        let mut s = sim(block_on_floor(h, 0.2, 0.1, theta, mu, 1e7));
-        let x0 = centroid(&s, "block")[0];
-        s.run(&mut []).unwrap();
-        let dx = centroid(&s, "block")[0] - x0;
+        let (dx, _) = creep(theta_deg, mu, StepParams::default());
         println!(
             "θ = {theta_deg}°, tan θ = {:.3} < μ = {mu}: moved {dx:.2e} m in 1 s",
-            theta.tan()
+            theta_deg.to_radians().tan()
         );
         assert!(dx.abs() < 1e-3 * 0.2, "θ = {theta_deg}°: slid {dx} m");
     }
@@ -182,15 +189,11 @@ fn friction_holds_below_the_friction_angle_and_lets_go_above_it() {
 /// the block sticks as a whole. About 5 s.
 #[test]
 fn friction_holds_near_the_friction_angle() {
-    let (h, mu, theta_deg) = (0.02, 0.5, 20.0f64);
-    let theta = theta_deg.to_radians();
-    let mut s = sim(block_on_floor(h, 0.2, 0.1, theta, mu, 1e7));
-    let x0 = centroid(&s, "block")[0];
-    s.run(&mut []).unwrap();
-    let dx = centroid(&s, "block")[0] - x0;
+    let (mu, theta_deg) = (0.5, 20.0f64);
+    let (dx, s) = creep(theta_deg, mu, StepParams::default());
     println!(
         "θ = {theta_deg}°, tan θ = {:.3} < μ = {mu}: moved {dx:.2e} m in 1 s, {} steps ({} rejected)",
-        theta.tan(),
+        theta_deg.to_radians().tan(),
         s.steps(),
         s.rejected()
     );
@@ -204,20 +207,11 @@ fn friction_holds_near_the_friction_angle() {
 /// without it. About 1 s.
 #[test]
 fn aitken_relaxation_makes_a_sticking_block_cheap() {
-    let (h, mu, theta) = (0.02, 0.5, 20.0f64.to_radians());
     let params = StepParams {
         picard_relaxation: true,
         ..StepParams::default()
     };
-    let mut s = Simulation::new(
-        block_on_floor(h, 0.2, 0.1, theta, mu, 1e7),
-        Box::new(Delaunay2::default()),
-        params,
-    )
-    .unwrap();
-    let x0 = centroid(&s, "block")[0];
-    s.run(&mut []).unwrap();
-    let dx = centroid(&s, "block")[0] - x0;
+    let (dx, s) = creep(20.0, 0.5, params);
     println!(
         "relaxed, 20°: moved {dx:.2e} m in 1 s, {} steps ({} rejected), {} Picard iterates",
         s.steps(),

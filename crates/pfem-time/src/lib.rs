@@ -809,15 +809,17 @@ where
     /// `r = sol − V`, with `ω` from this and the last change `last_r`
     /// (Irons–Tuck; `ω = 1` at the first iterate, clamped to `[0.1, 2]`).
     /// Prescribed components take the solve's value (theirs) and no part
-    /// in `ω`.
+    /// in `ω`. `r` is scratch; the two buffers swap, so a loop allocates
+    /// them once.
     fn relax(
         &mut self,
         it: usize,
         constraints: &Constraints<D>,
+        r: &mut Vec<f64>,
         last_r: &mut Vec<f64>,
         omega: &mut f64,
     ) {
-        let mut r = Vec::with_capacity(self.sol.len());
+        r.clear();
         for (s, &p) in self.assembler.particles().iter().enumerate() {
             let p = p as usize;
             for k in 0..D {
@@ -848,7 +850,7 @@ where
                 self.v_it[p as usize][k] += *omega * r[s * D + k];
             }
         }
-        *last_r = r;
+        std::mem::swap(last_r, r);
     }
 
     /// The split form and the pressure stabilisation of the assembly for
@@ -989,7 +991,7 @@ where
         // Aitken's relaxation (`StepParams::picard_relaxation`): the last
         // proposed change and factor.
         let relax = self.params.picard_relaxation;
-        let mut last_r: Vec<f64> = Vec::new();
+        let (mut r, mut last_r) = (Vec::new(), Vec::new());
         let mut omega = 1.0f64;
         for it in 1..=self.params.max_picard_iterations {
             let ta = std::time::Instant::now();
@@ -1076,16 +1078,13 @@ where
                     let new = self.sol[s * D + k];
                     dv2 += (new - self.v_it[p][k]).powi(2);
                     v2 += new * new;
+                    if !relax {
+                        self.v_it[p][k] = new;
+                    }
                 }
             }
             if relax {
-                self.relax(it, input.constraints, &mut last_r, &mut omega);
-            } else {
-                for (s, &p) in self.assembler.particles().iter().enumerate() {
-                    for k in 0..D {
-                        self.v_it[p as usize][k] = self.sol[s * D + k];
-                    }
-                }
+                self.relax(it, input.constraints, &mut r, &mut last_r, &mut omega);
             }
             let ns = self.assembler.particles().len().max(1) as f64;
             let floor2 = velocity_floor.powi(2) * ns;
