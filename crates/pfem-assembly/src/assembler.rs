@@ -1010,15 +1010,7 @@ where
         let mut states = std::mem::take(&mut self.states);
         let mut unified = std::mem::take(&mut self.unified);
         states.resize(ne, dummy_state());
-        unified.resize(
-            ne,
-            Unified {
-                mu: 0.0,
-                kappa: 0.0,
-                sigma_hat: Tensor::<D>::zeros(),
-                sigma_hat_zz: 0.0,
-            },
-        );
+        unified.resize(ne, Unified::new(0.0, 0.0, Tensor::<D>::zeros(), 0.0));
         let mut frozen = std::mem::take(&mut self.frozen);
         let decide = frozen.len() != ne;
         frozen.resize(ne, false);

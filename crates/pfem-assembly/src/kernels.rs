@@ -111,6 +111,14 @@ pub enum VolumetricTreatment {
 ///
 /// With `include_volumetric = false` the `κ` part is left out (it is then
 /// assembled nodally).
+///
+/// A layer ([`Unified::layer`]: normal `n`, resisting tangential
+/// directions `Q`, the contact penalty) has `2 μ P(ε)` in place of
+/// `2 μ ε'`:
+///
+/// `K[(a,k),(b,l)] = V [ μ (Q_kl aₙ bₙ + (Q g_b)[k] n_l aₙ
+/// + n_k (Q gₐ)[l] bₙ + n_k n_l gₐ·Q g_b) + κ gₐ[k] g_b[l] ]`,
+/// `aₙ = gₐ·n`, `bₙ = g_b·n`.
 pub fn element_stiffness<const D: usize>(
     st: &ElementState<D>,
     u: &Unified<D>,
@@ -122,8 +130,35 @@ pub fn element_stiffness<const D: usize>(
     let nv = <Const<D> as Dim>::NV;
     let n = nv * D;
     let mu = u.mu;
-    let lam = if include_volumetric { u.kappa } else { 0.0 } - 2.0 / 3.0 * mu;
     let vol = st.volume;
+    if let Some(layer) = u.layer {
+        let kappa = if include_volumetric { u.kappa } else { 0.0 };
+        let nrm = layer.normal;
+        let q = layer.resisting();
+        for a in 0..nv {
+            let ga = &st.grads[a];
+            let an = ga.dot(&nrm);
+            let qa = q * ga;
+            for b in 0..nv {
+                let gb = &st.grads[b];
+                let bn = gb.dot(&nrm);
+                let qb = q * gb;
+                let aqb = ga.dot(&qb);
+                for k in 0..D {
+                    for l in 0..D {
+                        let shear = q[(k, l)] * an * bn
+                            + qb[k] * nrm[l] * an
+                            + nrm[k] * qa[l] * bn
+                            + nrm[k] * nrm[l] * aqb;
+                        out[(a * D + k) * n + b * D + l] =
+                            vol * (mu * shear + kappa * ga[k] * gb[l]);
+                    }
+                }
+            }
+        }
+        return;
+    }
+    let lam = if include_volumetric { u.kappa } else { 0.0 } - 2.0 / 3.0 * mu;
     for a in 0..nv {
         let ga = &st.grads[a];
         for b in 0..nv {
@@ -187,6 +222,7 @@ pub fn volumetric_on_element(kind: MaterialKind, treatment: VolumetricTreatment)
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use pfem_constitutive::Layer;
 
     #[test]
     fn kinematics_of_a_uniform_stretch() {
@@ -230,12 +266,7 @@ mod tests {
         ];
         let v = [Vector::<3>::zeros(); 4];
         let st = element_state::<3>(&x, &x, &v, 1.0, 1.0).unwrap();
-        let u = Unified {
-            mu: 2.0,
-            kappa: 7.0,
-            sigma_hat: Tensor::<3>::zeros(),
-            sigma_hat_zz: 0.0,
-        };
+        let u = Unified::new(2.0, 7.0, Tensor::<3>::zeros(), 0.0);
         let mut k = [0.0; 144];
         element_stiffness::<3>(&st, &u, true, &mut k);
         for i in 0..12 {
@@ -248,5 +279,120 @@ mod tests {
                 assert!(s.abs() < 1e-12);
             }
         }
+    }
+
+    /// `K v` is the force `V σ_lin gₐ` of the linear stress
+    /// (`Unified::linear_stress`) at the rate the velocities `v` give.
+    fn stiffness_is_the_linear_stress<const D: usize>(
+        x: &[Point<D>],
+        v: &[Vector<D>],
+        u: &Unified<D>,
+    ) where
+        Const<D>: Dim,
+    {
+        let nv = <Const<D> as Dim>::NV;
+        let n = nv * D;
+        let st = element_state::<D>(x, x, v, 1.0, 1.0).unwrap();
+        let mut k = vec![0.0; n * n];
+        element_stiffness::<D>(&st, u, true, &mut k);
+        let sigma = u.linear_stress(&st.kin).0;
+        let scale = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for a in 0..nv {
+            let f = sigma * st.grads[a] * st.volume;
+            for kk in 0..D {
+                let kv: f64 = (0..nv)
+                    .flat_map(|b| (0..D).map(move |l| (b, l)))
+                    .map(|(b, l)| k[(a * D + kk) * n + b * D + l] * v[b][l])
+                    .sum();
+                assert!(
+                    (kv - f[kk]).abs() <= 1e-12 * scale,
+                    "{a} {kk}: {kv} {}",
+                    f[kk]
+                );
+            }
+        }
+        for i in 0..n {
+            for j in 0..n {
+                assert!((k[i * n + j] - k[j * n + i]).abs() <= 1e-12 * scale);
+            }
+        }
+    }
+
+    #[test]
+    fn a_layer_resists_only_the_shear_across_its_plane() {
+        let x2 = [
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 0.1),
+            Point::<2>::new(0.2, 0.9),
+        ];
+        let v2 = [
+            Vector::<2>::new(0.3, -0.2),
+            Vector::<2>::new(-0.1, 0.4),
+            Vector::<2>::new(0.5, 0.05),
+        ];
+        let n2 = Vector::<2>::new(0.6, 0.8);
+        let layer2 = Unified {
+            layer: Some(Layer {
+                normal: n2,
+                slip: Vector::<2>::zeros(),
+            }),
+            ..Unified::new(2.0, 7.0, Tensor::<2>::zeros(), 0.0)
+        };
+        stiffness_is_the_linear_stress::<2>(&x2, &v2, &layer2);
+        stiffness_is_the_linear_stress::<2>(
+            &x2,
+            &v2,
+            &Unified::new(2.0, 7.0, Tensor::<2>::zeros(), 0.0),
+        );
+        let x3 = [
+            Point::<3>::new(0.0, 0.0, 0.0),
+            Point::<3>::new(1.0, 0.1, 0.0),
+            Point::<3>::new(0.2, 1.0, 0.1),
+            Point::<3>::new(0.1, 0.2, 1.0),
+        ];
+        let v3 = [
+            Vector::<3>::new(0.3, -0.2, 0.1),
+            Vector::<3>::new(-0.1, 0.4, 0.0),
+            Vector::<3>::new(0.5, 0.05, -0.3),
+            Vector::<3>::new(0.0, 0.2, 0.7),
+        ];
+        let n3 = Vector::<3>::new(2.0, -1.0, 2.0) / 3.0;
+        let t = Vector::<3>::new(1.0, 2.0, 0.0) / 5f64.sqrt();
+        let layer3 = Unified {
+            layer: Some(Layer {
+                normal: n3,
+                slip: Vector::<3>::zeros(),
+            }),
+            ..Unified::new(2.0, 0.0, Tensor::<3>::zeros(), 0.0)
+        };
+        stiffness_is_the_linear_stress::<3>(&x3, &v3, &layer3);
+        // Slipping along m = n × t: only the shear along t resists.
+        let m = n3.cross(&t).normalize();
+        let slipping = Unified {
+            layer: Some(Layer {
+                normal: n3,
+                slip: m,
+            }),
+            ..Unified::new(2.0, 7.0, Tensor::<3>::zeros(), 0.0)
+        };
+        stiffness_is_the_linear_stress::<3>(&x3, &v3, &slipping);
+        let mut kin = pfem_constitutive::Kinematics::<3>::at_rest(1.0);
+        kin.d = (m * n3.transpose() + n3 * m.transpose()) * 0.5;
+        assert!(slipping.linear_stress(&kin).0.norm() < 1e-14);
+        kin.d = (t * n3.transpose() + n3 * t.transpose()) * 0.5;
+        let s = slipping.linear_stress(&kin).0;
+        assert!((t.dot(&(s * n3)) - 2.0).abs() < 1e-14);
+        // Its stress: shear across the plane only. A stretch along the
+        // plane (t ⊥ n) and a normal stretch give nothing with 𝒦 = 0; a
+        // shear t–n gives 2 μ γ on (t, n).
+        let mut kin = pfem_constitutive::Kinematics::<3>::at_rest(1.0);
+        for d in [t * t.transpose(), n3 * n3.transpose()] {
+            kin.d = d;
+            assert!(layer3.linear_stress(&kin).0.norm() < 1e-14);
+        }
+        kin.d = (t * n3.transpose() + n3 * t.transpose()) * 0.5;
+        let s = layer3.linear_stress(&kin).0;
+        assert!((t.dot(&(s * n3)) - 2.0).abs() < 1e-14);
+        assert!(t.dot(&(s * t)).abs() < 1e-14 && n3.dot(&(s * n3)).abs() < 1e-14);
     }
 }

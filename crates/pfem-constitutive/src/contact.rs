@@ -25,7 +25,7 @@
 
 use pfem_core::{Const, Dim, Tensor, Vector};
 
-use crate::material::{History, Kinematics, Material, MaterialKind, Unified};
+use crate::material::{History, Kinematics, Layer, Material, MaterialKind, Unified};
 
 /// Slot of `gⁿ/g₀` in [`History::internal`].
 pub const GAP_RATIO: usize = 0;
@@ -73,6 +73,8 @@ where
     traction: Vector<D>,
     /// Stiffness factors of the linearisation: (shear, volumetric).
     tangent: (f64, f64),
+    /// Unit slip direction while slipping, zero while sticking.
+    slip: Vector<D>,
 }
 
 impl ContactPenalty {
@@ -86,6 +88,7 @@ impl ContactPenalty {
             normal: Vector::<D>::zeros(),
             traction: Vector::<D>::zeros(),
             tangent: (0.0, 0.0),
+            slip: Vector::<D>::zeros(),
         };
         let ratio = h.internal[GAP_RATIO];
         if ratio <= 0.0 {
@@ -112,29 +115,23 @@ impl ContactPenalty {
         let old = old - n * n.dot(&old);
         let trial = old + gamma * self.shear_stiffness;
         let cap = h.internal[FRICTION].max(0.0) * p;
-        // Return to the Coulomb cone. While slipping, the traction's
-        // derivative by the shear is `G_c |τ|/|τ_trial|` across the slip
-        // direction and 0 along it; the linearisation, one scalar for every
-        // shear, takes 0 in 2D (one tangential direction: the consistent
-        // shear–shear entry) and the secant `G_c |τ|/|τ_trial|` in 3D (0
-        // without friction). The cap's dependence on the volume change
-        // (`μ p'`) and the normal's turning with the shear have no place in
-        // the isotropic form and were never included. The elastic tangent
-        // `G_c` while slipping was tried: a frictionless block resting on
-        // a floor then took 2 471 steps (798 rejected by Picard) for 0.5 s
-        // against 250 (none). The secant in 2D (until session 37's change,
-        // with the rounded onset) converged slowly along the slip: a block
-        // at 20° with μ = 0.5 took 4 066 steps (1 311 rejected) for 1 s,
-        // against 1 748 (557) with 0.
-        let (traction, shear_factor) = if trial.norm() > cap {
-            let s = if trial.norm() > 0.0 {
-                cap / trial.norm()
-            } else {
-                0.0
-            };
-            (trial * s, if D == 2 { 0.0 } else { s })
+        // Return to the Coulomb cone. While slipping along `m` the
+        // traction's derivative by the shear is 0 along `m` and the secant
+        // `G_c |τ|/|τ_trial|` across it: the layer's linearisation
+        // (`Unified::layer`, the `Layer`'s slip direction) takes both, and
+        // in 2D, with one tangential direction, it has none. The cap's dependence on the volume
+        // change (`μ p'`) and the normal's turning with the shear are left
+        // out. Before session 38 the linearisation was isotropic (`2 μ D'`,
+        // one scalar for every shear, which overstated the normal stiffness
+        // ×2.3); the elastic tangent `G_c` while slipping was tried then: a
+        // frictionless block resting on a floor took 2 471 steps (798
+        // rejected by Picard) for 0.5 s against 250 (none).
+        let zero_slip = Vector::<D>::zeros();
+        let tn = trial.norm();
+        let (traction, shear_factor, slip) = if tn > cap {
+            (trial * (cap / tn), cap / tn, trial / tn)
         } else {
-            (trial, 1.0)
+            (trial, 1.0, zero_slip)
         };
         let sigma =
             Tensor::<D>::identity() * (-p) + traction * n.transpose() + n * traction.transpose();
@@ -144,6 +141,7 @@ impl ContactPenalty {
             pressure: p,
             normal: n,
             traction,
+            slip,
             tangent: (
                 self.shear_stiffness * w * shear_factor,
                 self.normal_stiffness * slope * r * w + c,
@@ -200,7 +198,18 @@ where
     fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D> {
         let s = self.state(kin, history);
         let zz = if D == 2 { -s.pressure } else { 0.0 };
-        Unified::returning(s.tangent.0, s.tangent.1, s.sigma, zz, kin)
+        // The layer resists the shear across its plane alone: its
+        // linearisation is `2 G_c P(D)`, not the isotropic `2 G_c D'`
+        // ([`Unified::layer`]).
+        if s.normal.norm() > 0.0 {
+            let layer = Layer {
+                normal: s.normal,
+                slip: s.slip,
+            };
+            Unified::returning_layer(s.tangent.0, s.tangent.1, layer, s.sigma, zz, kin)
+        } else {
+            Unified::returning(s.tangent.0, s.tangent.1, s.sigma, zz, kin)
+        }
     }
 
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>) {
@@ -334,15 +343,29 @@ mod tests {
         let s = m.state(&kin(f), &h);
         assert!((s.traction.norm() - 0.5 * s.pressure).abs() < 1e-6 * s.pressure);
         // Slipping in 2D: the traction does not change along the one
-        // tangential direction, and neither does the linearisation.
-        assert_eq!(s.tangent.0, 0.0);
+        // tangential direction, and neither does the linearisation's
+        // stress: a shear rate gives none.
+        let u = Material::<2>::unified(&m, &kin(f), &h);
+        let mut shear = kin(f);
+        shear.d = Tensor::<2>::new(0.0, 1.0, 1.0, 0.0);
+        assert!(u.linear_stress(&shear).0.norm() < 1e-12 * m.shear_stiffness);
+        // Sticking, it does: 2 μ on the shear.
+        let f = Tensor::<2>::new(1.0, 1e-3, 0.0, 0.99);
+        let u = Material::<2>::unified(&m, &kin(f), &h);
+        let s2 = u.linear_stress(&shear).0;
+        assert!((s2[(0, 1)] - 2.0 * m.shear_stiffness * 1e-3).abs() < 1e-9);
+        // Nor does it resist a stretch along the plane or (beyond the
+        // volumetric part) across it.
+        let mut stretch = kin(f);
+        stretch.d = Tensor::<2>::new(1.0, 0.0, 0.0, -1.0);
+        assert!(u.linear_stress(&stretch).0.norm() < 1e-12 * m.shear_stiffness);
         // Without friction no traction.
         let s = m.state(&kin(f), &layer(1.0, 0.0));
         assert_eq!(s.traction.norm(), 0.0);
     }
 
     #[test]
-    fn slipping_in_3d_keeps_the_secant() {
+    fn slipping_in_3d_resists_only_across_the_slip() {
         let m = penalty();
         let mut h = History::<3>::default();
         h.internal[GAP_RATIO] = 1.0;
@@ -363,5 +386,15 @@ mod tests {
             "{} {secant}",
             s.tangent.0
         );
+        // The slip is along x (n = y): a shear rate along it meets no
+        // stiffness, one across it (z) the secant.
+        let u = Material::<3>::unified(&m, &k, &h);
+        let mut along = k;
+        along.d = Tensor::<3>::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        assert!(u.linear_stress(&along).0.norm() < 1e-12 * m.shear_stiffness);
+        let mut across = k;
+        across.d = Tensor::<3>::new(0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0);
+        let sa = u.linear_stress(&across).0;
+        assert!((sa[(1, 2)] / (2.0 * s.tangent.0) - 1.0).abs() < 1e-9);
     }
 }

@@ -1,6 +1,6 @@
 //! The unified material interface (paper §3.5, eqs. 43–44).
 
-use pfem_core::{Const, Dim, Tensor};
+use pfem_core::{Const, Dim, Tensor, Vector};
 
 /// Kinematics of one element at the current Picard iterate, in the Updated
 /// Lagrangian frame whose reference is the configuration at `t_n`.
@@ -171,6 +171,11 @@ where
 
 /// The unified constitutive triple of eq. 44: with it the Cauchy stress at
 /// `t_{n+1}` is `σ = σ̂⁽ⁿ⁾ + 𝒦 ε_v I + 2 μ D'` (eq. 43).
+///
+/// A layer ([`Self::layer`], the contact penalty) replaces `D'` by the
+/// shear across its plane; every bulk material leaves it `None`. Build
+/// a triple with [`Self::new`] (or [`Self::returning`]) rather than a
+/// struct literal, which breaks when a field is added.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Unified<const D: usize> {
     /// Effective viscosity `μ⁽ⁿ⁺¹⁾` (Pa·s): `μ_f` for a fluid,
@@ -184,12 +189,63 @@ pub struct Unified<const D: usize> {
     pub sigma_hat: Tensor<D>,
     /// Out-of-plane component of `σ̂⁽ⁿ⁾` in 2D plane strain (zero in 3D).
     pub sigma_hat_zz: f64,
+    /// `Some` for a layer that resists only the shear across its plane
+    /// ([`Layer`]): the `μ` term is then `2 μ P(D)` instead of `2 μ D'`.
+    /// Not in the paper: the linearisation of the contact layer
+    /// ([`crate::ContactPenalty`]), whose isotropic `2 μ D'` overstated its
+    /// normal stiffness by `2 μ (1 − ⅓)` (×2.3 with `G_c = K_c`), so that
+    /// the Picard iterates of a block resting on a floor converged at a
+    /// linear rate near 0.6. `None` for every bulk material.
+    pub layer: Option<Layer<D>>,
+}
+
+/// The plane of a layer ([`Unified::layer`]): unit normal `n` and, while
+/// the layer slips, the unit slip direction `m` in the plane (zero while
+/// it sticks). The layer's linear stress is `2 μ P(D)`,
+/// `P(D) = (Q D n) ⊗ n + n ⊗ (Q D n)`, `Q = I − n ⊗ n − m ⊗ m`: the
+/// shear across the plane, less its part along the slip, where the
+/// traction is Coulomb's bound whatever the shear. No stiffness against
+/// stretching along the plane; the normal stiffness is all in `𝒦`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Layer<const D: usize> {
+    /// Unit normal `n` of the plane.
+    pub normal: Vector<D>,
+    /// Unit slip direction `m` (in the plane), or zero while sticking.
+    pub slip: Vector<D>,
+}
+
+impl<const D: usize> Layer<D>
+where
+    Const<D>: Dim,
+{
+    /// `Q = I − n ⊗ n − m ⊗ m`: the tangential directions that resist
+    /// (exactly zero for a slipping layer in 2D, whose one tangential
+    /// direction is the slip's).
+    pub fn resisting(&self) -> Tensor<D> {
+        if D == 2 && self.slip != Vector::<D>::zeros() {
+            return Tensor::<D>::zeros();
+        }
+        Tensor::<D>::identity()
+            - self.normal * self.normal.transpose()
+            - self.slip * self.slip.transpose()
+    }
 }
 
 impl<const D: usize> Unified<D>
 where
     Const<D>: Dim,
 {
+    /// The isotropic triple `(μ, 𝒦, σ̂, σ̂_zz)` of eq. 44.
+    pub fn new(mu: f64, kappa: f64, sigma_hat: Tensor<D>, sigma_hat_zz: f64) -> Self {
+        Unified {
+            mu,
+            kappa,
+            sigma_hat,
+            sigma_hat_zz,
+            layer: None,
+        }
+    }
+
     /// The triple of a solid whose stress at the iterate is `(σ, σ_zz)`,
     /// computed from the displacement, with effective coefficients `μ` and
     /// `𝒦`: `σ̂ = σ − (𝒦 ε_v I + 2 μ D')`, so that eq. 43 returns `σ`
@@ -203,33 +259,74 @@ where
         sigma_zz: f64,
         kin: &Kinematics<D>,
     ) -> Self {
-        let ev = kin.volumetric_rate();
-        let linear = Tensor::<D>::identity() * (kappa * ev) + kin.deviatoric_rate() * (2.0 * mu);
+        Self::new(mu, kappa, sigma, sigma_zz).returned(kin)
+    }
+
+    /// [`Self::returning`] for a layer ([`Self::layer`]):
+    /// `σ̂ = σ − (𝒦 ε_v I + 2 μ P(D))`.
+    pub fn returning_layer(
+        mu: f64,
+        kappa: f64,
+        layer: Layer<D>,
+        sigma: Tensor<D>,
+        sigma_zz: f64,
+        kin: &Kinematics<D>,
+    ) -> Self {
         Unified {
-            mu,
-            kappa,
-            sigma_hat: sigma - linear,
-            sigma_hat_zz: if D == 2 {
-                sigma_zz - (kappa * ev + 2.0 * mu * kin.deviatoric_rate_zz())
-            } else {
-                0.0
-            },
+            layer: Some(layer),
+            ..Self::new(mu, kappa, sigma, sigma_zz)
+        }
+        .returned(kin)
+    }
+
+    /// `self` with `(σ̂, σ̂_zz)` taken as the stress to return at `kin`.
+    fn returned(mut self, kin: &Kinematics<D>) -> Self {
+        let (linear, linear_zz) = self.linear_stress(kin);
+        self.sigma_hat -= linear;
+        self.sigma_hat_zz = if D == 2 {
+            self.sigma_hat_zz - linear_zz
+        } else {
+            0.0
+        };
+        self
+    }
+
+    /// The part of eq. 43 linear in the rate, `𝒦 ε_v I + 2 μ D'` (or
+    /// `2 μ P(D)` for a [`Layer`]), in-plane and out-of-plane (2D; zero in
+    /// 3D).
+    pub fn linear_stress(&self, kin: &Kinematics<D>) -> (Tensor<D>, f64) {
+        let ev = kin.volumetric_rate();
+        let volumetric = Tensor::<D>::identity() * (self.kappa * ev);
+        match self.layer {
+            None => (
+                volumetric + kin.deviatoric_rate() * (2.0 * self.mu),
+                if D == 2 {
+                    self.kappa * ev + 2.0 * self.mu * kin.deviatoric_rate_zz()
+                } else {
+                    0.0
+                },
+            ),
+            Some(layer) => {
+                let n = layer.normal;
+                let qdn = layer.resisting() * (kin.d * n);
+                let shear = qdn * n.transpose() + n * qdn.transpose();
+                (
+                    volumetric + shear * (2.0 * self.mu),
+                    if D == 2 { self.kappa * ev } else { 0.0 },
+                )
+            }
         }
     }
 
     /// Cauchy stress of eq. 43, `σ = σ̂ + 𝒦 ε_v I + 2 μ D'`, in-plane part.
     pub fn cauchy_stress(&self, kin: &Kinematics<D>) -> Tensor<D> {
-        self.sigma_hat
-            + Tensor::<D>::identity() * (self.kappa * kin.volumetric_rate())
-            + kin.deviatoric_rate() * (2.0 * self.mu)
+        self.sigma_hat + self.linear_stress(kin).0
     }
 
     /// Out-of-plane normal stress of eq. 43 in 2D plane strain (zero in 3D).
     pub fn cauchy_stress_zz(&self, kin: &Kinematics<D>) -> f64 {
         if D == 2 {
-            self.sigma_hat_zz
-                + self.kappa * kin.volumetric_rate()
-                + 2.0 * self.mu * kin.deviatoric_rate_zz()
+            self.sigma_hat_zz + self.linear_stress(kin).1
         } else {
             0.0
         }

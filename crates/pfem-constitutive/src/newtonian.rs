@@ -144,12 +144,12 @@ where
     /// `μ = μ_f`, `𝒦 = Δt K_f`, `σ̂ = −pⁿ I`, `σ̂_zz = −pⁿ` in 2D (eq. 44).
     fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D> {
         let p = history.pressure;
-        Unified {
-            mu: self.viscosity,                      // eq. 44
-            kappa: kin.dt * self.bulk_modulus,       // eq. 44
-            sigma_hat: Tensor::<D>::identity() * -p, // eq. 44
-            sigma_hat_zz: if D == 2 { -p } else { 0.0 },
-        }
+        Unified::new(
+            self.viscosity,                // eq. 44
+            kin.dt * self.bulk_modulus,    // eq. 44
+            Tensor::<D>::identity() * -p,  // eq. 44
+            if D == 2 { -p } else { 0.0 }, // out of plane
+        )
     }
 
     /// `pⁿ⁺¹ = pⁿ − Δt K_f ε_v` with `ε_v = tr D` (eqs. 26, 62).

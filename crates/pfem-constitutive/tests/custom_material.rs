@@ -75,12 +75,12 @@ where
 
     fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D> {
         let p = history.pressure;
-        Unified {
-            mu: self.effective_viscosity(Self::shear_rate(kin)),
-            kappa: kin.dt * self.bulk_modulus,
-            sigma_hat: Tensor::<D>::identity() * -p,
-            sigma_hat_zz: if D == 2 { -p } else { 0.0 },
-        }
+        Unified::new(
+            self.effective_viscosity(Self::shear_rate(kin)),
+            kin.dt * self.bulk_modulus,
+            Tensor::<D>::identity() * -p,
+            if D == 2 { -p } else { 0.0 },
+        )
     }
 
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>) {

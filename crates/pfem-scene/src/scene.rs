@@ -362,9 +362,10 @@ pub struct ContactSettings {
     /// the floor). Off, a clamped solid passes through what it reaches;
     /// on, every scene with a solid near another body remeshes each step,
     /// solid-only ones included. 2D only for now: in 3D the Picard loop
-    /// rejects a third of the steps of clamped solids in contact under a
-    /// wave (`tests/stability_3d.rs`, session 37: 220 of 744 against none
-    /// of 150 without), and [`Scene::validate`] refuses it
+    /// rejects a fifth of the steps of clamped solids in contact under a
+    /// wave (`tests/stability_3d.rs`, session 38: 50 of 258 against none
+    /// of 150 without; 220 of 744 in session 37), and [`Scene::validate`]
+    /// refuses it
     /// ([`SceneError::NotInDimension`]).
     pub clamped: bool,
 }
@@ -1056,7 +1057,7 @@ where
             return Err(SceneError::NotInDimension {
                 setting: "contact.clamped",
                 dim: 3,
-                why: "2D only for now: in 3D the Picard loop rejects a third of the steps of clamped solids in contact under a wave (a known gap)",
+                why: "2D only for now: in 3D the Picard loop rejects a fifth of the steps of clamped solids in contact under a wave (a known gap)",
             });
         }
         let mut names: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
