@@ -116,8 +116,8 @@ pub enum VolumetricTreatment {
 /// directions `Q`, the contact penalty) has `2 μ P(ε)` in place of
 /// `2 μ ε'`:
 ///
-/// `K[(a,k),(b,l)] = V [ μ (Q_kl aₙ bₙ + (Q g_b)[k] n_l aₙ
-/// + n_k (Q gₐ)[l] bₙ + n_k n_l gₐ·Q g_b) + κ gₐ[k] g_b[l] ]`,
+/// `K[(a,k),(b,l)] = V [ μ S + κ gₐ[k] g_b[l] ]`,
+/// `S = Q_kl aₙ bₙ + (Q g_b)[k] n_l aₙ + n_k (Q gₐ)[l] bₙ + n_k n_l gₐ·Q g_b`,
 /// `aₙ = gₐ·n`, `bₙ = g_b·n`.
 pub fn element_stiffness<const D: usize>(
     st: &ElementState<D>,

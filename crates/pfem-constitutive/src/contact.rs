@@ -119,9 +119,9 @@ impl ContactPenalty {
         // traction's derivative by the shear is 0 along `m` and the secant
         // `G_c |τ|/|τ_trial|` across it: the layer's linearisation
         // (`Unified::layer`, the `Layer`'s slip direction) takes both, and
-        // in 2D, with one tangential direction, it has none. The cap's dependence on the volume
-        // change (`μ p'`) and the normal's turning with the shear are left
-        // out. Before session 38 the linearisation was isotropic (`2 μ D'`,
+        // in 2D, with one tangential direction, it has none. The cap's
+        // dependence on the volume change (`μ p'`) and the normal's
+        // turning with the shear are left out. Before session 38 the linearisation was isotropic (`2 μ D'`,
         // one scalar for every shear, which overstated the normal stiffness
         // ×2.3); the elastic tangent `G_c` while slipping was tried then: a
         // frictionless block resting on a floor took 2 471 steps (798
@@ -396,5 +396,44 @@ mod tests {
         across.d = Tensor::<3>::new(0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0);
         let sa = u.linear_stress(&across).0;
         assert!((sa[(1, 2)] / (2.0 * s.tangent.0) - 1.0).abs() < 1e-9);
+    }
+
+    /// The layer's triple returns its stress exactly at the iterate, in
+    /// 2D (with `σ_zz = −p`) and 3D, sticking and slipping.
+    #[test]
+    fn the_layer_returns_its_stress_at_the_iterate() {
+        let m = ContactPenalty {
+            damping: 0.1,
+            onset: 0.01,
+            ..penalty()
+        };
+        for f in [
+            Tensor::<2>::new(1.0, 1e-3, 0.0, 0.99),
+            Tensor::<2>::new(1.0, 2e-2, 0.0, 0.99),
+        ] {
+            let mut k = kin(f);
+            k.d = Tensor::<2>::new(0.3, 0.7, 0.7, -0.2);
+            let h = layer(1.0, 0.5);
+            let s = m.state(&k, &h);
+            let u = Material::<2>::unified(&m, &k, &h);
+            assert!(u.layer.is_some());
+            assert!((u.cauchy_stress(&k) - s.sigma).norm() <= 1e-9 * s.sigma.norm());
+            assert!((u.cauchy_stress_zz(&k) + s.pressure).abs() <= 1e-9 * s.pressure);
+        }
+        let mut h = History::<3>::default();
+        h.internal[GAP_RATIO] = 1.0;
+        h.internal[FRICTION] = 0.5;
+        h.internal[NORMAL + 1] = 1.0;
+        for shear in [1e-3, 2e-2] {
+            let mut k = Kinematics::<3>::at_rest(1e-3);
+            k.f = Tensor::<3>::new(1.0, shear, 0.0, 0.0, 0.99, 0.0, 0.0, 3e-3, 1.0);
+            k.j = k.f.determinant();
+            k.displacement_weight = 1e-3;
+            k.d = Tensor::<3>::new(0.3, 0.7, 0.1, 0.7, -0.2, 0.4, 0.1, 0.4, 0.5);
+            let s = m.state(&k, &h);
+            let u = Material::<3>::unified(&m, &k, &h);
+            assert!(s.pressure > 0.0 && u.layer.is_some());
+            assert!((u.cauchy_stress(&k) - s.sigma).norm() <= 1e-9 * s.sigma.norm());
+        }
     }
 }

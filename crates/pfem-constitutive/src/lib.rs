@@ -11,7 +11,9 @@
 //!
 //! so that the Cauchy stress at `t_{n+1}` is
 //! `σ = σ̂⁽ⁿ⁾ + 𝒦 ε_v I + 2 μ D'` (eq. 43), with `ε_v = tr D` (eq. 19) and
-//! `D' = D − ⅓ ε_v I` (eq. 20). That triple is a [`Unified`]; the trait is
+//! `D' = D − ⅓ ε_v I` (eq. 20); a contact layer ([`ContactPenalty`]) has
+//! `2 μ P(D)`, the shear across its plane, in place of `2 μ D'`
+//! ([`Unified::layer`]). That triple is a [`Unified`]; the trait is
 //! [`Material`], object safe, held by the solver as `Box<dyn Material<D>>`.
 //! After the step converges the solver calls [`Material::update_history`]
 //! once (eqs. 62–63).
@@ -20,6 +22,7 @@
 //! |---|---|---|---|
 //! | [`Newtonian`] fluid (eqs. 16–27) | `μ_f` | `Δt K_f` | `−pⁿ I` |
 //! | [`Hypoelastic`] solid (eqs. 28–42) | `μ_h w / J` | `(λ_h + ⅔ μ_h) w / J` | `F σⁿ Fᵀ / J` + `P (C : Δε) P / J` − `(𝒦 ε_v I + 2 μ D')` |
+//! | [`ContactPenalty`] layer (not in the paper) | `G_c w` sticking, its secant across the slip slipping | `K_c s_δ' r w` + dashpot | `σ` of the layer − `(𝒦 ε_v I + 2 μ P(D))` |
 //!
 //! For the solid, `w = ∂Δu/∂V` ([`Kinematics::displacement_weight`]: `Δt`
 //! for backward Euler, `Δt/2` for the trapezoidal rule), `Δε` the

@@ -1810,9 +1810,15 @@ where
         (Kinematics::<D>::new(f, d, dt), stressed),
     ] {
         let u = m.unified(&kin, &history);
+        let layer = u.layer.map(|l| (l.normal, l.slip));
         let values = [u.mu, u.kappa, u.sigma_hat_zz]
             .into_iter()
             .chain(u.sigma_hat.iter().copied())
+            .chain(
+                layer
+                    .iter()
+                    .flat_map(|(n, m)| n.iter().chain(m.iter()).copied()),
+            )
             .chain([m.update_pressure(history.pressure, -0.1, dt)]);
         for v in values {
             bytes.extend_from_slice(&v.to_bits().to_le_bytes());
