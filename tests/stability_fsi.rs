@@ -263,16 +263,17 @@ fn hard_cases_keep_fluid_volume_within_one_percent() {
 /// the block from the wall at 0.5 s over `max_dt` = 1.8, 1.85, 1.9, 1.95,
 /// 2, 2.05, 2.1, 2.15, 2.2 ms): without 0.96, 0.95, 0.96, 0.92, 22.4,
 /// 0.97, 0.97, 48.8, 45.7 h; with α = 1 0.96, 0.97, 0.96, 0.96, 0.92, 0.98,
-/// 0.96, 0.97, 0.85 h (docs/benchmarks.md). "Into the floor" is asserted
-/// as the lowest particle closer than 0.8 h, a fifth of the contact
-/// distance: the layer's closure is `p/K_c`, and corner impacts of this
-/// chaotic case reach a tenth. Session 38 (the layer's own
-/// linearisation) moved the bound from 0.9 h: its run lands the tumbling
-/// block on a corner at 0.3 m/s at t = 0.40 s, the floor carrying 180 N/m
-/// (70 times the block's weight) on about half a spacing, and the corner
-/// comes to 0.897 h. Lowest particle over `max_dt` = 1.9, 1.95, 2, 2.05,
-/// 2.1 ms: 0.974, 0.987, 0.988, 0.968, 0.991 h before it, 0.991, 0.988,
-/// 0.897, 0.964, 0.986 h after. About a minute on 2 cores:
+/// 0.96, 0.97, 0.85 h (docs/benchmarks.md). The lowest particle's bound
+/// (0.9 h, a tenth of the contact distance closed) is a margin, not a law:
+/// the layer closes by `p/K_c`, and corner impacts of this chaotic case
+/// press hard. Lowest particle over `max_dt` = 1.9, 1.95, 2, 2.05, 2.1 ms
+/// (session 38): 0.974, 0.987, 0.988, 0.968, 0.991 h before the layer's
+/// own linearisation; 0.991, 0.988, **0.897**, 0.964, 0.986 h with it
+/// (`4e05e94`: the tumbling block landed on a corner at 0.3 m/s at
+/// t = 0.40 s, the floor carrying 180 N/m, 70 times its weight, on about
+/// half a spacing); 0.987, 0.989, 0.979, 0.980, 0.989 h once the
+/// dashpot's clamp took no stiffness (`ContactPenalty`). The bound was not
+/// moved. About a minute on 2 cores:
 /// `cargo test --release --test suite stability_fsi::a_dam_break_carries`
 #[test]
 fn a_dam_break_carries_a_free_block_into_the_wall() {
@@ -319,6 +320,6 @@ fn a_dam_break_carries_a_free_block_into_the_wall() {
         "the block stopped {:.1} h short of the wall",
         (0.5715 - rightmost) / h
     );
-    assert!(lowest > 0.8 * h, "into the floor: {lowest}");
+    assert!(lowest > 0.9 * h, "into the floor: {lowest}");
     assert!(rightmost < 0.5715 - 0.9 * h, "into the wall: {rightmost}");
 }

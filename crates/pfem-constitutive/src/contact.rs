@@ -107,7 +107,17 @@ impl ContactPenalty {
             return State { normal: n, ..zero };
         }
         let c = self.damping * kin.dt * self.normal_stiffness;
-        let p = (p_elastic - c * kin.volumetric_rate()).max(0.0);
+        let p = p_elastic - c * kin.volumetric_rate();
+        if p <= 0.0 {
+            // The dashpot holds the layer open faster than the penalty
+            // closes it: no pressure, and no stiffness either (the
+            // derivative of `max(0, ·)` there). Until session 38 the
+            // linearisation kept `K_c s' r w + c` here, which the
+            // pressure does not have: a 3D stiff block resting beside
+            // the walls took 57 steps (18 rejected by Picard, the iterates
+            // converging linearly at 0.75) for 0.02 s, against 14 (2).
+            return State { normal: n, ..zero };
+        }
         let de = kin.strain_increment();
         let den = de * n;
         let gamma = (den - n * n.dot(&den)) * 2.0;
@@ -435,5 +445,33 @@ mod tests {
             assert!(s.pressure > 0.0 && u.layer.is_some());
             assert!((u.cauchy_stress(&k) - s.sigma).norm() <= 1e-9 * s.sigma.norm());
         }
+    }
+
+    /// Where the dashpot holds the layer open (the gap closed, but opening
+    /// fast enough that `K_c s(x) − c Δt K_c tr D ≤ 0`) there is no
+    /// pressure and no stiffness: the linearisation is the clamp's zero
+    /// derivative. Bug fixed (session 38): it kept `K_c s' r w + c`.
+    #[test]
+    fn a_layer_held_open_by_its_dashpot_has_no_stiffness() {
+        let m = ContactPenalty {
+            damping: 0.1,
+            ..penalty()
+        };
+        let h = layer(1.0, 0.5);
+        let f = Tensor::<2>::new(1.0, 0.0, 0.0, 0.99);
+        // Closing (or still): pressure and stiffness.
+        let mut k = kin(f);
+        k.d = Tensor::<2>::new(0.0, 0.0, 0.0, -1.0);
+        let s = m.state(&k, &h);
+        assert!(s.pressure > 0.0 && s.tangent.1 > 0.0);
+        // Opening at 10⁴ s⁻¹: the dashpot's 0.1 × 10⁻³ s × 10⁶ Pa × 10⁴ s⁻¹
+        // = 10⁶ Pa outweighs the penalty's 10⁴ Pa.
+        k.d = Tensor::<2>::new(0.0, 0.0, 0.0, 1e4);
+        let s = m.state(&k, &h);
+        assert_eq!(s.pressure, 0.0);
+        assert_eq!(s.tangent, (0.0, 0.0));
+        assert_eq!(s.sigma, Tensor::<2>::zeros());
+        let u = Material::<2>::unified(&m, &k, &h);
+        assert_eq!((u.mu, u.kappa), (0.0, 0.0));
     }
 }

@@ -363,7 +363,7 @@ pub struct ContactSettings {
     /// on, every scene with a solid near another body remeshes each step,
     /// solid-only ones included. 2D only for now: in 3D the Picard loop
     /// rejects a fifth of the steps of clamped solids in contact under a
-    /// wave (`tests/stability_3d.rs`, session 38: 50 of 258 against none
+    /// wave (`tests/stability_3d.rs`, session 38: 43 of 242 against none
     /// of 150 without; 220 of 744 in session 37), and [`Scene::validate`]
     /// refuses it
     /// ([`SceneError::NotInDimension`]).
