@@ -18,7 +18,8 @@
 //! shear strain of the layer, `τⁿ⁺¹ = τⁿ + G_c γ`, `γ = 2 (Δε n − (n·Δε n) n)`,
 //! returned to the Coulomb cone `|τ| ≤ μ p` (stick inside, slip on it). The
 //! stress is `σ = −p I + τ ⊗ n + n ⊗ τ`. A dashpot on the gap's rate
-//! ([`ContactPenalty::damping`]) damps the contact's unresolved chatter. The element's
+//! ([`ContactPenalty::damping`], grown in over the first [`DASHPOT_RAMP`]
+//! of the onset) damps the contact's unresolved chatter. The element's
 //! [`History::internal`] holds `[rⁿ, μ, nⁿ (3), τⁿ (3)]`; the driver sets
 //! the first five when it forms the element, and `τ` is carried while the
 //! same particles stay in contact (stick has memory).
@@ -36,6 +37,14 @@ pub const NORMAL: usize = 2;
 /// First slot of the tangential traction (3 slots).
 pub const TRACTION: usize = 5;
 
+/// The dashpot ([`ContactPenalty::damping`]) grows in linearly over this
+/// fraction of the rounded onset: at closure `x = 1 − g/g₀` its strength
+/// is `min(1, x/(0.1 δ))` of the full (full at once with the kink).
+/// Bodies at rest sit at `x` ≈ 10⁻⁴–10⁻³ (`δ` = 10⁻²), where it is
+/// (nearly) full and damps their ringing; a ramp over the whole onset
+/// left a 2D block at 20° creeping 1.8 mm in 1 s against 0.03 mm.
+pub const DASHPOT_RAMP: f64 = 0.1;
+
 /// The penalty material of contact elements (module docs). Massless.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactPenalty {
@@ -47,7 +56,8 @@ pub struct ContactPenalty {
     pub shear_stiffness: f64,
     /// Normal damping `c` (dimensionless): while the gap is closed a
     /// dashpot adds `p_v = −c Δt K_c tr D` (`tr D` the rate of the
-    /// layer's volume, `ġ/g`), so that a contact mode of frequency `ω`
+    /// layer's volume, `ġ/g`; grown in over the first [`DASHPOT_RAMP`] of
+    /// the onset, and the pressure never below zero), so that a contact mode of frequency `ω`
     /// has the damping ratio `c ω Δt / 2`: strong on the contact's
     /// chatter that the step does not resolve (`ω Δt ≫ 1`), weak on
     /// motions it does (a bounce over many steps). 0 for none.
@@ -106,7 +116,20 @@ impl ContactPenalty {
         if p_elastic <= 0.0 || n.norm() == 0.0 {
             return State { normal: n, ..zero };
         }
-        let c = self.damping * kin.dt * self.normal_stiffness;
+        // The dashpot grows in over the first tenth of the onset
+        // (`DASHPOT_RAMP`; at once with the kink): at full strength from
+        // `g₀` on, its `c |tr D|` switched on from nothing as a closing gap
+        // passed `g₀`, a jump in the pressure, and the Picard iterates of a
+        // 3D post clamped one spacing from the side walls alternated
+        // between two states (session 38). The ramp's own derivative is
+        // left out of the linearisation.
+        let ramp = DASHPOT_RAMP * self.onset.max(0.0);
+        let grown = if ramp > 0.0 {
+            ((1.0 - r) / ramp).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let c = self.damping * kin.dt * self.normal_stiffness * grown;
         let p = p_elastic - c * kin.volumetric_rate();
         if p <= 0.0 {
             // The dashpot holds the layer open faster than the penalty
@@ -473,5 +496,35 @@ mod tests {
         assert_eq!(s.sigma, Tensor::<2>::zeros());
         let u = Material::<2>::unified(&m, &k, &h);
         assert_eq!((u.mu, u.kappa), (0.0, 0.0));
+    }
+
+    /// The dashpot grows in over the first tenth of the onset: a gap
+    /// closing past `g₀` meets a pressure that starts from zero, not the
+    /// dashpot's full `c |tr D|` at once. Bug fixed (session 38): that
+    /// jump made the Picard iterates of a 3D post clamped beside the walls
+    /// alternate between two states.
+    #[test]
+    fn the_dashpot_grows_in_without_a_jump() {
+        let m = ContactPenalty {
+            damping: 0.1,
+            onset: 0.01,
+            ..penalty()
+        };
+        let h = layer(1.0, 0.0);
+        // Closing at 1 s⁻¹: the full dashpot is 0.1 × 10⁻³ s × 10⁶ Pa = 100 Pa.
+        let at = |x: f64| {
+            let mut k = kin(Tensor::<2>::new(1.0, 0.0, 0.0, 1.0 - x));
+            k.d = Tensor::<2>::new(0.0, 0.0, 0.0, -1.0);
+            m.state(&k, &h).pressure
+        };
+        let elastic = |x: f64| m.rounded(x).0;
+        assert!(at(1e-7) < 0.02, "{}", at(1e-7));
+        assert!((at(5e-4) - elastic(5e-4) - 50.0).abs() < 1e-6);
+        assert!((at(2e-3) - elastic(2e-3) - 100.0).abs() < 1e-6);
+        // With the kink it is there at once.
+        let kink = ContactPenalty { onset: 0.0, ..m };
+        let mut k = kin(Tensor::<2>::new(1.0, 0.0, 0.0, 1.0 - 1e-7));
+        k.d = Tensor::<2>::new(0.0, 0.0, 0.0, -1.0);
+        assert!((kink.state(&k, &h).pressure - 100.1).abs() < 1e-6);
     }
 }

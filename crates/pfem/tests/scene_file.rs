@@ -718,11 +718,10 @@ fn a_fluid_displacement_probe_survives_removed_particles() {
     );
 }
 
-/// `[contact] clamped = true` in a 3D file is refused (2D only for now,
-/// `SceneError::NotInDimension`), and `pfem` points at the line of its
-/// key (`SceneFile::locate`).
+/// `[contact] clamped = true` in a 3D file is read (it was refused until
+/// session 38, `SceneError::NotInDimension`).
 #[test]
-fn contact_for_clamped_solids_in_3d_names_its_line() {
+fn contact_for_clamped_solids_in_3d_is_read() {
     let text = r#"name = "post_3d"
 dimension = 3
 gravity = [0.0, -9.81, 0.0]
@@ -747,20 +746,11 @@ clamp = { min = [0.0, 0.0, 0.0], max = [1.0, 0.06, 1.0] }
 clamped = true
 "#;
     let file = SceneFile::parse(text, "post_3d.toml").unwrap();
-    let err = file.build().map(|_| ()).unwrap_err();
-    assert!(
-        matches!(
-            err,
-            SceneError::NotInDimension {
-                setting: "contact.clamped",
-                dim: 3,
-                ..
-            }
-        ),
-        "{err:?}"
-    );
-    let line = text.lines().position(|l| l == "clamped = true").unwrap() + 1;
-    assert_eq!(file.locate(&err), Some(format!("line {line}")));
+    let LoadedScene::Three(scene, _) = file.build().unwrap() else {
+        panic!("3D")
+    };
+    assert!(scene.contact.clamped);
+    assert!(scene.validate().is_ok());
 }
 
 /// `[contact] onset` sets the width of the penalty's rounded onset
