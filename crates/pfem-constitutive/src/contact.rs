@@ -41,8 +41,9 @@ pub const TRACTION: usize = 5;
 /// fraction of the rounded onset: at closure `x = 1 − g/g₀` its strength
 /// is `min(1, x/(0.1 δ))` of the full (full at once with the kink).
 /// Bodies at rest sit at `x` ≈ 10⁻⁴–10⁻³ (`δ` = 10⁻²), where it is
-/// (nearly) full and damps their ringing; a ramp over the whole onset
-/// left a 2D block at 20° creeping 1.8 mm in 1 s against 0.03 mm.
+/// from a tenth to full strength and damps their ringing; a ramp over the
+/// whole onset (a hundredth to a tenth there) left a 2D block at 20°
+/// creeping 1.8 mm in 1 s against 0.03 mm.
 pub const DASHPOT_RAMP: f64 = 0.1;
 
 /// The penalty material of contact elements (module docs). Massless.
@@ -130,6 +131,9 @@ impl ContactPenalty {
             1.0
         };
         let c = self.damping * kin.dt * self.normal_stiffness * grown;
+        // (A non-finite rate gives a non-finite pressure, which the
+        // assembly refuses with the element named; `max(0, ·)` used to
+        // turn a NaN into 0.)
         let p = p_elastic - c * kin.volumetric_rate();
         if p <= 0.0 {
             // The dashpot holds the layer open faster than the penalty
@@ -526,5 +530,13 @@ mod tests {
         let mut k = kin(Tensor::<2>::new(1.0, 0.0, 0.0, 1.0 - 1e-7));
         k.d = Tensor::<2>::new(0.0, 0.0, 0.0, -1.0);
         assert!((kink.state(&k, &h).pressure - 100.1).abs() < 1e-6);
+        // So is a negative or NaN onset (the struct is public).
+        for bad in [-0.01, f64::NAN] {
+            let b = ContactPenalty { onset: bad, ..m };
+            assert!((b.state(&k, &h).pressure - 100.1).abs() < 1e-6);
+        }
+        // Continuous where the ramp ends (x = 0.1 δ = 10⁻³).
+        let (below, above) = (at(1e-3 - 1e-12), at(1e-3 + 1e-12));
+        assert!((below - above).abs() < 1e-6, "{below} {above}");
     }
 }

@@ -60,7 +60,7 @@ pub struct Stages {
     /// ballistically (scenes with a fluid that has a free surface).
     pub free_surface: bool,
     /// Contact elements between solids that take part in contact (free
-    /// ones, and in 2D clamped ones when the scene asks,
+    /// ones, and clamped ones when the scene asks,
     /// `ContactSettings::clamped`) and walls or other solids (scenes with
     /// such a solid and another solid or a wall); the particles are
     /// tessellated every step for it, fluid or not.

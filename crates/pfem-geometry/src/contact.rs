@@ -1,8 +1,8 @@
 //! Contact elements: the simplices of the particles' Delaunay tessellation
 //! that join two bodies with no fluid between them (the contact-domain idea
 //! of the PFEM solid-mechanics codes). The tessellation finds the contact:
-//! where a solid that takes part in contact (a free one; in 2D also a
-//! clamped one when the scene asks) comes within reach of a wall or
+//! where a solid that takes part in contact (a free one; also a clamped
+//! one when the scene asks) comes within reach of a wall or
 //! another solid, the simplices spanning the gap become interface
 //! elements, and the driver
 //! gives them a penalty material that resists the closing of the gap
@@ -41,8 +41,8 @@ where
 
 /// The contact elements of `delaunay`: simplices with no fluid node, with
 /// nodes of at least two bodies of which at least one takes part in
-/// contact (`in_contact[body]`: the free solids, and in 2D the clamped
-/// ones when the scene asks), every edge shorter than `reach` times the
+/// contact (`in_contact[body]`: the free solids, and the clamped ones
+/// when the scene asks), every edge shorter than `reach` times the
 /// mean spacing of its nodes, and a gap above `min_gap` times that
 /// spacing (no slivers; in 3D also a smallest height above it). Where
 /// three or four bodies meet in 3D, the gap, normal and `bodies` are those

@@ -124,7 +124,7 @@ pub struct SceneFile {
     /// The probes written to `probes.csv`, in order.
     #[serde(default)]
     pub probes: Vec<Spanned<ProbeSpec>>,
-    /// Contact between free solids (in 2D also clamped ones with
+    /// Contact between free solids (also clamped ones with
     /// `clamped = true`) and walls or solids (the `[contact]` table).
     #[serde(default)]
     pub contact: Option<Spanned<ContactSpec>>,
@@ -887,7 +887,6 @@ impl SceneFile {
             }
             SceneError::CannotFinish { .. } => &["max_dt", "end_time"],
             SceneError::TooLarge { .. } => &["spacing"],
-            SceneError::NotInDimension { .. } => &["clamped"],
             _ => &[],
         };
         let at = keys
