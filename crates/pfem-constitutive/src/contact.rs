@@ -133,8 +133,9 @@ impl ContactPenalty {
         // The ramp's own derivative: `−c_full tr D φ'(x) r w` (x falls
         // by `r w` per unit rate). Left out, a cantilever landing on a
         // floor had 68 of 417 steps rejected (2-cycles); with it, 10 of
-        // 315. The whole tangent is kept from going negative while the
-        // layer opens fast.
+        // 315. While the pressure is positive the whole tangent is too
+        // (the term is bounded by half the penalty's slope there); the
+        // `max(0, ·)` below only guards a negative damping.
         let ramp_slope = if ramp > 0.0 && 1.0 - r > 0.0 && 1.0 - r < ramp {
             -self.damping * kin.dt * self.normal_stiffness * kin.volumetric_rate() / ramp
                 * r
@@ -564,7 +565,9 @@ mod tests {
             onset: 0.01,
             ..penalty()
         };
-        let w = 1e-3;
+        // A displacement weight other than the step (the trapezoidal rule's
+        // Δt/2), so that the one cannot stand for the other.
+        let w = 5e-4;
         // The gap ratio puts the layer at x ≈ 5·10⁻⁴, halfway up the ramp.
         let h = layer(1.0 - 5e-4, 0.0);
         let state = |l: Tensor<2>| {
