@@ -256,14 +256,19 @@ mod tests {
         assert!(element_state::<2>(&xi, &x_n, &v, 0.5, 0.5).is_none());
     }
 
-    #[test]
-    fn stiffness_is_symmetric_and_annihilates_rigid_translation_3d() {
-        let x = [
+    /// A tetrahedron of no symmetry.
+    fn skewed_tetrahedron() -> [Point<3>; 4] {
+        [
             Point::<3>::new(0.0, 0.0, 0.0),
             Point::<3>::new(1.0, 0.1, 0.0),
             Point::<3>::new(0.2, 1.0, 0.1),
             Point::<3>::new(0.1, 0.2, 1.0),
-        ];
+        ]
+    }
+
+    #[test]
+    fn stiffness_is_symmetric_and_annihilates_rigid_translation_3d() {
+        let x = skewed_tetrahedron();
         let v = [Vector::<3>::zeros(); 4];
         let st = element_state::<3>(&x, &x, &v, 1.0, 1.0).unwrap();
         let u = Unified::new(2.0, 7.0, Tensor::<3>::zeros(), 0.0);
@@ -344,12 +349,7 @@ mod tests {
             &v2,
             &Unified::new(2.0, 7.0, Tensor::<2>::zeros(), 0.0),
         );
-        let x3 = [
-            Point::<3>::new(0.0, 0.0, 0.0),
-            Point::<3>::new(1.0, 0.1, 0.0),
-            Point::<3>::new(0.2, 1.0, 0.1),
-            Point::<3>::new(0.1, 0.2, 1.0),
-        ];
+        let x3 = skewed_tetrahedron();
         let v3 = [
             Vector::<3>::new(0.3, -0.2, 0.1),
             Vector::<3>::new(-0.1, 0.4, 0.0),

@@ -123,30 +123,28 @@ impl ContactPenalty {
         // passed `g₀`, a jump in the pressure, and the Picard iterates of a
         // 3D post clamped one spacing from the side walls alternated
         // between two states (session 38).
+        //
+        // The ramp's own derivative, `−c_full tr D φ'(x) r w` (x falls by
+        // `r w` per unit rate), is in the linearisation: left out, a
+        // cantilever landing on a floor had 68 of 417 steps rejected
+        // (2-cycles); with it, 10 of 315. While the pressure is positive
+        // the whole tangent is too (the term is bounded by half the
+        // penalty's slope there); the `max(0, ·)` below only guards a
+        // negative damping. (`x > 0` here: the penalty pushes.)
+        let x = 1.0 - r;
+        let rate = kin.volumetric_rate();
+        let w = kin.displacement_weight;
+        let c_full = self.damping * kin.dt * self.normal_stiffness;
         let ramp = DASHPOT_RAMP * self.onset.max(0.0);
-        let grown = if ramp > 0.0 {
-            ((1.0 - r) / ramp).clamp(0.0, 1.0)
+        let (c, ramp_slope) = if ramp > 0.0 && x < ramp {
+            (c_full * (x / ramp), -c_full * rate / ramp * r * w)
         } else {
-            1.0
-        };
-        let c = self.damping * kin.dt * self.normal_stiffness * grown;
-        // The ramp's own derivative: `−c_full tr D φ'(x) r w` (x falls
-        // by `r w` per unit rate). Left out, a cantilever landing on a
-        // floor had 68 of 417 steps rejected (2-cycles); with it, 10 of
-        // 315. While the pressure is positive the whole tangent is too
-        // (the term is bounded by half the penalty's slope there); the
-        // `max(0, ·)` below only guards a negative damping.
-        let ramp_slope = if ramp > 0.0 && 1.0 - r > 0.0 && 1.0 - r < ramp {
-            -self.damping * kin.dt * self.normal_stiffness * kin.volumetric_rate() / ramp
-                * r
-                * kin.displacement_weight
-        } else {
-            0.0
+            (c_full, 0.0)
         };
         // (A non-finite rate gives a non-finite pressure, which the
         // assembly refuses with the element named; `max(0, ·)` used to
         // turn a NaN into 0.)
-        let p = p_elastic - c * kin.volumetric_rate();
+        let p = p_elastic - c * rate;
         if p <= 0.0 {
             // The dashpot holds the layer open faster than the penalty
             // closes it: no pressure, and no stiffness either (the
@@ -170,9 +168,10 @@ impl ContactPenalty {
         // (`Unified::layer`, the `Layer`'s slip direction) takes both, and
         // in 2D, with one tangential direction, it has none. The cap's
         // dependence on the volume change (`μ p'`) and the normal's
-        // turning with the shear are left out. Before session 38 the linearisation was isotropic (`2 μ D'`,
-        // one scalar for every shear, which overstated the normal stiffness
-        // ×2.3); the elastic tangent `G_c` while slipping was tried then: a
+        // turning with the shear are left out. Before session 38 the
+        // linearisation was isotropic (`2 μ D'`, one scalar for every
+        // shear, which overstated the normal stiffness ×2.3); the elastic
+        // tangent `G_c` while slipping was tried then: a
         // frictionless block resting on a floor took 2 471 steps (798
         // rejected by Picard) for 0.5 s against 250 (none).
         let zero_slip = Vector::<D>::zeros();
@@ -184,7 +183,6 @@ impl ContactPenalty {
         };
         let sigma =
             Tensor::<D>::identity() * (-p) + traction * n.transpose() + n * traction.transpose();
-        let w = kin.displacement_weight;
         State {
             sigma,
             pressure: p,
