@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release --example dam_break_2d -- --out out/dam_break_2d \
-//!     [--spacing H] [--end-time T] [--aspect N2] [--width A] [--tank-length L] [--quiet] [--no-vtu]
+//!     [--spacing H] [--end-time T] [--aspect N2] [--width A] [--tank-length L] [--alpha A] [--quiet] [--no-vtu]
 //! ```
 //! Writes `dam_break_2d.pvd` + `.vtu` frames, `probes.csv`
 //! (`t, front_x, height_at_wall, volume`), `summary.json` and

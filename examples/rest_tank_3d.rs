@@ -2,7 +2,7 @@
 //! water, walls on four sides and the floor. Prints the largest and RMS fluid speed (in
 //! √(gH)), the RMS pressure error against ρ g (H − y) below the free-surface
 //! layer, and the fluid volume change, at intervals. The test
-//! `tests/three_d.rs` asserts the issue's bounds on the same tank.
+//! `tests/water_at_rest_3d.rs` asserts the issue's bounds on the same tank.
 //!
 //! ```text
 //! cargo run --release --example rest_tank_3d -- [--spacing H] [--end-time T]

@@ -179,13 +179,17 @@ where
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Unified<const D: usize> {
     /// Effective viscosity `μ⁽ⁿ⁺¹⁾` (Pa·s): `μ_f` for a fluid,
-    /// `μ_h Δt / J` for a hypoelastic solid.
+    /// `μ_h w / J` for a hypoelastic solid (`w`: the scheme's displacement
+    /// weight, [`Kinematics::displacement_weight`]; `Δt` in the paper's
+    /// trapezoidal rule).
     pub mu: f64,
     /// Effective volumetric coefficient `𝒦⁽ⁿ⁺¹⁾` (Pa·s): `Δt K_f` for a
-    /// fluid, `(λ_h + ⅔ μ_h) Δt / J` for a hypoelastic solid.
+    /// fluid, `(λ_h + ⅔ μ_h) w / J` for a hypoelastic solid.
     pub kappa: f64,
-    /// History stress `σ̂⁽ⁿ⁾` (Pa): `−pⁿ I` for a fluid,
-    /// `F σⁿ Fᵀ / J` for a hypoelastic solid.
+    /// History stress `σ̂⁽ⁿ⁾` (Pa): `−pⁿ I` for a fluid; for a hypoelastic
+    /// solid the stress at the iterate less its linear part,
+    /// `σ − (𝒦 ε_v I + 2 μ D')` ([`Self::returning`]; ARCHITECTURE.md,
+    /// deviation 6), where the paper has `F σⁿ Fᵀ / J`.
     pub sigma_hat: Tensor<D>,
     /// Out-of-plane component of `σ̂⁽ⁿ⁾` in 2D plane strain (zero in 3D).
     pub sigma_hat_zz: f64,

@@ -48,7 +48,8 @@ enum HookPoint {
 /// the effects it has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Stages {
-    /// Delaunay remeshing and alpha shape every step (scenes with a fluid).
+    /// Delaunay remeshing and alpha shape every step (scenes with a fluid,
+    /// or with contact).
     pub remesh: bool,
     /// Nodal pressure update, eq. 62 (scenes with a fluid).
     pub pressure: bool,
@@ -885,8 +886,9 @@ where
         result
     }
 
-    /// Smallest element size `h_min` used by the Courant controller: the
-    /// smallest particle spacing.
+    /// The smallest particle spacing `h_min` (reported; the Courant
+    /// controller bounds the step by each particle's own spacing,
+    /// `minᵢ hᵢ / |vᵢ|`).
     pub fn h_min(&self) -> f64 {
         self.particles
             .spacing()
@@ -925,7 +927,7 @@ where
             .fold(0.0, f64::max)
     }
 
-    /// One accepted step: remesh (if the scene has a fluid), the hooks
+    /// One accepted step: remesh (if the scene has a fluid or contact), the hooks
     /// after remeshing, `Δt`, the hooks before the solve, the
     /// Newmark–Picard step with rejection and retry, the hooks after the
     /// step.
@@ -1319,8 +1321,8 @@ where
 
     /// The run's state as a checkpoint ([`crate::checkpoint`]): sections
     /// [`SIMULATION`] (particles, materials, solid histories, clock, volume ledger,
-    /// body force, hook states), [`TIMINGS`] and [`SETTINGS`] (the settings the run must be
-    /// continued under). Add an observer's own
+    /// body force, hook states), [`TIMINGS`], [`SETTINGS`] (the settings the run must be
+    /// continued under) and [`CONTACT`] (who takes part in contact, friction by pair). Add an observer's own
     /// sections, encode and write it; [`Simulation::restore`] continues a
     /// simulation built from the same scene and options from it, bit for
     /// bit.

@@ -244,7 +244,8 @@ pub struct RunSettings {
     pub end_time: f64,
     /// Largest time step (s).
     pub max_dt: f64,
-    /// Courant number bounding `Δt ≤ C h_min / v_max`.
+    /// Courant number `C` bounding `Δt ≤ C minᵢ hᵢ / |vᵢ|` (each particle
+    /// against its own spacing).
     pub courant: f64,
     /// Interval between outputs (s); `None` for no VTU output.
     pub output_interval: Option<f64>,
@@ -337,10 +338,12 @@ pub struct ContactSettings {
     /// Coulomb friction coefficients by pair of body names (order free);
     /// pairs not listed are frictionless.
     pub friction: Vec<(String, String, f64)>,
-    /// Normal penalty stiffness `K_c` (Pa): the pressure that closes the
-    /// gap entirely, for every pair of bodies. Default, for each pair: the
-    /// larger P-wave modulus `λ + 2μ` of its solids (a wall counts as
-    /// none), so the penetration under a stress `σ` is `σ/K_c` of the
+    /// Normal penalty stiffness `K_c` (Pa), for every pair of bodies: the
+    /// slope of the contact pressure against the gap's closure beyond the
+    /// rounded onset (a gap closed entirely: `K_c (1 − δ/2)`,
+    /// `pfem_constitutive::ContactPenalty`). Default, for each contact
+    /// element: the largest P-wave modulus `λ + 2μ` of the solids among
+    /// its particles' bodies (a wall counts as none), so the penetration under a stress `σ` is `σ/K_c` of the
     /// spacing, the stiffer solid's own strain. (Before session 36 the
     /// default was the scene's stiffest solid's for every pair: a soft
     /// body then met a wall with a penalty many times its own stiffness.)

@@ -909,7 +909,6 @@ where
                 what: "one history entry per element is required".into(),
             });
         }
-        let t0 = std::time::Instant::now();
         let mut rep = StepReport {
             dt,
             ..Default::default()
@@ -1218,7 +1217,6 @@ where
         state.v.clone_from(&self.v_it);
         state.x.clone_from(&self.x_it);
         rep.update_seconds = tu.elapsed().as_secs_f64();
-        let _ = t0;
         Ok(rep)
     }
 }
