@@ -310,6 +310,69 @@ fn a_checkpoint_whose_time_or_state_is_not_finite_is_refused() {
     assert_eq!(fresh.time(), sim.time());
 }
 
+/// The rest of the state an edited checkpoint could make a non-number of
+/// is refused too (session 39's review: a NaN gravity ran on and failed as
+/// a "step too small", a NaN volume ledger turned the volume correction
+/// off without a word, a NaN spacing lifted a particle's Courant bound):
+/// the gravity, a solid's stress, the volume ledger, a spacing.
+#[test]
+fn a_checkpoint_whose_gravity_stress_ledger_or_spacing_is_not_finite_is_refused() {
+    // The last occurrence of `value`'s bytes in the SIMULATION section
+    // replaced by `by`.
+    let edit = |ck: &Checkpoint, value: f64, by: f64| -> Checkpoint {
+        let section = ck.section(SIMULATION).unwrap().to_vec();
+        let from = value.to_bits().to_le_bytes();
+        let at = section
+            .windows(8)
+            .rposition(|w| w == from)
+            .expect("the value is in the section");
+        let mut edited = section;
+        edited[at..at + 8].copy_from_slice(&by.to_bits().to_le_bytes());
+        let mut c = ck.clone();
+        c.set(SIMULATION, edited);
+        Checkpoint::decode(&c.encode()).unwrap()
+    };
+    let refused = |fresh: &mut Simulation<2>, ck: &Checkpoint, says: &str| {
+        let err = fresh.restore(ck).unwrap_err();
+        assert!(
+            matches!(err, RunError::Checkpoint(CheckpointError::Corrupt(_)))
+                && err.to_string().contains(says),
+            "{says}: {err}"
+        );
+        assert_eq!(fresh.time(), 0.0, "a refused checkpoint changes nothing");
+    };
+    let mut sim = dam_break();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let mut fresh = dam_break();
+    let g = sim.gravity().unwrap()[1];
+    refused(&mut fresh, &edit(&ck, g, f64::NAN), "gravity");
+    let v0 = sim.volume().initial;
+    refused(&mut fresh, &edit(&ck, v0, f64::NAN), "volume ledger");
+    let h = *sim.particles().spacing().last().unwrap();
+    refused(&mut fresh, &edit(&ck, h, f64::NAN), "spacing");
+    refused(&mut fresh, &edit(&ck, h, -h), "spacing");
+    fresh.restore(&ck).unwrap();
+    assert_eq!(fresh.time(), sim.time());
+
+    let mut sim = gate();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let stress = sim
+        .elements()
+        .solid_history()
+        .iter()
+        .map(|h| h.stress[(0, 1)])
+        .fold(0.0, |a: f64, b| if b.abs() > a.abs() { b } else { a });
+    assert!(stress != 0.0);
+    let mut fresh = gate();
+    refused(
+        &mut fresh,
+        &edit(&ck, stress, f64::INFINITY),
+        "solid element",
+    );
+}
+
 /// A restart under other settings is refused with the first one that
 /// differs named: another time scheme, another linear solver, another
 /// largest step (session 35's review: `--scheme euler`, `--solver lu` and

@@ -1561,6 +1561,17 @@ where
             ))
             .into());
         }
+        if let Some(i) = particles
+            .spacing()
+            .iter()
+            .position(|h| !(h.is_finite() && *h > 0.0))
+            .or_else(|| finite(&particles.constraints().velocity))
+        {
+            return Err(CheckpointError::Corrupt(format!(
+                "particle {i}'s spacing or prescribed velocity is not a finite (positive) number"
+            ))
+            .into());
+        }
         // Walls and solids keep their indices for the whole run.
         let fixed = |p: &Particles<D>| {
             p.kind()
@@ -1606,6 +1617,40 @@ where
         let mut g = Vector::<D>::zeros();
         for k in 0..D {
             g[k] = d.f64()?;
+        }
+        // The rest of the state must be numbers too: a gravity, a solid's
+        // stress or internal variable, a contact element's history or the
+        // volume ledger that is not would run on as one (or turn the
+        // volume correction off without a word).
+        let state_finite = |h: &History<D>| {
+            h.stress.iter().all(|v| v.is_finite())
+                && h.stress_zz.is_finite()
+                && h.pressure.is_finite()
+                && h.internal.iter().all(|v| v.is_finite())
+        };
+        let what = if !g.iter().all(|c| c.is_finite()) {
+            Some("its gravity".to_string())
+        } else if let Some(e) = solid_history.iter().position(|h| !state_finite(h)) {
+            Some(format!("solid element {e}'s stress or internal variables"))
+        } else if let Some(e) = stash.1.iter().position(|h| !state_finite(h)) {
+            Some(format!("contact element {e}'s history"))
+        } else if ![
+            volume.initial,
+            volume.remeshing,
+            volume.solution,
+            volume.sources,
+            volume_now,
+        ]
+        .iter()
+        .chain(volume.hooks.iter().map(|(_, v)| v))
+        .all(|v| v.is_finite())
+        {
+            Some("its fluid volume ledger".to_string())
+        } else {
+            None
+        };
+        if let Some(what) = what {
+            return Err(CheckpointError::Corrupt(format!("{what} is not finite")).into());
         }
         let nh = d.len(16)?;
         let mut saved = Vec::with_capacity(nh);

@@ -251,6 +251,18 @@ where
         if ctx.steps() == 0 {
             return Ok(());
         }
+        // Bound what one call inserts, as one layer is bounded: a step of
+        // `max_dt` at the inflow's speed may span many spacings.
+        let layers = (self.advanced / self.spacing).floor();
+        let count = layers * self.layer.len() as f64;
+        if count.is_nan() || count > MAX_LAYER {
+            return Err(RunError::Hook {
+                hook: Self::NAME.into(),
+                why: format!(
+                    "the fluid advanced {layers:.3e} spacings since the last insertion: {count:.3e} particles to insert at once, more than {MAX_LAYER:.0e} (lower max_dt or the inflow's speed)"
+                ),
+            });
+        }
         while self.advanced >= self.spacing {
             self.advanced -= self.spacing;
             let off = self.advanced * self.velocity[self.axis].signum();
@@ -313,8 +325,56 @@ where
     }
 
     fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
-        self.advanced = from.f64()?;
+        let advanced = from.f64()?;
+        // At most the step's advance since the last insertion: finite and
+        // not negative (an edited value would insert without end).
+        if !(advanced >= 0.0 && advanced.is_finite()) {
+            return Err(CheckpointError::Corrupt(format!(
+                "inflow advance {advanced} (must be finite and not negative)"
+            )));
+        }
+        self.advanced = advanced;
         self.inserted = from.len(0)?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An inflow's saved advance that is not a finite, non-negative length
+    /// is refused: `1e300` less a spacing is `1e300`, and the insertion
+    /// loop would never end.
+    #[test]
+    fn an_edited_inflow_advance_is_refused() {
+        let mut inflow = Inflow::<2>::new(
+            "water",
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(0.0, 0.1),
+            Vector::<2>::new(1.0, 0.0),
+            0.01,
+            0.02,
+        )
+        .unwrap();
+        for bad in [1e300, f64::NAN, f64::INFINITY, -0.01] {
+            let mut e = Encoder::new();
+            e.f64(bad);
+            e.u64(0);
+            let bytes = e.finish();
+            let err = inflow.restore_state(&mut Decoder::new(&bytes));
+            if bad == 1e300 {
+                // Finite: accepted here, refused by the insertion's bound.
+                assert!(err.is_ok());
+            } else {
+                assert!(matches!(err, Err(CheckpointError::Corrupt(_))), "{bad}");
+            }
+        }
+        let mut e = Encoder::new();
+        e.f64(0.005);
+        e.u64(3);
+        let bytes = e.finish();
+        inflow.restore_state(&mut Decoder::new(&bytes)).unwrap();
+        assert_eq!((inflow.advanced, inflow.inserted), (0.005, 3));
     }
 }

@@ -239,7 +239,17 @@ where
             .flatten()
             .map(|b| b.spacing)
             .fold(f64::INFINITY, f64::min);
-        let mut grid = lattice::HashGrid::<D>::new(cell);
+        // The coarsest body's coincidence tolerance (a quarter spacing, below)
+        // sets the grid's coarsest level: a scene of very different spacings
+        // (10⁻⁹ m beside 0.1 m) would otherwise have each coarse particle
+        // look at (10⁸/4)^D cells of the fine spacing.
+        let reach = 0.25
+            * bodies
+                .iter()
+                .flatten()
+                .map(|b| b.spacing)
+                .fold(0.0, f64::max);
+        let mut grid = lattice::HashGrid::<D>::with_reach(cell, reach);
         let mut merges: Vec<Merge> = Vec::new();
         let mut laws = Vec::new();
         let mut pressure_fields = Vec::new();
@@ -536,6 +546,13 @@ where
                     }
                 }
             }
+        }
+        // A gravity finite but so large that ρ g H overflows (or its norm
+        // does) leaves the hydrostatic start without numbers.
+        if particles.pressure.iter().any(|p| !p.is_finite()) {
+            return Err(SceneError::NonFinite {
+                setting: "the hydrostatic start pressure (gravity too large)",
+            });
         }
         // Initial pressure fields replace the hydrostatic start.
         for (range, f) in pressure_fields {

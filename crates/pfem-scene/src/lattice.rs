@@ -220,37 +220,62 @@ where
     out
 }
 
-/// A uniform hash grid over particle positions, for coincidence queries.
+/// A hash grid over particle positions, for coincidence queries: one or
+/// more levels of cells `cell · 2ˡ`, each recording every point, so that a
+/// query within a tolerance far larger than the finest cell (a coarse
+/// body's quarter spacing next to a fine one) looks at a few cells of a
+/// coarser level instead of `(tol/cell)^D` of the finest.
 #[derive(Debug, Clone)]
 pub struct HashGrid<const D: usize> {
-    cell: f64,
-    map: std::collections::HashMap<[i64; 3], Vec<usize>>,
+    levels: Vec<(f64, Cells)>,
 }
+
+/// One level of a [`HashGrid`]: the points recorded in each cell.
+type Cells = std::collections::HashMap<[i64; 3], Vec<usize>>;
+
+/// The most levels [`HashGrid::with_reach`] builds (cells up to `2⁶³`
+/// times the finest).
+const MAX_LEVELS: usize = 64;
 
 impl<const D: usize> HashGrid<D>
 where
     Const<D>: Dim,
 {
-    /// An empty grid of cell size `cell` (m).
+    /// An empty grid of cell size `cell` (m), one level.
     pub fn new(cell: f64) -> Self {
         Self {
-            cell,
-            map: std::collections::HashMap::new(),
+            levels: vec![(cell, Cells::new())],
         }
     }
 
-    fn key(&self, p: &Point<D>) -> [i64; 3] {
+    /// An empty grid of finest cell `cell` (m) with the coarser levels
+    /// `cell · 2ˡ` that queries within tolerances up to `reach` (m) need:
+    /// each query then visits `3^D` cells of the finest level whose cell is
+    /// no smaller than its tolerance.
+    pub fn with_reach(cell: f64, reach: f64) -> Self {
+        let mut g = Self::new(cell);
+        let mut c = cell;
+        while c < reach && g.levels.len() < MAX_LEVELS {
+            c *= 2.0;
+            g.levels.push((c, Cells::new()));
+        }
+        g
+    }
+
+    fn key(cell: f64, p: &Point<D>) -> [i64; 3] {
         let mut k = [0i64; 3];
         for d in 0..D {
-            k[d] = (p[d] / self.cell).floor() as i64;
+            k[d] = (p[d] / cell).floor() as i64;
         }
         k
     }
 
     /// Records point `index` at `p`.
     pub fn insert(&mut self, p: &Point<D>, index: usize) {
-        let k = self.key(p);
-        self.map.entry(k).or_default().push(index);
+        for (cell, map) in &mut self.levels {
+            let k = Self::key(*cell, p);
+            map.entry(k).or_default().push(index);
+        }
     }
 
     /// Whether a recorded point lies within `tol` of `p`.
@@ -259,19 +284,23 @@ where
     }
 
     /// The nearest recorded point within `tol` of `p`, if any. Searches
-    /// every cell `tol` can reach (a tolerance larger than the cell, as a
-    /// coarse body's quarter spacing next to a fine one, reaches further
-    /// than the adjacent cells).
+    /// every cell `tol` can reach on the finest level whose cell is no
+    /// smaller than `tol` (or the coarsest level).
     pub fn find(&self, p: &Point<D>, tol: f64, points: &[Point<D>]) -> Option<usize> {
-        let k = self.key(p);
-        let r = ((tol / self.cell).ceil() as i64).max(1);
+        let (cell, map) = self
+            .levels
+            .iter()
+            .find(|(c, _)| *c >= tol)
+            .unwrap_or_else(|| self.levels.last().expect("a grid has a level"));
+        let k = Self::key(*cell, p);
+        let r = ((tol / cell).ceil() as i64).max(1);
         let zr = if D == 3 { -r..=r } else { 0..=0 };
         let mut best: Option<(f64, usize)> = None;
         for dz in zr {
             for dy in -r..=r {
                 for dx in -r..=r {
                     let kk = [k[0] + dx, k[1] + dy, k[2] + dz];
-                    if let Some(v) = self.map.get(&kk) {
+                    if let Some(v) = map.get(&kk) {
                         for &i in v {
                             let d = (points[i] - p).norm();
                             if d < tol && best.is_none_or(|(b, _)| d < b) {

@@ -15,6 +15,21 @@ where
     fn position(&self, x0: &Point<D>, t: f64) -> Point<D>;
     /// Its velocity (m/s).
     fn velocity(&self, x0: &Point<D>, t: f64) -> Vector<D>;
+    /// An upper bound of the speed (m/s) of any point that starts in the
+    /// box `[min, max]`, at any time; `None` (the default) where the law
+    /// cannot tell. `Scene::validate` bounds the steps a run needs with it,
+    /// as it does a constant wall velocity.
+    fn max_speed(&self, min: &Point<D>, max: &Point<D>) -> Option<f64> {
+        let _ = (min, max);
+        None
+    }
+}
+
+/// An upper bound of `|r(t) ω cos(ωt) + r'(t) sin(ωt)|` for the ramp `r`
+/// over `ramp` seconds and `ω = 2π / period`.
+fn oscillation_rate(period: f64, ramp: f64) -> f64 {
+    let w = 2.0 * std::f64::consts::PI / period;
+    w + if ramp > 0.0 { 1.0 / ramp } else { 0.0 }
 }
 
 /// A sinusoidal translation `d(t) = A sin(2π t / T)`: a piston or flap
@@ -65,6 +80,9 @@ where
         let w = 2.0 * std::f64::consts::PI / self.period;
         let (r, dr) = self.factor(t);
         self.amplitude * (r * w * (w * t).cos() + dr * (w * t).sin())
+    }
+    fn max_speed(&self, _min: &Point<D>, _max: &Point<D>) -> Option<f64> {
+        Some(self.amplitude.norm() * oscillation_rate(self.period, self.ramp))
     }
 }
 
@@ -132,6 +150,14 @@ where
     }
     fn velocity(&self, _x0: &Point<D>, t: f64) -> Vector<D> {
         self.at(t).1
+    }
+    fn max_speed(&self, _min: &Point<D>, _max: &Point<D>) -> Option<f64> {
+        Some(
+            self.rows
+                .windows(2)
+                .map(|w| (w[1].1 - w[0].1).norm() / (w[1].0 - w[0].0))
+                .fold(0.0, f64::max),
+        )
     }
 }
 
@@ -271,6 +297,26 @@ where
         let (_, dth) = self.angle(t);
         let r = self.position(x0, t) - self.center;
         self.cross(&r) * dth
+    }
+    fn max_speed(&self, min: &Point<D>, max: &Point<D>) -> Option<f64> {
+        // The farthest corner of the box from the centre bounds every
+        // point's distance from the axis.
+        let radius = (0..D)
+            .map(|k| {
+                let d = (min[k] - self.center[k])
+                    .abs()
+                    .max((max[k] - self.center[k]).abs());
+                d * d
+            })
+            .sum::<f64>()
+            .sqrt();
+        let rate = self.rate.abs()
+            + if self.amplitude != 0.0 {
+                self.amplitude.abs() * oscillation_rate(self.period, self.ramp)
+            } else {
+                0.0
+            };
+        Some(rate * radius)
     }
 }
 

@@ -289,6 +289,11 @@ pub struct Estimate {
     pub bytes: f64,
 }
 
+/// The most bodies a scene may have: materials are numbered in 16 bits
+/// (`u16::MAX` marks none), one a body and one contact penalty a body at
+/// most.
+pub const MAX_BODIES: usize = 30_000;
+
 /// The default memory budget of a run: 80 % of the machine's memory
 /// (`/proc/meminfo`'s `MemTotal`), or 8 GiB where it cannot be read.
 pub fn default_memory_budget() -> f64 {
@@ -596,16 +601,20 @@ where
     }
 
     /// Estimated particle count and memory of the scene, from its
-    /// geometries and spacings, without placing a particle.
+    /// geometries and spacings, without placing a particle. Its cost grows
+    /// with the surfaces' fill work (`ClosedSurface::fill_work`);
+    /// [`Scene::validate_within`] bounds it by the budget it checks.
     pub fn estimate(&self) -> Estimate {
+        self.estimate_up_to(f64::INFINITY)
+    }
+
+    /// [`Scene::estimate`], its count of the surfaces' fill work stopped
+    /// once the bytes exceed `budget` (the estimate is then above `budget`,
+    /// not exact): the particles are counted first, the fill work, whose
+    /// count costs a step a slab of lattice lines, after.
+    fn estimate_up_to(&self, budget: f64) -> Estimate {
         let mut particles = 0.0;
-        // A surface's fill stores a (line, facet) pair for each lattice
-        // line near each facet (`ClosedSurface::fill_work`).
-        let mut fill_bytes = 0.0;
         for b in &self.bodies {
-            if let Geometry::Surface(s) = &b.geometry {
-                fill_bytes += 16.0 * s.fill_work(b.spacing);
-            }
             let h = b.spacing;
             particles += match &b.geometry {
                 Geometry::Box { min, max } => (0..D)
@@ -637,10 +646,18 @@ where
         } else {
             BYTES_PER_PARTICLE_3D
         };
-        Estimate {
-            particles,
-            bytes: particles * per_particle + fill_bytes,
+        let mut bytes = particles * per_particle;
+        // A surface's fill stores a (line, facet) pair for each lattice
+        // line near each facet (`ClosedSurface::fill_work`), 16 bytes each.
+        for b in &self.bodies {
+            if let Geometry::Surface(s) = &b.geometry {
+                if bytes.is_nan() || bytes > budget {
+                    break;
+                }
+                bytes += 16.0 * s.fill_work_up_to(b.spacing, (budget - bytes) / 16.0);
+            }
         }
+        Estimate { particles, bytes }
     }
 
     /// [`Scene::validate`], then refuses a scene whose
@@ -648,7 +665,7 @@ where
     /// particle is placed.
     pub fn validate_within(&self, budget: f64) -> Result<Estimate, SceneError> {
         self.validate()?;
-        let e = self.estimate();
+        let e = self.estimate_up_to(budget);
         if e.bytes.is_nan() || e.bytes > budget {
             return Err(SceneError::TooLarge {
                 particles: e.particles,
@@ -708,6 +725,14 @@ where
         }
         if self.bodies.is_empty() {
             return Err(SceneError::Empty);
+        }
+        if self.bodies.len() > MAX_BODIES {
+            return Err(SceneError::OutOfRange {
+                setting: "the number of bodies",
+                value: self.bodies.len() as f64,
+                range:
+                    "1..=30000 (each body's material and contact penalty is numbered in 16 bits)",
+            });
         }
         for b in &self.bodies {
             // Body names head probe columns and name bodies in messages.
@@ -976,14 +1001,27 @@ where
             .iter()
             .map(|b| match &b.motion {
                 WallMotion::Velocity(w) if b.kind == ParticleKind::Wall => w.norm(),
+                // A law's largest speed over the wall's box (a period of
+                // 10⁻³⁰⁰ s would move it at 10³⁰⁰ m/s, or give NaN
+                // positions when 2π/T overflows).
+                WallMotion::Law(law) if b.kind == ParticleKind::Wall => {
+                    let (lo, hi) = b.geometry.bounds();
+                    law.max_speed(&lo, &hi).unwrap_or(0.0)
+                }
                 _ => b.velocity.norm(),
             })
-            .fold(0.0, f64::max);
+            .fold(0.0, |a: f64, v| {
+                if a.is_nan() || v.is_nan() {
+                    f64::NAN
+                } else {
+                    a.max(v)
+                }
+            });
         let courant_steps = s.end_time * v_max / (s.courant * h_min);
-        if courant_steps > MAX_STEPS {
+        if courant_steps.is_nan() || courant_steps > MAX_STEPS {
             return Err(SceneError::CannotFinish {
                 what: format!(
-                    "steps at the Courant limit (initial speed {v_max:e} m/s, spacing {h_min:e} m)"
+                    "steps at the Courant limit (largest initial or wall speed {v_max:e} m/s, spacing {h_min:e} m)"
                 ),
                 count: courant_steps,
                 limit: MAX_STEPS,

@@ -223,8 +223,10 @@ where
         (n, lo)
     }
 
-    /// Calls `line(index)` for each lattice line (index `jz (n_y + 1) + jy`)
-    /// that facet `f` may cross: those within a spacing of the facet's
+    /// Calls `run(first, last)` for each run of consecutive lattice lines
+    /// (index `jz (n_y + 1) + jy`, `first..=last`, one run per slab) that
+    /// facet `f` may cross, until `run` returns `false` (then so does this
+    /// function): those within a spacing of the facet's
     /// projection across x (in 2D the segment's y-extent, in 3D the
     /// triangle's y-extent within a slab of `±h` about each line's z),
     /// with one line of margin, as the bounding box of the facet gave
@@ -237,8 +239,8 @@ where
         h: f64,
         lo: &Point<D>,
         n: &[usize; 3],
-        mut line: impl FnMut(usize),
-    ) {
+        mut run: impl FnMut(usize, usize) -> bool,
+    ) -> bool {
         let v = |a: usize| self.vertices[f[a] as usize];
         let ny = n[1] + 1;
         let span = |a: f64, b: f64, k: usize| -> (usize, usize) {
@@ -249,8 +251,7 @@ where
         if D == 2 {
             let (a, b) = (v(0)[1], v(1)[1]);
             let (j0, j1) = span(a.min(b), a.max(b), 1);
-            (j0..=j1).for_each(&mut line);
-            return;
+            return run(j0, j1);
         }
         let (mut za, mut zb) = (f64::INFINITY, f64::NEG_INFINITY);
         for a in 0..D {
@@ -281,24 +282,41 @@ where
             }
             if ya <= yb {
                 let (j0, j1) = span(ya, yb, 1);
-                for jy in j0..=j1 {
-                    line(jz * ny + jy);
+                if !run(jz * ny + j0, jz * ny + j1) {
+                    return false;
                 }
             }
         }
+        true
     }
 
     /// How many (lattice line, facet) pairs [`Self::fill`] visits at
     /// spacing `h`: its work and memory beside the particles it places
-    /// (`Scene::estimate` counts 16 bytes each). Counted, not stored.
+    /// (`Scene::estimate` counts 16 bytes each). Counted by runs of lines
+    /// (one a facet in 2D, one a slab of lines in 3D), not stored.
     pub fn fill_work(&self, h: f64) -> f64 {
+        self.fill_work_up_to(h, f64::INFINITY)
+    }
+
+    /// [`Self::fill_work`], the count stopped as soon as it exceeds `cap`
+    /// (then some value above `cap` is returned): a scene's memory check
+    /// needs no more, and the count's own cost, one step a slab of lines
+    /// in 3D, stays within the budget it checks (at a spacing of 10⁻⁸ m a
+    /// 1 m facet spans 10⁸ slabs).
+    pub fn fill_work_up_to(&self, h: f64, cap: f64) -> f64 {
         if !(h > 0.0 && h.is_finite()) {
             return 0.0;
         }
         let (n, lo) = self.lattice_size(h);
         let mut count = 0.0;
         for f in self.facets.chunks_exact(D) {
-            self.facet_lines(f, h, &lo, &n, |_| count += 1.0);
+            let more = self.facet_lines(f, h, &lo, &n, |a, b| {
+                count += (b - a + 1) as f64;
+                count <= cap
+            });
+            if !more {
+                break;
+            }
         }
         count
     }
@@ -315,7 +333,10 @@ where
         // order of the lines, then of the facets.
         let mut pairs: Vec<(usize, u32)> = Vec::new();
         for (fi, f) in self.facets.chunks_exact(D).enumerate() {
-            self.facet_lines(f, h, &lo, &n, |l| pairs.push((l, fi as u32)));
+            self.facet_lines(f, h, &lo, &n, |a, b| {
+                pairs.extend((a..=b).map(|l| (l, fi as u32)));
+                true
+            });
         }
         pairs.sort_unstable();
         let ny = n[1] + 1;
@@ -607,6 +628,10 @@ mod tests {
         needle.check().unwrap();
         let work = needle.fill_work(0.01);
         assert!(work < 1e6, "{work}");
+        // Stopped as soon as it passes a cap, exact below it.
+        let capped = needle.fill_work_up_to(0.01, 1000.0);
+        assert!(capped > 1000.0 && capped < work, "{capped} of {work}");
+        assert_eq!(needle.fill_work_up_to(0.01, work), work);
         // Its edge from the origin passes through the lattice's diagonal
         // nodes (on the surface: inside), 20 000 of them (the far end is
         // beyond the last whole spacing), and hardly more.

@@ -753,3 +753,124 @@ fn bad_step_params_are_refused_up_front() {
     }
     assert!(Simulation::new(puddle("p"), Box::new(Delaunay2::default()), d).is_ok());
 }
+
+/// Runs `f` on a thread and fails the test if it takes more than `secs`
+/// (the failure these tests guard against is a hang).
+fn within<T: Send + 'static>(secs: u64, what: &str, f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(secs))
+        .unwrap_or_else(|_| panic!("{what}: not done within {secs} s"))
+}
+
+/// The bug this fixed: the coincidence grid's cell was the finest spacing,
+/// and each particle of a coarse body looked at every cell within a
+/// quarter of its own spacing: a one-particle body at 10⁻⁹ m beside a wall
+/// at 0.1 m made each wall particle visit 2.5·10¹⁵ cells, and
+/// `Simulation::new` (and `pfem check`) never returned. The grid now has
+/// coarser levels for coarse tolerances.
+#[test]
+fn bodies_of_very_different_spacings_are_placed_at_once() {
+    let sim = within(60, "placing the particles", || {
+        let s = puddle("spacings").wall(
+            "dot",
+            Geometry::Particles(vec![Point::<2>::new(0.5, 0.5)]),
+            1e-9,
+            WallMotion::Fixed,
+        );
+        build(s).map(|s| s.particles().len())
+    });
+    // floor 9 × 2, water 5 × 5 less the row on the floor, the dot.
+    assert_eq!(sim.expect("a valid scene"), 18 + 20 + 1);
+}
+
+/// The bug this fixed: the memory estimate counted a surface's fill work
+/// one (lattice line, facet) pair at a time, before the particles: at a
+/// spacing of 10⁻⁸ m the wedge's count alone would have taken about a day
+/// before `pfem check` could report the scene too large. The particles
+/// are now counted first, and the fill work by runs of lines up to the
+/// budget.
+#[test]
+fn a_surface_at_a_tiny_spacing_is_refused_at_once() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/scenes/wedge_3d.toml");
+    let result = within(60, "checking the scene", move || {
+        let mut file = pfem::scene_file::SceneFile::read(&path)?;
+        file.override_spacing(1e-8);
+        file.scene::<3>()?.validate_within(8.0 * 1024f64.powi(3))
+    });
+    match result {
+        Err(SceneError::TooLarge { particles, .. }) => assert!(particles > 1e18, "{particles}"),
+        other => panic!("expected TooLarge, got {other:?}"),
+    }
+}
+
+/// A gravity finite but so large that the hydrostatic start overflows, and
+/// more bodies than materials can be numbered, are refused with a typed
+/// error (session 39's review: the first gave NaN start pressures and a
+/// misleading mesh error, the second numbered body 65 537's material as
+/// body 1's).
+#[test]
+fn an_overflowing_gravity_and_too_many_bodies_are_refused() {
+    for g in [
+        Vector::<2>::new(0.0, -1e306),
+        Vector::<2>::new(1e308, 1e308),
+    ] {
+        match build(puddle("heavy").gravity(g)) {
+            Err(SceneError::NonFinite { setting }) => {
+                assert!(setting.contains("hydrostatic"), "{setting}")
+            }
+            other => panic!("gravity {g:?}: expected NonFinite, got {other:?}"),
+        }
+    }
+    let mut s = puddle("crowd");
+    for i in 0..pfem::scene::MAX_BODIES {
+        s = s.wall(
+            &format!("dot{i}"),
+            Geometry::Particles(vec![Point::<2>::new(i as f64, 5.0)]),
+            0.05,
+            WallMotion::Fixed,
+        );
+    }
+    match build(s) {
+        Err(SceneError::OutOfRange { setting, .. }) => assert!(setting.contains("bodies")),
+        other => panic!(
+            "expected OutOfRange, got {:?}",
+            other.map(|s| s.particles().len())
+        ),
+    }
+}
+
+/// A wall's motion law counts in the steps a run needs, as a constant wall
+/// velocity does (session 39's review): a paddle of period 10⁻³⁰⁰ s (10³⁰⁰
+/// m/s) was accepted and the run failed at its first step, and with a zero
+/// amplitude and a period of 10⁻³¹⁰ s its positions were NaN (0 × ∞).
+#[test]
+fn a_motion_law_too_fast_to_follow_is_refused() {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/scenes/wave_paddle_2d.toml");
+    let text = std::fs::read_to_string(&file).unwrap();
+    let law = "motion.sinusoidal = { amplitude = [0.01, 0.0], period = 0.8, ramp = 0.8 }";
+    assert!(text.contains(law));
+    let scene = |law_now: &str| {
+        let t = text.replace(law, law_now);
+        pfem::scene_file::SceneFile::parse(&t, "paddle.toml")
+            .and_then(|f| f.scene::<2>())
+            .and_then(|s| s.validate())
+    };
+    scene(law).expect("the bundled paddle");
+    for bad in [
+        "motion.sinusoidal = { amplitude = [0.01, 0.0], period = 1e-300, ramp = 0.8 }",
+        "motion.sinusoidal = { amplitude = [0.0, 0.0], period = 1e-310, ramp = 0.0 }",
+        "motion.table = [[0.0, 0.0, 0.0], [1e-300, 1.0, 0.0]]",
+    ] {
+        match scene(bad) {
+            Err(SceneError::CannotFinish { what, .. }) => {
+                assert!(what.contains("wall speed"), "{what}")
+            }
+            other => panic!("{bad}: expected CannotFinish, got {other:?}"),
+        }
+    }
+}

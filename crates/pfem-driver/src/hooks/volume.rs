@@ -135,6 +135,13 @@ where
     fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
         let some = from.bool()?;
         let c = from.f64()?;
+        // A compression that is not a number would turn the correction off
+        // without a word (`after_remesh` skips a non-finite error).
+        if some && !c.is_finite() {
+            return Err(CheckpointError::Corrupt(format!(
+                "the volume correction's initial compression {c} is not finite"
+            )));
+        }
         self.compression0 = some.then_some(c);
         Ok(())
     }
