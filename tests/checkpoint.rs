@@ -621,3 +621,93 @@ fn a_refused_checkpoint_leaves_the_simulation_as_it_was() {
     whole.run(&mut []).unwrap();
     assert_same("refused restore", &whole, &sim);
 }
+
+/// A user's solid: a hypoelastic one whose stress is capped at `cap` (Pa)
+/// after each step, and which names `names` internal variables.
+#[derive(Debug)]
+struct Capped {
+    inner: pfem::constitutive::Hypoelastic,
+    cap: f64,
+    names: &'static [&'static str],
+}
+
+impl Material<2> for Capped {
+    fn name(&self) -> &str {
+        "capped"
+    }
+    fn kind(&self) -> MaterialKind {
+        MaterialKind::Solid
+    }
+    fn density(&self) -> f64 {
+        Material::<2>::density(&self.inner)
+    }
+    fn wave_speed(&self) -> f64 {
+        Material::<2>::wave_speed(&self.inner)
+    }
+    fn unified(
+        &self,
+        kin: &pfem::constitutive::Kinematics<2>,
+        history: &pfem::constitutive::History<2>,
+    ) -> pfem::constitutive::Unified<2> {
+        self.inner.unified(kin, history)
+    }
+    fn update_history(
+        &self,
+        kin: &pfem::constitutive::Kinematics<2>,
+        history: &mut pfem::constitutive::History<2>,
+    ) {
+        self.inner.update_history(kin, history);
+        for v in history.stress.iter_mut() {
+            *v = v.clamp(-self.cap, self.cap);
+        }
+    }
+    fn internal_variables(&self) -> &[&str] {
+        self.names
+    }
+}
+
+/// The gate with its rubber replaced by a [`Capped`] solid.
+fn capped_gate(cap: f64, names: &'static [&'static str]) -> Result<Simulation<2>, SceneError> {
+    let mut scene = ElasticGate {
+        end_time: 0.012,
+        ..Default::default()
+    }
+    .scene()
+    .unwrap();
+    let gate = scene
+        .bodies
+        .iter_mut()
+        .find(|b| b.kind == ParticleKind::Solid)
+        .unwrap();
+    let inner = pfem::constitutive::Hypoelastic::new(1100.0, 12e6, 0.4).unwrap();
+    gate.material = Some(Box::new(Capped { inner, cap, names }));
+    Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
+}
+
+/// A user's material changed in a parameter the checkpoint's probes do not
+/// reach (a stress cap above their stress) is a changed material: its
+/// restart is refused (session 39's review: the fingerprint held only what
+/// the material answered to two probes, and both caps answered alike). A
+/// material naming more internal variables than a history holds is
+/// refused when the scene is built.
+#[test]
+fn a_restart_under_a_custom_material_changed_beyond_the_probes_is_refused() {
+    let mut a = capped_gate(1e9, &[]).unwrap();
+    a.step().unwrap();
+    let ck = a.checkpoint();
+    let mut same = capped_gate(1e9, &[]).unwrap();
+    same.restore(&ck).unwrap();
+    let mut other = capped_gate(1e8, &[]).unwrap();
+    let err = other.restore(&ck).unwrap_err();
+    assert!(err.to_string().contains("a material"), "{err}");
+    const NINE: &[&str] = &["a", "b", "c", "d", "e", "f", "g", "h", "i"];
+    match capped_gate(1e9, NINE) {
+        Err(SceneError::InvalidMaterial { source, .. }) => {
+            assert!(
+                source.to_string().contains("9 internal variables"),
+                "{source}"
+            )
+        }
+        other => panic!("expected InvalidMaterial, got {:?}", other.map(|_| ())),
+    }
+}

@@ -336,8 +336,8 @@ fn energy(sim: &Simulation<2>, rho: f64, young: f64, nu: f64) -> (f64, f64) {
 /// P-wave modulus and no contact dashpot) bounces back without passing
 /// through it and keeps its energy. The disk (`Geometry::Ball` for a
 /// solid) is sampled on rings: measured 1.7 % of the gap closed, energy
-/// +0.18 % (1.2 % and +0.28 % before the rounded onset, session 37), in contact for 19.8 ms (with the default dashpot 1.1 % and
-/// +0.23 %). As a lattice it met the floor with one particle: it needed the
+/// +0.18 % (1.2 % and +0.28 % before the rounded onset, session 37), in
+/// contact for 19.8 ms (with the default dashpot 1.1 % and +0.23 %). As a lattice it met the floor with one particle: it needed the
 /// dashpot (2.5 %, +0.2 %; without, the chatter inverted an element), and
 /// at the default stiffness (the disk's modulus) it closed 23 % of the
 /// gap, against 9.4 % on rings. (Ten times the default on the resting block of the first test took

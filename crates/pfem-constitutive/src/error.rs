@@ -82,6 +82,15 @@ pub enum MaterialError {
         /// The wave speed the parameters give (m/s).
         wave_speed: f64,
     },
+    /// A material names more internal variables than a history holds
+    /// ([`crate::MAX_INTERNAL`]).
+    #[error("{count} internal variables, more than a history holds ({limit})")]
+    TooManyInternalVariables {
+        /// How many the material names.
+        count: usize,
+        /// [`crate::MAX_INTERNAL`].
+        limit: usize,
+    },
 }
 
 impl MaterialError {
@@ -89,7 +98,8 @@ impl MaterialError {
     pub fn parameter(&self) -> Option<Parameter> {
         match self {
             MaterialError::InvalidParameter { parameter, .. } => Some(*parameter),
-            MaterialError::DegenerateWaveSpeed { .. } => None,
+            MaterialError::DegenerateWaveSpeed { .. }
+            | MaterialError::TooManyInternalVariables { .. } => None,
         }
     }
 }

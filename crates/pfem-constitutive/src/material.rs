@@ -378,14 +378,26 @@ where
     fn density(&self) -> f64;
 
     /// Speed of the fastest wave the material carries (m/s): `√(K/ρ)` for a
-    /// fluid, `√((λ + 2μ)/ρ)` for an elastic solid. Used by time-step
-    /// control and stability estimates.
+    /// fluid, `√((λ + 2μ)/ρ)` for an elastic solid (the P-wave speed). The
+    /// driver reads a modulus from it: `ρ c²` is a solid's default contact
+    /// penalty and a fluid's bulk modulus in the volume correction
+    /// (`VolumeCorrection`); it also identifies the material in a
+    /// checkpoint. A value larger than the true one stiffens contact; the
+    /// time step does not follow it (the Courant bound is on the particles'
+    /// speeds).
     fn wave_speed(&self) -> f64;
 
     /// The unified triple `(μ, 𝒦, σ̂⁽ⁿ⁾)` of eq. 44 for the kinematics of the
     /// current Picard iterate and the history at `t_n`: built by
     /// [`Unified::new`], or [`Unified::returning`] for a stress computed
     /// from the step's displacement.
+    ///
+    /// A solid's `history` is its element's. A fluid's pressure lives on
+    /// the nodes (eq. 62), not in elements: a fluid element is given
+    /// `History::default()` (pressure 0, no internal variables), and its
+    /// `σ̂` is not used (the nodal pressures enter the system instead). A
+    /// fluid whose `μ` or `𝒦` should depend on the pressure cannot read it
+    /// here.
     fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D>;
 
     /// After the step has converged, advance the history from `t_n` to
@@ -395,15 +407,20 @@ where
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>);
 
     /// Names of the internal variables a solid keeps in
-    /// [`History::internal`] (at most [`MAX_INTERNAL`]), written to the
-    /// output by name; none by default.
+    /// [`History::internal`] (at most [`MAX_INTERNAL`]; a scene with more is
+    /// refused), written to the output by name and kept by checkpoints;
+    /// none by default. A fluid keeps none (its elements are rebuilt every
+    /// step).
     fn internal_variables(&self) -> &[&str] {
         &[]
     }
 
     /// A fluid's nodal pressure at `t_{n+1}` (eq. 62) from its value `p_n`
     /// at `t_n`, the node's volumetric strain rate `ε_v` (1/s, the nodal
-    /// average of eq. 19) and the step `Δt` (s). The default calls
+    /// average of eq. 19) and the step `Δt` (s). With the pressure
+    /// stabilisation on (`StepParams::pressure_stabilisation` > 0) it is
+    /// not called: the pressures take the stabilised solve's linear
+    /// increments, built from `𝒦` (ARCHITECTURE.md, deviation 12). The default calls
     /// [`Material::update_history`] with isotropic kinematics `D = ε_v/D I`
     /// (what a fluid written against `update_history` alone expects);
     /// [`crate::Newtonian`] overrides it with eq. 26.

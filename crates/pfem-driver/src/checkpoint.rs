@@ -229,6 +229,11 @@ impl<'a> Decoder<'a> {
         let n = self.len(8)?;
         (0..n).map(|_| self.f64()).collect()
     }
+    /// Whether every byte was read (a section that may end early: a field
+    /// added at its end in a later version).
+    pub fn is_at_end(&self) -> bool {
+        self.pos == self.buf.len()
+    }
     /// Fails unless every byte was read.
     pub fn end(&self) -> Result<(), CheckpointError> {
         if self.pos == self.buf.len() {

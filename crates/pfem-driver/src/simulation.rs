@@ -116,6 +116,11 @@ where
     fn finish(&mut self, _sim: &Simulation<D>) -> Result<(), RunError> {
         Ok(())
     }
+    /// Called once when [`Simulation::run`] fails (a step's or an
+    /// observer's error, passed here before `run` returns it), instead of
+    /// [`Observer::finish`]: a last record of the run, on a best-effort
+    /// basis (its own failures are not reported).
+    fn failed(&mut self, _sim: &Simulation<D>, _error: &RunError) {}
 }
 
 impl<const D: usize> Observer<D> for () where Const<D>: Dim {}
@@ -1070,14 +1075,23 @@ where
         for o in observers.iter_mut() {
             o.start(self)?;
         }
-        while self.clock.time < self.end_time - 1e-12 && self.stop.is_none() {
-            self.step()?;
-            let t0 = Instant::now();
-            for o in observers.iter_mut() {
-                o.step(self)?;
+        let steps = (|| -> Result<(), RunError> {
+            while self.clock.time < self.end_time - 1e-12 && self.stop.is_none() {
+                self.step()?;
+                let t0 = Instant::now();
+                for o in observers.iter_mut() {
+                    o.step(self)?;
+                }
+                self.stats.observe.0 += 1;
+                self.stats.observe.1 += t0.elapsed().as_secs_f64();
             }
-            self.stats.observe.0 += 1;
-            self.stats.observe.1 += t0.elapsed().as_secs_f64();
+            Ok(())
+        })();
+        if let Err(e) = steps {
+            for o in observers.iter_mut() {
+                o.failed(self, &e);
+            }
+            return Err(e);
         }
         for o in observers.iter_mut() {
             o.finish(self)?;
@@ -1825,11 +1839,16 @@ where
     )
 }
 
-/// A fingerprint of what a material answers ([`Material::unified`],
-/// [`Material::update_pressure`]) to two fixed probes, at rest and under
-/// a stressed shearing compression with internal variables: the parameters the trait does not
-/// expose (a viscosity, a shear modulus, a yield stress, a contact
-/// stiffness) change it, and the same material gives the same bits.
+/// A fingerprint of a material: its `Debug` text (every parameter of a
+/// derived `Debug`), the names of its internal variables, and what it
+/// answers ([`Material::unified`], [`Material::update_history`],
+/// [`Material::update_pressure`]) to two fixed probes, at rest and under a
+/// stressed shearing compression with internal variables. The parameters
+/// the trait does not expose (a viscosity, a shear modulus, a yield stress
+/// the probes do not reach, a contact stiffness) change it, and the same
+/// material gives the same bits. (Before session 39 the `Debug` text and
+/// `update_history` were not in it: two plastic solids differing only in a
+/// yield stress above the probe's stress had one fingerprint.)
 fn material_response<const D: usize>(m: &dyn Material<D>) -> u64
 where
     Const<D>: Dim,
@@ -1851,7 +1870,11 @@ where
         // of its gap with friction 0.5, a plastic strain…
         internal: [0.9, 0.5, 0.6, 0.8, 0.3, 1e-3, 2e-3, 3e-3],
     };
-    let mut bytes = Vec::new();
+    let mut bytes = format!("{m:?}").into_bytes();
+    for name in m.internal_variables() {
+        bytes.extend_from_slice(name.as_bytes());
+        bytes.push(0);
+    }
     for (kin, history) in [
         (Kinematics::<D>::at_rest(dt), History::<D>::default()),
         (Kinematics::<D>::new(f, d, dt), stressed),
@@ -1867,7 +1890,15 @@ where
                     .flat_map(|(n, m)| n.iter().chain(m.iter()).copied()),
             )
             .chain([m.update_pressure(history.pressure, -0.1, dt)]);
-        for v in values {
+        let mut after = history;
+        m.update_history(&kin, &mut after);
+        let after = after
+            .stress
+            .iter()
+            .copied()
+            .chain([after.stress_zz, after.pressure])
+            .chain(after.internal);
+        for v in values.chain(after) {
             bytes.extend_from_slice(&v.to_bits().to_le_bytes());
         }
     }

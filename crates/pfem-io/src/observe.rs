@@ -78,12 +78,17 @@ where
     checkpoints: u64,
     resume: Option<Resumed>,
     restarted_at: Option<f64>,
+    /// The error that ended the run ([`Observer::failed`]).
+    failure: Option<String>,
 }
 
 /// The output state read from a checkpoint, applied at the start of the
 /// resumed run.
 #[derive(Debug, Clone)]
 struct Resumed {
+    /// Whether the checkpoint's run wrote frames (`None`: a checkpoint
+    /// written before session 39 does not say).
+    vtu: Option<bool>,
     next_frame: f64,
     next_probe: f64,
     next_checkpoint: f64,
@@ -140,6 +145,7 @@ where
             checkpoints: 0,
             resume: None,
             restarted_at: None,
+            failure: None,
         }
     }
 
@@ -194,8 +200,10 @@ where
             }
             history.push((t, v));
         }
+        let vtu = if d.is_at_end() { None } else { Some(d.bool()?) };
         d.end()?;
         self.resume = Some(Resumed {
+            vtu,
             next_frame,
             next_probe,
             next_checkpoint,
@@ -229,6 +237,7 @@ where
             e.f64(*t);
             e.f64s(v);
         }
+        e.bool(self.series.is_some());
         e.finish()
     }
 
@@ -541,6 +550,7 @@ where
                 );
                 e.insert("picard_iterations".into(), sim.stats().assemble.0.into());
                 let status = match sim.stopped() {
+                    _ if self.failure.is_some() => "failed",
                     None if sim.time() >= sim.end_time() - 1e-12 => "finished",
                     None => "running",
                     Some(pfem_driver::hooks::Interrupt::REASON) => "interrupted",
@@ -549,6 +559,9 @@ where
                 e.insert("status".into(), status.into());
                 if let Some(r) = sim.stopped() {
                     e.insert("stop_reason".into(), r.into());
+                }
+                if let Some(f) = &self.failure {
+                    e.insert("error".into(), f.clone().into());
                 }
                 if let Some(t) = self.restarted_at {
                     e.insert("restarted_at_time".into(), t.into());
@@ -576,6 +589,17 @@ where
             .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
         crate::output::remove_atomic_temporaries(&self.dir)?;
         if self.vtu && sim.output_interval().is_some() {
+            // A run that wrote no frames lists none: continuing with frames
+            // would remove every frame in the folder as written "after" it.
+            if r.vtu == Some(false) {
+                return Err(crate::output::OutputError::Resume {
+                    dir: self.dir.clone(),
+                    why:
+                        "the checkpoint's run wrote no frames (--no-vtu): restart with --no-vtu too"
+                            .into(),
+                }
+                .into());
+            }
             self.series = Some(VtuSeries::resume(
                 &self.dir,
                 sim.name(),
@@ -700,6 +724,18 @@ where
         }
         write_summary(self.dir.join("summary.json"), &self.summary(sim))?;
         Ok(())
+    }
+
+    /// `summary.json` with `"status": "failed"` and the error's text
+    /// (`"error"`), the figures as they stood at the last accepted step.
+    fn failed(&mut self, sim: &Simulation<D>, error: &RunError) {
+        if let Some(p) = self.progress.as_mut() {
+            p.finish();
+        }
+        self.failure = Some(error.to_string());
+        if self.dir.is_dir() {
+            let _ = write_summary(self.dir.join("summary.json"), &self.summary(sim));
+        }
     }
 }
 

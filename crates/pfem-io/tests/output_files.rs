@@ -157,6 +157,14 @@ fn summary_json_round_trips() {
     let back: RunSummary = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
     assert_eq!(back, s);
     assert!((s.relative_volume_change() - (-0.0002 / 0.0322)).abs() < 1e-12);
+    // A non-finite figure of the summary's own fields is written as null
+    // and read back as NaN (session 39's review: reading failed).
+    s.fluid_volume_final = f64::NAN;
+    s.wall_time_s.insert("remesh".into(), f64::INFINITY);
+    write_summary(&path, &s).unwrap();
+    let back: RunSummary = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    assert!(back.fluid_volume_final.is_nan() && back.wall_time_s["remesh"].is_nan());
+    assert_eq!(back.simulated_time, s.simulated_time);
     std::fs::remove_dir_all(&dir).ok();
 }
 

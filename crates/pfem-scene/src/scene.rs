@@ -877,6 +877,18 @@ where
                     });
                 }
             }
+            if let Some(m) = &b.material {
+                let count = m.internal_variables().len();
+                if count > pfem_constitutive::MAX_INTERNAL {
+                    return Err(SceneError::InvalidMaterial {
+                        body: b.name.clone(),
+                        source: pfem_constitutive::MaterialError::TooManyInternalVariables {
+                            count,
+                            limit: pfem_constitutive::MAX_INTERNAL,
+                        },
+                    });
+                }
+            }
             match (b.kind, &b.material) {
                 (ParticleKind::Wall, _) => {}
                 (_, None) => {

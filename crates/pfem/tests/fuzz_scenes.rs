@@ -233,8 +233,9 @@ fn random_command_lines_end_cleanly() {
                 std::thread::sleep(std::time::Duration::from_millis(20));
             };
             let code = status.code().unwrap_or(-1);
+            // 2: stopped by the wall-clock cap before the end time.
             assert!(
-                code == 0 || code == 1,
+                (0..=2).contains(&code),
                 "`pfem {}` ended with {status}",
                 args.join(" ")
             );

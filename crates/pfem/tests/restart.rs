@@ -231,3 +231,66 @@ fn ctrl_c_writes_a_checkpoint_and_an_interrupted_summary() {
     assert!(ck.section(SIMULATION).is_some());
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A restart continues in its checkpoint's folder by default, and refuses a
+/// folder that does not hold the frames its checkpoint lists (session 39's
+/// review: given another folder, it deleted that folder's frames numbered
+/// from the checkpoint's count on and rewrote its `.pvd`); a run stopped by
+/// `--max-wall-time` ends with status 2 and says how to go on.
+#[test]
+fn a_restart_keeps_to_its_own_folder_and_a_wall_clock_stop_says_so() {
+    let (dam, still) = (scene("dam_break_2d"), scene("hydrostatic_2d"));
+    let (a, b) = (tmp("own-a"), tmp("own-b"));
+    let run = |file: &Path, out: &Path, extra: &[&str]| {
+        let mut args = run_args(file, out, "0.04", "0.02");
+        args.extend(extra.iter().map(|s| s.to_string()));
+        Command::new(PFEM).args(&args).output().unwrap()
+    };
+    // Another scene's run in A, the dam break in B.
+    assert!(run(&still, &a, &[]).status.success());
+    assert!(run(&dam, &b, &[]).status.success());
+    let files_a = outputs(&a);
+    let ck_b = b.join("checkpoint.bin").display().to_string();
+    let restart = |out: Option<&Path>| {
+        let mut args = vec![
+            "run".to_string(),
+            dam.display().to_string(),
+            "--end-time".into(),
+            "0.06".into(),
+            "--quiet".into(),
+            "--restart".into(),
+            ck_b.clone(),
+        ];
+        if let Some(o) = out {
+            args.extend(["--out".to_string(), o.display().to_string()]);
+        }
+        Command::new(PFEM).args(&args).output().unwrap()
+    };
+    // B's checkpoint into A's folder: refused, A untouched.
+    let o = restart(Some(&a));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot continue the run's outputs"), "{err}");
+    assert_eq!(outputs(&a), files_a, "A's files changed");
+    // Without --out, B's checkpoint continues in B's folder.
+    let o = restart(None);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(b.join("summary.json")).unwrap()).unwrap();
+    assert!((summary["simulated_time"].as_f64().unwrap() - 0.06).abs() < 1e-9);
+    // A wall-clock limit shorter than a step: status 2, the hint printed.
+    let c = tmp("own-c");
+    let o = run(&dam, &c, &["--max-wall-time", "1e-6"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("wall-clock limit") && err.contains("--restart"),
+        "{err}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(c.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["extra"]["status"], "stopped");
+    for d in [a, b, c] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

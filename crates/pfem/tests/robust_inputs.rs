@@ -443,6 +443,20 @@ fn a_courant_step_below_the_smallest_step_stops_the_run() {
         other => panic!("expected CourantStepTooSmall, got {other}"),
     }
     assert!(sim.time() < 0.02 && sim.steps() < 10, "{} s", sim.time());
+    // With the standard outputs, the failure leaves a summary that says
+    // so (session 39's review: a run that failed after hours left none).
+    let dir = std::env::temp_dir().join(format!("pfem-test-failed-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    let mut s = puddle("crawl");
+    s.settings.courant = 1e-300;
+    let mut sim = build(s).unwrap();
+    let mut out = StandardOutput::new(&dir, false, Vec::new(), true);
+    let err = sim.run(&mut [&mut out]).expect_err("the water falls");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["extra"]["status"], "failed");
+    assert_eq!(summary["extra"]["error"], err.to_string());
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// The bundled wave-paddle scene runs end to end through `pfem run`: the

@@ -110,6 +110,16 @@ pub enum OutputError {
         #[source]
         source: serde_json::Error,
     },
+    /// A restart's outputs cannot continue in this folder: it is not the
+    /// one the checkpoint's run wrote (a frame it lists is missing), or
+    /// that run wrote no frames and this one would.
+    #[error("cannot continue the run's outputs in {dir}: {why}")]
+    Resume {
+        /// The output folder.
+        dir: PathBuf,
+        /// What does not match.
+        why: String,
+    },
     /// Drawing or encoding a plot failed.
     #[error("cannot draw {path}: {reason}")]
     Plot {

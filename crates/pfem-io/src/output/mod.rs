@@ -65,7 +65,7 @@ pub use csv::{load_reference_csv, parse_reference_csv, CsvProbe, ParseError};
 pub use error::OutputError;
 #[cfg(feature = "plots")]
 pub use plot::{plot_series_png, PlotSeries, PlotSpec, SeriesStyle};
-pub use progress::Progress;
+pub use progress::{Progress, LOG_EVERY};
 pub use pvd::{PvdWriter, VtuSeries};
 pub use summary::{write_summary, RunSummary};
 pub use vtu::{encode_vtu, write_vtu, Encoding, Field, FieldData, Frame, FrameError};

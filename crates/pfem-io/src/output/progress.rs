@@ -47,12 +47,16 @@ fn new_bar() -> ProgressBar {
 const TICKS: u64 = 10_000;
 /// Shortest interval between two redraws of the message.
 const REDRAW: Duration = Duration::from_millis(100);
+/// Interval between two plain progress lines when stderr is not a terminal
+/// (a log file, a batch job).
+pub const LOG_EVERY: Duration = Duration::from_secs(30);
 
 /// Shows simulated time / end time, the time step and the estimated time
 /// left on stderr, as a bar that redraws in place.
 ///
-/// It draws nothing when `quiet` is set or stderr is not a terminal (CI,
-/// output piped to a file), so drivers can call it unconditionally:
+/// When stderr is not a terminal (a log file, a batch job, CI) it prints a
+/// plain line every [`LOG_EVERY`] of wall time instead; nothing when
+/// `quiet` is set. Drivers can call it unconditionally:
 ///
 /// ```
 /// use pfem_io::output::Progress;
@@ -73,32 +77,65 @@ pub struct Progress {
     last_message: Option<Instant>,
     /// Latest `(t, dt)`, shown by [`finish`](Self::finish).
     latest: (f64, f64),
+    /// Without a bar and not quiet: the start, the last line printed and
+    /// the interval between lines.
+    log: Option<(Instant, Instant, Duration)>,
 }
 
 impl Progress {
     /// A progress display for a run that ends at simulated time `end_time`
     /// (s); disabled when `quiet` or when stderr is not a terminal.
     pub fn new(end_time: f64, quiet: bool) -> Self {
-        let enabled = !quiet && std::io::stderr().is_terminal();
-        let bar = enabled.then(new_bar);
+        let terminal = std::io::stderr().is_terminal();
+        let mut p = Self::log_every(end_time, quiet || terminal, LOG_EVERY);
+        p.quiet = quiet;
+        if !quiet && terminal {
+            p.bar = Some(new_bar());
+        }
+        p
+    }
+
+    /// Plain progress lines every `interval` of wall time (none when
+    /// `quiet`), whatever stderr is.
+    pub fn log_every(end_time: f64, quiet: bool, interval: Duration) -> Self {
+        let now = Instant::now();
         Self {
-            bar,
+            bar: None,
             end_time,
             quiet,
             last_message: None,
             latest: (0.0, 0.0),
+            log: (!quiet).then_some((now, now, interval)),
         }
     }
 
-    /// Whether anything is drawn.
+    /// Whether a bar is drawn.
     pub fn is_enabled(&self) -> bool {
         self.bar.is_some()
+    }
+
+    /// Whether plain progress lines are printed (stderr not a terminal).
+    pub fn is_logging(&self) -> bool {
+        self.log.is_some()
     }
 
     /// Reports that the simulation reached time `t` (s) with a last step of
     /// `dt` (s). Cheap enough to call every step: the text is redrawn at
     /// most ten times a second.
     pub fn update(&mut self, t: f64, dt: f64) {
+        if let Some((start, last, every)) = self.log {
+            let now = Instant::now();
+            if now.duration_since(last) >= every {
+                self.log = Some((start, now, every));
+                let done = 100.0 * self.position(t) as f64 / TICKS as f64;
+                eprintln!(
+                    "[{:.0} s] {} ({done:.1} %)",
+                    now.duration_since(start).as_secs_f64(),
+                    self.message(t, dt)
+                );
+            }
+            return;
+        }
         let Some(bar) = &self.bar else { return };
         self.latest = (t, dt);
         bar.set_position(self.position(t));
@@ -151,6 +188,21 @@ impl Progress {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn without_a_terminal_lines_are_logged_unless_quiet() {
+        let mut p = Progress::log_every(1.0, false, Duration::ZERO);
+        assert!(p.is_logging() && !p.is_enabled());
+        p.update(0.5, 0.01);
+        assert!(p.log.unwrap().1 > p.log.unwrap().0, "a line was due");
+        let p = Progress::log_every(1.0, true, Duration::ZERO);
+        assert!(!p.is_logging());
+        // In a test, stderr is not a terminal: lines every LOG_EVERY.
+        if !std::io::stderr().is_terminal() {
+            assert!(Progress::new(1.0, false).is_logging());
+            assert!(!Progress::new(1.0, true).is_logging());
+        }
+    }
 
     #[test]
     fn quiet_is_disabled_and_positions_clamp() {

@@ -124,7 +124,7 @@ pub(crate) fn frame_index(file: &str, name: &str) -> Option<usize> {
     file.strip_prefix(name)
         .and_then(|r| r.strip_prefix('_'))
         .and_then(|r| r.strip_suffix(".vtu"))
-        .filter(|r| r.len() == 6 && r.bytes().all(|b| b.is_ascii_digit()))
+        .filter(|r| r.len() >= 6 && r.bytes().all(|b| b.is_ascii_digit()))
         .and_then(|r| r.parse().ok())
 }
 
@@ -163,6 +163,17 @@ impl VtuSeries {
         check_series_name(&dir, name)?;
         std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
         let kept = entries.len();
+        // The folder must be the run's own: every frame the checkpoint
+        // lists is in it (otherwise the frames removed below would be
+        // another run's).
+        if let Some((_, f)) = entries.iter().find(|(_, f)| !dir.join(f).is_file()) {
+            return Err(OutputError::Resume {
+                dir,
+                why: format!(
+                    "it does not hold `{f}`, a frame the checkpoint lists: restart into the folder the run wrote (--out)"
+                ),
+            });
+        }
         if let Ok(list) = std::fs::read_dir(&dir) {
             for e in list.flatten() {
                 let f = e.file_name();
@@ -276,5 +287,16 @@ mod tests {
         assert!(pvd.entries().is_empty());
         pvd.push(0.0, "c_000000.vtu").unwrap();
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Frames from the millionth on have seven digits and are frames of
+    /// the series all the same (removed by `--overwrite` and a resume).
+    #[test]
+    fn frame_numbers_of_six_digits_and_more_are_frames() {
+        assert_eq!(frame_index("run_000042.vtu", "run"), Some(42));
+        assert_eq!(frame_index("run_1000000.vtu", "run"), Some(1_000_000));
+        assert_eq!(frame_index("run_00042.vtu", "run"), None);
+        assert_eq!(frame_index("run_00004a.vtu", "run"), None);
+        assert_eq!(frame_index("other_000042.vtu", "run"), None);
     }
 }

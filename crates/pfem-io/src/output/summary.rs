@@ -26,7 +26,8 @@ pub struct RunSummary {
     pub scene: String,
     /// Spatial dimension (2 or 3).
     pub dimension: usize,
-    /// Number of particles at the start.
+    /// Number of particles when the summary was written (the run's end;
+    /// particles may come and go during it).
     pub particles: usize,
     /// Accepted time steps.
     pub steps: u64,
@@ -34,16 +35,21 @@ pub struct RunSummary {
     /// elements…).
     pub rejected_steps: u64,
     /// Simulated time reached (s).
+    #[serde(deserialize_with = "nan_from_null")]
     pub simulated_time: f64,
     /// Wall-clock time per stage (stage name → s), e.g. `"remesh"`,
     /// `"assembly"`, `"solve"`, `"output"`, `"total"`.
+    #[serde(deserialize_with = "nans_from_nulls")]
     pub wall_time_s: BTreeMap<String, f64>,
     /// Fluid volume at the start (m³; m² per metre of depth in 2D).
+    #[serde(deserialize_with = "nan_from_null")]
     pub fluid_volume_initial: f64,
     /// Fluid volume at the end (same unit).
+    #[serde(deserialize_with = "nan_from_null")]
     pub fluid_volume_final: f64,
     /// Volume gained (+) or lost (−) by cause (cause → m³), e.g.
     /// `"alpha_shape"`, `"particle_removal"`, `"incompressibility"`.
+    #[serde(deserialize_with = "nans_from_nulls")]
     pub volume_change_by_cause: BTreeMap<String, f64>,
     /// Any further figures (errors against references, fitted time shifts,
     /// solver statistics…).
@@ -62,8 +68,25 @@ impl RunSummary {
     }
 }
 
+/// A number written as `null` (NaN or ±∞, which JSON cannot express) is
+/// read back as NaN.
+fn nan_from_null<'de, De: serde::Deserializer<'de>>(d: De) -> Result<f64, De::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// [`nan_from_null`] for each value of a map.
+fn nans_from_nulls<'de, De: serde::Deserializer<'de>>(
+    d: De,
+) -> Result<BTreeMap<String, f64>, De::Error> {
+    Ok(BTreeMap::<String, Option<f64>>::deserialize(d)?
+        .into_iter()
+        .map(|(k, v)| (k, v.unwrap_or(f64::NAN)))
+        .collect())
+}
+
 /// Writes `summary` to `path` as pretty-printed JSON, atomically. Non-finite
-/// numbers (NaN, ±∞), which JSON cannot express, are written as `null`.
+/// numbers (NaN, ±∞), which JSON cannot express, are written as `null`, and
+/// read back as NaN.
 pub fn write_summary(path: impl AsRef<Path>, summary: &RunSummary) -> Result<(), OutputError> {
     let path = path.as_ref();
     let mut bytes = serde_json::to_vec_pretty(summary).map_err(|source| OutputError::Json {

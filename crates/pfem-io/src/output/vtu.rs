@@ -660,12 +660,14 @@ impl XmlWriter {
 }
 
 /// Appends `s` to `out` with the five XML special characters escaped, and
-/// the control characters XML 1.0 forbids even as references (all below
-/// U+0020 but tab, line feed and carriage return) replaced by U+FFFD.
+/// the characters XML 1.0 forbids even as references (the controls below
+/// U+0020 but tab, line feed and carriage return; U+FFFE and U+FFFF)
+/// replaced by U+FFFD.
 pub(crate) fn escape_xml_into(s: &str, out: &mut String) {
     for c in s.chars() {
         match c {
             c if c < ' ' && !matches!(c, '\t' | '\n' | '\r') => out.push('\u{FFFD}'),
+            '\u{FFFE}' | '\u{FFFF}' => out.push('\u{FFFD}'),
             '&' => out.push_str("&amp;"),
             '<' => out.push_str("&lt;"),
             '>' => out.push_str("&gt;"),
@@ -685,8 +687,8 @@ mod tests {
     #[test]
     fn names_with_control_characters_stay_well_formed_xml() {
         let mut out = String::new();
-        escape_xml_into("a\u{1}b\tc<&", &mut out);
-        assert_eq!(out, "a\u{FFFD}b\tc&lt;&amp;");
+        escape_xml_into("a\u{1}b\tc<&\u{FFFF}", &mut out);
+        assert_eq!(out, "a\u{FFFD}b\tc&lt;&amp;\u{FFFD}");
     }
 
     /// A NaN written as text made a file ParaView could not open; it is

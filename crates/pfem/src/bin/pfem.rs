@@ -10,9 +10,10 @@
 //! `run` writes the same outputs as the bundled examples into `DIR`
 //! (default `out/NAME`): `NAME.pvd` + `NAME_*.vtu` frames, `probes.csv` and
 //! `summary.json`, and `checkpoint.bin` when asked or interrupted. Errors
-//! print a message and exit with status 1; a run interrupted by Ctrl-C (or
+//! print a message and exit with status 1 (a run that fails mid-way writes
+//! `summary.json` marked failed first); a run interrupted by Ctrl-C (or
 //! SIGTERM) writes its outputs and a final checkpoint and exits with status
-//! 130.
+//! 130; one stopped by `--max-wall-time` does the same with status 2.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -32,49 +33,35 @@ pfem: Particle Finite Element Method for fluid-structure interaction
 
 Usage:
   pfem run FILE [--out DIR] [--spacing H] [--end-time T] [--quiet] [--no-vtu]
-           [--checkpoint-every T] [--restart CHECKPOINT]
-  pfem check FILE [--spacing H] [--end-time T]
+           [--checkpoint-every T] [--restart CHECKPOINT] [OPTIONS]
+  pfem check FILE [--spacing H] [--end-time T] [OPTIONS]
   pfem --help
 
 Commands:
-  run     run the scene file FILE (TOML) and write into DIR (default out/NAME):
+  run     run the scene file FILE (TOML) and write into DIR (default out/NAME,
+          NAME the scene's name; with --restart, the checkpoint's folder):
           NAME.pvd + NAME_*.vtu frames, probes.csv and summary.json
           (and checkpoint.bin, see --checkpoint-every); Ctrl-C stops after
           the current step, writes the outputs, a checkpoint and a
-          summary marked interrupted, and exits with status 130
+          summary marked interrupted, and exits with status 130; a run
+          stopped by --max-wall-time does the same and exits with status 2;
+          a run that fails writes summary.json marked failed and exits
+          with status 1
   check   read FILE and validate its scene; runs no step, writes nothing
 
-Options:
-  --out DIR       output directory (default out/NAME, NAME the scene's name)
-  --spacing H     particle spacing of every body (m), overriding the file
-  --end-time T    simulated time (s), overriding the file
-  --quiet, -q     no progress bar
-  --no-vtu        no VTU frames (probes.csv and summary.json are still written)
-  --overwrite     replace a previous run's files in a non-empty DIR (refused
-                  without it)
+Options of `pfem run`:
   --checkpoint-every T
-                  write DIR/checkpoint.bin every T seconds of simulated time
-                  and at the end (atomically; the last one is kept)
-  --restart CHECKPOINT
-                  continue the run that wrote CHECKPOINT (same FILE and
-                  options, other ones refused; DIR its output folder): the result is the
-                  uninterrupted run's, bit for bit. With a later
-                  --end-time, a finished run goes on
-  --scheme S      bossak (default, α_B = -0.3), newmark (the paper's
-                  undamped trapezoidal rule) or euler (backward Euler)
-  --picard-tol X  Picard tolerance (default 1e-6)
-  --solver S      direct (default: Cholesky, LU fallback), lu, cholesky or cg
-  --volume-correction B
-                  fraction of the fluid-volume error restored per step,
-                  in [0, 1] (default 1; 0 = off, as in the paper)
-  --memory-budget GB
-                  refuse scenes estimated above GB (default 80 % of memory)
-  --max-wall-time S
-                  stop the run after S seconds of wall time, keeping outputs
-  --threads N     worker threads (default one per core)
-  --version, -V   the version
-  --help, -h      this help
+                        write DIR/checkpoint.bin every T seconds of simulated time
+                        and at the end (atomically; the last one is kept)
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE and
+                        options, other ones refused; DIR its output folder, by
+                        default the checkpoint's): the result is the uninterrupted
+                        run's, bit for bit. With a later --end-time, a finished
+                        run goes on
+";
 
+/// The end of the help, after the options shared with the examples.
+const HELP_END: &str = "
 Scene files: see examples/scenes/*.toml and the pfem::scene_file docs.
 Units are SI (m, s, kg, Pa).
 ";
@@ -97,6 +84,7 @@ fn main() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) if e == INTERRUPTED => ExitCode::from(130),
+        Ok(Err(e)) if e == STOPPED => ExitCode::from(2),
         Ok(Err(e)) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
@@ -136,7 +124,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
         return Err(format!("no command given\n\n{HELP}"));
     }
     if args[0] == "help" || pfem::cli::asks(&args, ["--help", "-h"]) {
-        print!("{HELP}");
+        print!("{HELP}\n{}\n{HELP_END}", pfem::cli::USAGE);
         return Ok(());
     }
     if pfem::cli::asks(&args, ["--version", "-V"]) {
@@ -144,6 +132,11 @@ fn run(args: Vec<String>) -> Result<(), String> {
         return Ok(());
     }
     let command = args[0].as_str();
+    if !matches!(command, "run" | "check") {
+        return Err(format!(
+            "unknown command `{command}` (run, check; see pfem --help)"
+        ));
+    }
     let parsed = Args::parse(args[1..].iter().cloned()).map_err(|e| e.to_string())?;
     parsed
         .reject_unknown(&["checkpoint-every", "restart"])
@@ -173,10 +166,11 @@ fn run(args: Vec<String>) -> Result<(), String> {
         "check" => {
             if parsed.out.is_some()
                 || parsed.no_vtu
+                || parsed.overwrite
                 || checkpoint_every.is_some()
                 || parsed.options.contains_key("restart")
             {
-                return Err("`pfem check` writes nothing: --out, --no-vtu, --checkpoint-every and --restart do not apply".into());
+                return Err("`pfem check` writes nothing: --out, --no-vtu, --overwrite, --checkpoint-every and --restart do not apply".into());
             }
             // The run options are checked as `run` would.
             parsed.validate_options().map_err(|e| e.to_string())?;
@@ -294,10 +288,17 @@ fn simulate<const D: usize>(
 where
     Const<D>: Dim,
 {
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(&scene.name));
+    // A restart continues in its checkpoint's folder unless told otherwise.
+    let out = args.out.clone().unwrap_or_else(|| {
+        match args
+            .options
+            .get("restart")
+            .and_then(|f| Path::new(f).parent())
+        {
+            Some(dir) => dir.to_path_buf(),
+            None => Path::new("out").join(&scene.name),
+        }
+    });
     let name = scene.name.clone();
     let restart = match args.options.get("restart") {
         Some(f) => {
@@ -332,19 +333,29 @@ where
     );
     sim.run(&mut [&mut output]).map_err(|e| e.to_string())?;
     output.report(&sim).map_err(|e| e.to_string())?;
-    if sim.stopped() == Some(pfem::hooks::Interrupt::REASON) {
+    if let Some(reason) = sim.stopped() {
+        // The run did not reach its end time: say how to go on, and end
+        // with a status a script sees.
         eprintln!(
-            "interrupted at t = {} s; continue with: --restart {}",
+            "{reason} at t = {} s; continue with: pfem run FILE --out {} --restart {}",
             sim.time(),
+            out.display(),
             output.checkpoint_path().display()
         );
-        return Err(INTERRUPTED.into());
+        if reason == pfem::hooks::Interrupt::REASON {
+            return Err(INTERRUPTED.into());
+        }
+        return Err(STOPPED.into());
     }
     Ok(())
 }
 
 /// The error text of an interrupted run (exit status 130).
 const INTERRUPTED: &str = "interrupted";
+
+/// The error text of a run a hook stopped before its end time, such as
+/// `--max-wall-time` (exit status 2).
+const STOPPED: &str = "stopped";
 
 /// Ctrl-C and SIGTERM set `flag`: the run stops after the current step and
 /// writes its outputs and a checkpoint. A second signal ends the process at
