@@ -25,6 +25,9 @@ pub use block::{
 };
 pub use error::{AssemblyError, SolveError};
 pub use export::MatrixExport;
+/// The sparse-matrix crate of [`LinearSolver::solve`]'s signature, so that a
+/// user's solver names the same version.
+pub use faer;
 pub use faer::Par;
 pub use kernels::VolumetricTreatment;
 pub use solver::{

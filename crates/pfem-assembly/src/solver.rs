@@ -27,6 +27,17 @@ pub struct SolveReport {
     pub iterations: usize,
 }
 
+impl SolveReport {
+    /// A report of `residual` (relative) after `iterations` (1 for a direct
+    /// solver): what a user's [`LinearSolver`] returns.
+    pub fn new(residual: f64, iterations: usize) -> Self {
+        Self {
+            residual,
+            iterations,
+        }
+    }
+}
+
 /// Work a solver has done: what the cost of a run is made of.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct SolverWork {
@@ -67,10 +78,18 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
     /// A short name for reports.
     fn name(&self) -> &str;
 
-    /// Solves `a x = b`. `generation` changes exactly when the sparsity
+    /// Solves `a x = b`. `a` is the whole system (constraints eliminated),
+    /// symmetric positive definite for the paper's system and stored with
+    /// both triangles, in compressed columns (`faer`'s, re-exported as
+    /// [`crate::faer`]). `generation` changes exactly when the sparsity
     /// pattern of `a` changes, so a solver may keep its symbolic analysis
     /// while it stays the same. `x` holds an initial guess on entry (used by
     /// iterative solvers) and the solution on return.
+    ///
+    /// Return `Err` when the answer is not good to the solver's tolerance:
+    /// the integrator takes the reported residual as given, and an `Ok`
+    /// with a poor `x` only shows later, as a Picard loop that does not
+    /// converge.
     fn solve(
         &mut self,
         a: SparseColMatRef<'_, usize, f64>,
@@ -128,9 +147,13 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
     }
 
     /// Solves `(A_v + Cᵀ C) x = f` given in split form. `x` holds an
-    /// initial guess on entry. Only called when
-    /// [`LinearSolver::wants_split`] said so; the default forms the
-    /// whole matrix and calls [`LinearSolver::solve`].
+    /// initial guess on entry. Called when [`LinearSolver::wants_split`]
+    /// said so, and whenever the pressure stabilisation is on (its system
+    /// exists only in split form). The default forms the whole matrix and
+    /// calls [`LinearSolver::solve`]; with the stabilisation it solves the
+    /// saddle-point system itself (`block::solve_saddle`, a direct
+    /// factorisation every call) and `solve` is not used: a solver meant
+    /// for stabilised systems overrides this.
     fn solve_split(
         &mut self,
         sys: &SplitSystem<'_>,

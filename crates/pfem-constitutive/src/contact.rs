@@ -89,6 +89,18 @@ where
 }
 
 impl ContactPenalty {
+    /// A penalty of normal stiffness `K_c` and shear stiffness `G_c` (Pa),
+    /// damping `c` and rounded onset `δ` (the fields' docs); a struct
+    /// literal breaks when a field is added.
+    pub fn new(normal_stiffness: f64, shear_stiffness: f64, damping: f64, onset: f64) -> Self {
+        Self {
+            normal_stiffness,
+            shear_stiffness,
+            damping,
+            onset,
+        }
+    }
+
     fn state<const D: usize>(&self, kin: &Kinematics<D>, h: &History<D>) -> State<D>
     where
         Const<D>: Dim,

@@ -515,12 +515,12 @@ where
                 contact_material[b] = match made.iter().find(|m| m.0 == k) {
                     Some(m) => m.1,
                     None => {
-                        materials.push(Box::new(pfem_constitutive::ContactPenalty {
-                            normal_stiffness: k,
-                            shear_stiffness: k,
-                            damping: contact_damping,
-                            onset: contact_onset,
-                        }));
+                        materials.push(Box::new(pfem_constitutive::ContactPenalty::new(
+                            k,
+                            k,
+                            contact_damping,
+                            contact_onset,
+                        )));
                         let index = (materials.len() - 1) as u16;
                         made.push((k, index));
                         index

@@ -63,7 +63,8 @@ pub use pfem_time as time;
 pub use scene::{Body, Clamp, Geometry, RunSettings, Scene, WallMotion};
 pub use simulation::{Observer, Options, Simulation, StageStats, Stages, VolumeLedger, Work};
 
-/// The names most programs need.
+/// The names most programs need, and those a user's material, solver or
+/// hook is written with.
 pub mod prelude {
     pub use crate::hooks::{Hook, HookContext};
     pub use crate::observe::{Probe, StandardOutput};
@@ -71,8 +72,12 @@ pub mod prelude {
     pub use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
     pub use crate::simulation::{Observer, Options, Simulation};
     pub use crate::{RunError, SceneError};
+    pub use pfem_assembly::{LinearSolver, SolveError, SolveReport};
+    pub use pfem_constitutive::{History, Kinematics, Unified};
     pub use pfem_constitutive::{Hypoelastic, Material, MaterialKind, Newtonian};
+    pub use pfem_core::{Const, Dim, Tensor};
     pub use pfem_core::{ParticleKind, Point, Vector};
+    pub use pfem_driver::particles::Particle;
     pub use pfem_geometry::{Delaunay2, Delaunay3, Tessellator};
     pub use pfem_io::Loads;
     pub use pfem_time::{Scheme, StepParams};

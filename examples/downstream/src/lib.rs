@@ -260,6 +260,42 @@ where
         }
         Ok(())
     }
+
+    // A hook that keeps a record saves it in checkpoints, so that a
+    // restarted run goes on with it (its name finds its state again).
+    fn save_state(&self, out: &mut pfem::checkpoint::Encoder) {
+        if let Ok(r) = self.record.lock() {
+            out.f64(r.largest);
+            out.u64(r.yielded as u64);
+            out.u64(r.history.len() as u64);
+            for &(t, v) in &r.history {
+                out.f64(t);
+                out.f64(v);
+            }
+        }
+    }
+
+    fn restore_state(
+        &mut self,
+        from: &mut pfem::checkpoint::Decoder<'_>,
+    ) -> Result<(), pfem::checkpoint::CheckpointError> {
+        let largest = from.f64()?;
+        let yielded = from.len(0)?;
+        let n = from.len(16)?;
+        let mut history = Vec::with_capacity(n);
+        for _ in 0..n {
+            history.push((from.f64()?, from.f64()?));
+        }
+        let mut r = self.record.lock().map_err(|_| {
+            pfem::checkpoint::CheckpointError::Corrupt("the record's lock is poisoned".into())
+        })?;
+        *r = PlasticityRecord {
+            largest,
+            yielded,
+            history,
+        };
+        Ok(())
+    }
 }
 
 /// Tip deflection (m) of a clamped 0.35 m × 0.02 m cantilever under a

@@ -180,3 +180,28 @@ fn a_cantilever_past_yield_deflects_more_than_an_elastic_one() {
         }
     }
 }
+
+/// The monitor's record goes into checkpoints and comes back: a restarted
+/// run goes on with it.
+#[test]
+fn the_monitor_record_survives_a_checkpoint() {
+    use pfem::checkpoint::{Decoder, Encoder};
+    use pfem::hooks::Hook;
+    use pfem_downstream_example::{PlasticityMonitor, PlasticityRecord};
+    let a = PlasticityMonitor::new(0.5);
+    *a.record().lock().unwrap() = PlasticityRecord {
+        largest: 0.25,
+        yielded: 7,
+        history: vec![(0.5, 0.1), (1.0, 0.25)],
+    };
+    let mut e = Encoder::new();
+    Hook::<2>::save_state(&a, &mut e);
+    let bytes = e.finish();
+    let mut b = PlasticityMonitor::new(0.5);
+    let mut d = Decoder::new(&bytes);
+    Hook::<2>::restore_state(&mut b, &mut d).unwrap();
+    d.end().unwrap();
+    let ra = a.record().lock().unwrap().clone();
+    let rb = b.record().lock().unwrap().clone();
+    assert_eq!(ra, rb);
+}

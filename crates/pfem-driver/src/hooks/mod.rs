@@ -78,7 +78,11 @@ pub trait Hook<const D: usize>: Send
 where
     Const<D>: Dim,
 {
-    /// Name, for the volume ledger and messages.
+    /// Name, for the volume ledger and messages. It is also the key that
+    /// gives a hook its saved state on [`crate::Simulation::restore`] (the
+    /// k-th hook of a name takes the k-th saved state of that name): keep
+    /// it stable from run to run, and distinct between hooks that keep
+    /// state.
     fn name(&self) -> &str;
 
     /// Whether the fluid volume this hook's changes add or remove is fluid
