@@ -30,6 +30,9 @@
 //! (`a_solid_ball_does_not_pass_through_a_floor`). Solid cylinders
 //! (`Geometry::Cylinder`) are still lattices.
 //!
+//! The whole energy (kinetic and strain) is not kept: a known gap, the
+//! last test below.
+//!
 //! `cargo test --release --test suite hertz_3d:: -- --ignored --nocapture` (2 min)
 
 use pfem::constitutive::Hypoelastic;
@@ -195,10 +198,6 @@ fn an_elastic_ball_bounces_off_a_floor_for_hertz_s_contact_time() {
         b.hertz
     );
     assert!(b.deepest > 0.95, "closed the gap to {} h", b.deepest);
-    println!(
-        "kinetic and strain energy after over before: {:.4}",
-        b.energy
-    );
     // The rigid motion's kinetic energy after the bounce against before.
     let energy = b.vy.powi(2);
     assert!(
@@ -220,4 +219,34 @@ fn a_solid_ball_does_not_pass_through_a_floor() {
     assert!(b.duration.is_some(), "the ball did not leave the floor");
     assert!(b.vy > 0.5, "rebound {} m/s", b.vy);
     assert!(b.deepest > 0.5, "the ball came to {} h", b.deepest);
+}
+
+/// The ball's whole energy, kinetic (every particle's) and strain, after
+/// the bounce against before: known gap (session 39). The test above
+/// bounds the rigid motion's kinetic energy (×1.035, the centre of mass's
+/// velocity); the whole energy is ×1.269 at the test's step (2·10⁻⁴ s),
+/// the ball leaving in strong vibration. A ledger per step (a scratch
+/// driver adding the contact layers' stored energy, `V* ∫p dx`) shows it
+/// falling to 0.937 of the start while the ball is pressed and rising to
+/// 1.227 as it leaves, in jumps of up to 6 % a step, also once the contact
+/// layer holds under 1 % of the energy. With the penalty's kink instead
+/// of its rounded onset (`contact_onset(0)`) it is ×1.049; at the default
+/// stiffness (30 times less) ×1.019; with Bossak's scheme ×1.017 (kink
+/// ×1.020); at a step of 10⁻⁴ s the undamped run stops at t = 0.019 s (kink:
+/// 0.012 s) with an inverted element, while Bossak's gives ×1.018. A free
+/// ball vibrating without contact keeps 0.95 of its energy over the same
+/// time. Carrying the closure of an element that the next tessellation
+/// forms on the same particles (so that its pressure is a function of its
+/// volume alone) did not cure it (the run stopped at t = 0.017 s). The 2D
+/// disk of `tests/contact.rs` keeps its energy to +0.18 %.
+/// `cargo test --release --test suite hertz_3d:: -- --ignored --nocapture`
+#[test]
+#[ignore = "known gap: under the undamped trapezoidal rule the 3D ball leaves with 27 % more kinetic and strain energy (bound 5 %); Bossak +1.7 %"]
+fn an_elastic_ball_leaves_with_the_energy_it_came_with() {
+    let b = throw(0.00625, 0.05, Some(4.05e7));
+    assert!(
+        (b.energy - 1.0).abs() < 0.05,
+        "kinetic and strain energy after over before: {}",
+        b.energy
+    );
 }
