@@ -6,7 +6,7 @@
 //!
 //! One step ([`Integrator::try_step`]) is the paper's §6 loop:
 //!
-//! 1. `x⁽⁰⁾ = Xⁿ`, `V⁽⁰⁾ = Vⁿ`;
+//! 1. `x⁽⁰⁾ = Xⁿ`, `V⁽⁰⁾` the velocity for which the scheme's position is `Xⁿ`;
 //! 2. while not converged: assemble on `x⁽ⁱ⁾` and solve eq. 60 for
 //!    `V⁽ⁱ⁺¹⁾`; move the particles, `x⁽ⁱ⁺¹⁾ = Xⁿ + Δt Vⁿ + Δt² [(½ − β) Aⁿ + β Aⁿ⁺¹]`
 //!    (eq. 61 with Newmark's eq. 47; `Xⁿ + Δt (Vⁿ + V⁽ⁱ⁺¹⁾)/2` for the

@@ -29,6 +29,12 @@
 pub mod cli;
 pub mod scene_file;
 
+/// README.md's Rust snippets, compiled and run as doctests (so that the
+/// README cannot drift from the API).
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct ReadmeDoctests;
+
 pub use pfem_cases::{cases, cases3d, exact, fidelity};
 pub use pfem_driver::{checkpoint, elements, error, particles, simulation};
 
