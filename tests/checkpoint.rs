@@ -658,7 +658,12 @@ impl Material<2> for Capped {
     ) {
         self.inner.update_history(kin, history);
         for v in history.stress.iter_mut() {
-            *v = v.clamp(-self.cap, self.cap);
+            // A NaN cap stands for a user's return map that fails.
+            *v = if self.cap.is_nan() {
+                f64::NAN
+            } else {
+                v.clamp(-self.cap, self.cap)
+            };
         }
     }
     fn internal_variables(&self) -> &[&str] {
@@ -710,4 +715,26 @@ fn a_restart_under_a_custom_material_changed_beyond_the_probes_is_refused() {
         }
         other => panic!("expected InvalidMaterial, got {:?}", other.map(|_| ())),
     }
+}
+
+/// A user's material whose `update_history` returns a non-number stops the
+/// run at once with a typed error naming it, and the state is left as it
+/// was (session 39's review: the NaN stress was written, the next step's
+/// assembly refused it as a non-finite system, and the step was halved
+/// two dozen times to a "step too small" booked as inverted elements).
+#[test]
+fn a_material_update_that_returns_nan_stops_the_run_with_a_typed_error() {
+    let mut sim = capped_gate(f64::NAN, &[]).unwrap();
+    let before = sim.elements().solid_history().to_vec();
+    let err = sim.step().unwrap_err();
+    assert!(
+        matches!(
+            &err,
+            RunError::Step(pfem::time::StepError::NonFinite { .. })
+        ),
+        "{err}"
+    );
+    assert!(err.to_string().contains("update_history"), "{err}");
+    assert_eq!(sim.steps(), 0);
+    assert_eq!(sim.elements().solid_history(), &before[..]);
 }

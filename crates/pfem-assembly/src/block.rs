@@ -562,17 +562,24 @@ fn solve_saddle_with(
         })?;
     let mut r = vec![0.0; b.len()];
     let mut residual = f64::INFINITY;
+    // `y` before the last correction, restored when the correction made
+    // the residual worse (the residual reported is `y`'s).
+    let mut before = y.clone();
     for pass in 0..3 {
         k.spmv(&y, &mut r);
         r.iter_mut().zip(&b).for_each(|(r, b)| *r = b - *r);
         let new = rel(dot(&r, &r).sqrt());
         if new.is_nan() || new >= residual {
+            if pass > 0 {
+                std::mem::swap(&mut y, &mut before);
+            }
             break;
         }
         residual = new;
         if residual <= 1e-13 || pass == 2 {
             break;
         }
+        before.copy_from_slice(&y);
         factor
             .solve_in_place(&mut r)
             .map_err(|detail| SolveError::Factorization {
@@ -583,6 +590,24 @@ fn solve_saddle_with(
     }
     if let Some(index) = y.iter().position(|v| !v.is_finite()) {
         return Err(SolveError::NonFinite { index });
+    }
+    // A direct solve's acceptance (`LinearSolver::solve`'s contract): its
+    // relative residual below `DIRECT_RESIDUAL_LIMIT`, or its normwise
+    // backward error `‖r‖ / (‖K‖_F ‖y‖ + ‖b‖)` below
+    // `DIRECT_BACKWARD_ERROR_LIMIT` (a small `b` beside `K y`'s terms).
+    if residual.is_nan() || residual > crate::solver::DIRECT_RESIDUAL_LIMIT {
+        k.spmv(&y, &mut r);
+        r.iter_mut().zip(&b).for_each(|(r, b)| *r = b - *r);
+        let nk = dot(&k.val, &k.val).sqrt();
+        let den = nk * dot(&y, &y).sqrt() + den;
+        let backward = dot(&r, &r).sqrt() / den;
+        if backward.is_nan() || backward > crate::solver::DIRECT_BACKWARD_ERROR_LIMIT {
+            return Err(SolveError::Inaccurate {
+                solver: SADDLE,
+                residual,
+                limit: crate::solver::DIRECT_RESIDUAL_LIMIT,
+            });
+        }
     }
     x.copy_from_slice(&y[..n]);
     Ok(SolveReport {

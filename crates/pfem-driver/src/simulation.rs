@@ -456,6 +456,15 @@ where
             value: e.value,
             range: e.range,
         })?;
+        // A step below `end_time · 2⁻⁵⁰` (four units in the last place of
+        // the end time) may not move the clock: the run would not end.
+        if params.min_dt < scene.settings.end_time * MIN_DT_OF_END_TIME {
+            return Err(SceneError::OutOfRange {
+                setting: "min_dt",
+                value: params.min_dt,
+                range: "at least end_time · 2⁻⁵⁰ (a smaller step may not advance the clock)",
+            });
+        }
         scene.validate_within(options.memory_budget)?;
         // The scene's pressure stabilisation, unless the program set one.
         let mut params = params;
@@ -1258,6 +1267,13 @@ where
                 reason: "must be positive and finite",
             });
         }
+        if self.controller.dt_min < t * MIN_DT_OF_END_TIME {
+            return Err(RunError::InvalidSetting {
+                name: "end_time",
+                value: t,
+                reason: "must be at most 2⁵⁰ times the smallest step (StepParams::min_dt): a step may not advance the clock",
+            });
+        }
         self.end_time = t;
         Ok(())
     }
@@ -1818,6 +1834,10 @@ where
     body_force: bool,
     hooks: Vec<Vec<u8>>,
 }
+
+/// The smallest `min_dt` over the end time: `2⁻⁵⁰`, four units in the
+/// last place, so that every step moves the clock.
+const MIN_DT_OF_END_TIME: f64 = 1.0 / (1u64 << 50) as f64;
 
 /// What a checkpoint records of a material to recognise it: its name, kind
 /// (0 fluid, 1 solid), density and wave speed (which moves with its bulk

@@ -577,6 +577,39 @@ pub enum StepError {
         /// What is wrong.
         what: String,
     },
+    /// The converged step's state is not finite: a material's update
+    /// (`Material::update_history`, `Material::update_pressure`) or the
+    /// stabilised pressure increments returned a non-number. Not retried
+    /// with a smaller step: the state would have carried it on.
+    #[error("the step's state is not finite at t = {time} s, dt = {dt:e} s: {what}")]
+    NonFinite {
+        /// Time at the start of the step (s).
+        time: f64,
+        /// Step (s).
+        dt: f64,
+        /// What is not finite.
+        what: String,
+    },
+}
+
+impl StepError {
+    /// Whether a smaller step may cure it (an inverted element, a Picard
+    /// loop or a solve that did not converge, a matrix that is not finite
+    /// at this step's kinematics); the others (invalid input, a mesh that
+    /// names a material that does not exist, a system of the wrong shape,
+    /// a non-finite state) are returned at once.
+    pub fn is_retryable(&self) -> bool {
+        use pfem_assembly::{AssemblyError as A, SolveError as S};
+        match self {
+            StepError::InvalidInput { .. } | StepError::NonFinite { .. } => false,
+            StepError::Assembly { source, .. } => !matches!(source, A::MeshMismatch { .. }),
+            StepError::Solve { source, .. } => !matches!(
+                source,
+                S::DimensionMismatch { .. } | S::InvalidSystem { .. }
+            ),
+            _ => true,
+        }
+    }
 }
 
 /// What a successful step reports.
@@ -781,11 +814,14 @@ where
                     rep.rejected_seconds = rejected_seconds;
                     return Ok(rep);
                 }
-                Err(e @ StepError::InvalidInput { .. }) => return Err(e),
+                Err(e) if !e.is_retryable() => return Err(e),
                 Err(e) => {
                     rejected_seconds += t0.elapsed().as_secs_f64();
                     match &e {
-                        StepError::Assembly { .. } => inverted += 1,
+                        StepError::Assembly {
+                            source: pfem_assembly::AssemblyError::InvertedElement { .. },
+                            ..
+                        } => inverted += 1,
                         StepError::PicardDiverged { .. } => picard += 1,
                         _ => {}
                     }
@@ -1182,25 +1218,54 @@ where
                 new_history.push((e, h));
             }
         }
-        for (e, h) in new_history {
-            history[e] = h;
+        // A material's update or the stabilised increments may return a
+        // non-number: refused before anything is written (the state, its
+        // frames and checkpoints would carry it on).
+        let finite_history = |h: &History<D>| {
+            h.stress.iter().all(|v| v.is_finite())
+                && h.stress_zz.is_finite()
+                && h.pressure.is_finite()
+                && h.internal.iter().all(|v| v.is_finite())
+        };
+        if let Some((e, _)) = new_history.iter().find(|(_, h)| !finite_history(h)) {
+            return Err(StepError::NonFinite {
+                time,
+                dt,
+                what: format!("element {e}'s stress or internal variables after `update_history`"),
+            });
         }
         // Fluid pressure on nodes (eq. 62, or its stabilised form).
-        let mut touched = vec![false; n];
+        let mut new_pressure: Vec<(usize, f64)> = Vec::new();
         if stabilised_increments {
-            for &(p, dp) in &increments {
-                state.pressure[p as usize] += dp;
-                touched[p as usize] = true;
-            }
+            new_pressure.extend(
+                increments
+                    .iter()
+                    .map(|&(p, dp)| (p as usize, state.pressure[p as usize] + dp)),
+            );
         } else {
             self.assembler
                 .nodal_volumetric_rates(&self.v_it, &mut self.rates);
             for r in &self.rates {
                 let p = r.particle as usize;
                 let mat = &input.materials[r.material as usize];
-                state.pressure[p] = mat.update_pressure(state.pressure[p], r.rate, dt); // eq. 62
-                touched[p] = true;
+                let value = mat.update_pressure(state.pressure[p], r.rate, dt); // eq. 62
+                new_pressure.push((p, value));
             }
+        }
+        if let Some(&(p, _)) = new_pressure.iter().find(|(_, v)| !v.is_finite()) {
+            return Err(StepError::NonFinite {
+                time,
+                dt,
+                what: format!("particle {p}'s pressure after `update_pressure`"),
+            });
+        }
+        for (e, h) in new_history {
+            history[e] = h;
+        }
+        let mut touched = vec![false; n];
+        for (p, value) in new_pressure {
+            state.pressure[p] = value;
+            touched[p] = true;
         }
         for p in 0..n {
             if !touched[p] && self.assembler.system_node(p).is_none() {

@@ -706,7 +706,7 @@ fn plane_stress_is_a_2d_option_of_scene_files() {
 #[test]
 fn bad_step_params_are_refused_up_front() {
     let d = StepParams::default();
-    let cases: [(StepParams, &str); 8] = [
+    let cases: [(StepParams, &str); 9] = [
         (
             StepParams {
                 picard_tolerance: 0.0,
@@ -729,6 +729,9 @@ fn bad_step_params_are_refused_up_front() {
             "max_picard_iterations",
         ),
         (StepParams { min_dt: -1e-9, ..d }, "min_dt"),
+        // Below the end time's (0.02 s) 2⁻⁵⁰: a step may not move the clock
+        // (session 39's review: with 1e-15 at t ≥ 8 s a run could spin).
+        (StepParams { min_dt: 1e-18, ..d }, "min_dt"),
         (
             StepParams {
                 velocity_floor: f64::NAN,
@@ -766,6 +769,11 @@ fn bad_step_params_are_refused_up_front() {
         assert!(err.contains(setting), "{setting}: {err}");
     }
     assert!(Simulation::new(puddle("p"), Box::new(Delaunay2::default()), d).is_ok());
+    // The same bound when the end time moves later.
+    let mut sim = Simulation::new(puddle("p"), Box::new(Delaunay2::default()), d).unwrap();
+    assert!(sim.set_end_time(1e5).is_ok());
+    let err = sim.set_end_time(1e9).unwrap_err().to_string();
+    assert!(err.contains("end_time"), "{err}");
 }
 
 /// Runs `f` on a thread and fails the test if it takes more than `secs`

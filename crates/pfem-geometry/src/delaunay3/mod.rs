@@ -564,6 +564,14 @@ impl Workspace {
             } else if let Some(t) = self.free.pop() {
                 t
             } else {
+                // A slot index is packed with its face in 32 bits (`pack`,
+                // `t << 2`): 2³⁰ slots at most.
+                if self.tets.len() >= 1 << 30 {
+                    return Err(GeometryError::TooManyPoints {
+                        count: self.pts.len(),
+                        max: MAX_POINTS,
+                    });
+                }
                 self.tets.push(Tet::default());
                 self.mark.push(0);
                 (self.tets.len() - 1) as u32
