@@ -732,3 +732,68 @@ fn an_inflow_refuses_non_finite_or_huge_faces() {
         assert!(err.contains("finite") || err.contains("layer"), "{err}");
     }
 }
+
+/// An inflow releases only the particles it drove: a constraint another
+/// hook put on its body's particles (a slip plane's component) stays
+/// (session 39's review: every constrained particle of the body outside
+/// the drive zone was released, so a slip plane fixed before it was lost
+/// for the solve).
+#[test]
+fn an_inflow_leaves_other_hooks_constraints_alone() {
+    let h = 0.02;
+    let scene = Scene::<2>::new("inflow_and_slip")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.02,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.4, -h, 1.0, 0.0), h, WallMotion::Fixed)
+        .wall("end", boxed(1.0, h, 1.0 + h, 0.6), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(-0.3, h, 0.98, 0.1),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    let water = sim.body_particles("water").unwrap();
+    // A water particle far from the inflow's face: its vertical velocity
+    // is fixed by a hook that runs before the inflow's.
+    let far = *water
+        .iter()
+        .max_by(|&&a, &&b| {
+            sim.particles().x()[a]
+                .x
+                .total_cmp(&sim.particles().x()[b].x)
+        })
+        .unwrap();
+    sim.add_hook(Box::new(FnHook::new("slip").before_solve(
+        move |ctx: &mut HookContext<'_, 2>| {
+            ctx.particles_mut()
+                .constraints_mut()
+                .fix_component(far, 1, 0.0);
+            Ok(())
+        },
+    )));
+    let inflow = Inflow::new(
+        "water",
+        Point::<2>::new(-0.3, h),
+        Point::<2>::new(-0.3, 0.1 - h),
+        Vector::<2>::new(0.5, 0.0),
+        h,
+        2.0 * h,
+    )
+    .unwrap();
+    sim.add_hook(Box::new(inflow));
+    sim.step().unwrap();
+    // (No particle was inserted yet: the index still names the same one.)
+    assert_eq!(sim.particles().constraints().mask[far], 0b10);
+    assert_eq!(sim.particles().v()[far].y, 0.0);
+    // The inflow's own drive is released as its particles leave the zone.
+    let driven = (0..sim.particles().len())
+        .filter(|&i| sim.particles().constraints().mask[i] == 0b11)
+        .count();
+    assert!(driven > 0);
+}

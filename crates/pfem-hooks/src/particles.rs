@@ -287,6 +287,7 @@ where
     fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let v = self.velocity;
         let zone = self.zone;
+        let full = (1u8 << D) - 1;
         let mut drive = Vec::new();
         let mut release = Vec::new();
         {
@@ -298,7 +299,10 @@ where
                 let d = self.depth(&p.x()[i]);
                 if d >= -1e-9 * self.spacing && d < zone && self.in_face(&p.x()[i]) {
                     drive.push(i);
-                } else if p.constraints().mask[i] != 0 {
+                } else if p.constraints().mask[i] == full && p.constraints().velocity[i] == v {
+                    // Only what this inflow fixed (every component, at its
+                    // velocity): another hook's constraints on the body's
+                    // particles (a slip plane's component) stay.
                     release.push(i);
                 }
             }
