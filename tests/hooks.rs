@@ -797,3 +797,75 @@ fn an_inflow_leaves_other_hooks_constraints_alone() {
         .count();
     assert!(driven > 0);
 }
+
+/// Water whose law has no answer for steps longer than 3 ms (a stand-in
+/// for a step that fails): the first attempt of 5 ms is rejected.
+#[derive(Debug)]
+struct ShortStepsOnly(Newtonian);
+
+impl Material<2> for ShortStepsOnly {
+    fn name(&self) -> &str {
+        "short steps only"
+    }
+    fn kind(&self) -> MaterialKind {
+        MaterialKind::Fluid
+    }
+    fn density(&self) -> f64 {
+        Material::<2>::density(&self.0)
+    }
+    fn wave_speed(&self) -> f64 {
+        Material::<2>::wave_speed(&self.0)
+    }
+    fn unified(&self, kin: &Kinematics<2>, history: &History<2>) -> Unified<2> {
+        let mut u = self.0.unified(kin, history);
+        if kin.dt > 3e-3 {
+            u.mu = f64::NAN;
+        }
+        u
+    }
+    fn update_history(&self, kin: &Kinematics<2>, history: &mut History<2>) {
+        self.0.update_history(kin, history);
+    }
+    fn update_pressure(&self, p_n: f64, rate: f64, dt: f64) -> f64 {
+        Material::<2>::update_pressure(&self.0, p_n, rate, dt)
+    }
+}
+
+/// After a rejected attempt the hooks before the solve run again with the
+/// halved step, so that what they prescribe for `t + Δt` is for the step
+/// taken (session 39's review: a wall's velocity and a ramped body force
+/// stayed the first attempt's, and the wall was then snapped to the law's
+/// position at the shorter step's end).
+#[test]
+fn a_retried_step_redoes_the_boundary_conditions_for_its_size() {
+    let h = 0.02;
+    let scene = Scene::<2>::new("retried")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.005,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(ShortStepsOnly(Newtonian::water())),
+            boxed(0.0, 0.0, 0.2, 0.1),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let record = seen.clone();
+    sim.add_hook(Box::new(FnHook::new("record the step").before_solve(
+        move |ctx: &mut HookContext<'_, 2>| {
+            record.lock().unwrap().push(ctx.dt());
+            Ok(())
+        },
+    )));
+    sim.step().unwrap();
+    let seen = seen.lock().unwrap().clone();
+    assert_eq!(sim.rejected(), 1);
+    assert_eq!(seen, vec![5e-3, 2.5e-3], "the step sizes the hook saw");
+    assert_eq!(sim.dt(), 2.5e-3);
+}

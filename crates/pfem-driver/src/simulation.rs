@@ -1024,18 +1024,39 @@ where
             self.stepper.integrator.particles_renumbered();
         }
         self.stepper.numbering = Some(numbering);
-        let (mesh, history) = self.elements.step_mesh();
-        let (state, constraints) = self.particles.state_and_constraints();
-        let input = StepInput {
-            mesh,
-            materials: &self.materials,
-            constraints,
-            body_force: self.gravity,
+        // The attempts, halving the step after each rejected one; the hooks
+        // before the solve run again for each smaller step, so that what
+        // they prescribe for `t + Δt` (a wall's velocity, a ramped body
+        // force, an inflow's drive) is for the step taken (with
+        // `Integrator::advance` a retried step kept the first attempt's).
+        let mut rejected = pfem_time::Rejections::default();
+        let rep = loop {
+            let (mesh, history) = self.elements.step_mesh();
+            let (state, constraints) = self.particles.state_and_constraints();
+            let input = StepInput {
+                mesh,
+                materials: &self.materials,
+                constraints,
+                body_force: self.gravity,
+            };
+            let t0 = Instant::now();
+            match self
+                .stepper
+                .integrator
+                .try_step(self.clock.time, dt, state, history, &input)
+            {
+                Ok(mut rep) => {
+                    rejected.report(&mut rep);
+                    break rep;
+                }
+                Err(e) => {
+                    let min_dt = self.stepper.integrator.params.min_dt;
+                    dt = rejected.reject(e, self.clock.time, dt, min_dt, t0.elapsed())?;
+                    self.clock.dt = dt;
+                    self.run_hooks(HookPoint::BeforeSolve)?;
+                }
+            }
         };
-        let rep = self
-            .stepper
-            .integrator
-            .advance(self.clock.time, dt, state, history, &input)?;
         self.clock.time += rep.dt;
         self.clock.dt = rep.dt;
         self.clock.steps += 1;

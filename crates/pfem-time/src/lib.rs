@@ -612,6 +612,69 @@ impl StepError {
     }
 }
 
+/// The failed attempts of a step so far: what [`Integrator::advance`]
+/// books between attempts, and what a driver that runs the attempts
+/// itself ([`Integrator::try_step`], to redo its boundary conditions for
+/// each step size) books the same way.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Rejections {
+    /// Failed attempts.
+    pub count: usize,
+    /// Of them, by an inverted element.
+    pub inverted: usize,
+    /// Of them, by a Picard loop that diverged or stalled.
+    pub picard: usize,
+    /// Wall-clock time they took (s).
+    pub seconds: f64,
+}
+
+impl Rejections {
+    /// Books the failed attempt `e` of the step of size `dt` from `time`
+    /// (it took `took`): the size of the next attempt (half), or the error
+    /// that ends the step (`e` itself when a smaller step cannot cure it,
+    /// [`StepError::StepTooSmall`] below `min_dt`).
+    pub fn reject(
+        &mut self,
+        e: StepError,
+        time: f64,
+        dt: f64,
+        min_dt: f64,
+        took: std::time::Duration,
+    ) -> Result<f64, StepError> {
+        if !e.is_retryable() {
+            return Err(e);
+        }
+        self.seconds += took.as_secs_f64();
+        match &e {
+            StepError::Assembly {
+                source: pfem_assembly::AssemblyError::InvertedElement { .. },
+                ..
+            } => self.inverted += 1,
+            StepError::PicardDiverged { .. } => self.picard += 1,
+            _ => {}
+        }
+        self.count += 1;
+        let next = dt * 0.5;
+        if next < min_dt {
+            return Err(StepError::StepTooSmall {
+                time,
+                min_dt,
+                rejections: self.count,
+                last: Box::new(e),
+            });
+        }
+        Ok(next)
+    }
+
+    /// Writes the rejections into the accepted attempt's report.
+    pub fn report(&self, rep: &mut StepReport) {
+        rep.rejections = self.count;
+        rep.rejected_inverted = self.inverted;
+        rep.rejected_picard = self.picard;
+        rep.rejected_seconds = self.seconds;
+    }
+}
+
 /// What a successful step reports.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct StepReport {
@@ -801,40 +864,16 @@ where
         input: &StepInput<'_, D>,
     ) -> Result<StepReport, StepError> {
         let mut dt = dt;
-        let mut rejections = 0;
-        let (mut inverted, mut picard) = (0, 0);
-        let mut rejected_seconds = 0.0;
+        let mut rejected = Rejections::default();
         loop {
             let t0 = std::time::Instant::now();
             match self.try_step(time, dt, state, history, input) {
                 Ok(mut rep) => {
-                    rep.rejections = rejections;
-                    rep.rejected_inverted = inverted;
-                    rep.rejected_picard = picard;
-                    rep.rejected_seconds = rejected_seconds;
+                    rejected.report(&mut rep);
                     return Ok(rep);
                 }
-                Err(e) if !e.is_retryable() => return Err(e),
                 Err(e) => {
-                    rejected_seconds += t0.elapsed().as_secs_f64();
-                    match &e {
-                        StepError::Assembly {
-                            source: pfem_assembly::AssemblyError::InvertedElement { .. },
-                            ..
-                        } => inverted += 1,
-                        StepError::PicardDiverged { .. } => picard += 1,
-                        _ => {}
-                    }
-                    rejections += 1;
-                    dt *= 0.5;
-                    if dt < self.params.min_dt {
-                        return Err(StepError::StepTooSmall {
-                            time,
-                            min_dt: self.params.min_dt,
-                            rejections,
-                            last: Box::new(e),
-                        });
-                    }
+                    dt = rejected.reject(e, time, dt, self.params.min_dt, t0.elapsed())?;
                 }
             }
         }

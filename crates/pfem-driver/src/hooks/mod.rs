@@ -104,7 +104,9 @@ where
         Ok(())
     }
 
-    /// Before the solve, with `Δt` chosen.
+    /// Before the solve, with `Δt` chosen; again, with the halved `Δt`,
+    /// after each rejected attempt (so that what a hook prescribes for
+    /// `t + Δt` is for the step taken). Write it to be repeated.
     fn before_solve(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         Ok(())
     }
