@@ -18,7 +18,7 @@
 //! ```
 //!
 //! The errors and times quoted on each preset were measured by the full
-//! study of `docs/accuracy-cost.md` (2 December 2026, 2 cores) on every
+//! study of `docs/accuracy-cost.md` (6 December 2026, 2 cores) on every
 //! case with a reference: circular Couette flow (velocity RMS), the first
 //! sloshing mode (frequency), the CSM2 cantilever (static deflection, first
 //! frequency) and the 2D dam break (front against a run at a/45, and
@@ -27,9 +27,10 @@
 //! knobs, refining the spacing is the one that keeps buying accuracy on
 //! every case (the time step pays until its error falls below the
 //! spacing's: on the standing wave, T/40 instead of T/20 at 20 cells cuts
-//! the error 3× for 1.4× the time, T/80 only 6 % more); the Picard
-//! tolerance changes no error on the exact cases (1e-3 saves 15–45 % of
-//! the time) and little on the dam break. Standard keeps the
+//! the error 3× for 1.5× the time, T/80 only 6 % more); the Picard
+//! tolerance changes no error on the exact cases (1e-3 saves 0–23 % of
+//! the time, single short runs) and little on the dam break. The times
+//! below are `Simulation::run`'s, summed over the five cases. Standard keeps the
 //! library's defaults (1e-6), with which the hard cases of the stability
 //! suite were verified.
 
@@ -44,19 +45,19 @@ pub enum Fidelity {
     /// Couette 2.3 %, standing wave 3.8 %, cantilever static 34 % and
     /// frequency 22 % (two linear triangles through the thickness lock in
     /// bending), dam break (a/10) 9.2 % against a/45 and 2.0 % against the
-    /// experiment, in 0.6 s.
+    /// experiment, in 0.3 s.
     Draft,
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
-    /// Couette 0.33 % (2.6 s), standing wave 0.65 % (0.3 s), cantilever
+    /// Couette 0.33 % (0.7 s), standing wave 0.65 % (0.06 s), cantilever
     /// static 12.5 % and frequency 6.5 %, dam break (a/20) 2.2 % against
-    /// a/45 and 1.8 % against the experiment, in 9 s.
+    /// a/45 and 1.8 % against the experiment, in 2.3 s.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
-    /// Couette 0.19 % (3.1 s), standing wave 0.27 % (1.7 s), cantilever
+    /// Couette 0.19 % (1.0 s), standing wave 0.27 % (0.2 s), cantilever
     /// static 6.5 % and frequency 3.1 %, dam break (a/29) 1.4 % against
-    /// a/45 and 1.1 % against the experiment, in 24 s: about 3× Standard's
-    /// time on the dam break for 0.65 of its error.
+    /// a/45 and 1.1 % against the experiment, in 6.4 s: about 3.6×
+    /// Standard's time on the dam break for 0.65 of its error.
     Fine,
 }
 
@@ -75,8 +76,8 @@ impl Fidelity {
 
     /// Courant number (`RunSettings::courant`): the default 0.5 for every
     /// preset. On the dam break the study found Courant 1 (Draft's before)
-    /// a poor trade: at a/16 it rejected 11 of 84 steps and saved 11 % of
-    /// the time for a front 9 % further from a/45.
+    /// a poor trade: at a/16 it rejected 11 of 84 steps and saved 1 % of
+    /// the time (11 % on 2 December) for a front 9 % further from a/45.
     pub fn courant(self) -> f64 {
         0.5
     }
