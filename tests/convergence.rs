@@ -1,6 +1,14 @@
 //! Convergence against exact references (issue 16), coarse: each case at
-//! three resolutions, the error falling at an observed order ≥ 0.9 (the
-//! least-squares slope of log error against log h). The full sweeps, with
+//! three resolutions, the error falling at each refinement and at an
+//! observed order (the least-squares slope of log error against log h)
+//! near the one the method should reach: at least 1.8 where linear
+//! elements and a second-order scheme give 2 (measured 2.47–2.77), 1.5 for
+//! the cantilever's frequency (1.82) and 1.3 for its static deflection
+//! (1.53: linear triangles lock in bending at two and four cells through
+//! the thickness). Until session 39 every case asserted only 0.9, which an
+//! order lost would have passed. The dam break's self-convergence asserts
+//! 0.9 against a finer run of its own, which overstates an order
+//! (`docs/accuracy-cost.md`). The full sweeps, with
 //! wall time, are in `examples/accuracy_cost.rs` and
 //! `docs/accuracy-cost.md`. Run with `cargo test --release --test
 //! suite convergence:: -- --nocapture` (the dam break's self-convergence:
@@ -11,15 +19,18 @@ use pfem::exact::{observed_order, Cantilever, CircularCouette, DamBreakFront, St
 use pfem::prelude::*;
 
 /// Asserts that `errors` (at spacings `h`, coarsest first) fall at each
-/// refinement and at an observed order ≥ 0.9; returns the order.
-fn assert_converges(name: &str, h: &[f64], errors: &[f64]) -> f64 {
+/// refinement and at an observed order ≥ `min_order`; returns the order.
+fn assert_converges(name: &str, h: &[f64], errors: &[f64], min_order: f64) -> f64 {
     let pts: Vec<(f64, f64)> = h.iter().copied().zip(errors.iter().copied()).collect();
     let order = observed_order(&pts);
     eprintln!("{name}: h {h:?}, errors {errors:?}, observed order {order:.2}");
     for w in errors.windows(2) {
         assert!(w[1] < w[0], "{name}: error does not fall: {errors:?}");
     }
-    assert!(order >= 0.9, "{name}: observed order {order}");
+    assert!(
+        order >= min_order,
+        "{name}: observed order {order} (at least {min_order})"
+    );
     order
 }
 
@@ -35,7 +46,7 @@ fn circular_couette_converges() {
         h.push(case.spacing());
         e.push(r.error);
     }
-    assert_converges("circular Couette (steady velocity RMS)", &h, &e);
+    assert_converges("circular Couette (steady velocity RMS)", &h, &e, 1.8);
 }
 
 #[test]
@@ -57,8 +68,8 @@ fn standing_wave_frequency_and_amplitude_converge() {
         e.push(r.error);
         a.push(r.second_error);
     }
-    assert_converges("standing wave (frequency)", &h, &e);
-    assert_converges("standing wave (amplitude decay over T/2)", &h, &a);
+    assert_converges("standing wave (frequency)", &h, &e, 1.8);
+    assert_converges("standing wave (amplitude decay over T/2)", &h, &a, 1.8);
 }
 
 #[test]
@@ -77,8 +88,8 @@ fn cantilever_static_deflection_and_frequency_converge() {
                 .error,
         );
     }
-    assert_converges("cantilever (static tip deflection)", &h, &es);
-    assert_converges("cantilever (first frequency)", &h, &ev);
+    assert_converges("cantilever (static tip deflection)", &h, &es, 1.3);
+    assert_converges("cantilever (first frequency)", &h, &ev, 1.5);
 }
 
 /// Water at rest is reproduced exactly: linear pressure is in the P1
@@ -128,5 +139,5 @@ fn dam_break_front_converges_to_a_finer_run() {
         h.push(1.0 / n as f64);
         e.push(case.difference(&front, &reference));
     }
-    assert_converges("dam break front (against a/32)", &h, &e);
+    assert_converges("dam break front (against a/32)", &h, &e, 0.9);
 }
