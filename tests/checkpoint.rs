@@ -669,6 +669,9 @@ impl Material<2> for Capped {
     fn internal_variables(&self) -> &[&str] {
         self.names
     }
+    fn parameters(&self) -> Vec<f64> {
+        vec![self.cap]
+    }
 }
 
 /// The gate with its rubber replaced by a [`Capped`] solid.
@@ -717,23 +720,24 @@ fn a_restart_under_a_custom_material_changed_beyond_the_probes_is_refused() {
     }
 }
 
-/// A user's material whose `update_history` returns a non-number stops the
-/// run at once with a typed error naming it, and the state is left as it
-/// was (session 39's review: the NaN stress was written, the next step's
-/// assembly refused it as a non-finite system, and the step was halved
-/// two dozen times to a "step too small" booked as inverted elements).
+/// A user's material whose `update_history` returns a non-number at every
+/// step size stops the run with a typed error naming it, after halving
+/// the step (a smaller one might cure it), and the state left as it was
+/// (session 39's review: the NaN stress was written, the next step's
+/// assembly refused it as a non-finite system, and the step was halved two
+/// dozen times to a "step too small" booked as inverted elements).
 #[test]
 fn a_material_update_that_returns_nan_stops_the_run_with_a_typed_error() {
     let mut sim = capped_gate(f64::NAN, &[]).unwrap();
     let before = sim.elements().solid_history().to_vec();
     let err = sim.step().unwrap_err();
-    assert!(
-        matches!(
-            &err,
-            RunError::Step(pfem::time::StepError::NonFinite { .. })
+    match &err {
+        RunError::Step(pfem::time::StepError::StepTooSmall { last, .. }) => assert!(
+            matches!(**last, pfem::time::StepError::NonFinite { .. }),
+            "{last}"
         ),
-        "{err}"
-    );
+        other => panic!("expected StepTooSmall after NonFinite, got {other}"),
+    }
     assert!(err.to_string().contains("update_history"), "{err}");
     assert_eq!(sim.steps(), 0);
     assert_eq!(sim.elements().solid_history(), &before[..]);

@@ -415,6 +415,16 @@ where
         &[]
     }
 
+    /// The numbers that define the material (moduli, viscosities, a yield
+    /// stress…), for a checkpoint to recognise it: a restart under a
+    /// material whose parameters differ is refused. None by default; a
+    /// material is then recognised by its name, kind, density, wave speed
+    /// and its answers to two fixed probes, which miss a parameter those
+    /// probes do not reach (a yield stress above their stress).
+    fn parameters(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
     /// A fluid's nodal pressure at `t_{n+1}` (eq. 62) from its value `p_n`
     /// at `t_n`, the node's volumetric strain rate `ε_v` (1/s, the nodal
     /// average of eq. 19) and the step `Δt` (s). With the pressure

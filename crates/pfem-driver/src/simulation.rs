@@ -457,17 +457,15 @@ where
             range: e.range,
         })?;
         // A step below `end_time · 2⁻⁵⁰` (four units in the last place of
-        // the end time) may not move the clock: the run would not end.
-        if params.min_dt < scene.settings.end_time * MIN_DT_OF_END_TIME {
-            return Err(SceneError::OutOfRange {
-                setting: "min_dt",
-                value: params.min_dt,
-                range: "at least end_time · 2⁻⁵⁰ (a smaller step may not advance the clock)",
-            });
-        }
+        // the end time) may not move the clock: the run would not end. The
+        // smallest step is raised to it (a long run's default `min_dt` of
+        // 10⁻⁹ s is below it past 1.1·10⁶ s).
+        let mut params = params;
+        params.min_dt = params
+            .min_dt
+            .max(scene.settings.end_time * MIN_DT_OF_END_TIME);
         scene.validate_within(options.memory_budget)?;
         // The scene's pressure stabilisation, unless the program set one.
-        let mut params = params;
         if params.pressure_stabilisation == 0.0 {
             params.pressure_stabilisation = scene.pressure_stabilisation;
         }
@@ -1019,11 +1017,6 @@ where
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();
         self.run_hooks(HookPoint::BeforeSolve)?;
-        let numbering = self.particles.generation();
-        if self.stepper.numbering.is_some_and(|n| n != numbering) {
-            self.stepper.integrator.particles_renumbered();
-        }
-        self.stepper.numbering = Some(numbering);
         // The attempts, halving the step after each rejected one; the hooks
         // before the solve run again for each smaller step, so that what
         // they prescribe for `t + Δt` (a wall's velocity, a ramped body
@@ -1031,6 +1024,12 @@ where
         // `Integrator::advance` a retried step kept the first attempt's).
         let mut rejected = pfem_time::Rejections::default();
         let rep = loop {
+            // (Checked at each attempt: a hook run again may change the set.)
+            let numbering = self.particles.generation();
+            if self.stepper.numbering.is_some_and(|n| n != numbering) {
+                self.stepper.integrator.particles_renumbered();
+            }
+            self.stepper.numbering = Some(numbering);
             let (mesh, history) = self.elements.step_mesh();
             let (state, constraints) = self.particles.state_and_constraints();
             let input = StepInput {
@@ -1288,12 +1287,12 @@ where
                 reason: "must be positive and finite",
             });
         }
-        if self.controller.dt_min < t * MIN_DT_OF_END_TIME {
-            return Err(RunError::InvalidSetting {
-                name: "end_time",
-                value: t,
-                reason: "must be at most 2⁵⁰ times the smallest step (StepParams::min_dt): a step may not advance the clock",
-            });
+        // The smallest step goes up with a later end time, so that every
+        // step moves the clock (`Simulation::new`).
+        let floor = t * MIN_DT_OF_END_TIME;
+        if self.controller.dt_min < floor {
+            self.controller.dt_min = floor;
+            self.stepper.integrator.params.min_dt = floor;
         }
         self.end_time = t;
         Ok(())
@@ -1880,16 +1879,18 @@ where
     )
 }
 
-/// A fingerprint of a material: its `Debug` text (every parameter of a
-/// derived `Debug`), the names of its internal variables, and what it
+/// A fingerprint of a material: its [`Material::parameters`], the names
+/// of its internal variables, and what it
 /// answers ([`Material::unified`], [`Material::update_history`],
 /// [`Material::update_pressure`]) to two fixed probes, at rest and under a
 /// stressed shearing compression with internal variables. The parameters
 /// the trait does not expose (a viscosity, a shear modulus, a yield stress
 /// the probes do not reach, a contact stiffness) change it, and the same
-/// material gives the same bits. (Before session 39 the `Debug` text and
+/// material gives the same bits. (Before session 39 the parameters and
 /// `update_history` were not in it: two plastic solids differing only in a
-/// yield stress above the probe's stress had one fingerprint.)
+/// yield stress above the probe's stress had one fingerprint. The `Debug`
+/// text, tried first, is not deterministic for every material: a map's
+/// order, an address.)
 fn material_response<const D: usize>(m: &dyn Material<D>) -> u64
 where
     Const<D>: Dim,
@@ -1911,7 +1912,11 @@ where
         // of its gap with friction 0.5, a plastic strain…
         internal: [0.9, 0.5, 0.6, 0.8, 0.3, 1e-3, 2e-3, 3e-3],
     };
-    let mut bytes = format!("{m:?}").into_bytes();
+    let mut bytes: Vec<u8> = m
+        .parameters()
+        .iter()
+        .flat_map(|v| v.to_bits().to_le_bytes())
+        .collect();
     for name in m.internal_variables() {
         bytes.extend_from_slice(name.as_bytes());
         bytes.push(0);

@@ -127,7 +127,10 @@ where
     /// `[face_min, face_max]` (equal coordinates along the axis of
     /// `velocity`) at `velocity`, as particles of spacing `h`; `zone` is the
     /// depth (m) downstream of the face where particles are driven (at
-    /// least `2h` is advised).
+    /// least `2h` is advised). A particle leaving the zone is released in
+    /// every component: another hook's constraint on it (a slip plane's)
+    /// is back only if that hook runs after this one, so add `SlipPlanes`
+    /// after an inflow.
     pub fn new(
         body: impl Into<String>,
         face_min: Point<D>,

@@ -239,17 +239,12 @@ where
             .flatten()
             .map(|b| b.spacing)
             .fold(f64::INFINITY, f64::min);
-        // The coarsest body's coincidence tolerance (a quarter spacing, below)
-        // sets the grid's coarsest level: a scene of very different spacings
+        // A level of the grid for each body's coincidence tolerance (a
+        // quarter spacing, below): a scene of very different spacings
         // (10⁻⁹ m beside 0.1 m) would otherwise have each coarse particle
         // look at (10⁸/4)^D cells of the fine spacing.
-        let reach = 0.25
-            * bodies
-                .iter()
-                .flatten()
-                .map(|b| b.spacing)
-                .fold(0.0, f64::max);
-        let mut grid = lattice::HashGrid::<D>::with_reach(cell, reach);
+        let tolerances: Vec<f64> = bodies.iter().flatten().map(|b| 0.25 * b.spacing).collect();
+        let mut grid = lattice::HashGrid::<D>::with_tolerances(cell, &tolerances);
         let mut merges: Vec<Merge> = Vec::new();
         let mut laws = Vec::new();
         let mut pressure_fields = Vec::new();

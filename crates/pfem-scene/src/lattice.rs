@@ -233,9 +233,9 @@ pub struct HashGrid<const D: usize> {
 /// One level of a [`HashGrid`]: the points recorded in each cell.
 type Cells = std::collections::HashMap<[i64; 3], Vec<usize>>;
 
-/// The most levels [`HashGrid::with_reach`] builds (cells up to `2⁶³`
+/// The most levels [`HashGrid::with_tolerances`] builds (cells up to `2⁶³`
 /// times the finest).
-const MAX_LEVELS: usize = 64;
+pub const MAX_LEVELS: usize = 64;
 
 impl<const D: usize> HashGrid<D>
 where
@@ -249,16 +249,24 @@ where
     }
 
     /// An empty grid of finest cell `cell` (m) with the coarser levels
-    /// `cell · 2ˡ` that queries within tolerances up to `reach` (m) need:
-    /// each query then visits `3^D` cells of the finest level whose cell is
-    /// no smaller than its tolerance.
-    pub fn with_reach(cell: f64, reach: f64) -> Self {
+    /// `cell · 2ˡ` that queries within `tolerances` (m) use, one for each
+    /// (the first no smaller than it), and no others: each query then
+    /// visits `3^D` cells, and each point is recorded once per level used
+    /// (at most [`MAX_LEVELS`] levels).
+    pub fn with_tolerances(cell: f64, tolerances: &[f64]) -> Self {
         let mut g = Self::new(cell);
-        let mut c = cell;
-        while c < reach && g.levels.len() < MAX_LEVELS {
-            c *= 2.0;
-            g.levels.push((c, Cells::new()));
-        }
+        let mut cells: Vec<f64> = tolerances
+            .iter()
+            .filter(|&&t| t > cell && t.is_finite())
+            .map(|&t| {
+                let l = (t / cell).log2().ceil().min((MAX_LEVELS - 1) as f64);
+                cell * 2f64.powi(l as i32)
+            })
+            .collect();
+        cells.sort_by(f64::total_cmp);
+        cells.dedup();
+        g.levels
+            .extend(cells.into_iter().map(|c| (c, Cells::new())));
         g
     }
 
@@ -318,6 +326,37 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A grid for a fine and a coarse tolerance holds two levels, and a
+    /// coarse query finds the nearest point within its tolerance (a fine
+    /// body's point, or none) as a one-level grid would.
+    #[test]
+    fn a_grid_keeps_one_level_per_tolerance_and_finds_the_same_points() {
+        let fine = 1e-3;
+        let pts: Vec<Point<2>> = (0..50)
+            .map(|i| Point::<2>::new(i as f64 * fine, 0.0))
+            .collect();
+        let mut levels = HashGrid::<2>::with_tolerances(fine, &[0.25 * fine, 0.025, 0.025]);
+        let mut flat = HashGrid::<2>::new(fine);
+        for (i, p) in pts.iter().enumerate() {
+            levels.insert(p, i);
+            flat.insert(p, i);
+        }
+        assert_eq!(levels.levels.len(), 2);
+        for q in [
+            Point::<2>::new(0.0101, 0.001),
+            Point::<2>::new(0.2, 0.0),
+            Point::<2>::new(-0.02, 0.0),
+        ] {
+            for tol in [0.25 * fine, 0.025] {
+                assert_eq!(levels.find(&q, tol, &pts), flat.find(&q, tol, &pts));
+            }
+        }
+        assert_eq!(
+            levels.find(&Point::<2>::new(0.0101, 0.001), 0.025, &pts),
+            Some(10)
+        );
+    }
 
     #[test]
     fn box_mesh_covers_the_box() {

@@ -579,8 +579,10 @@ pub enum StepError {
     },
     /// The converged step's state is not finite: a material's update
     /// (`Material::update_history`, `Material::update_pressure`) or the
-    /// stabilised pressure increments returned a non-number. Not retried
-    /// with a smaller step: the state would have carried it on.
+    /// stabilised pressure increments returned a non-number. Nothing is
+    /// written; the step is retried smaller (a return map that fails only
+    /// at large increments), and the error is named as the last failure of
+    /// a `StepTooSmall` when no step cures it.
     #[error("the step's state is not finite at t = {time} s, dt = {dt:e} s: {what}")]
     NonFinite {
         /// Time at the start of the step (s).
@@ -595,13 +597,14 @@ pub enum StepError {
 impl StepError {
     /// Whether a smaller step may cure it (an inverted element, a Picard
     /// loop or a solve that did not converge, a matrix that is not finite
-    /// at this step's kinematics); the others (invalid input, a mesh that
-    /// names a material that does not exist, a system of the wrong shape,
-    /// a non-finite state) are returned at once.
+    /// at this step's kinematics, a material's update that returned a
+    /// non-number); the others (invalid input, a mesh that names a
+    /// material that does not exist, a system of the wrong shape) are
+    /// returned at once.
     pub fn is_retryable(&self) -> bool {
         use pfem_assembly::{AssemblyError as A, SolveError as S};
         match self {
-            StepError::InvalidInput { .. } | StepError::NonFinite { .. } => false,
+            StepError::InvalidInput { .. } => false,
             StepError::Assembly { source, .. } => !matches!(source, A::MeshMismatch { .. }),
             StepError::Solve { source, .. } => !matches!(
                 source,

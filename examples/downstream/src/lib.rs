@@ -171,6 +171,13 @@ where
         &["equivalent_plastic_strain"]
     }
 
+    // What identifies this material in a checkpoint beside its answers to
+    // fixed probes (which a yield stress above their stress would not
+    // change): a restart under another yield stress is refused.
+    fn parameters(&self) -> Vec<f64> {
+        vec![self.yield_stress, self.hardening]
+    }
+
     fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D> {
         let w_over_j = kin.displacement_weight / kin.j;
         let g = self.elastic.shear_modulus();

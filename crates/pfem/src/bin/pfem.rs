@@ -295,6 +295,8 @@ where
             .get("restart")
             .and_then(|f| Path::new(f).parent())
         {
+            // `checkpoint.bin` alone: its parent is "", the current folder.
+            Some(dir) if dir.as_os_str().is_empty() => PathBuf::from("."),
             Some(dir) => dir.to_path_buf(),
             None => Path::new("out").join(&scene.name),
         }
