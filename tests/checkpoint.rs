@@ -264,6 +264,24 @@ fn foreign_damaged_and_future_checkpoints_are_refused() {
     assert!(err.to_string().contains("dimension"), "{err}");
 }
 
+/// `ck` with the first (`last`: the last) occurrence of `value`'s bytes in
+/// its SIMULATION section replaced by `by`, the checksum made to match.
+fn edited(ck: &Checkpoint, value: f64, by: f64, last: bool) -> Checkpoint {
+    let mut section = ck.section(SIMULATION).unwrap().to_vec();
+    let from = value.to_bits().to_le_bytes();
+    let found = |w: &[u8]| w == from;
+    let at = if last {
+        section.windows(8).rposition(found)
+    } else {
+        section.windows(8).position(found)
+    }
+    .expect("the value is in the section");
+    section[at..at + 8].copy_from_slice(&by.to_bits().to_le_bytes());
+    let mut c = ck.clone();
+    c.set(SIMULATION, section);
+    Checkpoint::decode(&c.encode()).unwrap()
+}
+
 /// A checkpoint edited by hand (its checksum made to match: the checksum
 /// guards against damage, not against edits) whose time, or a particle's
 /// state, is not a number is refused; before session 35 a time of NaN ran
@@ -273,19 +291,7 @@ fn a_checkpoint_whose_time_or_state_is_not_finite_is_refused() {
     let mut sim = dam_break();
     sim.step().unwrap();
     let ck = sim.checkpoint();
-    let section = ck.section(SIMULATION).unwrap().to_vec();
-    let replaced = |value: f64, by: f64| -> Checkpoint {
-        let from = value.to_bits().to_le_bytes();
-        let at = section
-            .windows(8)
-            .position(|w| w == from)
-            .expect("the value is in the section");
-        let mut edited = section.clone();
-        edited[at..at + 8].copy_from_slice(&by.to_bits().to_le_bytes());
-        let mut c = ck.clone();
-        c.set(SIMULATION, edited);
-        Checkpoint::decode(&c.encode()).unwrap()
-    };
+    let replaced = |value: f64, by: f64| edited(&ck, value, by, false);
     let mut fresh = dam_break();
     for (value, by, says) in [
         (sim.time(), f64::NAN, "time"),
@@ -317,21 +323,7 @@ fn a_checkpoint_whose_time_or_state_is_not_finite_is_refused() {
 /// the gravity, a solid's stress, the volume ledger, a spacing.
 #[test]
 fn a_checkpoint_whose_gravity_stress_ledger_or_spacing_is_not_finite_is_refused() {
-    // The last occurrence of `value`'s bytes in the SIMULATION section
-    // replaced by `by`.
-    let edit = |ck: &Checkpoint, value: f64, by: f64| -> Checkpoint {
-        let section = ck.section(SIMULATION).unwrap().to_vec();
-        let from = value.to_bits().to_le_bytes();
-        let at = section
-            .windows(8)
-            .rposition(|w| w == from)
-            .expect("the value is in the section");
-        let mut edited = section;
-        edited[at..at + 8].copy_from_slice(&by.to_bits().to_le_bytes());
-        let mut c = ck.clone();
-        c.set(SIMULATION, edited);
-        Checkpoint::decode(&c.encode()).unwrap()
-    };
+    let edit = |ck: &Checkpoint, value: f64, by: f64| edited(ck, value, by, true);
     let refused = |fresh: &mut Simulation<2>, ck: &Checkpoint, says: &str| {
         let err = fresh.restore(ck).unwrap_err();
         assert!(

@@ -791,7 +791,7 @@ fn an_inflow_leaves_other_hooks_constraints_alone() {
     // (No particle was inserted yet: the index still names the same one.)
     assert_eq!(sim.particles().constraints().mask[far], 0b10);
     assert_eq!(sim.particles().v()[far].y, 0.0);
-    // The inflow's own drive is released as its particles leave the zone.
+    // The inflow still drives its own zone's particles.
     let driven = (0..sim.particles().len())
         .filter(|&i| sim.particles().constraints().mask[i] == 0b11)
         .count();

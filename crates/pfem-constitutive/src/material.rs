@@ -169,6 +169,20 @@ where
     }
 }
 
+impl<const D: usize> History<D>
+where
+    Const<D>: Dim,
+{
+    /// Whether every entry (stress, `σ_zz`, pressure, internal variables)
+    /// is a finite number.
+    pub fn is_finite(&self) -> bool {
+        self.stress.iter().all(|v| v.is_finite())
+            && self.stress_zz.is_finite()
+            && self.pressure.is_finite()
+            && self.internal.iter().all(|v| v.is_finite())
+    }
+}
+
 /// The unified constitutive triple of eq. 44: with it the Cauchy stress at
 /// `t_{n+1}` is `σ = σ̂⁽ⁿ⁾ + 𝒦 ε_v I + 2 μ D'` (eq. 43).
 ///

@@ -1672,17 +1672,11 @@ where
         // stress or internal variable, a contact element's history or the
         // volume ledger that is not would run on as one (or turn the
         // volume correction off without a word).
-        let state_finite = |h: &History<D>| {
-            h.stress.iter().all(|v| v.is_finite())
-                && h.stress_zz.is_finite()
-                && h.pressure.is_finite()
-                && h.internal.iter().all(|v| v.is_finite())
-        };
         let what = if !g.iter().all(|c| c.is_finite()) {
             Some("its gravity".to_string())
-        } else if let Some(e) = solid_history.iter().position(|h| !state_finite(h)) {
+        } else if let Some(e) = solid_history.iter().position(|h| !h.is_finite()) {
             Some(format!("solid element {e}'s stress or internal variables"))
-        } else if let Some(e) = stash.1.iter().position(|h| !state_finite(h)) {
+        } else if let Some(e) = stash.1.iter().position(|h| !h.is_finite()) {
             Some(format!("contact element {e}'s history"))
         } else if ![
             volume.initial,

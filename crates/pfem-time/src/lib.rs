@@ -1263,13 +1263,7 @@ where
         // A material's update or the stabilised increments may return a
         // non-number: refused before anything is written (the state, its
         // frames and checkpoints would carry it on).
-        let finite_history = |h: &History<D>| {
-            h.stress.iter().all(|v| v.is_finite())
-                && h.stress_zz.is_finite()
-                && h.pressure.is_finite()
-                && h.internal.iter().all(|v| v.is_finite())
-        };
-        if let Some((e, _)) = new_history.iter().find(|(_, h)| !finite_history(h)) {
+        if let Some((e, _)) = new_history.iter().find(|(_, h)| !h.is_finite()) {
             return Err(StepError::NonFinite {
                 time,
                 dt,

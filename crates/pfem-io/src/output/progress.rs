@@ -84,12 +84,12 @@ pub struct Progress {
 
 impl Progress {
     /// A progress display for a run that ends at simulated time `end_time`
-    /// (s); disabled when `quiet` or when stderr is not a terminal.
+    /// (s): a bar on a terminal, a line every [`LOG_EVERY`] otherwise,
+    /// nothing when `quiet`.
     pub fn new(end_time: f64, quiet: bool) -> Self {
-        let terminal = std::io::stderr().is_terminal();
-        let mut p = Self::log_every(end_time, quiet || terminal, LOG_EVERY);
-        p.quiet = quiet;
-        if !quiet && terminal {
+        let mut p = Self::log_every(end_time, quiet, LOG_EVERY);
+        if p.log.is_some() && std::io::stderr().is_terminal() {
+            p.log = None;
             p.bar = Some(new_bar());
         }
         p
