@@ -476,7 +476,8 @@ fn initial_velocity_and_pressure_fields_start_the_run() {
 
 /// A hook stops the run (`HookContext::stop`): `run` returns `Ok`, the
 /// reason is kept, and no step runs after it. A body-force ramp and a
-/// closure hook see the time they are given.
+/// closure hook see the time they are given, and the alpha shape's water
+/// line follows the ramped gravity.
 #[test]
 fn a_hook_stops_the_run_and_a_ramp_loads_gradually() {
     let h = 0.05;
@@ -495,6 +496,7 @@ fn a_hook_stops_the_run_and_a_ramp_loads_gradually() {
             h,
         );
     let mut sim = sim2(scene, StepParams::default());
+    assert_eq!(sim.alpha().up, None, "no gravity yet, no water line");
     sim.add_hook(Box::new(BodyForceRamp {
         target: Vector::<2>::new(0.0, -G),
         duration: 0.2,
@@ -521,6 +523,9 @@ fn a_hook_stops_the_run_and_a_ramp_loads_gradually() {
         assert!((g - want).abs() < 1e-12, "gravity {g} at {t}");
     }
     assert!(sim.stages().body_force);
+    // The water line follows the ramped gravity (it had none before:
+    // dry bridges and water-line cuts were off for the whole run).
+    assert_eq!(sim.alpha().up, Some([0.0, 1.0, 0.0]));
     let steps = sim.steps();
     sim.run(&mut []).unwrap();
     assert_eq!(sim.steps(), steps, "a stopped run stays stopped");

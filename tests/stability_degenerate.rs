@@ -116,3 +116,77 @@ fn solid_particles_1e9_apart_give_a_typed_error() {
         Err(e) => eprintln!("typed error: {e}"),
     }
 }
+
+/// Drops with no mesh: one fluid particle, two, a row on one line (2D),
+/// and a flat sheet in one plane (3D), with no wall. No simplex has a
+/// measure, so every particle flies (§8's isolated particles) and falls
+/// as `y₀ − g t²/2` (the Newmark step is exact for a constant
+/// acceleration). Session 40's review: `Simulation::new` refused each of
+/// them with a mesh error (a degenerate tessellation), so not even a
+/// single drop could fall.
+#[test]
+fn a_drop_with_no_mesh_falls_freely() {
+    let h = 0.01;
+    let g = 9.81;
+    let t_end = 0.05;
+    let settings2 = RunSettings {
+        end_time: t_end,
+        max_dt: 5e-3,
+        output_interval: None,
+        ..Default::default()
+    };
+    let drops2: [Vec<Point<2>>; 3] = [
+        vec![Point::<2>::new(0.0, 1.0)],
+        vec![Point::<2>::new(0.0, 1.0), Point::<2>::new(h, 1.0)],
+        (0..5).map(|i| Point::<2>::new(i as f64 * h, 1.0)).collect(),
+    ];
+    for pts in drops2 {
+        let n = pts.len();
+        let scene = Scene::<2>::new("drop")
+            .gravity(Vector::<2>::new(0.0, -g))
+            .settings(settings2)
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                Geometry::Particles(pts),
+                h,
+            );
+        let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
+            .unwrap_or_else(|e| panic!("{n} particles: {e}"));
+        sim.run(&mut [])
+            .unwrap_or_else(|e| panic!("{n} particles: {e}"));
+        let want = 1.0 - 0.5 * g * sim.time() * sim.time();
+        for (x, v) in sim.particles().x().iter().zip(sim.particles().v()) {
+            assert!(
+                (x.y - want).abs() < 1e-9,
+                "{n} particles: y {} against {want}",
+                x.y
+            );
+            assert!(
+                (v.y + g * sim.time()).abs() < 1e-9,
+                "{n} particles: vy {}",
+                v.y
+            );
+        }
+        assert!((sim.time() - t_end).abs() < 1e-12);
+    }
+    let sheet: Vec<Point<3>> = (0..4)
+        .flat_map(|i| (0..4).map(move |k| Point::<3>::new(i as f64 * h, 1.0, k as f64 * h)))
+        .collect();
+    let scene = Scene::<3>::new("sheet")
+        .gravity(Vector::<3>::new(0.0, -g, 0.0))
+        .settings(settings2)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            Geometry::Particles(sheet),
+            h,
+        );
+    let mut sim = Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default())
+        .expect("a flat sheet is built");
+    sim.run(&mut []).expect("and falls");
+    let want = 1.0 - 0.5 * g * sim.time() * sim.time();
+    for x in sim.particles().x() {
+        assert!((x.y - want).abs() < 1e-9, "sheet: y {} against {want}", x.y);
+    }
+}

@@ -6,8 +6,8 @@ use std::time::Instant;
 use pfem_constitutive::{History, Kinematics, Material, MaterialKind};
 use pfem_core::{Const, Dim, ParticleKind, Point, Tensor, Vector};
 use pfem_geometry::{
-    alpha_shape_cutting_into, near_matter, tessellate_subset, AlphaShapeParams, Tessellation,
-    Tessellator,
+    alpha_shape_cutting_into, near_matter, tessellate_subset, AlphaShapeParams, GeometryError,
+    Tessellation, Tessellator,
 };
 use pfem_time::{CourantController, Integrator, StepInput, StepParams};
 
@@ -586,10 +586,7 @@ where
             controller,
             alpha: AlphaShapeParams {
                 // Above the water line is against gravity (dry bridges).
-                up: gravity.filter(|g| g.norm() > 0.0).map(|g| {
-                    let u = -g / g.norm();
-                    [u[0], u[1], if D == 3 { u[D - 1] } else { 0.0 }]
-                }),
+                up: up_of(gravity),
                 min_quality_3d: options.min_quality_3d,
                 cut_dry_bridges,
                 ..AlphaShapeParams::with_alpha(settings.alpha)
@@ -729,9 +726,20 @@ where
             .is_ok();
         if !subset {
             st.near.clear();
-            st.tessellator
-                .tessellate(x, &mut st.tess)
-                .map_err(RunError::Geometry)?;
+            match st.tessellator.tessellate(x, &mut st.tess) {
+                Ok(()) => {}
+                // Fewer than D + 1 particles, or all on one line (2D) or
+                // plane (3D): no simplex has a measure, so there is no mesh
+                // and every fluid particle flies (§8's isolated particles).
+                // It was a fatal error: a single falling drop could not be
+                // simulated (session 40's review).
+                Err(GeometryError::Degenerate { .. }) => {
+                    st.tess.nv = D + 1;
+                    st.tess.simplices.clear();
+                    st.tess.neighbors.clear();
+                }
+                Err(e) => return Err(RunError::Geometry(e)),
+            }
         }
         let ts = Instant::now();
         let mut shape = self.elements.take_shape();
@@ -892,10 +900,19 @@ where
             }
         }
         self.hooks = hooks;
-        self.stages.body_force = self.gravity.is_some_and(|g| g.norm() > 0.0);
+        self.gravity_changed();
         self.stats.hooks.0 += 1;
         self.stats.hooks.1 += t0.elapsed().as_secs_f64();
         result
+    }
+
+    /// What follows from the body force when a hook or a restore has set
+    /// it: its stage, and the alpha shape's `up` (the water line's
+    /// direction for dry bridges; a scene whose gravity only a ramp sets
+    /// had none before).
+    fn gravity_changed(&mut self) {
+        self.stages.body_force = self.gravity.is_some_and(|g| g.norm() > 0.0);
+        self.alpha.up = up_of(self.gravity);
     }
 
     /// The smallest particle spacing `h_min` (reported; the Courant
@@ -1785,7 +1802,7 @@ where
             self.volume = volume;
             self.volume_now = volume_now;
             self.gravity = has_gravity.then_some(g);
-            self.stages.body_force = self.gravity.is_some_and(|g| g.norm() > 0.0);
+            self.gravity_changed();
             self.stop = None;
             self.elements.set_solid_history(&solid_history);
             self.elements.set_stash(stash);
@@ -1815,6 +1832,7 @@ where
                 self.volume_now = before.volume_now;
                 self.gravity = before.gravity;
                 self.stages.body_force = before.body_force;
+                self.alpha.up = up_of(before.gravity);
                 for (h, bytes) in self.hooks.iter_mut().zip(&before.hooks) {
                     // A hook's own state read back: cannot fail for a hook
                     // whose save and restore agree; if it did, the
@@ -2004,6 +2022,18 @@ where
     }
 }
 
+/// The alpha shape's `up`: against a non-zero body force, 3 components
+/// whatever the dimension.
+fn up_of<const D: usize>(gravity: Option<Vector<D>>) -> Option<[f64; 3]>
+where
+    Const<D>: Dim,
+{
+    gravity.filter(|g| g.norm() > 0.0).map(|g| {
+        let u = -g / g.norm();
+        [u[0], u[1], if D == 3 { u[D - 1] } else { 0.0 }]
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -2065,3 +2095,4 @@ mod tests {
         assert!(g(1, 0).abs() < 1e-12 && g(4, 2).abs() < 1e-12);
     }
 }
+

@@ -9,7 +9,9 @@ use crate::{GeometryError, Tessellation, NO_NEIGHBOR, SEALED};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AlphaShapeParams {
     /// A fluid-candidate simplex is kept when its circumradius
-    /// `R ≤ alpha · h`, with `h` the mean spacing of its nodes.
+    /// `R ≤ alpha · h`, with `h` the largest spacing of its nodes (the
+    /// coarser side of an interface between bodies of different spacings;
+    /// ARCHITECTURE.md's deviations).
     /// Dimensionless, finite and `> 0`; PFEM codes use 1.2–1.4 (paper §8:
     /// "close to, but greater than one"). Default `1.3`.
     pub alpha: f64,
@@ -36,8 +38,9 @@ pub struct AlphaShapeParams {
     /// Smallest `measure / R³` of a kept tetrahedron (3D; `R` its
     /// circumradius): flatter candidates are slivers, never elements (the
     /// regular tetrahedron has 0.51, a cubic lattice's Kuhn tetrahedron
-    /// 0.26). Default [`MIN_SHAPE_QUALITY`]: only simplices flat to
-    /// round-off; [`MIN_ELEMENT_QUALITY_3D`] is the measured option of
+    /// 0.26). Default [`MIN_SHAPE_QUALITY`] (10⁻³): only nearly flat
+    /// simplices (a tetrahedron whose smallest height is about a
+    /// thousandth of its circumradius); [`MIN_ELEMENT_QUALITY_3D`] is the measured option of
     /// ARCHITECTURE.md's "options measured and left off". In 2D the sliver
     /// test is always [`MIN_SHAPE_QUALITY`].
     pub min_quality_3d: f64,

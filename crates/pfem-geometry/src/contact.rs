@@ -14,9 +14,10 @@
 //! on one body: the distance to their triangle; two and two: the distance
 //! between the two edges), its normal the master facet's, pointing from
 //! the master body towards the other. In 3D a tetrahedron whose smallest
-//! height is below `min_gap` spacings is no contact element, and one where
-//! three or four bodies meet takes the gap and normal of its nearest pair
-//! of particles of different bodies, one of a body in contact.
+//! height is below `min_gap` spacings is no contact element. A simplex
+//! where three or more bodies meet (2D or 3D) takes the gap and normal of
+//! its nearest pair of particles of different bodies, one of a body in
+//! contact.
 
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 
@@ -45,7 +46,7 @@ where
 /// when the scene asks), every edge shorter than `reach` times the
 /// mean spacing of its nodes, and a gap above `min_gap` times that
 /// spacing (no slivers; in 3D also a smallest height above it). Where
-/// three or four bodies meet in 3D, the gap, normal and `bodies` are those
+/// three or more bodies meet (2D or 3D), the gap, normal and `bodies` are those
 /// of the nearest pair of particles of different bodies, one of a body in
 /// contact. In tessellation order.
 ///
@@ -127,7 +128,12 @@ where
         group[..ng].sort_by_key(|g| std::cmp::Reverse(g.1));
         let (mut master, mut other) = (group[0].0, group[1].0);
         let on = |a: usize| bodies[s[a] as usize] == master;
-        let found = if D == 3 && ng >= 3 {
+        // Three or more bodies (2D: one node each): the nearest pair. A
+        // plane or edge through the master's node and another body's node
+        // mixes two bodies; in 2D it put a solid resting one spacing from
+        // a floor and a side wall under penalty at rest (gap 0.71 h, a
+        // diagonal normal; session 40's review).
+        let found = if ng >= 3 {
             let body = |a: usize| bodies[s[a] as usize];
             let takes_part = |a: usize| in_contact.get(body(a) as usize).copied().unwrap_or(false);
             nearest_pair::<D>(&x, &body, &takes_part, master).map(|(gap, n, pair)| {
@@ -221,9 +227,10 @@ where
     }
 }
 
-/// Gap and master normal of a simplex whose nodes `a` with `on(a)` are the
-/// master body's (`m` of them): any triangle in 2D; in 3D a tetrahedron of
-/// two bodies (three or four bodies: [`nearest_pair`]).
+/// Gap and master normal of a simplex of two bodies whose nodes `a` with
+/// `on(a)` are the master body's (`m` of them): a triangle 2 + 1 in 2D, a
+/// tetrahedron 3 + 1 or 2 + 2 in 3D (three or more bodies:
+/// [`nearest_pair`]).
 fn gap_and_normal<const D: usize>(
     x: &dyn Fn(usize) -> Point<D>,
     on: &dyn Fn(usize) -> bool,
@@ -245,14 +252,11 @@ where
         }
     };
     let n = if D == 2 {
-        // 2D: a master edge (2 nodes) or, with three bodies, the
-        // longest edge of the master's single node and… take the edge
-        // opposite the lone non-master node.
-        let (p, q) = if m >= 2 {
-            (x(mine[0]), x(mine[1]))
-        } else {
-            (x(mine[0]), x(theirs[0]))
-        };
+        // 2D: the master edge (two bodies split a triangle 2 + 1).
+        if m != 2 {
+            return None;
+        }
+        let (p, q) = (x(mine[0]), x(mine[1]));
         let e = q - p;
         let mut n = Vector::<D>::zeros();
         n[0] = -e[1];
@@ -278,8 +282,8 @@ where
         }
         orient(n, x(mine[0]))
     } else {
-        // 3D with three or four bodies: `nearest_pair` measures those, and
-        // two bodies split a tetrahedron 3 + 1 or 2 + 2.
+        // Three or more bodies: `nearest_pair` measures those, and two
+        // bodies split a tetrahedron 3 + 1 or 2 + 2.
         return None;
     };
     // The gap: the largest distance of a non-master node from the master's
@@ -401,6 +405,77 @@ mod tests {
             matches!(err, Err(GeometryError::InvalidConnectivity { .. })),
             "{err:?}"
         );
+    }
+
+    /// 2D: a solid resting one spacing from a floor and from a side wall,
+    /// each a body of its own. The corner triangle {floor, solid, side
+    /// wall} has the gap of its nearest pair (the spacing), from the
+    /// solid's neighbour along the pair, never the mixed floor–wall edge's
+    /// (0.71 h, a diagonal normal: the solid started under penalty at
+    /// rest). Every element starts open at the spacing.
+    #[test]
+    fn a_solid_in_a_corner_of_two_walls_starts_open_2d() {
+        let mut x = Vec::new();
+        let mut bodies = Vec::new();
+        for i in 0..4 {
+            x.push(Point::<2>::new(i as f64, 0.0)); // floor, body 0
+            bodies.push(0);
+        }
+        for j in 1..4 {
+            x.push(Point::<2>::new(0.0, j as f64)); // side wall, body 1
+            bodies.push(1);
+        }
+        for i in 1..3 {
+            for j in 1..3 {
+                x.push(Point::<2>::new(i as f64, j as f64)); // solid, body 2
+                bodies.push(2);
+            }
+        }
+        let kinds: Vec<ParticleKind> = bodies
+            .iter()
+            .map(|&b| {
+                if b == 2 {
+                    ParticleKind::Solid
+                } else {
+                    ParticleKind::Wall
+                }
+            })
+            .collect();
+        // Both diagonals of the corner square: the lattice's tie may go
+        // either way. Triangle {floor (1,0), solid (1,1), side (0,1)} with
+        // the corner (0,0), and the other split.
+        for corner in [[0u32, 7, 4, 0, 1, 7], [0, 1, 4, 1, 7, 4]] {
+            let tess = Tessellation {
+                nv: 3,
+                simplices: corner.to_vec(),
+                neighbors: vec![crate::NO_NEIGHBOR; 6],
+            };
+            let mut out = Vec::new();
+            contact_elements::<2>(
+                &x,
+                &kinds,
+                &bodies,
+                &vec![1.0; x.len()],
+                &[false, false, true],
+                &tess,
+                1.6,
+                0.05,
+                &mut out,
+            )
+            .unwrap();
+            assert!(!out.is_empty(), "{corner:?}");
+            for c in &out {
+                assert!((c.gap - 1.0).abs() < 1e-12, "{corner:?}: gap {}", c.gap);
+                // Along a lattice axis, between the solid and a wall.
+                assert!(
+                    (c.normal.x.abs() - 1.0).abs() < 1e-12
+                        || (c.normal.y.abs() - 1.0).abs() < 1e-12,
+                    "{corner:?}: normal {:?}",
+                    c.normal
+                );
+                assert!(c.bodies.0 == 2 || c.bodies.1 == 2, "{:?}", c.bodies);
+            }
+        }
     }
 
     /// Contact elements of single 3D tetrahedra, each of the given bodies

@@ -1,5 +1,6 @@
-//! Geometry for pfem: Delaunay tessellation, alpha shapes (paper §8),
-//! boundary classification, particle management and mesh quality.
+//! Geometry for pfem: Delaunay tessellation, alpha shapes (§8 of Marti &
+//! Idelsohn 2007, "the paper" in this crate's comments), boundary
+//! classification, particle management and mesh quality.
 //!
 //! One remeshing step of the driver, in 2D:
 //!

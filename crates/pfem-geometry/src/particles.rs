@@ -20,8 +20,8 @@ pub struct ParticleManagementParams {
     pub removal_fraction: f64,
     /// A kept simplex with a fluid node is refined by a particle at its
     /// centroid when its measure exceeds `insertion_factor` times the measure
-    /// of the regular simplex of edge `h` (`h` the mean spacing of its
-    /// nodes; √3/4·h² in 2D, h³/(6√2) in 3D). Dimensionless, `> 0`;
+    /// of the regular simplex of edge `h` (`h` the largest spacing of its
+    /// nodes, as in the alpha shape; √3/4·h² in 2D, h³/(6√2) in 3D). Dimensionless, `> 0`;
     /// `f64::INFINITY` disables insertion. Default `2.0`.
     pub insertion_factor: f64,
 }
@@ -240,8 +240,11 @@ fn regular_measure<const D: usize>(h: f64) -> f64 {
 ///   removed, and a measure above
 ///   [`insertion_factor`](ParticleManagementParams::insertion_factor) times
 ///   the regular simplex of edge `h` gets a fluid particle at its centroid,
-///   with the parents' mean spacing; its state is the mean of the parents'
-///   ([`Origin::Inserted`]).
+///   with the parents' largest spacing (the `h` of the criterion) in
+///   [`ParticleUpdate`]'s spacing; its state is the mean of the parents'
+///   ([`Origin::Inserted`]). (The driver's `Particles::remap` gives it the
+///   mean of the parents' spacings instead, as it does every field; the
+///   two differ only between bodies of different spacings.)
 /// * **Accounting**: the cloud after removal is re-tessellated and
 ///   alpha-shaped to measure [`VolumeChange::removal`]; the final cloud
 ///   likewise for [`VolumeChange::insertion`] (a step with nothing to do

@@ -111,7 +111,8 @@ pub struct QualityReport {
     /// Simplices with negative signed measure, ascending.
     pub inverted: Vec<u32>,
     /// Positively oriented simplices with quality below
-    /// [`QualityParams::degenerate_threshold`] (zero measure included),
+    /// [`QualityParams::degenerate_threshold`] (zero measure included when
+    /// the threshold is above 0),
     /// ascending.
     pub degenerate: Vec<u32>,
 }

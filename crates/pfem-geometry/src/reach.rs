@@ -12,12 +12,15 @@
 //! of the Delaunay tessellation of the subset that is not one of the whole
 //! set has a left-out point inside its circumsphere; if that simplex is
 //! small enough to be kept, the point is within `2 α h` of one of its
-//! non-wall nodes, and so it was not left out. Both tessellators' exact
-//! predicates (and `Delaunay3`'s symbolic perturbation, ranked by input
-//! index: [`tessellate_subset`] keeps the subset in index order) decide the
-//! same way on the points they share, so only simplices the alpha shape
-//! drops can differ. The order of the simplices differs, so a run with and
-//! without it agrees to round-off, not bit for bit.
+//! non-wall nodes, and so it was not left out. `Delaunay3`'s exact
+//! predicates and symbolic perturbation (ranked by input index:
+//! [`tessellate_subset`] keeps the subset in index order) decide the same
+//! way on the points they share, so only simplices the alpha shape drops
+//! can differ. `Delaunay2` (spade) does not: it splits a cocircular square
+//! by insertion order, so on a lattice the subset's diagonals may differ
+//! from the whole set's. That is why the driver uses the subset in 3D only.
+//! The order of the simplices differs, so a run with and without it agrees
+//! to round-off, not bit for bit.
 //!
 //! One gap in that argument: slivers (and contact elements) are bounded by
 //! their edges, not their circumradius, and a flat simplex's circumsphere
@@ -46,8 +49,10 @@ const CELLS_PER_PARTICLE: usize = 8;
 ///
 /// A uniform grid of cells at least `reach` wide: a wall particle is kept
 /// when a non-wall particle lies in its cell or in one next to it, so every
-/// wall particle within `reach` is kept, and some up to `2 √D reach` away.
-/// `O(N)` time and `O(N)` memory at most.
+/// wall particle within `reach` is kept, and some up to `2 √D` cells away
+/// (a cell is `reach` wide unless the grid had to be coarsened to stay
+/// within `CELLS_PER_PARTICLE` cells a particle: a drop far from the
+/// rest). `O(N)` time and `O(N)` memory at most.
 pub fn near_matter<const D: usize>(
     points: &[Point<D>],
     kinds: &[ParticleKind],

@@ -364,6 +364,33 @@ fn near_coincident_points_are_reported_with_a_tolerance() {
     }
 }
 
+/// The first tetrahedron's own corners are checked too (session 40's
+/// review: four points, two of them 10⁻² apart, passed a 10⁻¹ tolerance,
+/// since only inserted points were compared with their cavity).
+#[test]
+fn near_coincident_corners_of_the_first_tetrahedron_are_reported() {
+    let pts = [
+        Point::<3>::new(0.0, 0.0, 0.0),
+        Point::<3>::new(0.01, 0.0, 0.0),
+        Point::<3>::new(0.0, 1.0, 0.0),
+        Point::<3>::new(0.0, 0.0, 1.0),
+    ];
+    let mut out = Tessellation::new(4);
+    Delaunay3::default().tessellate(&pts, &mut out).unwrap();
+    match Delaunay3::with_min_distance(0.1).tessellate(&pts, &mut out) {
+        Err(GeometryError::NearCoincident {
+            first,
+            second,
+            distance,
+            ..
+        }) => {
+            assert_eq!((first, second), (0, 1));
+            assert!((distance - 0.01).abs() < 1e-15, "{distance}");
+        }
+        other => panic!("expected NearCoincident, got {other:?}"),
+    }
+}
+
 #[test]
 fn huge_and_mixed_magnitudes_never_panic() {
     // The checker's predicates would overflow at 2^500: check the

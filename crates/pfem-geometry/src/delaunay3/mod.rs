@@ -225,6 +225,26 @@ impl Tessellator<3> for Delaunay3 {
             return Err(GeometryError::Degenerate { count: n, dim: 3 });
         };
         let tol = self.min_distance * scale;
+        // Each insertion checks its point against the cavity's vertices;
+        // the first tetrahedron's own pairs are checked here (they were
+        // not: two of its corners 10⁻² apart passed a 10⁻¹ check).
+        if tol > 0.0 {
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let (p, q) = (ws.pts[first[a] as usize], ws.pts[first[b] as usize]);
+                    let d = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
+                    if d < tol {
+                        let (v, w) = (ws.rank[first[a] as usize], ws.rank[first[b] as usize]);
+                        return Err(GeometryError::NearCoincident {
+                            first: v.min(w) as usize,
+                            second: v.max(w) as usize,
+                            distance: d / scale,
+                            tolerance: tol / scale,
+                        });
+                    }
+                }
+            }
+        }
         for p in 0..n as u32 {
             if first.contains(&p) {
                 continue;
