@@ -108,13 +108,23 @@ fn density_ratio_free_solids_in_water() {
 
 /// The same case, for contact (issue 19): the heavy box sinks through the
 /// water to the floor (within the contact distance, one spacing, of its
-/// top row) without passing into it (its lowest particle stays above 0.9 h).
-/// Measured (2 December 2026): it reaches 1.04 h at 0.19 s, then rests on
-/// the one layer of water particles trapped under it, 1.4–1.5 h above the
-/// floor: the floor's contact force is zero over the last 0.1 s and the
-/// water film carries the box, its pressure force swinging between −220
-/// and +1 230 N/m from step to step (submerged weight 141 N/m). A film one
-/// particle thick does not drain: known gap.
+/// top row) without passing into it.
+///
+/// The bound on its lowest particle is the impact's: the box falls 0.1 m
+/// through water (`g (1 − 1/10)`) and meets the floor at about
+/// `√(2 · 0.9 g · 0.1)` = 1.33 m/s; the contact layer is as stiff as the
+/// box (its P-wave modulus, `c` = 11.6 m/s), so it closes by about
+/// `v / c` = 0.115 of its gap, as the box's own impact strain. Asserted:
+/// above 0.8 h. Measured (6 December 2026, solid masses `ρ₀ V₀`): it
+/// touches at 0.173 s, its lowest particle 0.897 h, and the floor carries
+/// 145.6 N/m over the last 0.1 s (submerged weight 141.3 N/m).
+///
+/// Until then (masses `ρ₀ Vⁿ`, which differ by under 1.4 %) the same run
+/// landed on the one layer of water particles trapped under the box,
+/// never below 0.99 h, and rested on that film (floor force zero, the
+/// film's pressure force swinging between −220 and +1 230 N/m); the bound
+/// was 0.9 h. Whether the film drains is sensitive to such small changes:
+/// the floor force is printed, not asserted.
 #[test]
 fn density_ratio_heavy_box_lands_on_the_floor() {
     let h = 0.01;
@@ -151,7 +161,7 @@ fn density_ratio_heavy_box_lands_on_the_floor() {
         (10_000.0 - 1000.0) * 0.04 * 0.04 * 9.81
     );
     assert!(landed.is_some(), "the heavy box never reached the floor");
-    assert!(lowest > 0.9 * h, "into the floor: {} h", lowest / h);
+    assert!(lowest > 0.8 * h, "into the floor: {} h", lowest / h);
 }
 
 /// The same case with backward Euler, the other damped scheme: the energy

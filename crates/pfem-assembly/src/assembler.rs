@@ -130,6 +130,14 @@ pub struct StepMesh<'a> {
     /// Fluid elements integrated only below their water line (issue 19;
     /// `pfem_geometry::AlphaShape::surface_cuts`). Empty by default.
     pub surface_cuts: SurfaceCuts<'a>,
+    /// Reference volume `V₀` (m³; m² in 2D) of the first elements, one
+    /// each (a prefix: the solids' elements, which keep their nodes for
+    /// the whole run): an element's lumped mass is `ρ₀ V₀` whatever its
+    /// volume at `t_n`, since `ρⁿ = ρ₀ / Jⁿ` (eq. 46). The elements after
+    /// the prefix (a fluid's, built anew each step, whose density moves
+    /// only by `p / K`) weigh `ρ Vⁿ`. Empty by default: every element
+    /// weighs `ρ Vⁿ`, so a solid's mass drifted with its volume strain.
+    pub reference_volumes: &'a [f64],
 }
 
 /// Fluid elements that join free-surface particles to a solid
@@ -296,6 +304,13 @@ where
     patch_blocks: Vec<u32>,
     /// Fluid material of each patch node (first fluid element seen).
     node_fluid_material: Vec<u16>,
+    /// Whether each patch node touches fluid elements of two materials or
+    /// more, and whether any does.
+    node_mixed: Vec<bool>,
+    any_mixed: bool,
+    /// At such nodes, after [`Assembler::nodal_gradients`]: (particle,
+    /// material, its share of `M̂_a`), by particle.
+    mixed_shares: Vec<(u32, u16, f64)>,
     /// Closure connectivity in system node numbers (see
     /// [`StepMesh::closures`]) and NV² patch slots per closure.
     clo_sys: Vec<u32>,
@@ -310,6 +325,8 @@ where
     cuts: Vec<(u32, u8)>,
     cut_up: [f64; 3],
     cut_share: Vec<(f64, [f64; MAX_NV])>,
+    /// [`StepMesh::reference_volumes`] of the step.
+    ref_vol: Vec<f64>,
     // Per-iteration values.
     values: Vec<f64>,
     rhs: Vec<f64>,
@@ -643,6 +660,20 @@ where
             mesh.elements.len() / <Const<D> as Dim>::NV,
             mesh.surface_cuts,
         )?;
+        let ne = mesh.elements.len() / <Const<D> as Dim>::NV;
+        if mesh.reference_volumes.len() > ne
+            || mesh
+                .reference_volumes
+                .iter()
+                .any(|v| !(v.is_finite() && *v > 0.0))
+        {
+            self.ref_vol.clear();
+            return Err(AssemblyError::MeshMismatch {
+                what: "more reference volumes than elements, or one that is not a positive number",
+            });
+        }
+        self.ref_vol.clear();
+        self.ref_vol.extend_from_slice(mesh.reference_volumes);
         let (ref le, ref lm, ref lc, ln) = self.last_mesh;
         if self.work.patterns_built > 0
             && ln == n_particles
@@ -809,6 +840,9 @@ where
         raw.resize(ptr[ns], 0);
         self.node_fluid_material.clear();
         self.node_fluid_material.resize(ns, u16::MAX);
+        self.node_mixed.clear();
+        self.node_mixed.resize(ns, false);
+        self.any_mixed = false;
         for e in 0..ne {
             if self.elem_fluid[e] {
                 let el = &self.elem_sys[e * nv..(e + 1) * nv];
@@ -818,6 +852,9 @@ where
                     fill[a] += nv;
                     if self.node_fluid_material[a] == u16::MAX {
                         self.node_fluid_material[a] = self.elem_material[e];
+                    } else if self.node_fluid_material[a] != self.elem_material[e] {
+                        self.node_mixed[a] = true;
+                        self.any_mixed = true;
                     }
                 }
             }
@@ -1158,6 +1195,7 @@ where
         let (elem_vol, elem_fluid) = (&self.elem_vol, &self.elem_fluid);
         let (elem_sys, elem_blocks) = (&self.elem_sys, &self.elem_blocks);
         let elem_material = &self.elem_material;
+        let ref_vol = &self.ref_vol;
         let (cut_of, cut_share) = (&self.cut_of, &self.cut_share);
         let (pattern, particle_of) = (&self.pattern, &self.particle_of);
         let constraints = input.constraints;
@@ -1186,6 +1224,9 @@ where
                 let (k, f) = (&*k, &*f);
                 let el = &elem_sys[e * nv..(e + 1) * nv];
                 let rho = input.materials[elem_material[e] as usize].density();
+                // Lumped mass `ρ₀ V₀` (eq. 46) where the element has a
+                // reference, else `ρ Vⁿ`.
+                let weight = rho * ref_vol.get(e).copied().unwrap_or(states[e].volume_n);
                 for a in 0..nv {
                     let i = el[a];
                     let own_i = own(i);
@@ -1193,8 +1234,7 @@ where
                     let ri = (i as usize).wrapping_sub(nodes.start);
                     if own_i {
                         // Lumped: ∫ ρ W_a over the element (or its cut part).
-                        mass[ri] +=
-                            shape_integral::<D>(cut_of, cut_share, e, a, rho * states[e].volume_n);
+                        mass[ri] += shape_integral::<D>(cut_of, cut_share, e, a, weight);
                         for kk in 0..D {
                             if !constraints.is_fixed(pi, kk) {
                                 rhs[ri * D + kk] += f[a * D + kk];
@@ -1815,6 +1855,60 @@ where
                 }
             }
         }
+        // Where two fluids meet, each material's share of the node's
+        // weights, the weights of `𝒦_a` above (serial: such nodes are an
+        // interface's).
+        self.mixed_shares.clear();
+        if self.any_mixed {
+            for e in 0..self.n_elements {
+                if !self.elem_fluid[e] {
+                    continue;
+                }
+                let frozen = self.frozen.get(e).copied().unwrap_or(false);
+                for a in 0..nv {
+                    let na = self.elem_sys[e * nv + a] as usize;
+                    if !self.node_mixed[na] {
+                        continue;
+                    }
+                    let wv = if frozen {
+                        shape_integral::<D>(&self.cut_of, &self.cut_share, e, a, 1.0)
+                            * self.frozen_w[e].0
+                    } else {
+                        shape_integral::<D>(
+                            &self.cut_of,
+                            &self.cut_share,
+                            e,
+                            a,
+                            self.states[e].volume,
+                        )
+                    };
+                    self.mixed_shares
+                        .push((self.particle_of[na], self.elem_material[e], wv));
+                }
+            }
+            // A stable sort, then each (particle, material) summed in
+            // element order.
+            self.mixed_shares.sort_by_key(|s| (s.0, s.1));
+            self.mixed_shares.dedup_by(|later, kept| {
+                let same = later.0 == kept.0 && later.1 == kept.1;
+                if same {
+                    kept.2 += later.2;
+                }
+                same
+            });
+        }
+    }
+
+    /// At each node where fluid elements of two materials or more meet:
+    /// (particle, material, that material's share of the node's weight),
+    /// sorted by particle then material; the shares of a node sum to its
+    /// `M̂_a` less its closures'. The same weights as the volume-weighted
+    /// `𝒦_a` of the momentum equation, so that a pressure update weighted
+    /// by them (`pfem_time`) is the one that equation balanced. Empty when
+    /// the mesh has one fluid material. Uses the geometry of the last
+    /// assembly.
+    pub fn mixed_fluid_shares(&self) -> &[(u32, u16, f64)] {
+        &self.mixed_shares
     }
 
     /// The assembled matrix as a faer sparse view.

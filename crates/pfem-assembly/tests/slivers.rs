@@ -108,6 +108,7 @@ where
             element_material: mesh.element_material,
             closures: &[],
             surface_cuts: Default::default(),
+            reference_volumes: &[],
         },
         mesh.materials,
     )

@@ -106,6 +106,7 @@ fn prepared(t: &Tank, split: bool, alpha: f64) -> Assembler<2> {
             element_material: &t.mat,
             closures: &[],
             surface_cuts: Default::default(),
+            reference_volumes: &[],
         },
         &t.materials,
     )
@@ -557,6 +558,7 @@ fn rows_name_no_particles_after_a_renumbering() {
                 element_material: &t.mat,
                 closures: &[],
                 surface_cuts: Default::default(),
+                reference_volumes: &[],
             },
             &t.materials,
         )

@@ -388,7 +388,10 @@ where
     /// body is remeshed.
     fn kind(&self) -> MaterialKind;
 
-    /// Density `ρ` (kg/m³) in the reference configuration at `t_n`.
+    /// Density `ρ₀` (kg/m³) in the initial configuration. A solid
+    /// element's lumped mass is `ρ₀ V₀` with `V₀` its initial volume (eq.
+    /// 46: `ρⁿ = ρ₀ / Jⁿ`, mass conserved); a fluid element, built anew
+    /// each step, weighs `ρ₀ Vⁿ` (its density moves only by `p / K`).
     fn density(&self) -> f64;
 
     /// Speed of the fastest wave the material carries (m/s): `√(K/ρ)` for a

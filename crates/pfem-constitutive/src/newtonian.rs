@@ -28,6 +28,13 @@ use crate::material::{History, Kinematics, Material, MaterialKind, Unified};
 /// The real bulk modulus of water (2.2 GPa) is accepted; lowering it
 /// (artificial compressibility) is the caller's explicit choice.
 ///
+/// The pressure is updated with the rate at the step's end (backward
+/// Euler in `p`) while the positions follow the Newmark scheme: as in the
+/// paper, this acts as a bulk viscosity `K_f Δt / 2` under the
+/// trapezoidal rule, a damping ratio of about `ω Δt / 4` on an acoustic
+/// mode of frequency `ω`: the stiff water's pressure waves, unresolved by
+/// the step, are damped; a wave the step resolves is barely touched.
+///
 /// ```
 /// use pfem_constitutive::{History, Kinematics, Material, Newtonian};
 ///

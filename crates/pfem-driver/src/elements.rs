@@ -30,6 +30,9 @@ where
     conn: Vec<u32>,
     material: Vec<u16>,
     history: Vec<History<D>>,
+    /// Each solid element's volume in the scene's initial configuration:
+    /// its lumped mass is `ρ₀ V₀` (eq. 46), whatever its volume now.
+    reference_volumes: Vec<f64>,
     n_solid: usize,
     n_fluid: usize,
     /// The two bodies of each contact element (master first).
@@ -51,19 +54,35 @@ impl<const D: usize> Elements<D>
 where
     Const<D>: Dim,
 {
-    /// The solid elements (`conn`, flat) with one material each, and the
-    /// options for the fluid range.
+    /// The solid elements (`conn`, flat) with one material each, their
+    /// particles' initial positions `x0` (their reference volumes), and
+    /// the options for the fluid range.
     pub(crate) fn new(
         solid: Vec<u32>,
         solid_material: Vec<u16>,
+        x0: &[Point<D>],
         close_sealed_voids: bool,
         count_wall_pockets: bool,
     ) -> Self {
         let n_solid = solid_material.len();
+        let reference_volumes = solid
+            .chunks_exact(D + 1)
+            .map(|el| {
+                let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+                for (a, &i) in el.iter().enumerate() {
+                    p[a] = x0
+                        .get(i as usize)
+                        .copied()
+                        .unwrap_or_else(Point::<D>::zeros);
+                }
+                simplex_measure::<D>(&p[..D + 1])
+            })
+            .collect();
         Self {
             conn: solid,
             material: solid_material,
             history: vec![History::default(); n_solid],
+            reference_volumes,
             n_solid,
             n_fluid: 0,
             contact_bodies: Vec::new(),
@@ -215,6 +234,7 @@ where
                     elements: &self.cuts,
                     up: self.up,
                 },
+                reference_volumes: &self.reference_volumes,
             },
             &mut self.history,
         )

@@ -231,7 +231,7 @@ pub struct Options {
     /// Smallest quality `measure / R³` of a fluid tetrahedron (3D):
     /// flatter ones are slivers, not elements
     /// (`pfem_geometry::AlphaShapeParams::min_quality_3d`). Default
-    /// [`pfem_geometry::MIN_SHAPE_QUALITY`] (flat to round-off);
+    /// [`pfem_geometry::MIN_SHAPE_QUALITY`] (only nearly flat ones);
     /// [`pfem_geometry::MIN_ELEMENT_QUALITY_3D`] (0.06) removes the 3D water
     /// column's rejected attempts (142 of 450 steps to 0.3 s → 0 of 144)
     /// but changes the column-on-cylinder's top displacement (50.96
@@ -558,15 +558,18 @@ where
         for (body, law) in laws {
             hooks.push(Box::new(crate::hooks::PrescribedMotion::new(body, law)));
         }
+        // The solid elements weigh their initial volume (eq. 46).
+        let elements = Elements::new(
+            solid_elements,
+            solid_material,
+            particles.x(),
+            options.close_sealed_voids,
+            options.count_wall_pockets,
+        );
         let mut sim = Self {
             name,
             particles,
-            elements: Elements::new(
-                solid_elements,
-                solid_material,
-                options.close_sealed_voids,
-                options.count_wall_pockets,
-            ),
+            elements,
             materials,
             body_names,
             hooks,
@@ -2095,4 +2098,3 @@ mod tests {
         assert!(g(1, 0).abs() < 1e-12 && g(4, 2).abs() < 1e-12);
     }
 }
-

@@ -110,6 +110,7 @@ fn prepared(t: &Tank, split: bool) -> Assembler<2> {
             element_material: &t.mat,
             closures: &[],
             surface_cuts: Default::default(),
+            reference_volumes: &[],
         },
         &t.materials,
     )

@@ -1281,10 +1281,29 @@ where
         } else {
             self.assembler
                 .nodal_volumetric_rates(&self.v_it, &mut self.rates);
+            let mixed = self.assembler.mixed_fluid_shares();
             for r in &self.rates {
                 let p = r.particle as usize;
-                let mat = &input.materials[r.material as usize];
-                let value = mat.update_pressure(state.pressure[p], r.rate, dt); // eq. 62
+                let start = mixed.partition_point(|s| s.0 < r.particle);
+                let shares = mixed[start..].iter().take_while(|s| s.0 == r.particle);
+                let weight: f64 = shares.clone().map(|s| s.2).sum();
+                let value = if weight > 0.0 {
+                    // Where two fluids meet, each material's update
+                    // weighted by its share, the weights of the momentum
+                    // equation's `𝒦_a` (it used the first element's
+                    // material alone, which that equation did not balance;
+                    // session 40's review).
+                    let mut sum = 0.0;
+                    for &(_, m, w) in shares {
+                        let mat = &input.materials[m as usize];
+                        sum += w * mat.update_pressure(state.pressure[p], r.rate, dt);
+                        // eq. 62
+                    }
+                    sum / weight
+                } else {
+                    let mat = &input.materials[r.material as usize];
+                    mat.update_pressure(state.pressure[p], r.rate, dt) // eq. 62
+                };
                 new_pressure.push((p, value));
             }
         }

@@ -145,6 +145,7 @@ impl<'b> Sim<'b> {
                     element_material: &self.mat,
                     closures: &[],
                     surface_cuts: Default::default(),
+                    reference_volumes: &[],
                 },
                 materials: &self.materials,
                 constraints: &self.b.constraints,

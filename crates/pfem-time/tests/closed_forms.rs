@@ -36,6 +36,7 @@ fn an_integrator_with_a_zero_tolerance_names_it() {
             element_material: &mat,
             closures: &[],
             surface_cuts: Default::default(),
+            reference_volumes: &[],
         },
         materials: &materials,
         constraints: &constraints,
@@ -65,6 +66,7 @@ fn free_fall_of_a_detached_fluid_block() {
             element_material: &mat,
             closures: &[],
             surface_cuts: Default::default(),
+            reference_volumes: &[],
         },
         materials: &materials,
         constraints: &constraints,
@@ -141,6 +143,7 @@ fn run_tank(
             element_material: &mat,
             closures: &[],
             surface_cuts: Default::default(),
+            reference_volumes: &[],
         },
         materials: &materials,
         constraints: &constraints,
@@ -212,4 +215,81 @@ fn water_released_without_pressure_settles_to_hydrostatic() {
     let vend = state.v.iter().fold(0.0f64, |m, v| m.max(v.norm()));
     assert!(vend < 1e-3 * (G * h).sqrt(), "residual velocity {vend}");
     assert!(((vol - vol0) / vol0).abs() < 1e-3, "volume {vol0} -> {vol}");
+}
+
+/// Two fluids of different bulk moduli side by side, squeezed uniformly
+/// (every particle's velocity prescribed, `v = −(x − x_c)/s`: the nodal
+/// volumetric strain rate is −2/s everywhere). A node where the two meet
+/// gets the pressure of each material's update (eq. 62) weighted by its
+/// share of the node's weights, the weights of the momentum equation's
+/// volume-averaged `𝒦_a`; a node of one fluid, its own. Session 40's
+/// review: the update used the first element's material at an interface
+/// node, so its pressure was `2 Δt K₀` or `2 Δt K₁` where the momentum
+/// equation had balanced the mean.
+#[test]
+fn where_two_fluids_meet_the_pressure_update_weighs_both() {
+    let (nx, ny) = (4, 4);
+    let (pts, tris) = common::grid(0.0, 0.0, 0.4, 0.4, nx, ny);
+    let ne = tris.len() / 3;
+    let (k0, k1) = (2.2e9, 2.2e7);
+    let materials: Vec<Box<dyn Material<2>>> = vec![
+        Box::new(Newtonian::new(1000.0, 1e-3, k0).unwrap()),
+        Box::new(Newtonian::new(1000.0, 1e-3, k1).unwrap()),
+    ];
+    // Material 1 right of x = 0.2 (by each triangle's centroid).
+    let mat: Vec<u16> = tris
+        .chunks_exact(3)
+        .map(|t| {
+            let cx = t.iter().map(|&i| pts[i as usize].x).sum::<f64>() / 3.0;
+            u16::from(cx > 0.2)
+        })
+        .collect();
+    let mut history = vec![History::<2>::default(); ne];
+    let centre = Point::<2>::new(0.2, 0.2);
+    let mut constraints = Constraints::<2>::free(pts.len());
+    for (i, p) in pts.iter().enumerate() {
+        constraints.fix(i, -(p - centre));
+    }
+    // Each node's weights by material: a third of each element's area.
+    let mut share = vec![[0.0f64; 2]; pts.len()];
+    for (t, &m) in tris.chunks_exact(3).zip(&mat) {
+        let p: Vec<Point<2>> = t.iter().map(|&i| pts[i as usize]).collect();
+        let area = pfem_core::simplex_measure::<2>(&p);
+        for &i in t {
+            share[i as usize][m as usize] += area / 3.0;
+        }
+    }
+    let mut state = ParticleState::at_rest(pts.clone());
+    for (i, p) in pts.iter().enumerate() {
+        state.v[i] = -(p - centre);
+    }
+    let mut integ = Integrator::<2>::new(StepParams::default());
+    let input = StepInput {
+        mesh: StepMesh {
+            elements: &tris,
+            element_material: &mat,
+            ..Default::default()
+        },
+        materials: &materials,
+        constraints: &constraints,
+        body_force: None,
+    };
+    let dt = 1e-5;
+    integ
+        .try_step(0.0, dt, &mut state, &mut history, &input)
+        .unwrap();
+    let mut mixed = 0;
+    for (i, w) in share.iter().enumerate() {
+        let k = (w[0] * k0 + w[1] * k1) / (w[0] + w[1]);
+        let want = 2.0 * dt * k;
+        let got = state.pressure[i];
+        assert!(
+            (got - want).abs() < 1e-3 * want,
+            "node {i} (shares {w:?}): {got} Pa against {want}"
+        );
+        if w[0] > 0.0 && w[1] > 0.0 {
+            mixed += 1;
+        }
+    }
+    assert_eq!(mixed, ny + 1, "the middle column meets both fluids");
 }

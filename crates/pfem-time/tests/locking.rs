@@ -82,6 +82,7 @@ fn collapse(treatment: VolumetricTreatment, union_jack: bool, t_end: f64) -> Col
             element_material: &mat,
             closures: &[],
             surface_cuts: Default::default(),
+            reference_volumes: &[],
         },
         materials: &materials,
         constraints: &constraints,

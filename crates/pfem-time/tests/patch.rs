@@ -87,6 +87,7 @@ where
             element_material: &mat,
             closures: &[],
             surface_cuts: Default::default(),
+            reference_volumes: &[],
         },
         materials: &materials,
         constraints: &constraints,

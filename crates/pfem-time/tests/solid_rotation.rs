@@ -110,6 +110,7 @@ where
                 element_material: &self.material_of,
                 closures: &[],
                 surface_cuts: Default::default(),
+                reference_volumes: &[],
             },
             materials: &self.materials,
             constraints: &constraints,
