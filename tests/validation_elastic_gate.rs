@@ -52,8 +52,13 @@ fn run(h: f64, gate_h: f64, plane_stress: bool) -> (f64, f64) {
         StepParams::default(),
     )
     .unwrap();
+    // One folder per call: the tests of this file run the same case at
+    // once (`--include-ignored`), and a shared folder made one run's
+    // output fail under another's.
+    static CALL: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALL.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::env::temp_dir().join(format!(
-        "pfem-test-gate-{h}-{gate_h}-{plane_stress}-{}",
+        "pfem-test-gate-{h}-{gate_h}-{plane_stress}-{}-{call}",
         std::process::id()
     ));
     let mut out = StandardOutput::new(&dir, false, case.probes(), true).overwrite(true);
@@ -104,9 +109,15 @@ fn plane_stress_gate_peaks_within_ten_percent_of_the_measured_46_mm() {
 }
 
 /// `cargo test --release --test suite validation_elastic_gate::refinement -- --ignored`
-/// (about 2 minutes).
+/// (about 25 s).
+///
+/// Known gap since session 40: the h/2 peak is 41.96 mm at 0.104 s, the
+/// refinement moving it by −11.5 % (bound 10 %); it was 42.97 mm (−9.3 %)
+/// before the solid elements weighed `ρ₀ V₀`. The h/2 peak itself moves
+/// by 2 % with the Picard tolerance (41.96 mm at 10⁻⁶ and 10⁻⁷, 42.79 mm
+/// at 3·10⁻⁶), so the bound sits within the run's own spread.
 #[test]
-#[ignore = "long: the h/2 run takes about 100 s"]
+#[ignore = "known gap: refining h to h/2 moves the plane-stress peak by -11.5 % (bound 10 %); long"]
 fn refinement_from_h_to_half_h_moves_the_peak_by_less_than_ten_percent() {
     let (_, ux_exp) = measured_peak();
     let (_, coarse) = run(0.005, 0.00125, true);
