@@ -734,3 +734,49 @@ fn a_material_update_that_returns_nan_stops_the_run_with_a_typed_error() {
     assert_eq!(sim.steps(), 0);
     assert_eq!(sim.elements().solid_history(), &before[..]);
 }
+
+/// A restore weighs the solid elements by the checkpoint's own initial
+/// positions (`ρ₀ V₀`, eq. 46), not by the scene it is restored into: a
+/// scene whose block was scaled by 1.1 (spacing too, so that its lattice
+/// and connectivity pass the checks) gives its masses from the run that
+/// wrote the checkpoint (session 40's review: they came from the edited
+/// scene, 1.21 times heavier).
+#[test]
+fn a_restore_weighs_the_solids_by_the_checkpoint_s_own_start() {
+    use pfem::constitutive::Hypoelastic;
+    let block = |s: f64| {
+        let h = 0.02 * s;
+        Scene::<2>::new("slide")
+            .settings(RunSettings {
+                end_time: 0.01,
+                max_dt: 2e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .solid(
+                "block",
+                Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+                Geometry::Box {
+                    min: Point::<2>::new(0.0, 0.0),
+                    max: Point::<2>::new(0.2 * s, 0.1 * s),
+                },
+                h,
+                None,
+            )
+    };
+    let mut run = sim2(block(1.0));
+    run.step().unwrap();
+    let ck = run.checkpoint();
+    let mut scaled = sim2(block(1.1));
+    let v0: f64 = run.elements().reference_volumes().iter().sum();
+    let v_scaled: f64 = scaled.elements().reference_volumes().iter().sum();
+    assert!(
+        (v_scaled / v0 - 1.21).abs() < 1e-9,
+        "{v_scaled} against {v0}"
+    );
+    // Accepted: the checks see the same particles, kinds, bodies,
+    // connectivity and materials.
+    scaled.restore(&ck).unwrap();
+    let v: f64 = scaled.elements().reference_volumes().iter().sum();
+    assert_eq!(v, v0, "the checkpoint's masses");
+}

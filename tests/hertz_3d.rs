@@ -52,19 +52,25 @@ struct Bounce {
     energy: f64,
 }
 
-/// Mass of each particle (lumped from the solid's own elements, `ρ V / 4`
-/// each) and the strain energy `Σ V ((1 + ν) σ:σ − ν (tr σ)²) / (2E)` of
-/// the solid's elements.
+/// Mass of each particle (lumped from the solid's own elements, `ρ V₀ / 4`
+/// each with `V₀` the initial volume, as the solver's, eq. 46) and the
+/// strain energy `Σ V ((1 + ν) σ:σ − ν (tr σ)²) / (2E)` of the solid's
+/// elements.
 fn masses_and_strain(s: &Simulation<3>, rho: f64, young: f64, nu: f64) -> (Vec<f64>, f64) {
     let x = s.particles().x();
     let el = s.elements();
     let mut mass = vec![0.0; x.len()];
     let mut strain = 0.0;
-    for (e, h) in el.solid().chunks_exact(4).zip(el.solid_history()) {
+    for ((e, h), &vol0) in el
+        .solid()
+        .chunks_exact(4)
+        .zip(el.solid_history())
+        .zip(el.reference_volumes())
+    {
         let p: Vec<Point<3>> = e.iter().map(|&i| x[i as usize]).collect();
         let vol = pfem::core::simplex_measure::<3>(&p);
         for &i in e {
-            mass[i as usize] += rho * vol / 4.0;
+            mass[i as usize] += rho * vol0 / 4.0;
         }
         let sig = h.stress;
         let tr = sig.trace();

@@ -9,7 +9,9 @@
 //! the trapezoidal Newmark (β = ¼, γ = ½; the paper prints `M Aⁿ/Δt` in
 //! eq. 49, dimensional consistency and Newmark's eq. 48 give `M Aⁿ`),
 //! Bossak's weights (`pfem-time`), `(1/Δt, 0)` for backward Euler. `M` is
-//! the lumped mass `ρ Vₑⁿ / (D + 1)` per node.
+//! the lumped mass per node, each element's `ρ₀ V₀ / (D + 1)` where the
+//! mesh gives its reference volume (a solid's, eq. 46,
+//! [`StepMesh::reference_volumes`]), else `ρ Vₑⁿ / (D + 1)`.
 //!
 //! Fluids carry their pressure on nodes (eq. 62). The volumetric term of a
 //! fluid is assembled as `Gᵀ M̂⁻¹ 𝒦 G` with the lumped `M̂` of eq. 56 and
@@ -308,8 +310,8 @@ where
     /// more, and whether any does.
     node_mixed: Vec<bool>,
     any_mixed: bool,
-    /// At such nodes, after [`Assembler::nodal_gradients`]: (particle,
-    /// material, its share of `M̂_a`), by particle.
+    /// At such nodes, filled by [`Assembler::mixed_fluid_shares`]:
+    /// (particle, material, its share of `M̂_a`), by particle.
     mixed_shares: Vec<(u32, u16, f64)>,
     /// Closure connectivity in system node numbers (see
     /// [`StepMesh::closures`]) and NV² patch slots per closure.
@@ -648,6 +650,24 @@ where
         materials: &[Box<dyn Material<D>>],
     ) -> Result<(), AssemblyError> {
         self.work.prepares += 1;
+        // Checked before anything changes (the last mesh stays usable).
+        let ne = mesh.elements.len() / <Const<D> as Dim>::NV;
+        if let Some(e) = (mesh.reference_volumes.len() > ne)
+            .then_some(ne)
+            .or_else(|| {
+                mesh.reference_volumes
+                    .iter()
+                    .position(|v| !(v.is_finite() && *v > 0.0))
+            })
+        {
+            return Err(AssemblyError::MeshMismatch {
+                what: if e == ne {
+                    "more reference volumes than elements"
+                } else {
+                    "a reference volume that is not a positive number"
+                },
+            });
+        }
         let renumbered = std::mem::take(&mut self.renumbered);
         if renumbered {
             self.ids_valid = false;
@@ -660,18 +680,6 @@ where
             mesh.elements.len() / <Const<D> as Dim>::NV,
             mesh.surface_cuts,
         )?;
-        let ne = mesh.elements.len() / <Const<D> as Dim>::NV;
-        if mesh.reference_volumes.len() > ne
-            || mesh
-                .reference_volumes
-                .iter()
-                .any(|v| !(v.is_finite() && *v > 0.0))
-        {
-            self.ref_vol.clear();
-            return Err(AssemblyError::MeshMismatch {
-                what: "more reference volumes than elements, or one that is not a positive number",
-            });
-        }
         self.ref_vol.clear();
         self.ref_vol.extend_from_slice(mesh.reference_volumes);
         let (ref le, ref lm, ref lc, ln) = self.last_mesh;
@@ -1855,9 +1863,24 @@ where
                 }
             }
         }
-        // Where two fluids meet, each material's share of the node's
-        // weights, the weights of `𝒦_a` above (serial: such nodes are an
-        // interface's).
+    }
+
+    /// At each node where fluid elements of two materials or more meet:
+    /// (particle, material, that material's share of the node's weight),
+    /// sorted by particle then material; the shares of a node sum to its
+    /// `M̂_a` less its closures' (an inverted sliver kept in shape counts
+    /// zero). The same weights as the volume-weighted
+    /// `𝒦_a` of the momentum equation, so that a pressure update weighted
+    /// by them (`pfem_time`) is the one that equation balanced. Empty when
+    /// the mesh has one fluid material. Uses the geometry of the last
+    /// assembly.
+    pub fn mixed_fluid_shares(&mut self) -> &[(u32, u16, f64)] {
+        let nv = <Const<D> as Dim>::NV;
+        // Each material's share of the node's weights, the weights of
+        // `𝒦_a` in `nodal_gradients` (serial: such nodes are an
+        // interface's; once a step, not once an iterate). A frozen
+        // sliver's signed weight is taken at zero when negative (an
+        // inverted one): a share is a weight of an average.
         self.mixed_shares.clear();
         if self.any_mixed {
             for e in 0..self.n_elements {
@@ -1882,8 +1905,11 @@ where
                             self.states[e].volume,
                         )
                     };
-                    self.mixed_shares
-                        .push((self.particle_of[na], self.elem_material[e], wv));
+                    self.mixed_shares.push((
+                        self.particle_of[na],
+                        self.elem_material[e],
+                        wv.max(0.0),
+                    ));
                 }
             }
             // A stable sort, then each (particle, material) summed in
@@ -1897,17 +1923,6 @@ where
                 same
             });
         }
-    }
-
-    /// At each node where fluid elements of two materials or more meet:
-    /// (particle, material, that material's share of the node's weight),
-    /// sorted by particle then material; the shares of a node sum to its
-    /// `M̂_a` less its closures'. The same weights as the volume-weighted
-    /// `𝒦_a` of the momentum equation, so that a pressure update weighted
-    /// by them (`pfem_time`) is the one that equation balanced. Empty when
-    /// the mesh has one fluid material. Uses the geometry of the last
-    /// assembly.
-    pub fn mixed_fluid_shares(&self) -> &[(u32, u16, f64)] {
         &self.mixed_shares
     }
 
@@ -2251,7 +2266,9 @@ where
 pub struct NodalRate {
     /// Particle index.
     pub particle: u32,
-    /// Fluid material of the node.
+    /// Fluid material of the node: its first fluid element's (where two
+    /// fluids meet, [`Assembler::mixed_fluid_shares`] gives each one's
+    /// share).
     pub material: u16,
     /// Lumped nodal measure `M̂_a` (eq. 56).
     pub volume: f64,

@@ -374,7 +374,8 @@ where
 ///
 /// For a free (not clamped) particle `i` of the solid, its share of the
 /// discrete momentum balance is `mˢᵢ aᵢ = fˢᵢ + fᶠᵢ + mˢᵢ g`, with `mˢ` the
-/// lumped mass of the solid's own elements (ρ V / (D + 1) each), `fˢ` their
+/// lumped mass of the solid's own elements (`ρ₀ V₀ / (D + 1)` each, their
+/// initial volumes as the solver's, eq. 46), `fˢ` their
 /// internal force `−V σ ∇Nᵢ` (Cauchy stress of the last accepted step, on
 /// the current positions) and `fᶠ` what the fluid elements sharing the
 /// particle transmit (their internal force less their own inertia). The
@@ -413,10 +414,16 @@ where
             continue;
         };
         let rho = s.materials()[s.elements().solid_material()[e] as usize].density();
+        let v0 = s
+            .elements()
+            .reference_volumes()
+            .get(e)
+            .copied()
+            .unwrap_or(vol);
         let sigma = s.elements().solid_history()[e].stress;
         for a in 0..nv {
             let i = el[a] as usize;
-            mass[i] += rho * vol / nv as f64;
+            mass[i] += rho * v0 / nv as f64;
             f_int[i] -= sigma * grads[a] * vol;
         }
     }

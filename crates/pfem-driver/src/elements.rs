@@ -65,24 +65,11 @@ where
         count_wall_pockets: bool,
     ) -> Self {
         let n_solid = solid_material.len();
-        let reference_volumes = solid
-            .chunks_exact(D + 1)
-            .map(|el| {
-                let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
-                for (a, &i) in el.iter().enumerate() {
-                    p[a] = x0
-                        .get(i as usize)
-                        .copied()
-                        .unwrap_or_else(Point::<D>::zeros);
-                }
-                simplex_measure::<D>(&p[..D + 1])
-            })
-            .collect();
-        Self {
+        let mut elements = Self {
             conn: solid,
             material: solid_material,
             history: vec![History::default(); n_solid],
-            reference_volumes,
+            reference_volumes: Vec::new(),
             n_solid,
             n_fluid: 0,
             contact_bodies: Vec::new(),
@@ -93,7 +80,33 @@ where
             count_wall_pockets,
             cuts: Vec::new(),
             up: [0.0; 3],
+        };
+        elements.set_reference_volumes(x0);
+        elements
+    }
+
+    /// Each solid element's volume at the particles' initial positions
+    /// `x0` (its mass `ρ₀ V₀`, eq. 46). A restore sets them again from the
+    /// checkpoint's own initial positions, not the scene's.
+    pub(crate) fn set_reference_volumes(&mut self, x0: &[Point<D>]) {
+        let nv = D + 1;
+        self.reference_volumes.clear();
+        for el in self.conn[..self.n_solid * nv].chunks_exact(nv) {
+            let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+            for (a, &i) in el.iter().enumerate() {
+                p[a] = x0
+                    .get(i as usize)
+                    .copied()
+                    .unwrap_or_else(Point::<D>::zeros);
+            }
+            self.reference_volumes.push(simplex_measure::<D>(&p[..nv]));
         }
+    }
+
+    /// Each solid element's initial volume (m³; m² in 2D), in the order of
+    /// [`Elements::solid`]: its lumped mass is `ρ₀ V₀`.
+    pub fn reference_volumes(&self) -> &[f64] {
+        &self.reference_volumes
     }
 
     /// Replaces the fluid range with the kept simplices of `shape`, the

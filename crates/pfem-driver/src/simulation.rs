@@ -562,7 +562,7 @@ where
         let elements = Elements::new(
             solid_elements,
             solid_material,
-            particles.x(),
+            particles.initial_positions(),
             options.close_sealed_voids,
             options.count_wall_pockets,
         );
@@ -1801,6 +1801,11 @@ where
                 hd.end()?;
             }
             self.particles = particles;
+            // The masses of the run that wrote the checkpoint: its own
+            // initial positions, not the scene's (which may have been
+            // edited and still pass the connectivity check).
+            self.elements
+                .set_reference_volumes(self.particles.initial_positions());
             self.clock = clock;
             self.volume = volume;
             self.volume_now = volume_now;

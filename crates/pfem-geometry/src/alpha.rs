@@ -33,7 +33,8 @@ pub struct AlphaShapeParams {
     /// The unit vector opposite to gravity (its first `D` components are
     /// used), which says where "above the water line" is; `None` (the
     /// default) when the scene has no gravity, and no simplex is then a dry
-    /// bridge. The driver sets it from the scene's gravity.
+    /// bridge. The driver sets it from the body force, again whenever a
+    /// hook or a restore changes it.
     pub up: Option<[f64; 3]>,
     /// Smallest `measure / R³` of a kept tetrahedron (3D; `R` its
     /// circumradius): flatter candidates are slivers, never elements (the

@@ -482,7 +482,12 @@ where
                 100.0 * change
             )
         } else {
-            "no fluid".to_string()
+            // No fluid volume at the start (no fluid, or drops with no
+            // mesh): no relative change to give.
+            format!(
+                "fluid volume {:.6e} -> {:.6e}",
+                summary.fluid_volume_initial, summary.fluid_volume_final
+            )
         };
         println!(
             "{} steps ({} rejected), simulated {:.4} s, {volume}, wall time {:.1} s",

@@ -25,7 +25,8 @@ use crate::RunError;
 /// smallest spacing and undone where it would halve an element.
 /// Velocities, pressures and accelerations are untouched: the correction
 /// is geometric and adds no momentum. Its effect is booked in the ledger
-/// under [`VolumeCorrection::NAME`].
+/// under [`VolumeCorrection::NAME`]. A run with no fluid volume to hold (its
+/// fluid starting as drops with no mesh, and no source) is left alone.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VolumeCorrection {
     beta: f64,
@@ -150,12 +151,15 @@ where
         let Some(c0) = self.compression0 else {
             return Ok(());
         };
-        let target = self
+        let intended = self
             .target_volume
-            .unwrap_or_else(|| ctx.intended_fluid_volume())
-            + c0;
+            .unwrap_or_else(|| ctx.intended_fluid_volume());
+        let target = intended + c0;
         let volume_now = ctx.fluid_volume();
-        if self.beta == 0.0 || volume_now <= 0.0 {
+        // No volume to hold: a scene whose fluid starts with no mesh (drops
+        // flying) and no source. Its drops meeting later would otherwise
+        // be squeezed towards a volume of zero (session 40's review).
+        if self.beta == 0.0 || volume_now <= 0.0 || intended <= 0.0 {
             return Ok(());
         }
         let e = (volume_now + fluid_compression(ctx)) - target;
