@@ -21,8 +21,9 @@ pub struct ParticleManagementParams {
     /// A kept simplex with a fluid node is refined by a particle at its
     /// centroid when its measure exceeds `insertion_factor` times the measure
     /// of the regular simplex of edge `h` (`h` the largest spacing of its
-    /// nodes, as in the alpha shape; √3/4·h² in 2D, h³/(6√2) in 3D). Dimensionless, `> 0`;
-    /// `f64::INFINITY` disables insertion. Default `2.0`.
+    /// nodes, as in the alpha shape; √3/4·h² in 2D, h³/(6√2) in 3D).
+    /// Dimensionless, `≥ 1` (below, particles would be inserted closer than
+    /// their spacing); `f64::INFINITY` disables insertion. Default `2.0`.
     pub insertion_factor: f64,
 }
 
@@ -46,12 +47,17 @@ impl ParticleManagementParams {
                 reason: "must be in [0, 1)",
             });
         }
+        // Below 1 a simplex smaller than the regular one of edge `h` is
+        // refined: its centroid may lie within `0.22 f h` of a vertex (a
+        // kept simplex has `R ≤ α h`), so the particles crowd below their
+        // spacing (0.06 h at 0.1, session 39's review), and the removal
+        // takes them out again.
         let f = self.insertion_factor;
-        if f.is_nan() || f <= 0.0 {
+        if f.is_nan() || f < 1.0 {
             return Err(GeometryError::InvalidParameter {
                 name: "insertion_factor",
                 value: f,
-                reason: "must be > 0 (infinity disables insertion)",
+                reason: "must be >= 1 (below, particles are inserted closer than their spacing; infinity disables insertion)",
             });
         }
         Ok(())
@@ -583,6 +589,8 @@ mod tests {
             (1.0, 2.0),
             (f64::NAN, 2.0),
             (0.3, 0.0),
+            (0.3, 0.5),
+            (0.3, 0.999),
             (0.3, f64::NAN),
         ] {
             let p = ParticleManagementParams {

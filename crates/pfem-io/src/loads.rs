@@ -102,7 +102,11 @@ where
     /// `tests/water_at_rest_2d.rs` checks it to 2 %). The closures of
     /// sealed voids add their pressure force (3D; without them a 3D block
     /// read 12 N sideways and +47 % up, `tests/water_at_rest_3d.rs`). The
-    /// viscous part is left out (negligible for water).
+    /// viscous part is left out (negligible for water). The inertia is the
+    /// last acceleration's, `m aⁿ⁺¹`: under Bossak's scheme the step
+    /// balanced `m [(1 − α_B) aⁿ⁺¹ + α_B aⁿ]`, so a force that changes
+    /// fast reads slightly off the one the step transmitted (as
+    /// `pfem::cases3d::fluid_force` measures).
     /// The force body `from` exerts on body `on` through their contact
     /// elements at the end of the last step: each element's stress `σ`
     /// (`−p I + τ ⊗ n + n ⊗ τ`, constant in the simplex) gives its particles

@@ -477,7 +477,8 @@ where
     pub v: Vec<Vector<D>>,
     /// Accelerations (m/s²).
     pub a: Vec<Vector<D>>,
-    /// Nodal pressure (Pa) of fluid nodes (eq. 62).
+    /// Nodal pressure (Pa, eq. 62) of every node of a fluid element, wall
+    /// and solid nodes of the wetted interface included; zero elsewhere.
     pub pressure: Vec<f64>,
 }
 
@@ -1323,15 +1324,29 @@ where
             touched[p] = true;
         }
         for p in 0..n {
-            if !touched[p] && self.assembler.system_node(p).is_none() {
-                state.pressure[p] = 0.0; // a flying particle carries no pressure
+            // Outside every fluid element: a flying particle, or a solid
+            // or wall particle whose water has left, carries no pressure
+            // (a solid particle kept its last wetted one, which came back
+            // into `Gᵀ pⁿ` and eq. 62 when the water did: session 40's
+            // review).
+            if !touched[p] {
+                state.pressure[p] = 0.0;
             }
         }
         // Accelerations and positions (eqs. 47–48, 64).
         for p in 0..n {
             state.a[p] = w.acceleration(&state.v[p], &state.a[p], &self.v_it[p]);
-            if self.assembler.system_node(p).is_none() && !input.constraints.is_fully_fixed(p) {
-                state.a[p] = b;
+            // A flying particle falls freely in its free components; a
+            // prescribed component keeps the scheme's value (session 40:
+            // a slip-plane particle flying under a tilted gravity got the
+            // gravity's component across its plane, and drifted off it
+            // under Bossak).
+            if self.assembler.system_node(p).is_none() {
+                for k in 0..D {
+                    if !input.constraints.is_fixed(p, k) {
+                        state.a[p][k] = b[k];
+                    }
+                }
             }
         }
         state.v.clone_from(&self.v_it);

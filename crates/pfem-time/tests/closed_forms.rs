@@ -293,3 +293,109 @@ fn where_two_fluids_meet_the_pressure_update_weighs_both() {
     }
     assert_eq!(mixed, ny + 1, "the middle column meets both fluids");
 }
+
+/// A solid particle whose water has left carries no pressure: a fluid
+/// triangle and a solid one share an edge; squeezed, the shared nodes
+/// take the water's pressure; a step on the solid triangle alone (the
+/// water gone) leaves them at zero. Session 40's review: they kept the
+/// last wetted pressure, which came back into the next wetted step's
+/// `Gᵀ pⁿ` and eq. 62.
+#[test]
+fn a_solid_particle_that_dries_carries_no_pressure() {
+    use pfem_constitutive::Hypoelastic;
+    let pts = vec![
+        Point::<2>::new(0.0, 0.0),
+        Point::<2>::new(1.0, 0.0),
+        Point::<2>::new(0.0, 1.0),
+        Point::<2>::new(1.0, 1.0),
+    ];
+    let materials: Vec<Box<dyn Material<2>>> = vec![
+        Box::new(Newtonian::water()),
+        Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+    ];
+    let centre = Point::<2>::new(0.5, 0.5);
+    let mut constraints = Constraints::<2>::free(pts.len());
+    for (i, p) in pts.iter().enumerate() {
+        constraints.fix(i, -(p - centre));
+    }
+    let mut state = ParticleState::at_rest(pts.clone());
+    for (i, p) in pts.iter().enumerate() {
+        state.v[i] = -(p - centre);
+    }
+    let mut integ = Integrator::<2>::new(StepParams::default());
+    let wet = [0u32, 1, 2, 1, 3, 2];
+    let mut history = vec![History::<2>::default(); 2];
+    let input = StepInput {
+        mesh: StepMesh {
+            elements: &wet,
+            element_material: &[0, 1],
+            ..Default::default()
+        },
+        materials: &materials,
+        constraints: &constraints,
+        body_force: None,
+    };
+    integ
+        .try_step(0.0, 1e-5, &mut state, &mut history, &input)
+        .unwrap();
+    assert!(
+        state.pressure[1] > 1e3 && state.pressure[2] > 1e3,
+        "{:?}",
+        state.pressure
+    );
+    assert_eq!(state.pressure[3], 0.0, "the solid's own node");
+    let dry = [1u32, 3, 2];
+    let mut history = vec![History::<2>::default(); 1];
+    let input = StepInput {
+        mesh: StepMesh {
+            elements: &dry,
+            element_material: &[1],
+            ..Default::default()
+        },
+        materials: &materials,
+        constraints: &constraints,
+        body_force: None,
+    };
+    integ
+        .try_step(1e-5, 1e-5, &mut state, &mut history, &input)
+        .unwrap();
+    assert_eq!(&state.pressure[1..], &[0.0, 0.0, 0.0], "dry solid nodes");
+}
+
+/// A flying particle held on a slip plane (its x velocity prescribed at
+/// zero) under a tilted gravity stays on the plane: it falls freely along
+/// y only. Session 40's review: its stored acceleration took gravity's x
+/// component too, and Bossak's next position moved it off the plane by
+/// about `0.028 Δt² g_x` a step.
+#[test]
+fn a_flying_particle_on_a_slip_plane_stays_on_it() {
+    let materials: Vec<Box<dyn Material<2>>> = vec![Box::new(Newtonian::water())];
+    let mut constraints = Constraints::<2>::free(1);
+    constraints.fix_component(0, 0, 0.0);
+    let mut state = ParticleState::at_rest(vec![Point::<2>::new(0.0, 1.0)]);
+    let mut history: Vec<History<2>> = Vec::new();
+    let mut integ = Integrator::<2>::new(StepParams::default());
+    let input = StepInput {
+        mesh: StepMesh::default(),
+        materials: &materials,
+        constraints: &constraints,
+        body_force: Some(Vector::<2>::new(3.0, -G)),
+    };
+    integ
+        .initialize_acceleration(&mut state, &history, &input)
+        .unwrap();
+    let dt = 1e-2;
+    for k in 0..5 {
+        integ
+            .try_step(k as f64 * dt, dt, &mut state, &mut history, &input)
+            .unwrap();
+        assert_eq!(state.x[0].x, 0.0, "step {k}: off the plane");
+        assert_eq!(state.a[0].x, 0.0, "step {k}: acceleration across the plane");
+    }
+    let t = 5.0 * dt;
+    assert!(
+        (state.x[0].y - (1.0 - 0.5 * G * t * t)).abs() < 1e-9,
+        "{}",
+        state.x[0].y
+    );
+}
