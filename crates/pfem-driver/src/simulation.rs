@@ -128,7 +128,8 @@ impl<const D: usize> Observer<D> for () where Const<D>: Dim {}
 /// Fluid volume changes by cause (m³, m² per metre in 2D).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct VolumeLedger {
-    /// Fluid volume at the start.
+    /// Fluid volume at the start (m³; m² per metre in 2D, as every field
+    /// here).
     pub initial: f64,
     /// Change by remeshing (Delaunay + alpha shape deletions/creations).
     pub remeshing: f64,

@@ -124,8 +124,9 @@ where
     pub const NAME: &'static str = "inflow";
 
     /// Fluid of body `body` (its material) enters through the face box
-    /// `[face_min, face_max]` (equal coordinates along the axis of
-    /// `velocity`) at `velocity`, as particles of spacing `h`; `zone` is the
+    /// `[face_min, face_max]` (m; equal coordinates along the axis of
+    /// `velocity`) at `velocity` (m/s), as particles of spacing `h` (m);
+    /// `zone` is the
     /// depth (m) downstream of the face where particles are driven (at
     /// least `2h` is advised). A particle leaving the zone is released in
     /// every component: another hook's constraint on it (a slip plane's)

@@ -30,9 +30,9 @@ where
     /// The force (N; N per metre in 2D).
     pub force: Vector<D>,
     /// Its component along the mean contact normal (pointing into the
-    /// body acted on; positive when it pushes).
+    /// body acted on; positive when it pushes) (N; N per metre in 2D).
     pub normal: f64,
-    /// The magnitude of the rest (friction).
+    /// The magnitude of the rest (friction) (N; N per metre in 2D).
     pub tangential: f64,
     /// Contact elements between the two bodies that carry a pressure.
     pub active: usize,

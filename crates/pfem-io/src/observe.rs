@@ -474,9 +474,10 @@ where
         let summary = self.summary(sim);
         write_summary(self.dir.join("summary.json"), &summary)?;
         let change = summary.relative_volume_change();
+        let unit = if D == 2 { "m²/m" } else { "m³" };
         let volume = if change.is_finite() {
             format!(
-                "fluid volume {:.6e} -> {:.6e} ({:+.3}%)",
+                "fluid volume {:.6e} -> {:.6e} {unit} ({:+.3}%)",
                 summary.fluid_volume_initial,
                 summary.fluid_volume_final,
                 100.0 * change
@@ -485,7 +486,7 @@ where
             // No fluid volume at the start (no fluid, or drops with no
             // mesh): no relative change to give.
             format!(
-                "fluid volume {:.6e} -> {:.6e}",
+                "fluid volume {:.6e} -> {:.6e} {unit}",
                 summary.fluid_volume_initial, summary.fluid_volume_final
             )
         };

@@ -1,12 +1,13 @@
 //! Scenes from TOML files: the serde description of a 2D or 3D scene
 //! ([`SceneFile`]) and its conversion into a [`Scene`] and its probes.
 //!
-//! Units are SI throughout (m, s, kg, Pa). A file looks like this (the
+//! Units are SI throughout (m, s, kg, Pa; angles in rad); 2D is per metre
+//! of depth (volumes m²/m, forces N/m; `docs/units.md`). A file looks like this (the
 //! bundled ones are in `examples/scenes/`):
 //!
 //! ```toml
 //! name = "puddle"
-//! dimension = 2              # 2 (plane strain) or 3
+//! dimension = 2              # 2 (a slice of unit depth) or 3
 //! gravity = [0.0, -9.81]     # m/s²; omit for none
 //! spacing = 0.025            # m, default particle spacing of every body
 //! probes = ["volume", "max_speed"]   # columns of probes.csv
@@ -70,9 +71,9 @@
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`]; `pressure_stabilisation` (factor α ≥ 0, default 0: [`Scene::pressure_stabilisation`]) |
-//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }`, `table = [[t, dx, dy], …]` or `rotation = { center, axis (3D), rate, amplitude, period, ramp }`, angles in rad), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }`, the nearest sample's value) |
+//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` (m, s, s), `table = [[t, dx, dy], …]` (s, m) or `rotation = { center, axis (3D), rate, amplitude, period, ramp }` (m, –, rad/s, rad, s, s)), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }` (points m; values m/s or Pa), the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
-//! | `[contact]` | `stiffness` (Pa), `damping`, `onset` (the penalty's rounded onset, a fraction of the spacing in `[0, 0.5]`, default 0.01), `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
+//! | `[contact]` | `stiffness` (Pa), `damping` (dimensionless: the dashpot's time constant in steps, default 0.1), `onset` (the penalty's rounded onset, a fraction of the spacing in `[0, 0.5]`, default 0.01), `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
 //!
@@ -107,7 +108,8 @@ pub struct SceneFile {
     /// Scene name (output file names, summary); default: the file's stem.
     #[serde(default)]
     pub name: Option<String>,
-    /// Dimension: 2 (plane strain) or 3.
+    /// Dimension: 2 (a slice of unit depth: plane strain, or plane stress
+    /// for a solid that asks) or 3.
     pub dimension: Spanned<u32>,
     /// Body force per unit mass (m/s²); `None` for none.
     #[serde(default)]
@@ -251,7 +253,8 @@ pub struct ContactSpec {
     /// P-wave modulus of its solids (`pfem::scene::ContactSettings::stiffness`).
     #[serde(default)]
     pub stiffness: Option<f64>,
-    /// Normal damping (steps), default 0.1.
+    /// Normal damping, dimensionless (the dashpot `c Δt K_c`: its time
+    /// constant in steps), default 0.1.
     #[serde(default)]
     pub damping: Option<f64>,
     /// Width of the penalty's rounded onset, a fraction of the contact

@@ -38,7 +38,8 @@ pub struct RunSummary {
     #[serde(deserialize_with = "nan_from_null")]
     pub simulated_time: f64,
     /// Wall-clock time per stage (stage name → s), e.g. `"remesh"`,
-    /// `"assembly"`, `"solve"`, `"output"`, `"total"`.
+    /// `"assemble"`, `"solve"`, `"update"`, `"hooks"`, `"output"`,
+    /// `"total"`.
     #[serde(deserialize_with = "nans_from_nulls")]
     pub wall_time_s: BTreeMap<String, f64>,
     /// Fluid volume at the start (m³; m² per metre of depth in 2D).
@@ -47,8 +48,10 @@ pub struct RunSummary {
     /// Fluid volume at the end (same unit).
     #[serde(deserialize_with = "nan_from_null")]
     pub fluid_volume_final: f64,
-    /// Volume gained (+) or lost (−) by cause (cause → m³), e.g.
-    /// `"alpha_shape"`, `"particle_removal"`, `"incompressibility"`.
+    /// Volume gained (+) or lost (−) by cause (cause → the unit of
+    /// [`RunSummary::fluid_volume_initial`]: m³; m² per metre of depth in
+    /// 2D): `"remeshing"`, `"solution"` and each hook's name (e.g.
+    /// `"volume correction"`).
     #[serde(deserialize_with = "nans_from_nulls")]
     pub volume_change_by_cause: BTreeMap<String, f64>,
     /// Any further figures (errors against references, fitted time shifts,

@@ -63,7 +63,8 @@ Options of `pfem run`:
 /// The end of the help, after the options shared with the examples.
 const HELP_END: &str = "
 Scene files: see examples/scenes/*.toml and the pfem::scene_file docs.
-Units are SI (m, s, kg, Pa).
+Units are SI (m, s, kg, Pa; angles in rad). 2D is per metre of depth:
+volumes m²/m, forces N/m. See docs/units.md.
 ";
 
 fn main() -> ExitCode {
