@@ -874,3 +874,55 @@ fn a_retried_step_redoes_the_boundary_conditions_for_its_size() {
     assert_eq!(seen, vec![5e-3, 2.5e-3], "the step sizes the hook saw");
     assert_eq!(sim.dt(), 2.5e-3);
 }
+
+/// A paddle moved by a sinusoidal law carries the law's acceleration, at
+/// the start and after every step, under the undamped trapezoidal rule.
+/// Session 40's review: it started at zero (the scene's rest) and the
+/// scheme's `Aⁿ⁺¹ = 2 ΔV/Δt − Aⁿ` then alternated about the true value
+/// for the whole run; the pressure force on a moving wall reads it.
+#[test]
+fn a_moving_wall_carries_its_law_s_acceleration() {
+    let scene = small_tank("paddle acceleration").wall(
+        "paddle",
+        boxed(-0.1, 0.0, -0.05, 0.2),
+        0.05,
+        WallMotion::Fixed,
+    );
+    let mut sim = sim2(
+        scene,
+        StepParams {
+            scheme: Scheme::Newmark,
+            ..StepParams::default()
+        },
+    );
+    // Ramped: its acceleration at rest is `2 A ω / ramp`, not zero.
+    let ramp = 0.05;
+    let law = Sinusoidal {
+        amplitude: Vector::<2>::new(0.01, 0.0),
+        period: 0.1,
+        ramp,
+    };
+    sim.add_hook(Box::new(PrescribedMotion::new(
+        "paddle",
+        std::sync::Arc::new(law),
+    )));
+    let paddle = sim.body_particles("paddle").unwrap();
+    let w = 2.0 * std::f64::consts::PI / 0.1;
+    for _ in 0..6 {
+        sim.step().unwrap();
+        let t = sim.time();
+        let (r, dr) = if t < ramp {
+            (t / ramp, 1.0 / ramp)
+        } else {
+            (1.0, 0.0)
+        };
+        let want = 0.01 * (2.0 * dr * w * (w * t).cos() - r * w * w * (w * t).sin());
+        for &i in &paddle {
+            let a = sim.particles().a()[i];
+            assert!(
+                (a.x - want).abs() < 1e-9 * (1.0 + want.abs()) && a.y == 0.0,
+                "t = {t}: {a:?} against ({want}, 0)"
+            );
+        }
+    }
+}

@@ -15,6 +15,15 @@ where
     fn position(&self, x0: &Point<D>, t: f64) -> Point<D>;
     /// Its velocity (m/s).
     fn velocity(&self, x0: &Point<D>, t: f64) -> Vector<D>;
+    /// Its acceleration (m/s²), `None` (the default) where the law cannot
+    /// tell: the wall's particles then carry the time scheme's value, which
+    /// starts at zero and, under the trapezoidal rule, alternates about the
+    /// true one for the whole run. The pressure force on a moving wall
+    /// reads it (the inertia of the water it carries).
+    fn acceleration(&self, x0: &Point<D>, t: f64) -> Option<Vector<D>> {
+        let _ = (x0, t);
+        None
+    }
     /// An upper bound of the speed (m/s) of any point that starts in the
     /// box `[min, max]`, at any time; `None` (the default) where the law
     /// cannot tell. `Scene::validate` bounds the steps a run needs with it,
@@ -67,6 +76,15 @@ fn ramp_factor(ramp: f64, t: f64) -> (f64, f64) {
     }
 }
 
+/// The second derivative of `r(t) sin(ω t)` (`ω = 2π / period`, `r` the
+/// ramp): `2 r' ω cos(ω t) − r ω² sin(ω t)` (the ramp is linear, `r'' = 0`
+/// but at its end).
+fn oscillation_acceleration(period: f64, ramp: f64, t: f64) -> f64 {
+    let w = 2.0 * std::f64::consts::PI / period;
+    let (r, dr) = ramp_factor(ramp, t);
+    2.0 * dr * w * (w * t).cos() - r * w * w * (w * t).sin()
+}
+
 impl<const D: usize> MotionLaw<D> for Sinusoidal<D>
 where
     Const<D>: Dim,
@@ -80,6 +98,9 @@ where
         let w = 2.0 * std::f64::consts::PI / self.period;
         let (r, dr) = self.factor(t);
         self.amplitude * (r * w * (w * t).cos() + dr * (w * t).sin())
+    }
+    fn acceleration(&self, _x0: &Point<D>, t: f64) -> Option<Vector<D>> {
+        Some(self.amplitude * oscillation_acceleration(self.period, self.ramp, t))
     }
     fn max_speed(&self, _min: &Point<D>, _max: &Point<D>) -> Option<f64> {
         Some(self.amplitude.norm() * oscillation_rate(self.period, self.ramp))
@@ -150,6 +171,11 @@ where
     }
     fn velocity(&self, _x0: &Point<D>, t: f64) -> Vector<D> {
         self.at(t).1
+    }
+    /// Zero: the velocity is constant between rows (the jumps at the rows
+    /// are not accelerations a step can carry).
+    fn acceleration(&self, _x0: &Point<D>, _t: f64) -> Option<Vector<D>> {
+        Some(Vector::<D>::zeros())
     }
     fn max_speed(&self, _min: &Point<D>, _max: &Point<D>) -> Option<f64> {
         Some(
@@ -298,6 +324,19 @@ where
         let r = self.position(x0, t) - self.center;
         self.cross(&r) * dth
     }
+    /// `θ'' k × r + θ'² k × (k × r)`: the angular acceleration's part and
+    /// the centripetal one.
+    fn acceleration(&self, x0: &Point<D>, t: f64) -> Option<Vector<D>> {
+        let (_, dth) = self.angle(t);
+        let ddth = if self.amplitude != 0.0 {
+            self.amplitude * oscillation_acceleration(self.period, self.ramp, t)
+        } else {
+            0.0
+        };
+        let r = self.position(x0, t) - self.center;
+        let kr = self.cross(&r);
+        Some(kr * ddth + self.cross(&kr) * (dth * dth))
+    }
     fn max_speed(&self, min: &Point<D>, max: &Point<D>) -> Option<f64> {
         // The farthest corner of the box from the centre bounds every
         // point's distance from the axis.
@@ -342,6 +381,44 @@ mod tests {
             let r0 = (x0 - law.center).norm();
             let r = (law.position(&x0, t) - law.center).norm();
             assert!((r - r0).abs() < 1e-12);
+            check_acceleration(law, x0, t);
+        }
+    }
+
+    /// The acceleration is the time derivative of the velocity (session
+    /// 40: laws give it, so a moving wall carries its own).
+    fn check_acceleration<const D: usize>(law: &dyn MotionLaw<D>, x0: Point<D>, t: f64)
+    where
+        Const<D>: Dim,
+    {
+        let dt = 1e-6;
+        let fd = (law.velocity(&x0, t + dt) - law.velocity(&x0, (t - dt).max(0.0)))
+            / (t + dt - (t - dt).max(0.0));
+        let a = law
+            .acceleration(&x0, t)
+            .expect("the law gives its acceleration");
+        assert!(
+            (fd - a).norm() < 1e-4 * (1.0 + a.norm()),
+            "t = {t}: {fd} vs {a}"
+        );
+    }
+
+    #[test]
+    fn sinusoidal_and_table_laws_give_their_acceleration() {
+        let piston = Sinusoidal::<2> {
+            amplitude: Vector::<2>::new(0.05, 0.01),
+            period: 0.8,
+            ramp: 0.4,
+        };
+        let table = PiecewiseLinear::<2>::new(vec![
+            (0.0, Vector::<2>::zeros()),
+            (1.0, Vector::<2>::new(0.1, 0.0)),
+            (3.0, Vector::<2>::new(0.1, 0.2)),
+        ])
+        .unwrap();
+        for &t in &[0.0, 0.13, 0.5, 0.77, 1.9] {
+            check_acceleration(&piston, Point::<2>::new(0.1, 0.3), t);
+            check_acceleration(&table, Point::<2>::new(0.1, 0.3), t);
         }
     }
 

@@ -64,6 +64,9 @@ where
             let v = self.finite(self.law.velocity(&x0, t), "velocity", t)?;
             p.v_mut()[i] = v;
             p.constraints_mut().fix(i, v);
+            if let Some(a) = self.law.acceleration(&x0, t) {
+                p.a_mut()[i] = self.finite(a, "acceleration", t)?;
+            }
         }
         Ok(())
     }
@@ -87,6 +90,12 @@ where
             let x = self.law.position(&x0, t);
             self.finite(x, "position", t)?;
             p.x_mut()[i] = x;
+            // The law's acceleration where it gives one (the scheme's
+            // alternated about it under the trapezoidal rule, from a zero
+            // start: session 40's review).
+            if let Some(a) = self.law.acceleration(&x0, t) {
+                p.a_mut()[i] = self.finite(a, "acceleration", t)?;
+            }
         }
         Ok(())
     }
