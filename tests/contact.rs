@@ -306,20 +306,11 @@ fn energy(sim: &Simulation<2>, rho: f64, young: f64, nu: f64) -> (f64, f64) {
     let x = sim.particles().x();
     let v = sim.particles().v();
     let el = sim.elements();
-    let mut mass = vec![0.0; x.len()];
+    let mass = crate::stability_support::solid_masses(sim, rho);
     let mut strain = 0.0;
-    for ((e, h), &area0) in el
-        .solid()
-        .chunks_exact(3)
-        .zip(el.solid_history())
-        .zip(el.reference_volumes())
-    {
+    for (e, h) in el.solid().chunks_exact(3).zip(el.solid_history()) {
         let p = [x[e[0] as usize], x[e[1] as usize], x[e[2] as usize]];
         let area = pfem::core::simplex_measure::<2>(&p);
-        // The solver's masses: `ρ₀ V₀` (eq. 46).
-        for &i in e {
-            mass[i as usize] += rho * area0 / 3.0;
-        }
         let (sx, sy, sz, t) = (
             h.stress[(0, 0)],
             h.stress[(1, 1)],

@@ -59,19 +59,11 @@ struct Bounce {
 fn masses_and_strain(s: &Simulation<3>, rho: f64, young: f64, nu: f64) -> (Vec<f64>, f64) {
     let x = s.particles().x();
     let el = s.elements();
-    let mut mass = vec![0.0; x.len()];
+    let mass = crate::stability_support::solid_masses(s, rho);
     let mut strain = 0.0;
-    for ((e, h), &vol0) in el
-        .solid()
-        .chunks_exact(4)
-        .zip(el.solid_history())
-        .zip(el.reference_volumes())
-    {
+    for (e, h) in el.solid().chunks_exact(4).zip(el.solid_history()) {
         let p: Vec<Point<3>> = e.iter().map(|&i| x[i as usize]).collect();
         let vol = pfem::core::simplex_measure::<3>(&p);
-        for &i in e {
-            mass[i as usize] += rho * vol0 / 4.0;
-        }
         let sig = h.stress;
         let tr = sig.trace();
         strain += vol * ((1.0 + nu) * sig.norm_squared() - nu * tr * tr) / (2.0 * young);

@@ -58,6 +58,23 @@ pub struct Watch {
     y_ref: f64,
 }
 
+/// The solver's lumped masses of the solid particles (kg; kg/m in 2D):
+/// each solid element gives `ρ V₀ / (D + 1)` to its nodes, `V₀` its initial
+/// volume (eq. 46); `rho` the solids' density. Zero elsewhere.
+pub fn solid_masses<const D: usize>(sim: &Simulation<D>, rho: f64) -> Vec<f64>
+where
+    Const<D>: Dim,
+{
+    let el = sim.elements();
+    let mut mass = vec![0.0; sim.particles().len()];
+    for (e, &v0) in el.solid().chunks_exact(D + 1).zip(el.reference_volumes()) {
+        for &i in e {
+            mass[i as usize] += rho * v0 / (D + 1) as f64;
+        }
+    }
+    mass
+}
+
 /// Mass per particle: `ρ h^D` of its body (kg per metre of depth in 2D);
 /// zero for walls.
 fn masses<const D: usize>(sim: &Simulation<D>) -> Vec<f64>

@@ -652,20 +652,15 @@ where
         self.work.prepares += 1;
         // Checked before anything changes (the last mesh stays usable).
         let ne = mesh.elements.len() / <Const<D> as Dim>::NV;
-        if let Some(e) = (mesh.reference_volumes.len() > ne)
-            .then_some(ne)
-            .or_else(|| {
-                mesh.reference_volumes
-                    .iter()
-                    .position(|v| !(v.is_finite() && *v > 0.0))
-            })
-        {
+        let refs = mesh.reference_volumes;
+        if refs.len() > ne {
             return Err(AssemblyError::MeshMismatch {
-                what: if e == ne {
-                    "more reference volumes than elements"
-                } else {
-                    "a reference volume that is not a positive number"
-                },
+                what: "more reference volumes than elements",
+            });
+        }
+        if refs.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(AssemblyError::MeshMismatch {
+                what: "a reference volume that is not a positive number",
             });
         }
         let renumbered = std::mem::take(&mut self.renumbered);

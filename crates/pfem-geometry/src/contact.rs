@@ -407,6 +407,20 @@ mod tests {
         );
     }
 
+    /// Every particle a wall's but those of body `solid`.
+    fn kinds_of(bodies: &[u32], solid: u32) -> Vec<ParticleKind> {
+        bodies
+            .iter()
+            .map(|&b| {
+                if b == solid {
+                    ParticleKind::Solid
+                } else {
+                    ParticleKind::Wall
+                }
+            })
+            .collect()
+    }
+
     /// 2D: a solid resting one spacing from a floor and from a side wall,
     /// each a body of its own. The corner triangle {floor, solid, side
     /// wall} has the gap of its nearest pair (the spacing), from the
@@ -431,16 +445,7 @@ mod tests {
                 bodies.push(2);
             }
         }
-        let kinds: Vec<ParticleKind> = bodies
-            .iter()
-            .map(|&b| {
-                if b == 2 {
-                    ParticleKind::Solid
-                } else {
-                    ParticleKind::Wall
-                }
-            })
-            .collect();
+        let kinds = kinds_of(&bodies, 2);
         // Both diagonals of the corner square: the lattice's tie may go
         // either way. Triangle {floor (1,0), solid (1,1), side (0,1)} with
         // the corner (0,0), and the other split.
@@ -481,16 +486,7 @@ mod tests {
     /// Contact elements of single 3D tetrahedra, each of the given bodies
     /// (body 1 takes part in contact; 0 and 2 are walls).
     fn tets_3d(x: &[Point<3>], bodies: &[u32], tets: &[[u32; 4]]) -> Vec<ContactCandidate<3>> {
-        let kinds: Vec<ParticleKind> = bodies
-            .iter()
-            .map(|&b| {
-                if b == 1 {
-                    ParticleKind::Solid
-                } else {
-                    ParticleKind::Wall
-                }
-            })
-            .collect();
+        let kinds = kinds_of(bodies, 1);
         let tess = Tessellation {
             nv: 4,
             simplices: tets.iter().flatten().copied().collect(),

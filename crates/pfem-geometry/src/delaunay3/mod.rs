@@ -234,13 +234,7 @@ impl Tessellator<3> for Delaunay3 {
                     let (p, q) = (ws.pts[first[a] as usize], ws.pts[first[b] as usize]);
                     let d = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
                     if d < tol {
-                        let (v, w) = (ws.rank[first[a] as usize], ws.rank[first[b] as usize]);
-                        return Err(GeometryError::NearCoincident {
-                            first: v.min(w) as usize,
-                            second: v.max(w) as usize,
-                            distance: d / scale,
-                            tolerance: tol / scale,
-                        });
+                        return Err(near_coincident(&ws.rank, first[a], first[b], d, tol, scale));
                     }
                 }
             }
@@ -253,6 +247,19 @@ impl Tessellator<3> for Delaunay3 {
         }
         ws.write(out);
         Ok(())
+    }
+}
+
+/// [`GeometryError::NearCoincident`] for the workspace's points `a` and `b`
+/// (input order through `rank`), at the rescaled distance `d` and
+/// tolerance `tol` (scaled back by `scale`).
+fn near_coincident(rank: &[u32], a: u32, b: u32, d: f64, tol: f64, scale: f64) -> GeometryError {
+    let (v, w) = (rank[a as usize], rank[b as usize]);
+    GeometryError::NearCoincident {
+        first: v.min(w) as usize,
+        second: v.max(w) as usize,
+        distance: d / scale,
+        tolerance: tol / scale,
     }
 }
 
@@ -474,13 +481,7 @@ impl Workspace {
         let seed = match self.locate(pi) {
             Located::Tet(t) => t,
             Located::Duplicate(v) => {
-                let (v, w) = (self.rank[v as usize], self.rank[pi as usize]);
-                return Err(GeometryError::NearCoincident {
-                    first: v.min(w) as usize,
-                    second: v.max(w) as usize,
-                    distance: 0.0,
-                    tolerance: tol / scale,
-                });
+                return Err(near_coincident(&self.rank, v, pi, 0.0, tol, scale));
             }
             Located::Lost => {
                 let i = self.rank[pi as usize];
@@ -548,13 +549,7 @@ impl Workspace {
             }
             let d = best.0.sqrt();
             if d < tol {
-                let (v, w) = (rank[best.1 as usize], rank[pi as usize]);
-                return Err(GeometryError::NearCoincident {
-                    first: v.min(w) as usize,
-                    second: v.max(w) as usize,
-                    distance: d / scale,
-                    tolerance: tol / scale,
-                });
+                return Err(near_coincident(rank, best.1, pi, d, tol, scale));
             }
         }
 
