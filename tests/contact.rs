@@ -414,6 +414,80 @@ fn an_elastic_disk_bounces_off_a_floor_and_keeps_its_energy() {
     assert!((total1 / total0 - 1.0).abs() < 0.05, "{total0} -> {total1}");
 }
 
+/// A block dropped from above a floor lands on it. Until session 41 the
+/// scene's validation refused it ("no support"): a free solid under
+/// gravity had to start touching a wall, though contact catches it as
+/// well from above. It falls freely to the contact distance (one spacing
+/// above the floor's top row), comes back up, and never sinks through.
+#[test]
+fn a_block_dropped_onto_a_floor_lands_on_it() {
+    let (h, drop) = (0.01, 0.03);
+    let scene = Scene::<2>::new("drop")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.25,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.1, -h),
+                max: Point::<2>::new(0.2, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, h + drop),
+                max: Point::<2>::new(0.1, h + drop + 0.05),
+            },
+            h,
+            None,
+        );
+    scene.validate().expect("a solid above a floor lands on it");
+    let mut s = sim(scene);
+    assert!(s.stages().contact);
+    let block = s.body_particles("block").unwrap();
+    let mean_vy = |s: &Simulation<2>| {
+        block.iter().map(|&i| s.particles().v()[i][1]).sum::<f64>() / block.len() as f64
+    };
+    // Free fall to the contact distance: t = sqrt(2 drop / g).
+    let t_land = (2.0 * drop / G).sqrt();
+    let (mut worst, mut impact_v, mut rebound_v): (f64, f64, f64) = (f64::INFINITY, 0.0, 0.0);
+    while s.time() < s.end_time() - 1e-12 {
+        s.step().unwrap();
+        worst = worst.min(lowest(&s, "block"));
+        let vy = mean_vy(&s);
+        impact_v = impact_v.min(vy);
+        rebound_v = rebound_v.max(vy);
+        if s.time() < 0.9 * t_land {
+            // In free fall: v = −g t to the scheme's round-off.
+            assert!((vy + G * s.time()).abs() < 1e-6 * G, "{vy} at {}", s.time());
+        }
+    }
+    println!(
+        "dropped block: {} steps ({} rejected), impact {impact_v:.3} m/s (free fall {:.3}), rebound {rebound_v:.3} m/s, lowest point {:.3} h above the floor's top row",
+        s.steps(),
+        s.rejected(),
+        -(2.0 * G * drop).sqrt(),
+        worst / h
+    );
+    assert!(worst > 0.8 * h, "sank to {worst} m");
+    assert!(
+        impact_v < -0.9 * (2.0 * G * drop).sqrt(),
+        "impact {impact_v}"
+    );
+    assert!(
+        rebound_v > 0.2 * (2.0 * G * drop).sqrt(),
+        "no rebound: {rebound_v}"
+    );
+}
+
 /// 3D: a free elastic block resting on a floor (contact elements of three
 /// nodes against one, and two against two) sinks no deeper than a small
 /// fraction of the spacing, and the floor carries its weight.

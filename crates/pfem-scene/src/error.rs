@@ -85,8 +85,9 @@ pub enum SceneError {
         /// Second body.
         second: String,
     },
-    /// A solid under gravity with nothing to hold it.
-    #[error("solid `{body}` has no support: clamp it or give the scene a fluid to rest in")]
+    /// A solid under gravity with nothing to hold it: no clamp, no fluid
+    /// to rest in, no wall or other solid to land on.
+    #[error("solid `{body}` has no support: clamp it, or give the scene a fluid to rest in or a wall or solid to land on")]
     Unsupported {
         /// Body name.
         body: String,

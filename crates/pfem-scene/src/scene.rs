@@ -911,12 +911,12 @@ where
             if b.kind == ParticleKind::Solid {
                 // Boxes keep a structured mesh; any other geometry is meshed
                 // by `solid_mesh` (Delaunay of its particles + alpha shape).
-                // A free solid touching a wall or another solid rests on it
-                // through contact.
+                // A free solid lands on a wall or another solid through
+                // contact, whether it starts on it or above it (as
+                // `Particles::solid_can_touch` at build).
                 let touches = self.bodies.iter().any(|w| {
                     !std::ptr::eq(w, b)
                         && matches!(w.kind, ParticleKind::Wall | ParticleKind::Solid)
-                        && boxes_touch(&b.geometry, &w.geometry, b.spacing.min(w.spacing))
                 });
                 let supported = !b.clamps.is_empty() || touches || self.gravity.is_none();
                 let floating = self.bodies.iter().any(|o| o.kind == ParticleKind::Fluid);
@@ -1166,14 +1166,4 @@ pub fn file_name_fault(name: &str) -> Option<&'static str> {
     } else {
         None
     }
-}
-
-/// Whether the bounding boxes of two geometries touch (within `tol`).
-fn boxes_touch<const D: usize>(a: &Geometry<D>, b: &Geometry<D>, tol: f64) -> bool
-where
-    Const<D>: Dim,
-{
-    let (a0, a1) = a.bounds();
-    let (b0, b1) = b.bounds();
-    (0..D).all(|k| a0[k] <= b1[k] + tol && b0[k] <= a1[k] + tol)
 }
