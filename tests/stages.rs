@@ -317,3 +317,93 @@ fn work_done_follows_the_scene() {
     assert_eq!(vtu, 0);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A small clamped block at rest, no gravity: every step is `max_dt`.
+fn block_at_rest(end_time: f64, max_dt: f64) -> Scene<2> {
+    Scene::<2>::new("block at rest")
+        .settings(RunSettings {
+            end_time,
+            max_dt,
+            output_interval: None,
+            ..Default::default()
+        })
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.02, 0.02),
+            },
+            0.01,
+            Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(1e-9, 1.0))),
+        )
+}
+
+/// Session 41 (a review of the time stepping): the clock's round-off
+/// grows with the steps, and past 10⁻¹² s the run took one more step of
+/// `min_dt` (10⁻⁹ s) beyond the end time: end 100 s by steps of 0.1 s
+/// was 1 001 steps ending at 100.000000001 s. The last step now lands on
+/// the end time.
+#[test]
+fn a_long_run_ends_on_its_end_time_without_a_sliver_step() {
+    let mut sim = Simulation::new(
+        block_at_rest(100.0, 0.1),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.time(), 100.0);
+    assert!(sim.dt() > 1e-3, "last step {}", sim.dt());
+    assert!(sim.steps() <= 1000, "{} steps", sim.steps());
+    // Called by hand past the end time, a step is the controller's, not
+    // the `min_dt` the end time's cut gave (10⁻⁹ s a step: a hang).
+    sim.step().unwrap();
+    assert!(sim.dt() > 1e-3, "step past the end: {}", sim.dt());
+    assert!(sim.time() > 100.0 + 1e-3);
+}
+
+/// Session 41: a `min_dt` above the scene's `max_dt` ran every step at
+/// `min_dt`, above the ceiling, without a word; it is refused.
+#[test]
+fn a_smallest_step_above_the_largest_is_refused() {
+    let params = StepParams {
+        min_dt: 1e-2,
+        ..StepParams::default()
+    };
+    let r = Simulation::new(
+        block_at_rest(0.1, 1e-3),
+        Box::new(Delaunay2::default()),
+        params,
+    );
+    assert!(
+        matches!(
+            r,
+            Err(pfem::SceneError::OutOfRange {
+                setting: "min_dt",
+                ..
+            })
+        ),
+        "{r:?}"
+    );
+}
+
+/// Session 41: with `velocity_floor` 0 and no body force, a body at rest
+/// gave the Picard loop a change of `0/0`, read as divergence: the step
+/// was halved down to `min_dt` and failed. Nothing moving is converged.
+#[test]
+fn a_body_at_rest_with_no_velocity_floor_steps() {
+    let params = StepParams {
+        velocity_floor: 0.0,
+        ..StepParams::default()
+    };
+    let mut sim = Simulation::new(
+        block_at_rest(0.01, 1e-3),
+        Box::new(Delaunay2::default()),
+        params,
+    )
+    .unwrap();
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.rejected(), 0);
+    assert_eq!(sim.time(), 0.01);
+}

@@ -466,6 +466,16 @@ where
             .min_dt
             .max(scene.settings.end_time * MIN_DT_OF_END_TIME);
         scene.validate_within(options.memory_budget)?;
+        // The controller keeps every step within [min_dt, max_dt]: a
+        // floor above the ceiling would run every step at `min_dt`,
+        // above the scene's `max_dt`, without a word.
+        if params.min_dt > scene.settings.max_dt {
+            return Err(SceneError::OutOfRange {
+                setting: "min_dt",
+                value: params.min_dt,
+                range: "at most the scene's max_dt (min_dt is raised to end_time · 2⁻⁵⁰ at least)",
+            });
+        }
         // The scene's pressure stabilisation, unless the program set one.
         if params.pressure_stabilisation == 0.0 {
             params.pressure_stabilisation = scene.pressure_stabilisation;
@@ -965,6 +975,10 @@ where
     /// Newmark–Picard step with rejection and retry, the hooks after the
     /// step.
     ///
+    /// `Δt` is the Courant controller's, within `[min_dt, max_dt]`; the step
+    /// that reaches the end time ends on it exactly. Called past the end
+    /// time (a program's own loop), the step is the controller's, not cut.
+    ///
     /// The step runs on a worker of rayon's global pool (the calling thread
     /// waits), so that the parallel loops inside it (meshing, element
     /// kernels) are entered from inside the pool. Called from outside the
@@ -1032,8 +1046,14 @@ where
         } else {
             self.controller.next(0.0, 0.0, self.clock.dt)
         };
-        if self.clock.time + dt > self.end_time {
-            dt = (self.end_time - self.clock.time).max(self.controller.dt_min);
+        // The step that ends the run lands on the end time: one within
+        // `END_SNAP` of a step of it is stretched to it, so that the
+        // clock's round-off (about 10⁻¹⁰ s after 10⁵ steps) leaves no
+        // sliver of `min_dt` to take after it. Past the end time (`step`
+        // called by hand) the step is the controller's.
+        let remaining = self.end_time - self.clock.time;
+        if remaining > 0.0 && dt * (1.0 + END_SNAP) >= remaining {
+            dt = remaining.max(self.controller.dt_min);
         }
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();
@@ -1077,7 +1097,11 @@ where
                 }
             }
         };
-        self.clock.time += rep.dt;
+        self.clock.time = if rep.dt == remaining {
+            self.end_time
+        } else {
+            self.clock.time + rep.dt
+        };
         self.clock.dt = rep.dt;
         self.clock.steps += 1;
         self.clock.rejected += rep.rejections as u64;
@@ -1311,6 +1335,13 @@ where
         // The smallest step goes up with a later end time, so that every
         // step moves the clock (`Simulation::new`).
         let floor = t * MIN_DT_OF_END_TIME;
+        if floor > self.controller.dt_max {
+            return Err(RunError::InvalidSetting {
+                name: "end_time",
+                value: t,
+                reason: "too late for max_dt: a step of max_dt would not move the clock",
+            });
+        }
         if self.controller.dt_min < floor {
             self.controller.dt_min = floor;
             self.stepper.integrator.params.min_dt = floor;
@@ -1879,6 +1910,11 @@ where
 /// The smallest `min_dt` over the end time: `2⁻⁵⁰`, four units in the
 /// last place, so that every step moves the clock.
 const MIN_DT_OF_END_TIME: f64 = 1.0 / (1u64 << 50) as f64;
+
+/// A step within this fraction of the time left to the end time is
+/// stretched to it (`Simulation::step`): the last step lands on the end
+/// time, with no sliver after it.
+const END_SNAP: f64 = 1e-6;
 
 /// What a checkpoint records of a material to recognise it: its name, kind
 /// (0 fluid, 1 solid), density and wave speed (which moves with its bulk

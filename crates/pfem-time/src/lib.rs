@@ -296,8 +296,9 @@ pub struct StepParams {
     pub sliver_prediction: bool,
     /// Start the Picard loop from the constant-acceleration prediction
     /// `V⁽⁰⁾ = Vⁿ + Δt Aⁿ` (prescribed components as prescribed),
-    /// `X⁽⁰⁾ = Xⁿ + Δt Vⁿ + ½ Δt² Aⁿ` (a consistent pair: eq. 61 gives
-    /// that position for that velocity) instead of the start of the step
+    /// `X⁽⁰⁾` the position the scheme gives for that velocity (eq. 61:
+    /// `Xⁿ + Δt Vⁿ + ½ Δt² Aⁿ` for the Newmark family, `Xⁿ + Δt Vⁿ + Δt² Aⁿ`
+    /// for backward Euler; a consistent pair) instead of the start of the step
     /// (`X⁽⁰⁾ = Xⁿ` with the velocity that leaves it there), for the
     /// particles of no solid element: a solid's step is not bounded by a
     /// Courant number, and a quasi-static step of 5 s predicted a beam
@@ -979,9 +980,34 @@ where
             || state.a.len() != n
             || state.pressure.len() != n
             || input.constraints.mask.len() != n
+            || input.constraints.velocity.len() != n
         {
             return Err(StepError::InvalidInput {
                 what: "particle arrays have different lengths".into(),
+            });
+        }
+        // A non-number in the start state or the loads is the caller's,
+        // not the step's: no smaller step cures it, so it is named here
+        // rather than retried down to `min_dt` (and a particle outside
+        // every element, which does not iterate, would carry it silently).
+        let finite = |v: &Vector<D>| v.iter().all(|c| c.is_finite());
+        if let Some(p) = (0..n).find(|&p| {
+            !(state.x[p].iter().all(|c| c.is_finite())
+                && finite(&state.v[p])
+                && finite(&state.a[p])
+                && state.pressure[p].is_finite()
+                && (0..D).all(|k| {
+                    !input.constraints.is_fixed(p, k)
+                        || input.constraints.velocity[p][k].is_finite()
+                }))
+        }) {
+            return Err(StepError::InvalidInput {
+                what: format!("particle {p}'s position, velocity, acceleration, pressure or prescribed velocity is not finite"),
+            });
+        }
+        if input.body_force.is_some_and(|b| !finite(&b)) {
+            return Err(StepError::InvalidInput {
+                what: "the body force is not finite".into(),
             });
         }
         if history.len() != input.mesh.element_material.len() {
@@ -1167,7 +1193,13 @@ where
             }
             let ns = self.assembler.particles().len().max(1) as f64;
             let floor2 = velocity_floor.powi(2) * ns;
-            let change = (dv2 / v2.max(floor2)).sqrt();
+            // Nothing moved and nothing may (a body at rest, no body
+            // force, `velocity_floor` 0): converged, not `0/0`.
+            let change = if dv2 == 0.0 {
+                0.0
+            } else {
+                (dv2 / v2.max(floor2)).sqrt()
+            };
             rep.iterations = it;
             // Move the particles (eq. 61 with eq. 47).
             for p in 0..n {

@@ -331,3 +331,88 @@ fn a_flying_particle_on_a_slip_plane_stays_on_it() {
         state.x[0].y
     );
 }
+
+/// Session 41 (a review of the time stepping): a non-finite body force
+/// passed a particle outside every element through the step (its free
+/// flight is not iterated, and `f64::max` hid the NaN in the velocity
+/// floor): `try_step` returned `Ok` with the position NaN. A non-number
+/// in the start state was retried at halved steps down to `min_dt`. Both
+/// are the caller's input, refused at once and not retryable; so is a
+/// prescribed-velocity array of the wrong length (it panicked).
+#[test]
+fn non_finite_or_mismatched_input_is_refused_not_stepped() {
+    let materials: Vec<Box<dyn Material<2>>> = vec![Box::new(Newtonian::water())];
+    let constraints = Constraints::<2>::free(1);
+    let mut history: Vec<History<2>> = Vec::new();
+    let mut integ = Integrator::<2>::new(StepParams::default());
+    let step = |integ: &mut Integrator<2>,
+                state: &mut ParticleState<2>,
+                history: &mut Vec<History<2>>,
+                constraints: &Constraints<2>,
+                body_force: Vector<2>| {
+        let input = StepInput {
+            mesh: StepMesh::default(),
+            materials: &materials,
+            constraints,
+            body_force: Some(body_force),
+        };
+        integ.try_step(0.0, 1e-3, state, history, &input)
+    };
+    let fresh = || ParticleState::at_rest(vec![Point::<2>::new(0.0, 1.0)]);
+    let mut state = fresh();
+    let err = step(
+        &mut integ,
+        &mut state,
+        &mut history,
+        &constraints,
+        Vector::<2>::new(f64::NAN, -G),
+    )
+    .unwrap_err();
+    assert!(
+        !err.is_retryable() && err.to_string().contains("body force"),
+        "{err}"
+    );
+    assert!(state.x[0].iter().all(|c| c.is_finite()));
+    let mut state = fresh();
+    state.v[0].y = f64::INFINITY;
+    let err = step(
+        &mut integ,
+        &mut state,
+        &mut history,
+        &constraints,
+        Vector::<2>::new(0.0, -G),
+    )
+    .unwrap_err();
+    assert!(
+        !err.is_retryable() && err.to_string().contains("particle 0"),
+        "{err}"
+    );
+    let mut state = fresh();
+    let short = Constraints::<2> {
+        mask: constraints.mask.clone(),
+        velocity: Vec::new(),
+    };
+    let err = step(
+        &mut integ,
+        &mut state,
+        &mut history,
+        &short,
+        Vector::<2>::new(0.0, -G),
+    )
+    .unwrap_err();
+    assert!(
+        !err.is_retryable() && err.to_string().contains("lengths"),
+        "{err}"
+    );
+    // The same particle with finite input falls.
+    let mut state = fresh();
+    step(
+        &mut integ,
+        &mut state,
+        &mut history,
+        &constraints,
+        Vector::<2>::new(0.0, -G),
+    )
+    .unwrap();
+    assert!(state.x[0].y < 1.0);
+}
