@@ -488,6 +488,73 @@ fn a_block_dropped_onto_a_floor_lands_on_it() {
     );
 }
 
+/// A fine block (spacing h) on a coarse floor (2h), its bottom row the
+/// pair's contact distance 1.5h above the floor's top row: it rests. Until
+/// session 41 each contact element took the mean spacing of its own
+/// particles as its contact distance (1.67h with two floor particles,
+/// 1.33h with two block particles), so the block started under pressure
+/// in one kind and open in the other.
+#[test]
+fn a_fine_block_rests_on_a_coarse_floor() {
+    let (h, hf) = (0.01, 0.02);
+    let (w, t) = (0.2, 0.05);
+    let scene = Scene::<2>::new("fine on coarse")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.3,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.2, -hf),
+                max: Point::<2>::new(0.4, 0.0),
+            },
+            hf,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.5 * (h + hf)),
+                max: Point::<2>::new(w, 0.5 * (h + hf) + t),
+            },
+            h,
+            None,
+        );
+    let mut s = sim(scene);
+    let y0 = lowest(&s, "block");
+    let weight = 1000.0 * w * t * G;
+    let (mut top, mut impulse, mut span) = (y0, 0.0, 0.0);
+    while s.time() < s.end_time() - 1e-12 {
+        s.step().unwrap();
+        top = top.max(lowest(&s, "block"));
+        if s.time() > 0.2 {
+            impulse += s.contact_force("block", "floor").unwrap().normal * s.dt();
+            span += s.dt();
+        }
+    }
+    let f = impulse / span;
+    let v = s
+        .body_particles("block")
+        .unwrap()
+        .iter()
+        .map(|&i| s.particles().v()[i].norm())
+        .fold(0.0, f64::max);
+    println!(
+        "fine block on a coarse floor: {} steps ({} rejected), rose {:.2e} m above its start, floor force {f:.3} N/m (weight {weight:.3}), largest speed at the end {v:.2e} m/s",
+        s.steps(),
+        s.rejected(),
+        top - y0
+    );
+    assert!(top - y0 < 0.01 * h, "launched: rose {} m", top - y0);
+    assert!((f / weight - 1.0).abs() < 0.02, "{f} vs {weight}");
+    assert!(v < 0.02, "still moving at {v} m/s");
+}
+
 /// 3D: a free elastic block resting on a floor (contact elements of three
 /// nodes against one, and two against two) sinks no deeper than a small
 /// fraction of the spacing, and the floor carries its weight.

@@ -161,7 +161,7 @@ where
 
     /// Appends the contact range (after the fluid range): one element per
     /// candidate with `material(nodes)`, its history's gap ratio (gap over the
-    /// mean spacing of its particles, the contact distance), friction
+    /// contact distance, [`contact_distance`]), friction
     /// (`friction(master, other)`) and normal set, and its tangential
     /// traction carried from the last contact range when the same
     /// particles were in contact there.
@@ -169,6 +169,7 @@ where
         &mut self,
         candidates: &[pfem_geometry::ContactCandidate<D>],
         material: &dyn Fn(&[u32]) -> u16,
+        body: &[u32],
         spacing: &[f64],
         friction: &dyn Fn(u32, u32) -> f64,
     ) {
@@ -197,7 +198,7 @@ where
             let el = &c.nodes[..nv];
             self.conn.extend_from_slice(el);
             self.material.push(material(el));
-            let g0 = el.iter().map(|&p| spacing[p as usize]).sum::<f64>() / nv as f64;
+            let g0 = contact_distance(el, c.bodies, body, spacing);
             let mut h = History::<D>::default();
             let (mut shear, mut count) = (pfem_core::Tensor::<D>::zeros(), 0u32);
             for p in el {
@@ -541,5 +542,59 @@ where
     pub(crate) fn set_stash(&mut self, stash: ContactStash<D>) {
         self.truncate_to_solid();
         self.stash = stash;
+    }
+}
+
+/// The contact distance of a contact element between bodies `pair` (m):
+/// half the sum of the two bodies' spacings (each the mean over the
+/// element's particles of that body), where two bodies' outer rows sit at
+/// rest, each surface half its own spacing beyond its row. The mean over
+/// the element's particles, used until session 41, was another distance
+/// for each element between bodies of unlike spacings: a fine block (h)
+/// on a coarse floor (2h) met elements of 2h's two particles and of h's
+/// two, `g₀` 1.67h and 1.33h, so no gap left them both open, and each
+/// flip of the tessellation between the two kinds changed the pressure.
+/// Particles of a third body are left out; one with no particle of either
+/// body (not formed) takes the mean of all.
+pub(crate) fn contact_distance(
+    nodes: &[u32],
+    pair: (u32, u32),
+    body: &[u32],
+    spacing: &[f64],
+) -> f64 {
+    let mean = |b: u32| {
+        let (sum, n) = nodes
+            .iter()
+            .filter(|&&p| body.get(p as usize) == Some(&b))
+            .fold((0.0, 0u32), |(s, n), &p| (s + spacing[p as usize], n + 1));
+        (n > 0).then(|| sum / n as f64)
+    };
+    match (mean(pair.0), mean(pair.1)) {
+        (Some(a), Some(b)) => 0.5 * (a + b),
+        _ => nodes.iter().map(|&p| spacing[p as usize]).sum::<f64>() / nodes.len() as f64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::contact_distance;
+
+    /// Session 41: a fine body (h) on a coarse one (2h). Every element
+    /// between them has the one contact distance 1.5h, however many of
+    /// its particles each body brings (the mean over the element's
+    /// particles gave 1.67h and 1.33h).
+    #[test]
+    fn the_contact_distance_is_the_pair_s_whatever_the_element() {
+        let body = [0, 0, 0, 1, 1, 1, 2];
+        let spacing = [0.02, 0.02, 0.02, 0.01, 0.01, 0.01, 0.05];
+        for nodes in [[0u32, 1, 3], [0, 3, 4], [0, 3, 6]] {
+            let g0 = contact_distance(&nodes, (0, 1), &body, &spacing);
+            assert!((g0 - 0.015).abs() < 1e-15, "{nodes:?}: {g0}");
+        }
+        let g0 = contact_distance(&[1, 4, 5, 2], (1, 0), &body, &spacing);
+        assert!((g0 - 0.015).abs() < 1e-15);
+        // No particle of one of the two: the mean of all.
+        let g0 = contact_distance(&[0, 1, 6], (0, 1), &body, &spacing);
+        assert!((g0 - 0.03).abs() < 1e-15);
     }
 }

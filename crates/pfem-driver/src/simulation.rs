@@ -818,8 +818,13 @@ where
                     .and_then(|b| material.get(b).copied())
                     .unwrap_or(NO_MATERIAL)
             };
-            self.elements
-                .set_contact(&cands, &element_material, self.particles.spacing(), &mu);
+            self.elements.set_contact(
+                &cands,
+                &element_material,
+                body,
+                self.particles.spacing(),
+                &mu,
+            );
             self.contact.candidates = cands;
         }
         self.stats.remesh.0 += 1;
