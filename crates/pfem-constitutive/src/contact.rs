@@ -3,8 +3,9 @@
 //! with friction, the sliding across it up to Coulomb's limit.
 //!
 //! A contact element is a simplex spanning the gap between two bodies. Its
-//! gap at the start of the step `gⁿ` over the contact distance `g₀` (the
-//! spacing, where particles of two bodies at rest sit) is `rⁿ`; the gap at
+//! gap at the start of the step `gⁿ` over the contact distance `g₀` (where
+//! particles of two bodies at rest sit: half the sum of their spacings,
+//! set by the driver) is `rⁿ`; the gap at
 //! the iterate follows the element's volume, `g/g₀ = J rⁿ`. The normal
 //! pressure is the penalty
 //!
