@@ -780,3 +780,115 @@ fn a_restore_weighs_the_solids_by_the_checkpoint_s_own_start() {
     let v: f64 = scaled.elements().reference_volumes().iter().sum();
     assert_eq!(v, v0, "the checkpoint's masses");
 }
+
+/// Copies the output folder's checkpoint once, after the first step at or
+/// past `at`, and reads the checkpoint's time at the end.
+struct Spy {
+    dir: std::path::PathBuf,
+    at: f64,
+    copied: Option<std::path::PathBuf>,
+}
+
+impl Observer<2> for Spy {
+    fn step(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+        if self.copied.is_none() && sim.time() >= self.at {
+            let to = self.dir.with_extension("early.bin");
+            std::fs::copy(self.dir.join("checkpoint.bin"), &to).unwrap();
+            self.copied = Some(to);
+        }
+        Ok(())
+    }
+}
+
+fn checkpoint_time(path: &std::path::Path) -> f64 {
+    let ck = pfem::observe::read_checkpoint(path).unwrap();
+    let mut s = dam_break();
+    s.restore(&ck).unwrap();
+    s.time()
+}
+
+/// Session 41 (a review of the restarts):
+/// - a run without periodic checkpoints, stopped (its stop writes one),
+///   restarted with an interval wrote none: the checkpoint kept the first
+///   run's "never" as its next time;
+/// - a restart whose probes had other names (the same number) was accepted,
+///   `probes.csv` heading the old values with the new names;
+/// - a restart without frames left the `.pvd` listing the frames the first
+///   run wrote after its checkpoint.
+#[test]
+fn a_restart_keeps_its_own_checkpoint_schedule_probes_and_frames() {
+    let dir = std::env::temp_dir().join(format!("pfem-ck-schedule-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let volume = || Probe::<2>::new("volume", |s: &Simulation<2>| s.fluid_volume());
+    // 1. Frames, no interval, stopped after 0.01 s: one checkpoint, at the
+    // stop.
+    let mut a = dam_break();
+    a.add_hook(Box::new(pfem::hooks::StopWhen::new("test", |t, _| {
+        t >= 0.01
+    })));
+    let mut out = StandardOutput::new(&dir, true, vec![volume()], true);
+    a.run(&mut [&mut out]).unwrap();
+    let stop = a.time();
+    let ck = pfem::observe::read_checkpoint(dir.join("checkpoint.bin")).unwrap();
+    // 2. Other probe names: refused.
+    let mut b = dam_break();
+    b.restore(&ck).unwrap();
+    let mut other = StandardOutput::new(
+        &dir,
+        true,
+        vec![Probe::<2>::new("speed", |s: &Simulation<2>| s.v_max())],
+        true,
+    );
+    let err = other.resume(&ck).unwrap_err().to_string();
+    assert!(err.contains("probes") && err.contains("speed"), "{err}");
+    // 3. Continued with a checkpoint every 0.01 s: by 0.035 s the folder's
+    // checkpoint is a periodic one, past 0.03 s (it stayed at the stop's).
+    let mut b = dam_break();
+    b.restore(&ck).unwrap();
+    b.set_end_time(0.05).unwrap();
+    let mut out =
+        StandardOutput::new(&dir, true, vec![volume()], true).checkpoint_every(Some(0.01));
+    out.resume(&ck).unwrap();
+    let mut spy = Spy {
+        dir: dir.clone(),
+        at: 0.035,
+        copied: None,
+    };
+    b.run(&mut [&mut out, &mut spy]).unwrap();
+    let early = spy.copied.clone().expect("copied");
+    let t = checkpoint_time(&early);
+    assert!(
+        t >= 0.03 && t < 0.035,
+        "the checkpoint at 0.035 s is of t = {t} (the stop was at {stop})"
+    );
+    // 4. The run killed after that checkpoint (frames written past it),
+    // restarted without frames: the collection lists the checkpoint's
+    // frames only, and every frame it lists exists.
+    let ck = pfem::observe::read_checkpoint(&early).unwrap();
+    let mut c = dam_break();
+    c.restore(&ck).unwrap();
+    c.set_end_time(0.05).unwrap();
+    let mut out = StandardOutput::new(&dir, false, vec![volume()], true);
+    out.resume(&ck).unwrap();
+    c.run(&mut [&mut out]).unwrap();
+    let pvd = std::fs::read_to_string(dir.join(format!("{}.pvd", c.name()))).unwrap();
+    let times: Vec<f64> = pvd
+        .split("timestep=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap().parse().unwrap())
+        .collect();
+    assert!(!times.is_empty());
+    assert!(
+        times.iter().all(|&ft| ft <= t + 1e-12),
+        "frames past the checkpoint's {t} s listed: {times:?}"
+    );
+    for f in pvd
+        .split("file=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap())
+    {
+        assert!(dir.join(f).is_file(), "{f} listed, not there");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_file(&early);
+}

@@ -91,7 +91,6 @@ struct Resumed {
     vtu: Option<bool>,
     next_frame: f64,
     next_probe: f64,
-    next_checkpoint: f64,
     frames: Vec<(f64, String)>,
     history: Vec<(f64, Vec<f64>)>,
 }
@@ -170,6 +169,7 @@ where
         let mut d = Decoder::new(checkpoint.require(OUTPUT_SECTION)?);
         let next_frame = d.f64()?;
         let next_probe = d.f64()?;
+        // (This run's interval sets its schedule: `start_resumed`.)
         let next_checkpoint = d.f64()?;
         let n = d.len(16)?;
         let mut frames = Vec::with_capacity(n);
@@ -201,12 +201,38 @@ where
             history.push((t, v));
         }
         let vtu = if d.is_at_end() { None } else { Some(d.bool()?) };
+        if !d.is_at_end() {
+            let n = d.len(8)?;
+            let mut names = Vec::with_capacity(n);
+            for _ in 0..n {
+                names.push(d.str()?.to_string());
+            }
+            let ours: Vec<&str> = self.probes.iter().map(|p| p.name.as_str()).collect();
+            if names != ours {
+                return Err(CheckpointError::Mismatch {
+                    what: "the probes",
+                    checkpoint: names.join(", "),
+                    simulation: ours.join(", "),
+                }
+                .into());
+            }
+        }
         d.end()?;
+        // A schedule or frame time that is not a number (an edited
+        // checkpoint) would stop the frames or list `NaN` in the `.pvd`.
+        let finite_or_later = |t: f64| !t.is_nan() && t > f64::NEG_INFINITY;
+        if !(finite_or_later(next_frame)
+            && finite_or_later(next_probe)
+            && finite_or_later(next_checkpoint))
+            || frames.iter().any(|(t, _)| !t.is_finite())
+            || history.iter().any(|(t, _)| !t.is_finite())
+        {
+            return Err(CheckpointError::Corrupt("an output time is not a number".into()).into());
+        }
         self.resume = Some(Resumed {
             vtu,
             next_frame,
             next_probe,
-            next_checkpoint,
             frames,
             history,
         });
@@ -238,6 +264,12 @@ where
             e.f64s(v);
         }
         e.bool(self.series.is_some());
+        // The probes' names (session 41 on; a checkpoint without them is
+        // compared by their number alone).
+        e.u64(self.probes.len() as u64);
+        for p in &self.probes {
+            e.str(&p.name);
+        }
         e.finish()
     }
 
@@ -612,6 +644,11 @@ where
                 Encoding::Base64,
                 r.frames,
             )?);
+        } else if !r.frames.is_empty() {
+            // No frames from here on (`--no-vtu`), but the run's listed
+            // ones stay listed: the collection is put back to the
+            // checkpoint's, without the frames written after it.
+            VtuSeries::resume(&self.dir, sim.name(), Encoding::Base64, r.frames)?;
         }
         if !self.probes.is_empty() {
             let mut cols = vec!["t"];
@@ -627,11 +664,13 @@ where
         self.history = r.history;
         self.next_frame = r.next_frame;
         self.next_probe = r.next_probe;
-        self.next_checkpoint = if self.checkpoint_every.is_some() {
-            r.next_checkpoint
-        } else {
-            f64::INFINITY
-        };
+        // The checkpoint schedule is this run's: a run restarted with
+        // `--checkpoint-every` from one without it (whose checkpoint, written
+        // at a stop, holds no next time) writes them, and a new interval
+        // takes effect at once. With the interval unchanged this is the
+        // saved next time (the first multiple after the last write).
+        self.next_checkpoint =
+            next_after(sim.time() + 1e-9 * sim.end_time(), self.checkpoint_every);
         self.restarted_at = Some(sim.time());
         self.progress = Some(Progress::new(sim.end_time(), self.quiet));
         Ok(())
