@@ -858,7 +858,7 @@ fn a_restart_keeps_its_own_checkpoint_schedule_probes_and_frames() {
     let early = spy.copied.clone().expect("copied");
     let t = checkpoint_time(&early);
     assert!(
-        t >= 0.03 && t < 0.035,
+        (0.03..0.035).contains(&t),
         "the checkpoint at 0.035 s is of t = {t} (the stop was at {stop})"
     );
     // 4. The run killed after that checkpoint (frames written past it),
