@@ -70,18 +70,22 @@ where
         (self.bulk_modulus / self.density).sqrt()
     }
 
-    fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D> {
-        let p = history.pressure;
+    fn unified(&self, kin: &Kinematics<D>, _history: &History<D>) -> Unified<D> {
+        // A fluid's pressure is nodal (eq. 62): the assembly adds it, so a
+        // fluid element's `σ̂` is not used and the history it is given
+        // holds no pressure (`Material::unified`).
         Unified::new(
             self.effective_viscosity(Self::shear_rate(kin)),
             kin.dt * self.bulk_modulus,
-            Tensor::<D>::identity() * -p,
-            if D == 2 { -p } else { 0.0 },
+            Tensor::<D>::zeros(),
+            0.0,
         )
     }
 
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>) {
-        // Nodal update with only tr D, as for any fluid (eqs. 26, 62).
+        // The nodal pressure's update with only tr D, as for any fluid
+        // (eqs. 26, 62): the default `Material::update_pressure` calls this
+        // with the node's pressure and volumetric rate.
         history.pressure -= kin.dt * self.bulk_modulus * kin.volumetric_rate();
     }
 }

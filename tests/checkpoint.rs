@@ -892,3 +892,62 @@ fn a_restart_keeps_its_own_checkpoint_schedule_probes_and_frames() {
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_file(&early);
 }
+
+/// Session 41 (a review of the library's seams): a run continued in the
+/// same process, with the same output, past its end time
+/// (`set_end_time`, then `run` again) was refused (the folder "not
+/// empty": `StandardOutput::start` began a new run), or with `overwrite`
+/// lost the first part's frames and probes; and a hook's stop stayed, so
+/// every later `run` did nothing.
+#[test]
+fn a_run_continued_in_process_keeps_its_outputs_and_goes_past_a_stop() {
+    let dir = std::env::temp_dir().join(format!("pfem-continued-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut sim = dam_break();
+    sim.add_hook(Box::new(pfem::hooks::StopWhen::new("half way", |t, _| {
+        (0.01..0.012).contains(&t)
+    })));
+    sim.set_end_time(0.02).unwrap();
+    let probe = Probe::<2>::new("volume", |s: &Simulation<2>| s.fluid_volume());
+    let mut out = StandardOutput::new(&dir, true, vec![probe], true);
+    sim.run(&mut [&mut out]).unwrap();
+    assert_eq!(sim.stopped(), Some("half way"));
+    let stopped_at = sim.time();
+    assert!(stopped_at < 0.015);
+    // Again: past the stop, to the end time.
+    sim.run(&mut [&mut out]).unwrap();
+    assert_eq!(sim.time(), 0.02);
+    let frames_first = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".vtu"))
+        .count();
+    // Past the end time, with the same output.
+    sim.set_end_time(0.04).unwrap();
+    sim.run(&mut [&mut out]).unwrap();
+    assert_eq!(sim.time(), 0.04);
+    let frames = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".vtu"))
+        .count();
+    assert!(
+        frames > frames_first,
+        "{frames} frames, {frames_first} before"
+    );
+    let csv = std::fs::read_to_string(dir.join("probes.csv")).unwrap();
+    let t: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(t.first(), Some(&0.0));
+    assert_eq!(t.last(), Some(&0.04));
+    assert!(
+        t.windows(2).all(|w| w[1] > w[0]),
+        "probe times not increasing"
+    );
+    assert_eq!(t.len(), out.history.len());
+    assert_eq!(t.len() as u64, sim.steps() + 1);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -407,3 +407,99 @@ fn a_body_at_rest_with_no_velocity_floor_steps() {
     assert_eq!(sim.rejected(), 0);
     assert_eq!(sim.time(), 0.01);
 }
+
+/// Session 41 (a review of the library's seams): a plane-stress solid in a
+/// 3D scene built from Rust ran with the plane-stress Lamé constant (a
+/// third of λ at ν = 0.4), where the scene file refused it. The material
+/// refuses it itself (`Material::check_dimension`).
+#[test]
+fn a_plane_stress_solid_in_3d_is_refused() {
+    let strip = Hypoelastic::plane_stress(1100.0, 12e6, 0.4).unwrap();
+    let scene = Scene::<3>::new("strip").solid(
+        "strip",
+        Box::new(strip),
+        Geometry::Box {
+            min: Point::<3>::new(0.0, 0.0, 0.0),
+            max: Point::<3>::new(0.1, 0.02, 0.02),
+        },
+        0.01,
+        Some((
+            Point::<3>::new(-1.0, -1.0, -1.0),
+            Point::<3>::new(1e-9, 1.0, 1.0),
+        )),
+    );
+    let err = scene.validate().unwrap_err();
+    assert!(
+        matches!(err, pfem::SceneError::InvalidMaterial { .. }),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("plane stress"), "{err}");
+    // In 2D it is what it says.
+    let strip = Hypoelastic::plane_stress(1100.0, 12e6, 0.4).unwrap();
+    let scene = Scene::<2>::new("strip").solid(
+        "strip",
+        Box::new(strip),
+        Geometry::Box {
+            min: Point::<2>::new(0.0, 0.0),
+            max: Point::<2>::new(0.1, 0.02),
+        },
+        0.01,
+        Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(1e-9, 1.0))),
+    );
+    scene.validate().unwrap();
+}
+
+/// Session 41 (a review of the library's seams): per-body builder calls
+/// with nothing to act on were dropped without a word: `with_velocity`
+/// before any body (the water started at rest), a velocity on a wall, and
+/// a velocity together with a velocity field (the field silently won).
+#[test]
+fn builder_calls_that_cannot_act_are_refused() {
+    let water = || {
+        (
+            Box::new(Newtonian::water()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.1, 0.1),
+            },
+        )
+    };
+    let (m, g) = water();
+    let early = Scene::<2>::new("early")
+        .with_velocity(Vector::<2>::new(1.0, 0.0))
+        .fluid("water", m, g, 0.01);
+    let err = early.validate().unwrap_err();
+    assert!(
+        matches!(err, pfem::SceneError::Misuse { .. }) && err.to_string().contains("with_velocity"),
+        "{err}"
+    );
+    let moving_wall = Scene::<2>::new("wall")
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(0.0, -0.01),
+                max: Point::<2>::new(0.1, 0.0),
+            },
+            0.01,
+            WallMotion::Fixed,
+        )
+        .with_velocity(Vector::<2>::new(1.0, 0.0));
+    assert!(matches!(
+        moving_wall.validate(),
+        Err(pfem::SceneError::Misuse { .. })
+    ));
+    let (m, g) = water();
+    let both = Scene::<2>::new("both")
+        .fluid("water", m, g, 0.01)
+        .with_velocity(Vector::<2>::new(1.0, 0.0))
+        .with_velocity_field(|_| Vector::<2>::new(0.0, 1.0));
+    assert!(matches!(
+        both.validate(),
+        Err(pfem::SceneError::Misuse { .. })
+    ));
+    let (m, g) = water();
+    let fine = Scene::<2>::new("fine")
+        .fluid("water", m, g, 0.01)
+        .with_velocity(Vector::<2>::new(1.0, 0.0));
+    fine.validate().unwrap();
+}

@@ -91,6 +91,15 @@ pub enum MaterialError {
         /// [`crate::MAX_INTERNAL`].
         limit: usize,
     },
+    /// A setting that holds in one dimension only, used in another (plane
+    /// stress in 3D).
+    #[error("{what} does not apply in {dimension}D")]
+    NotInDimension {
+        /// The setting.
+        what: &'static str,
+        /// The dimension the material is used in.
+        dimension: usize,
+    },
 }
 
 impl MaterialError {
@@ -99,7 +108,8 @@ impl MaterialError {
         match self {
             MaterialError::InvalidParameter { parameter, .. } => Some(*parameter),
             MaterialError::DegenerateWaveSpeed { .. }
-            | MaterialError::TooManyInternalVariables { .. } => None,
+            | MaterialError::TooManyInternalVariables { .. }
+            | MaterialError::NotInDimension { .. } => None,
         }
     }
 }

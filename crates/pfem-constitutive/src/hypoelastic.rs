@@ -151,7 +151,8 @@ impl Hypoelastic {
     /// plane, `σ_zz = 0`) instead of plane strain (the default, `ε_zz = 0`,
     /// an infinitely deep body): the in-plane law takes the Lamé constant
     /// `λ* = 2 λ μ / (λ + 2 μ) = E ν / (1 − ν²)`, and `σ_zz` stays zero.
-    /// In 3D the setting does not apply (refuse it upstream); the
+    /// In 3D the setting does not apply: a scene refuses it
+    /// ([`Material::check_dimension`]); the
     /// accessors ([`Hypoelastic::lame_lambda`], [`Hypoelastic::young_modulus`]…)
     /// then report the in-plane constants.
     ///
@@ -220,6 +221,16 @@ where
 {
     fn name(&self) -> &str {
         "hypoelastic solid"
+    }
+
+    fn check_dimension(&self) -> Result<(), MaterialError> {
+        if self.plane_stress && D != 2 {
+            return Err(MaterialError::NotInDimension {
+                what: "plane stress",
+                dimension: D,
+            });
+        }
+        Ok(())
     }
 
     fn kind(&self) -> MaterialKind {

@@ -1,5 +1,6 @@
 //! The unified material interface (paper §3.5, eqs. 43–44).
 
+use crate::error::MaterialError;
 use pfem_core::{Const, Dim, Tensor, Vector};
 
 /// Kinematics of one element at the current Picard iterate, in the Updated
@@ -430,6 +431,13 @@ where
     /// step).
     fn internal_variables(&self) -> &[&str] {
         &[]
+    }
+
+    /// Refuses a material that does not apply in this dimension `D` (a 2D
+    /// assumption such as plane stress used in 3D): `Scene::validate` asks
+    /// every body's material. Fine by default.
+    fn check_dimension(&self) -> Result<(), MaterialError> {
+        Ok(())
     }
 
     /// The numbers that define the material (moduli, viscosities, a yield

@@ -122,6 +122,9 @@ where
     assert_eq!(material.density(), 1800.0);
     assert!((material.wave_speed() - (1.0e8f64 / 1800.0).sqrt()).abs() < 1e-12);
 
+    // The trait alone, with a pressure in the history: in a simulation a
+    // fluid element is given `History::default()` (its pressure is nodal,
+    // eq. 62, and its `σ̂` unused; `examples/custom_material.rs`).
     let p0 = 2.0e3;
     let history = History::<D> {
         pressure: p0,

@@ -104,7 +104,10 @@ pub trait Observer<const D: usize>
 where
     Const<D>: Dim,
 {
-    /// Called once before the first step.
+    /// Called at the start of every [`Simulation::run`], before its first
+    /// step. An observer given to a second `run` (a run continued past its
+    /// end time with [`Simulation::set_end_time`]) should go on from where
+    /// it stood, as `pfem_io::StandardOutput` does.
     fn start(&mut self, _sim: &Simulation<D>) -> Result<(), RunError> {
         Ok(())
     }
@@ -1150,7 +1153,12 @@ where
 
     /// Runs to the end time (or until a hook stops it,
     /// [`Simulation::stopped`]), calling the observers after every step.
+    /// Called again (after [`Simulation::set_end_time`], or after a hook's
+    /// stop), it goes on from where the last call ended.
     pub fn run(&mut self, observers: &mut [&mut dyn Observer<D>]) -> Result<(), RunError> {
+        // A stop a hook asked for ended the last `run`; this one goes on
+        // (until a hook asks again).
+        self.stop = None;
         for o in observers.iter_mut() {
             o.start(self)?;
         }

@@ -90,23 +90,6 @@ where
         None
     }
 
-    /// Pressure force the fluid exerts on body `name` (N, per metre of depth
-    /// in 2D), or [`RunError::UnknownBody`]: at each of the body's particles
-    /// `i`, the nodal pressure force `Gᵀ p` of eq. 58,
-    /// `Σ_e Σ_{a∈e} p_a (V_e/(D+1)) grad W_i` over the fluid elements `e`
-    /// holding `i`, plus the weight less the inertia of the fluid mass those
-    /// elements lump on `i`, `Σ_e ρ_e V_e/(D+1) (g − aᵢ)`. The lumped mass
-    /// puts part of the adjacent fluid's weight on the body's nodes, where
-    /// the nodal pressure force holds it up; without the second term a
-    /// block held under water at rest read its buoyancy +40 % (issue 13;
-    /// `tests/water_at_rest_2d.rs` checks it to 2 %). The closures of
-    /// sealed voids add their pressure force (3D; without them a 3D block
-    /// read 12 N sideways and +47 % up, `tests/water_at_rest_3d.rs`). The
-    /// viscous part is left out (negligible for water). The inertia is the
-    /// last acceleration's, `m aⁿ⁺¹`: under Bossak's scheme the step
-    /// balanced `m [(1 − α_B) aⁿ⁺¹ + α_B aⁿ]`, so a force that changes
-    /// fast reads slightly off the one the step transmitted (as
-    /// `pfem::cases3d::fluid_force` measures).
     /// The force body `from` exerts on body `on` through their contact
     /// elements at the end of the last step: each element's stress `σ`
     /// (`−p I + τ ⊗ n + n ⊗ τ`, constant in the simplex) gives its particles
@@ -169,6 +152,23 @@ where
         })
     }
 
+    /// Pressure force the fluid exerts on body `name` (N, per metre of depth
+    /// in 2D), or [`RunError::UnknownBody`]: at each of the body's particles
+    /// `i`, the nodal pressure force `Gᵀ p` of eq. 58,
+    /// `Σ_e Σ_{a∈e} p_a (V_e/(D+1)) grad W_i` over the fluid elements `e`
+    /// holding `i`, plus the weight less the inertia of the fluid mass those
+    /// elements lump on `i`, `Σ_e ρ_e V_e/(D+1) (g − aᵢ)`. The lumped mass
+    /// puts part of the adjacent fluid's weight on the body's nodes, where
+    /// the nodal pressure force holds it up; without the second term a
+    /// block held under water at rest read its buoyancy +40 % (issue 13;
+    /// `tests/water_at_rest_2d.rs` checks it to 2 %). The closures of
+    /// sealed voids add their pressure force (3D; without them a 3D block
+    /// read 12 N sideways and +47 % up, `tests/water_at_rest_3d.rs`). The
+    /// viscous part is left out (negligible for water). The inertia is the
+    /// last acceleration's, `m aⁿ⁺¹`: under Bossak's scheme the step
+    /// balanced `m [(1 − α_B) aⁿ⁺¹ + α_B aⁿ]`, so a force that changes
+    /// fast reads slightly off the one the step transmitted (as
+    /// `pfem::cases3d::fluid_force` measures).
     fn pressure_force_on(&self, name: &str) -> Result<Vector<D>, RunError> {
         let id = self.body_id(name)?;
         let nv = D + 1;

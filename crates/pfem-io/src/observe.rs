@@ -682,6 +682,14 @@ where
     Const<D>: Dim,
 {
     fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        // A second `run` with this output (a run continued past its end
+        // time): the folder, frames, probes and schedules go on; only the
+        // progress bar starts again. (It cleared the first run's files, or
+        // refused the folder as not empty.)
+        if self.progress.is_some() && self.resume.is_none() {
+            self.progress = Some(Progress::new(sim.end_time(), self.quiet));
+            return Ok(());
+        }
         self.started = Some(Instant::now());
         if let Some(t) = self.probe_interval {
             if !(t > 0.0 && t.is_finite()) {

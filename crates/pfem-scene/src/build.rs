@@ -210,6 +210,7 @@ where
             settings,
             contact,
             pressure_stabilisation: _,
+            misuse: _,
         } = scene;
         let mut free_solids = vec![false; bodies.len()];
         let mut particles = Cloud::<D>::default();

@@ -85,6 +85,13 @@ pub enum SceneError {
         /// Second body.
         second: String,
     },
+    /// A call of the scene builder that had nothing to act on, or
+    /// settings of a body that exclude each other.
+    #[error("scene: {why}")]
+    Misuse {
+        /// What was called, and why it cannot hold.
+        why: String,
+    },
     /// A solid under gravity with nothing to hold it: no clamp, no fluid
     /// to rest in, no wall or other solid to land on.
     #[error("solid `{body}` has no support: clamp it, or give the scene a fluid to rest in or a wall or solid to land on")]

@@ -330,6 +330,10 @@ where
     /// deviation 12). The driver applies it unless the program's
     /// `StepParams` sets one.
     pub pressure_stabilisation: f64,
+    /// Calls of the builder that had nothing to act on (a per-body setting
+    /// such as [`Scene::with_velocity`] called before any body), found as
+    /// they were made and refused by [`Scene::validate`].
+    pub misuse: Vec<String>,
 }
 
 /// Contact settings ([`Scene::friction`], [`Scene::contact_stiffness`],
@@ -414,6 +418,7 @@ where
             settings: RunSettings::default(),
             contact: ContactSettings::default(),
             pressure_stabilisation: 0.0,
+            misuse: Vec::new(),
         }
     }
 
@@ -553,6 +558,9 @@ where
     pub fn with_velocity(mut self, v: Vector<D>) -> Self {
         if let Some(b) = self.bodies.last_mut() {
             b.velocity = v;
+        } else {
+            self.misuse
+                .push("`with_velocity` called before any body: it sets the last body added".into());
         }
         self
     }
@@ -566,6 +574,10 @@ where
     ) -> Self {
         if let Some(b) = self.bodies.last_mut() {
             b.velocity_field = Some(InitialField(std::sync::Arc::new(f)));
+        } else {
+            self.misuse.push(
+                "`with_velocity_field` called before any body: it sets the last body added".into(),
+            );
         }
         self
     }
@@ -578,6 +590,10 @@ where
     ) -> Self {
         if let Some(b) = self.bodies.last_mut() {
             b.pressure_field = Some(InitialField(std::sync::Arc::new(f)));
+        } else {
+            self.misuse.push(
+                "`with_pressure_field` called before any body: it sets the last body added".into(),
+            );
         }
         self
     }
@@ -587,6 +603,9 @@ where
     pub fn clamp_box(mut self, min: Point<D>, max: Point<D>) -> Self {
         if let Some(b) = self.bodies.last_mut() {
             b.clamps.push(Clamp::Box(min, max));
+        } else {
+            self.misuse
+                .push("`clamp_box` called before any body: it sets the last body added".into());
         }
         self
     }
@@ -596,6 +615,9 @@ where
     pub fn clamp_where(mut self, f: impl Fn(&Point<D>) -> bool + Send + Sync + 'static) -> Self {
         if let Some(b) = self.bodies.last_mut() {
             b.clamps.push(Clamp::Where(std::sync::Arc::new(f)));
+        } else {
+            self.misuse
+                .push("`clamp_where` called before any body: it sets the last body added".into());
         }
         self
     }
@@ -681,6 +703,9 @@ where
     /// valid run settings, cylinders in 3D only, solids supported, fluids not overlapping other
     /// bodies' interiors.
     pub fn validate(&self) -> Result<(), SceneError> {
+        if let Some(why) = self.misuse.first() {
+            return Err(SceneError::Misuse { why: why.clone() });
+        }
         let s = &self.settings;
         for (what, v) in [
             ("end_time", s.end_time),
@@ -907,6 +932,25 @@ where
                     })
                 }
                 _ => {}
+            }
+            if b.kind == ParticleKind::Wall
+                && (b.velocity != Vector::<D>::zeros() || b.velocity_field.is_some())
+            {
+                return Err(SceneError::Misuse {
+                    why: format!("wall `{}` given an initial velocity: a wall moves by its motion (WallMotion), not by one", b.name),
+                });
+            }
+            if b.velocity != Vector::<D>::zeros() && b.velocity_field.is_some() {
+                return Err(SceneError::Misuse {
+                    why: format!("body `{}` given both an initial velocity and a velocity field: they exclude each other", b.name),
+                });
+            }
+            if let Some(m) = &b.material {
+                m.check_dimension()
+                    .map_err(|source| SceneError::InvalidMaterial {
+                        body: b.name.clone(),
+                        source,
+                    })?;
             }
             if b.kind == ParticleKind::Solid {
                 // Boxes keep a structured mesh; any other geometry is meshed
