@@ -32,7 +32,7 @@ where
     pub name: String,
     /// The measurement.
     #[allow(clippy::type_complexity)]
-    pub measure: Box<dyn Fn(&Simulation<D>) -> f64>,
+    pub measure: Box<dyn Fn(&Simulation<D>) -> f64 + Send>,
 }
 
 impl<const D: usize> Probe<D>
@@ -40,13 +40,22 @@ where
     Const<D>: Dim,
 {
     /// A probe from a name and a closure.
-    pub fn new(name: &str, measure: impl Fn(&Simulation<D>) -> f64 + 'static) -> Self {
+    pub fn new(name: &str, measure: impl Fn(&Simulation<D>) -> f64 + Send + 'static) -> Self {
         Self {
             name: name.into(),
             measure: Box::new(measure),
         }
     }
 }
+
+// A run's output moves to another thread with its simulation (a batch of
+// runs on a pool): `Probe` and `StandardOutput` are `Send` (session 41; a
+// probe's closure was not).
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<Probe<2>>();
+    send::<StandardOutput<3>>();
+};
 
 /// Writes what a run leaves on disk into one directory: `NAME.pvd` with
 /// `NAME_*.vtu` frames (if `vtu`), `probes.csv` (if there are probes) and
