@@ -133,15 +133,28 @@ where
         // mixes two bodies; in 2D it put a solid resting one spacing from
         // a floor and a side wall under penalty at rest (gap 0.71 h, a
         // diagonal normal; session 40's review).
+        let body = |a: usize| bodies[s[a] as usize];
+        let takes_part = |a: usize| in_contact.get(body(a) as usize).copied().unwrap_or(false);
         let found = if ng >= 3 {
-            let body = |a: usize| bodies[s[a] as usize];
-            let takes_part = |a: usize| in_contact.get(body(a) as usize).copied().unwrap_or(false);
             nearest_pair::<D>(&x, &body, &takes_part, master).map(|(gap, n, pair)| {
                 (master, other) = pair;
                 (gap, n)
             })
         } else {
-            gap_and_normal::<D>(&x, &on, group[0].1)
+            // Two bodies: the master facet's height, unless the facet
+            // cuts across a concave corner of one body (a floor and a side
+            // wall of one polygon or surface): then it lies nearer than any
+            // particle of that body, and the nearest pair measures the
+            // gap (`CORNER_RATIO`; session 41's review).
+            gap_and_normal::<D>(&x, &on, group[0].1).map(|(gap, n)| {
+                match nearest_pair::<D>(&x, &body, &takes_part, master) {
+                    Some((d, nd, pair)) if gap < CORNER_RATIO * d => {
+                        (master, other) = pair;
+                        (d, nd)
+                    }
+                    _ => (gap, n),
+                }
+            })
         };
         let Some((gap, normal)) = found else {
             continue;
@@ -160,6 +173,19 @@ where
     }
     Ok(())
 }
+
+/// Below this ratio of a two-body simplex's facet height to its nearest
+/// pair of particles of the two bodies, the facet cuts across a concave
+/// corner of the master body and the nearest pair gives the gap. Across a
+/// corner of a lattice the ratio is `1/√2` (a solid one spacing from a
+/// floor and a side wall of one body: the facet's height 0.71 h, a
+/// diagonal normal, the solid under penalty at rest); over a flat surface
+/// it is at least `g/√(g² + s²)`, `s` the largest offset of the other
+/// body's particle from the master's nearest: 0.89 at the contact distance
+/// between offset 2D rows (`s = h/2`), 0.82 in 3D (`s = h/√2`), and 0.79
+/// still with 10 % of the gap closed. (Rows of spacings more than four
+/// times apart reach below it.)
+const CORNER_RATIO: f64 = 0.75;
 
 /// Gap, normal and bodies of a tetrahedron where three or four bodies meet
 /// (a solid in the corner of two walls): the shortest distance between two
@@ -483,6 +509,74 @@ mod tests {
         }
     }
 
+    /// Session 41's review: the floor and the side wall are one body (a
+    /// tank of one polygon). The triangle {floor (1,0), solid (1,1), side
+    /// (0,1)} is then a two-body simplex whose master edge, floor to side,
+    /// cuts the corner: gap 0.71 h with a diagonal normal (the solid under
+    /// penalty at rest). It takes its nearest pair's: the spacing, along
+    /// an axis. A row over a row offset by half a spacing keeps its facet's
+    /// gap (the spacing, vertical).
+    #[test]
+    fn a_solid_in_a_corner_of_one_wall_body_starts_open_2d() {
+        let mut x = Vec::new();
+        let mut bodies = Vec::new();
+        for i in 0..4 {
+            x.push(Point::<2>::new(i as f64, 0.0)); // floor, body 0
+            bodies.push(0);
+        }
+        for j in 1..4 {
+            x.push(Point::<2>::new(0.0, j as f64)); // side wall, body 0 too
+            bodies.push(0);
+        }
+        for i in 1..3 {
+            for j in 1..3 {
+                x.push(Point::<2>::new(i as f64, j as f64)); // solid, body 2
+                bodies.push(2);
+            }
+        }
+        let kinds = kinds_of(&bodies, 2);
+        let contact = |x: &[Point<2>], kinds: &[ParticleKind], bodies: &[u32], tris: &[u32]| {
+            let tess = Tessellation {
+                nv: 3,
+                simplices: tris.to_vec(),
+                neighbors: vec![crate::NO_NEIGHBOR; tris.len()],
+            };
+            let mut out = Vec::new();
+            contact_elements::<2>(
+                x,
+                kinds,
+                bodies,
+                &vec![1.0; x.len()],
+                &[false, false, true],
+                &tess,
+                1.6,
+                0.05,
+                &mut out,
+            )
+            .unwrap();
+            out
+        };
+        let out = contact(&x, &kinds, &bodies, &[1, 7, 4]);
+        assert_eq!(out.len(), 1);
+        let c = &out[0];
+        assert!((c.gap - 1.0).abs() < 1e-12, "gap {}", c.gap);
+        assert!(
+            (c.normal.x.abs() - 1.0).abs() < 1e-12 || (c.normal.y.abs() - 1.0).abs() < 1e-12,
+            "normal {:?}",
+            c.normal
+        );
+        // A flat floor and a solid row offset by half a spacing, one
+        // spacing up: the floor's edge, gap 1, normal +y.
+        let x = [
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 0.0),
+            Point::<2>::new(0.5, 1.0),
+        ];
+        let out = contact(&x, &kinds_of(&[0, 0, 2], 2), &[0, 0, 2], &[0, 1, 2]);
+        assert_eq!(out.len(), 1);
+        assert!((out[0].gap - 1.0).abs() < 1e-12 && (out[0].normal.y - 1.0).abs() < 1e-12);
+    }
+
     /// Contact elements of single 3D tetrahedra, each of the given bodies
     /// (body 1 takes part in contact; 0 and 2 are walls).
     fn tets_3d(x: &[Point<3>], bodies: &[u32], tets: &[[u32; 4]]) -> Vec<ContactCandidate<3>> {
@@ -506,6 +600,29 @@ mod tests {
         )
         .unwrap();
         out
+    }
+
+    /// 3D, session 41's review: floor (1,0,0) and side wall (0,1,0) of one
+    /// body against a solid's edge (1,1,0)–(1,1,1) in the corner. Edge
+    /// against edge gave the common normal (1,1,0)/√2 and a gap of 0.71 h;
+    /// the nearest pair gives the spacing along an axis.
+    #[test]
+    fn a_solid_in_a_corner_of_one_wall_body_starts_open_3d() {
+        let x = [
+            Point::<3>::new(1.0, 0.0, 0.0),
+            Point::<3>::new(0.0, 1.0, 0.0),
+            Point::<3>::new(1.0, 1.0, 0.0),
+            Point::<3>::new(1.0, 1.0, 1.0),
+        ];
+        let out = tets_3d(&x, &[0, 0, 1, 1], &[[0, 1, 2, 3]]);
+        assert_eq!(out.len(), 1);
+        let c = &out[0];
+        assert!((c.gap - 1.0).abs() < 1e-12, "gap {}", c.gap);
+        assert!(
+            c.normal.iter().filter(|v| (v.abs() - 1.0).abs() < 1e-12).count() == 1,
+            "normal {:?}",
+            c.normal
+        );
     }
 
     /// 3D: four nearly coplanar particles, a row of a solid one spacing
