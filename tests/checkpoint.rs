@@ -897,8 +897,9 @@ fn a_restart_keeps_its_own_checkpoint_schedule_probes_and_frames() {
 /// same process, with the same output, past its end time
 /// (`set_end_time`, then `run` again) was refused (the folder "not
 /// empty": `StandardOutput::start` began a new run), or with `overwrite`
-/// lost the first part's frames and probes; and a hook's stop stayed, so
-/// every later `run` did nothing.
+/// lost the first part's frames and probes; and a hook's stop could not
+/// be undone (`Simulation::clear_stop`, new), so every later `run` did
+/// nothing.
 #[test]
 fn a_run_continued_in_process_keeps_its_outputs_and_goes_past_a_stop() {
     let dir = std::env::temp_dir().join(format!("pfem-continued-{}", std::process::id()));
@@ -914,7 +915,12 @@ fn a_run_continued_in_process_keeps_its_outputs_and_goes_past_a_stop() {
     assert_eq!(sim.stopped(), Some("half way"));
     let stopped_at = sim.time();
     assert!(stopped_at < 0.015);
-    // Again: past the stop, to the end time.
+    // A stopped run stays stopped; once its stop is cleared it goes on,
+    // to the end time.
+    let steps = sim.steps();
+    sim.run(&mut [&mut out]).unwrap();
+    assert_eq!(sim.steps(), steps);
+    assert_eq!(sim.clear_stop().as_deref(), Some("half way"));
     sim.run(&mut [&mut out]).unwrap();
     assert_eq!(sim.time(), 0.02);
     let frames_first = std::fs::read_dir(&dir)

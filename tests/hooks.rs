@@ -926,3 +926,80 @@ fn a_moving_wall_carries_its_law_s_acceleration() {
         }
     }
 }
+
+/// Session 41 (a review of particles that come and go): an inflow face
+/// drawn from the floor's top row to the ceiling's bottom row put a
+/// particle of each layer on each row and drove it through the walls'
+/// particles (coincident points for the Delaunay, or inverted elements at
+/// every step). The face's points on a wall row are left out: the run
+/// goes on with the rate of the clear height.
+#[test]
+fn an_inflow_face_drawn_onto_the_walls_leaves_their_rows_alone() {
+    let h = 0.02;
+    let pipe = 0.1;
+    let speed = 0.5;
+    let scene = Scene::<2>::new("inflow onto walls")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.3,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.4, -h, 1.0, 0.0), h, WallMotion::Fixed)
+        .wall("end", boxed(1.0, h, 1.0 + h, 0.6), h, WallMotion::Fixed)
+        .wall(
+            "ceiling",
+            boxed(-0.4, pipe, 0.0, pipe + h),
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(-0.3, h, 0.98, pipe - h),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    // The face from the floor's top row (y = 0) to the ceiling's (y = pipe).
+    let inflow = Inflow::new(
+        "water",
+        Point::<2>::new(-0.3, 0.0),
+        Point::<2>::new(-0.3, pipe),
+        Vector::<2>::new(speed, 0.0),
+        h,
+        2.0 * h,
+    )
+    .unwrap();
+    sim.add_hook(Box::new(inflow));
+    let v0 = sim.fluid_volume();
+    while sim.time() < sim.end_time() - 1e-12 {
+        sim.step().unwrap();
+    }
+    let added = sim.volume().by(Inflow::<2>::NAME);
+    println!(
+        "inflow onto walls: {} steps ({} rejected), volume {v0:.5} -> {:.5} m², inflow {added:+.5} m² (clear height at {speed} m/s for 0.3 s: {:.5})",
+        sim.steps(),
+        sim.rejected(),
+        sim.fluid_volume(),
+        speed * (pipe - h) * 0.3
+    );
+    assert!(
+        sim.rejected() <= sim.steps() / 10,
+        "{} of {} rejected",
+        sim.rejected(),
+        sim.steps()
+    );
+    assert!(added > 0.5 * speed * (pipe - h) * 0.3, "{added}");
+    // No fluid particle on a wall row inside the pipe.
+    let p = sim.particles();
+    for i in 0..p.len() {
+        if p.kind()[i] == ParticleKind::Fluid && p.x()[i].x < 0.0 {
+            let y = p.x()[i].y;
+            assert!(
+                y > 0.25 * h && y < pipe - 0.25 * h,
+                "fluid particle at y = {y}"
+            );
+        }
+    }
+}

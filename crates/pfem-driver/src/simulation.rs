@@ -1163,12 +1163,10 @@ where
 
     /// Runs to the end time (or until a hook stops it,
     /// [`Simulation::stopped`]), calling the observers after every step.
-    /// Called again (after [`Simulation::set_end_time`], or after a hook's
-    /// stop), it goes on from where the last call ended.
+    /// Called again after [`Simulation::set_end_time`], it goes on from
+    /// where the last call ended. A run a hook stopped stays stopped
+    /// (`run` returns at once) until [`Simulation::clear_stop`].
     pub fn run(&mut self, observers: &mut [&mut dyn Observer<D>]) -> Result<(), RunError> {
-        // A stop a hook asked for ended the last `run`; this one goes on
-        // (until a hook asks again).
-        self.stop = None;
         for o in observers.iter_mut() {
             o.start(self)?;
         }
@@ -1217,6 +1215,13 @@ where
     /// Why a hook stopped the run, if one did.
     pub fn stopped(&self) -> Option<&str> {
         self.stop.as_deref()
+    }
+
+    /// Forgets a hook's stop ([`Simulation::stopped`]), so that the next
+    /// [`Simulation::run`] goes on (until a hook stops it again). Returns
+    /// the reason it had.
+    pub fn clear_stop(&mut self) -> Option<String> {
+        self.stop.take()
     }
 
     /// The time-integration parameters in use (those given to

@@ -619,7 +619,11 @@ mod tests {
         let c = &out[0];
         assert!((c.gap - 1.0).abs() < 1e-12, "gap {}", c.gap);
         assert!(
-            c.normal.iter().filter(|v| (v.abs() - 1.0).abs() < 1e-12).count() == 1,
+            c.normal
+                .iter()
+                .filter(|v| (v.abs() - 1.0).abs() < 1e-12)
+                .count()
+                == 1,
             "normal {:?}",
             c.normal
         );

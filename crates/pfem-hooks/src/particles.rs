@@ -248,6 +248,38 @@ where
         }
         self.body_id = id;
         self.material = p.material()[i];
+        // A point of the face on a wall's or a solid's row (a face drawn
+        // from floor to ceiling, whose particles lie on those rows) would
+        // put a fluid particle onto that row and drive it through the
+        // row's particles: the Delaunay refuses them as coincident, or
+        // their elements invert at every step. Such points are left out
+        // (the scene's build leaves out fluid particles on another body's
+        // the same way).
+        let half = 0.5 * self.spacing;
+        let blocked: Vec<Point<D>> = (0..p.len())
+            .filter(|&j| p.kind()[j] != ParticleKind::Fluid)
+            .map(|j| p.x()[j])
+            .filter(|x| {
+                let d = self.depth(x);
+                d > -self.spacing && d < self.zone + self.spacing
+            })
+            .collect();
+        let axis = self.axis;
+        self.layer.retain(|q| {
+            !blocked.iter().any(|x| {
+                (0..D)
+                    .filter(|&k| k != axis)
+                    .map(|k| (x[k] - q[k]).powi(2))
+                    .sum::<f64>()
+                    < half * half
+            })
+        });
+        if self.layer.is_empty() {
+            return Err(RunError::Hook {
+                hook: Self::NAME.into(),
+                why: "every point of the face lies on a wall's or a solid's row".into(),
+            });
+        }
         Ok(())
     }
 
