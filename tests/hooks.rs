@@ -4,7 +4,9 @@
 //! `cargo test --release --test suite hooks::`
 
 use pfem::core::ParticleKind;
-use pfem::hooks::{BodyForceRamp, FnHook, Inflow, PrescribedMotion, Sinusoidal, StopWhen};
+use pfem::hooks::{
+    AppliedForce, BodyForceRamp, FnHook, Inflow, PrescribedMotion, Sinusoidal, StopWhen,
+};
 use pfem::prelude::*;
 
 const G: f64 = 9.81;
@@ -1002,4 +1004,102 @@ fn an_inflow_face_drawn_onto_the_walls_leaves_their_rows_alone() {
             );
         }
     }
+}
+
+/// Session 41 (a review of the library's seams found no way to put a
+/// force on a body): `HookContext::add_force` and the `AppliedForce` hook. A free
+/// block, no gravity, pushed by a constant 2 N/m: its momentum grows by
+/// F Δt each step once the scheme's acceleration has settled (from the
+/// first steps, Bossak's stored acceleration starts at zero), and by
+/// F t over the run to 1 %. A load on a region picks its particles, and a
+/// load on a fluid, or on no particle, is refused.
+#[test]
+fn a_load_pushes_a_free_block_by_newton_s_law() {
+    let h = 0.01;
+    let (rho, w, t) = (1000.0, 0.1, 0.05);
+    let scene = || {
+        Scene::<2>::new("pushed block")
+            .settings(RunSettings {
+                end_time: 0.1,
+                max_dt: 1e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .solid(
+                "block",
+                Box::new(Hypoelastic::new(rho, 1e6, 0.3).unwrap()),
+                boxed(0.0, 0.0, w, t),
+                h,
+                None,
+            )
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(1.0, 0.0, 1.1, 0.1),
+                h,
+            )
+    };
+    let f = Vector::<2>::new(2.0, 0.0);
+    let mut sim = sim2(scene(), StepParams::default());
+    // On the right face only: the block is pushed and rings.
+    sim.add_hook(Box::new(AppliedForce::new(
+        "block",
+        Some((
+            Point::<2>::new(w - 0.5 * h, -1.0),
+            Point::<2>::new(1.0, 1.0),
+        )),
+        move |_| f,
+    )));
+    let block = sim.body_particles("block").unwrap();
+    let masses = {
+        let el = sim.elements();
+        let mut m = vec![0.0; sim.particles().len()];
+        for (e, &v0) in el.solid().chunks_exact(3).zip(el.reference_volumes()) {
+            for &i in e {
+                m[i as usize] += rho * v0 / 3.0;
+            }
+        }
+        m
+    };
+    let momentum = |s: &Simulation<2>| {
+        block
+            .iter()
+            .map(|&i| s.particles().v()[i] * masses[i])
+            .sum::<Vector<2>>()
+    };
+    let mut last = momentum(&sim);
+    while sim.time() < sim.end_time() - 1e-12 {
+        sim.step().unwrap();
+        let p = momentum(&sim);
+        if sim.steps() > 20 {
+            let dp = (p - last) / sim.dt();
+            assert!(
+                (dp - f).norm() < 1e-6 * f.norm(),
+                "step {}: dp/dt {dp:?}",
+                sim.steps()
+            );
+        }
+        last = p;
+    }
+    let p = momentum(&sim);
+    println!(
+        "pushed block: momentum {p:?} after {} s against F t {:?}",
+        sim.time(),
+        f * sim.time()
+    );
+    assert!(
+        (p - f * sim.time()).norm() < 0.01 * f.norm() * sim.time(),
+        "{p:?}"
+    );
+    // A load on the water, or on no particle of the block: refused.
+    let mut sim = sim2(scene(), StepParams::default());
+    sim.add_hook(Box::new(AppliedForce::new("water", None, move |_| f)));
+    assert!(sim.step().is_err());
+    let mut sim = sim2(scene(), StepParams::default());
+    sim.add_hook(Box::new(AppliedForce::new(
+        "block",
+        Some((Point::<2>::new(5.0, 5.0), Point::<2>::new(6.0, 6.0))),
+        move |_| f,
+    )));
+    assert!(sim.step().is_err());
 }

@@ -187,6 +187,10 @@ where
     pub constraints: &'a Constraints<D>,
     /// Body force per unit mass (m/s²), `None` when the scene has none.
     pub body_force: Option<Vector<D>>,
+    /// External force on each particle (N; N per metre of depth in 2D),
+    /// added at its node beside the lumped body force (eq. 59); empty for
+    /// none, else one per particle.
+    pub external_force: &'a [Vector<D>],
     /// Time step (s).
     pub dt: f64,
     /// Inertia weights of the time scheme.
@@ -1412,6 +1416,9 @@ where
                 }
                 if let Some(b) = input.body_force {
                     f += b * m; // eq. 59, lumped
+                }
+                if let Some(fe) = input.external_force.get(part) {
+                    f += fe; // a nodal force (eq. 59's boundary term)
                 }
                 let p = diag_block[a];
                 for k in 0..D {

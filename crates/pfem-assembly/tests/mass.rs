@@ -64,6 +64,7 @@ fn assemble(reference_volumes: &[f64]) -> (Assembler<2>, Result<(), AssemblyErro
                 acceleration_factor: 1.0,
                 displacement_weight: 0.5 * dt,
             },
+            external_force: &[],
         })
         .map(|_| ());
     (asm, r)

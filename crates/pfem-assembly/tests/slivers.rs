@@ -134,6 +134,7 @@ where
                 acceleration_factor: 1.0,
                 displacement_weight: 0.5 * dt,
             },
+            external_force: &[],
         })
         .map(|_| ());
     (asm, r)

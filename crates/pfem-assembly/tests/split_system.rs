@@ -135,6 +135,7 @@ fn assembled_with(t: &Tank, split: bool, alpha: f64) -> Assembler<2> {
             acceleration_factor: 1.0,
             displacement_weight: 0.5 * dt,
         },
+        external_force: &[],
     })
     .unwrap();
     asm
@@ -632,6 +633,7 @@ fn parts_that_do_not_fit_are_typed_errors() {
                 acceleration_factor: 1.0,
                 displacement_weight: 0.5 * dt,
             },
+            external_force: &[],
         });
         assert!(
             matches!(r, Err(pfem_assembly::AssemblyError::MeshMismatch { .. })),

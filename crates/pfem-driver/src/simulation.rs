@@ -360,6 +360,9 @@ where
     materials: Vec<Box<dyn Material<D>>>,
     body_names: Vec<String>,
     hooks: Vec<Box<dyn Hook<D>>>,
+    /// External forces the hooks added for the coming attempt (N; empty
+    /// for none): `HookContext::add_force`.
+    external_force: Vec<Vector<D>>,
     /// How many of `hooks` have had their `start` (a hook added during a
     /// run has it before the next step).
     started: usize,
@@ -597,6 +600,7 @@ where
             materials,
             body_names,
             hooks,
+            external_force: Vec::new(),
             started: 0,
             stop: None,
             stages,
@@ -660,6 +664,7 @@ where
             materials: &self.materials,
             constraints: self.particles.constraints(),
             body_force: self.gravity,
+            external_force: &[],
         };
         let mut state = self.particles.state().clone();
         self.stepper
@@ -863,6 +868,11 @@ where
     /// their volume changes; a hook that changes the particle set has the
     /// mesh remade before the next hook runs.
     fn run_hooks_from(&mut self, point: HookPoint, first: usize) -> Result<(), RunError> {
+        // Each attempt's external forces are those its `before_solve`
+        // hooks add (`HookContext::add_force`).
+        if point == HookPoint::BeforeSolve && first == 0 {
+            self.external_force.clear();
+        }
         if self.hooks.len() <= first {
             return Ok(());
         }
@@ -881,6 +891,7 @@ where
                 body_names: &self.body_names,
                 gravity: &mut self.gravity,
                 stop: &mut self.stop,
+                external_force: &mut self.external_force,
                 tessellator: self.stepper.tessellator.as_mut(),
                 delaunay: &self.stepper.tess,
                 alpha: &self.alpha,
@@ -915,6 +926,8 @@ where
                 break;
             }
             if remesh {
+                // Forces added on the old numbering are dropped.
+                self.external_force.clear();
                 self.elements.clear_fluid();
                 if let Err(e) = self.remesh() {
                     result = Err(e);
@@ -1096,6 +1109,7 @@ where
                 materials: &self.materials,
                 constraints,
                 body_force: self.gravity,
+                external_force: &self.external_force,
             };
             let t0 = Instant::now();
             match self

@@ -95,6 +95,7 @@ fn input(t: &Tank) -> AssemblyInput<'_, 2> {
             acceleration_factor: 1.0,
             displacement_weight: 0.5 * dt,
         },
+        external_force: &[],
     }
 }
 

@@ -524,6 +524,11 @@ where
     pub constraints: &'a Constraints<D>,
     /// Body force per unit mass (m/s²), `None` when the scene has none.
     pub body_force: Option<Vector<D>>,
+    /// External force on each particle (N; N per metre of depth in 2D),
+    /// added to its momentum balance beside the body force (eq. 59);
+    /// empty for none. A particle outside every element (a flying drop)
+    /// has no mass in the system and does not feel it.
+    pub external_force: &'a [Vector<D>],
 }
 
 /// Why a step failed.
@@ -822,6 +827,7 @@ where
                 acceleration_factor: 0.0,
                 displacement_weight: dt,
             },
+            external_force: input.external_force,
         };
         self.assembler
             .assemble(&ainput)
@@ -1005,6 +1011,19 @@ where
                 what: format!("particle {p}'s position, velocity, acceleration, pressure or prescribed velocity is not finite"),
             });
         }
+        if !(input.external_force.is_empty() || input.external_force.len() == n) {
+            return Err(StepError::InvalidInput {
+                what: format!(
+                    "{} external forces for {n} particles: one per particle, or none",
+                    input.external_force.len()
+                ),
+            });
+        }
+        if let Some(p) = input.external_force.iter().position(|f| !finite(f)) {
+            return Err(StepError::InvalidInput {
+                what: format!("particle {p}'s external force is not finite"),
+            });
+        }
         if input.body_force.is_some_and(|b| !finite(&b)) {
             return Err(StepError::InvalidInput {
                 what: "the body force is not finite".into(),
@@ -1113,6 +1132,7 @@ where
                 body_force: input.body_force,
                 dt,
                 inertia,
+                external_force: input.external_force,
             };
             self.assembler
                 .assemble(&ainput)

@@ -150,10 +150,12 @@ impl<'b> Sim<'b> {
                 materials: &self.materials,
                 constraints: &self.b.constraints,
                 body_force: Some(Vector::<2>::new(0.0, -g(self.t + dt))),
+                external_force: &[],
             };
             if !self.initialised {
                 let at_start = StepInput {
                     body_force: Some(Vector::<2>::new(0.0, -g(self.t))),
+                    external_force: &[],
                     ..input
                 };
                 self.integ

@@ -41,6 +41,7 @@ fn an_integrator_with_a_zero_tolerance_names_it() {
         materials: &materials,
         constraints: &constraints,
         body_force: Some(Vector::<2>::new(0.0, -G)),
+        external_force: &[],
     };
     let err = integ
         .try_step(0.0, 1e-3, &mut state, &mut history, &input)
@@ -71,6 +72,7 @@ fn free_fall_of_a_detached_fluid_block() {
         materials: &materials,
         constraints: &constraints,
         body_force: Some(Vector::<2>::new(0.0, -G)),
+        external_force: &[],
     };
     integ
         .initialize_acceleration(&mut state, &history, &input)
@@ -148,6 +150,7 @@ fn run_tank(
         materials: &materials,
         constraints: &constraints,
         body_force: Some(Vector::<2>::new(0.0, -G)),
+        external_force: &[],
     };
     let vol0 = volume(&state.x, &tris);
     let mut t = 0.0;
@@ -273,6 +276,7 @@ fn where_two_fluids_meet_the_pressure_update_weighs_both() {
         materials: &materials,
         constraints: &constraints,
         body_force: None,
+        external_force: &[],
     };
     let dt = 1e-5;
     integ
@@ -312,6 +316,7 @@ fn a_flying_particle_on_a_slip_plane_stays_on_it() {
         materials: &materials,
         constraints: &constraints,
         body_force: Some(Vector::<2>::new(3.0, -G)),
+        external_force: &[],
     };
     integ
         .initialize_acceleration(&mut state, &history, &input)
@@ -355,6 +360,7 @@ fn non_finite_or_mismatched_input_is_refused_not_stepped() {
             materials: &materials,
             constraints,
             body_force: Some(body_force),
+            external_force: &[],
         };
         integ.try_step(0.0, 1e-3, state, history, &input)
     };

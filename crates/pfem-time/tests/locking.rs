@@ -87,6 +87,7 @@ fn collapse(treatment: VolumetricTreatment, union_jack: bool, t_end: f64) -> Col
         materials: &materials,
         constraints: &constraints,
         body_force: Some(Vector::<2>::new(0.0, -G)),
+        external_force: &[],
     };
     integ
         .initialize_acceleration(&mut state, &history, &input)

@@ -92,6 +92,7 @@ where
         materials: &materials,
         constraints: &constraints,
         body_force: None,
+        external_force: &[],
     };
     let mut t = 0.0;
     for _ in 0..steps {

@@ -115,6 +115,7 @@ where
             materials: &self.materials,
             constraints: &constraints,
             body_force: None,
+            external_force: &[],
         };
         let rep = self
             .integrator

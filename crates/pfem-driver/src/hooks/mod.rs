@@ -154,6 +154,7 @@ where
     pub(crate) body_names: &'a [String],
     pub(crate) gravity: &'a mut Option<Vector<D>>,
     pub(crate) stop: &'a mut Option<String>,
+    pub(crate) external_force: &'a mut Vec<Vector<D>>,
     pub(crate) tessellator: &'a mut dyn Tessellator<D>,
     pub(crate) delaunay: &'a Tessellation,
     pub(crate) alpha: &'a AlphaShapeParams,
@@ -195,6 +196,40 @@ where
     /// Accepted steps so far.
     pub fn steps(&self) -> u64 {
         self.steps
+    }
+
+    /// Adds the force `f` (N; N per metre of depth in 2D) on particle `i`
+    /// to the coming step's momentum balance (beside the body force, eq.
+    /// 59): a point load, or a traction or a pressure spread over a
+    /// body's boundary particles by the hook. Call it in
+    /// [`Hook::before_solve`]: every attempt starts with no external force
+    /// (a rejected attempt, retried smaller, calls those hooks again), and
+    /// forces added before a hook changes the particle set are dropped
+    /// with the old numbering. A particle outside every element (a flying
+    /// drop) has no mass in the system and does not feel it; a prescribed
+    /// velocity component wins over it. A force that is not finite, or a
+    /// particle out of range, is an error.
+    pub fn add_force(&mut self, i: usize, f: Vector<D>) -> Result<(), RunError> {
+        let n = self.particles.len();
+        if i >= n || f.iter().any(|c| !c.is_finite()) {
+            return Err(RunError::InvalidSetting {
+                name: "external force",
+                value: if i >= n { i as f64 } else { f.norm() },
+                reason: "on a particle of the set, and finite",
+            });
+        }
+        if self.external_force.len() != n {
+            self.external_force.clear();
+            self.external_force.resize(n, Vector::<D>::zeros());
+        }
+        self.external_force[i] += f;
+        Ok(())
+    }
+
+    /// The external forces added so far for the coming step (N; empty
+    /// when none): [`HookContext::add_force`].
+    pub fn external_forces(&self) -> &[Vector<D>] {
+        self.external_force
     }
 
     /// The particles.
