@@ -508,6 +508,7 @@ where
             settings,
             merges: _,
             laws,
+            forces,
             free_solids,
             in_contact,
             friction,
@@ -584,6 +585,13 @@ where
         }
         for (body, law) in laws {
             hooks.push(Box::new(crate::hooks::PrescribedMotion::new(body, law)));
+        }
+        for load in forces {
+            hooks.push(Box::new(crate::hooks::AppliedForce::shared(
+                &load.body,
+                load.region,
+                load.force,
+            )));
         }
         // The solid elements weigh their initial volume (eq. 46).
         let elements = Elements::new(

@@ -16,5 +16,5 @@
 mod motion;
 mod particles;
 
-pub use motion::{AppliedForce, BodyForceRamp, SlipPlanes};
+pub use motion::{BodyForceRamp, SlipPlanes};
 pub use particles::{Inflow, ParticleManagement};

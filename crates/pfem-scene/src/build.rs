@@ -156,6 +156,8 @@ where
     /// Walls moving along a law of time, by name.
     #[allow(clippy::type_complexity)]
     pub laws: Vec<(String, std::sync::Arc<dyn crate::motion::MotionLaw<D>>)>,
+    /// Forces on solids in time ([`crate::Scene::force`]).
+    pub forces: Vec<crate::AppliedLoad<D>>,
     /// Per body: a free solid (no clamp, not welded to a wall).
     pub free_solids: Vec<bool>,
     /// Per body: takes part in contact (the free solids, and every solid
@@ -211,6 +213,7 @@ where
             contact,
             pressure_stabilisation: _,
             misuse: _,
+            forces,
         } = scene;
         let mut free_solids = vec![false; bodies.len()];
         let mut particles = Cloud::<D>::default();
@@ -629,6 +632,7 @@ where
             settings,
             merges,
             laws,
+            forces,
         })
     }
 }

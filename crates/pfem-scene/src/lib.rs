@@ -25,6 +25,6 @@ pub mod surface;
 pub use build::{Built, Cloud, Merge, Particle, NO_MATERIAL};
 pub use error::SceneError;
 pub use scene::{
-    default_memory_budget, file_name_fault, is_column_name, Body, Clamp, ContactSettings, Estimate,
-    FieldFn, Geometry, InitialField, RunSettings, Scene, WallMotion,
+    default_memory_budget, file_name_fault, is_column_name, AppliedLoad, Body, Clamp,
+    ContactSettings, Estimate, FieldFn, Geometry, InitialField, RunSettings, Scene, WallMotion,
 };

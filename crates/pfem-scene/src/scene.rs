@@ -308,6 +308,36 @@ pub fn default_memory_budget() -> f64 {
         .map_or(8.0 * 1024f64.powi(3), |kb| 0.8 * kb * 1024.0)
 }
 
+/// A force on a solid body in time ([`Scene::force`]): `force(t)` (N; N
+/// per metre of depth in 2D) split evenly among the body's particles that
+/// start inside `region` (all of them without one). The driver applies it
+/// with its `AppliedForce` hook.
+#[derive(Clone)]
+pub struct AppliedLoad<const D: usize>
+where
+    Const<D>: Dim,
+{
+    /// The solid body's name.
+    pub body: String,
+    /// The box `[min, max]` its loaded particles start in (`None`: all).
+    pub region: Option<(Point<D>, Point<D>)>,
+    /// The total force at time `t` (s).
+    #[allow(clippy::type_complexity)]
+    pub force: std::sync::Arc<dyn Fn(f64) -> Vector<D> + Send + Sync>,
+}
+
+impl<const D: usize> std::fmt::Debug for AppliedLoad<D>
+where
+    Const<D>: Dim,
+{
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AppliedLoad")
+            .field("body", &self.body)
+            .field("region", &self.region)
+            .finish_non_exhaustive()
+    }
+}
+
 /// A scene: bodies, body force and run settings.
 #[derive(Debug)]
 pub struct Scene<const D: usize>
@@ -334,6 +364,8 @@ where
     /// such as [`Scene::with_velocity`] called before any body), found as
     /// they were made and refused by [`Scene::validate`].
     pub misuse: Vec<String>,
+    /// Forces on solid bodies in time ([`Scene::force`]).
+    pub forces: Vec<AppliedLoad<D>>,
 }
 
 /// Contact settings ([`Scene::friction`], [`Scene::contact_stiffness`],
@@ -419,6 +451,7 @@ where
             contact: ContactSettings::default(),
             pressure_stabilisation: 0.0,
             misuse: Vec::new(),
+            forces: Vec::new(),
         }
     }
 
@@ -550,6 +583,24 @@ where
             pressure_field: None,
             motion,
             clamps: Vec::new(),
+        });
+        self
+    }
+
+    /// A force `force(t)` (N; N per metre of depth in 2D, `t` in s) on the
+    /// solid `body`, split evenly among its particles that start inside
+    /// `region` (`None`: all of them): a tip load, a traction on a face,
+    /// a push. Applied at the end of each step (`t = tₙ + Δt`).
+    pub fn force(
+        mut self,
+        body: &str,
+        region: Option<(Point<D>, Point<D>)>,
+        force: impl Fn(f64) -> Vector<D> + Send + Sync + 'static,
+    ) -> Self {
+        self.forces.push(AppliedLoad {
+            body: body.into(),
+            region,
+            force: std::sync::Arc::new(force),
         });
         self
     }
@@ -1017,6 +1068,27 @@ where
                 return Err(SceneError::InvalidGeometry {
                     body: b.name.clone(),
                     why: "only a fluid has an initial pressure field".into(),
+                });
+            }
+        }
+        for load in &self.forces {
+            let why = match self.bodies.iter().find(|b| b.name == load.body) {
+                None => Some("names a body the scene does not have"),
+                Some(b) if b.kind != ParticleKind::Solid => Some("acts on solids only"),
+                Some(_) => match load.region {
+                    Some((lo, hi))
+                        if !(lo.iter().chain(hi.iter()).all(|v| v.is_finite())
+                            && (0..D).all(|k| lo[k] <= hi[k])) =>
+                    {
+                        Some("its region must have finite corners, max not below min")
+                    }
+                    _ => None,
+                },
+            };
+            if let Some(why) = why {
+                return Err(SceneError::InvalidGeometry {
+                    body: load.body.clone(),
+                    why: format!("an applied force {why}"),
                 });
             }
         }

@@ -76,6 +76,7 @@
 //! | `[contact]` | `stiffness` (Pa), `damping` (dimensionless: the dashpot's time constant in steps, default 0.1), `onset` (the penalty's rounded onset, a fraction of the spacing in `[0, 0.5]`, default 0.01), `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
+//! | `[[force]]` | a force on a solid in time: `body`, `region = { min, max }` (m, optional: the whole body), and `value = [fx, fy]` (N; N/m in 2D) with an optional `ramp` (s), or `table = [[t, fx, fy], …]` (s, N): [`ForceSpec`] |
 //!
 //! A malformed file (syntax, unknown key, wrong type, wrong number of
 //! coordinates) is a [`SceneError::File`] naming the line; impossible values
@@ -130,6 +131,9 @@ pub struct SceneFile {
     /// `clamped = true`) and walls or solids (the `[contact]` table).
     #[serde(default)]
     pub contact: Option<Spanned<ContactSpec>>,
+    /// Forces on solids in time (`[[force]]` tables), in order.
+    #[serde(default, rename = "force")]
+    pub forces: Vec<Spanned<ForceSpec>>,
     /// The file's text, to turn spans into line numbers.
     #[serde(skip)]
     source: String,
@@ -269,6 +273,31 @@ pub struct ContactSpec {
     /// (`pfem::scene::ContactSettings::clamped`), default `false`.
     #[serde(default)]
     pub clamped: bool,
+}
+
+/// A `[[force]]` table: a force on a solid in time
+/// ([`Scene::force`]): `body`, `region = { min, max }` (m; optional: the
+/// whole body) and either `value = [fx, fy]` (N; N per metre of depth in
+/// 2D) with `ramp` (s, optional: grown linearly from 0 over it) or
+/// `table = [[t, fx, fy], …]` (s, N; linear between rows, the last row's
+/// value after it, the first's before it).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceSpec {
+    /// The solid body's name.
+    pub body: String,
+    /// The box its loaded particles start in (m); the whole body if absent.
+    #[serde(default)]
+    pub region: Option<BoxSpec>,
+    /// A constant force (N; N/m in 2D).
+    #[serde(default)]
+    pub value: Option<Coords>,
+    /// Ramp of `value` from 0 (s).
+    #[serde(default)]
+    pub ramp: Option<f64>,
+    /// A table of `[t, f…]` rows (s, N).
+    #[serde(default)]
+    pub table: Option<Spanned<Vec<Vec<f64>>>>,
 }
 
 /// `{ bodies = ["a", "b"], mu = 0.3 }`.
@@ -846,6 +875,74 @@ impl SceneFile {
                 scene = scene.contact_onset(d);
             }
             scene = scene.contact_clamped(spec.clamped);
+        }
+        for f in &self.forces {
+            let (span, spec) = (f.span(), f.get_ref());
+            let region = match &spec.region {
+                Some(r) => Some((
+                    Point::from(self.vector::<D>(&r.min, "force.region.min")?),
+                    Point::from(self.vector::<D>(&r.max, "force.region.max")?),
+                )),
+                None => None,
+            };
+            let law: Box<dyn Fn(f64) -> Vector<D> + Send + Sync> = match (&spec.value, &spec.table)
+            {
+                (Some(v), None) => {
+                    let v = self.vector::<D>(v, "force.value")?;
+                    let ramp = spec.ramp.unwrap_or(0.0);
+                    if !(ramp >= 0.0 && ramp.is_finite()) {
+                        return Err(self.error(
+                            span,
+                            format!("force.ramp must be non-negative and finite, got {ramp}"),
+                        ));
+                    }
+                    Box::new(move |t| {
+                        if ramp > 0.0 {
+                            v * (t / ramp).clamp(0.0, 1.0)
+                        } else {
+                            v
+                        }
+                    })
+                }
+                (None, Some(table)) => {
+                    let rows = table.get_ref().clone();
+                    let good = !rows.is_empty()
+                        && rows
+                            .iter()
+                            .all(|r| r.len() == D + 1 && r.iter().all(|x| x.is_finite()))
+                        && rows.windows(2).all(|w| w[1][0] > w[0][0]);
+                    if !good || spec.ramp.is_some() {
+                        return Err(self.error(
+                                table.span(),
+                                format!(
+                                    "force.table needs rows of {} finite numbers [t, f…] with increasing t (and no ramp)",
+                                    D + 1
+                                ),
+                            ));
+                    }
+                    Box::new(move |t| {
+                        let k = rows.partition_point(|r| r[0] <= t);
+                        let at = |r: &Vec<f64>| Vector::<D>::from_fn(|i, _| r[i + 1]);
+                        if k == 0 {
+                            at(&rows[0])
+                        } else if k == rows.len() {
+                            at(&rows[k - 1])
+                        } else {
+                            let (a, b) = (&rows[k - 1], &rows[k]);
+                            let s = (t - a[0]) / (b[0] - a[0]);
+                            at(a) * (1.0 - s) + at(b) * s
+                        }
+                    })
+                }
+                _ => {
+                    return Err(self.error(
+                        span,
+                        "a [[force]] needs `value` (with an optional `ramp`) or `table`, not both"
+                            .into(),
+                    ))
+                }
+            };
+            scene = scene.force(&spec.body, region, law);
         }
         scene.validate()?;
         Ok(scene)

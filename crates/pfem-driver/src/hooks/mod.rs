@@ -55,9 +55,11 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod force;
 mod motion;
 mod volume;
 
+pub use force::AppliedForce;
 pub use motion::PrescribedMotion;
 pub use pfem_scene::motion::{MotionLaw, PiecewiseLinear, Rotation, Sinusoidal};
 pub use volume::{FreeSurfacePressureZero, VolumeCorrection};
