@@ -222,6 +222,30 @@ fn a_restarted_block_in_frictional_contact_ends_bit_for_bit() {
     assert_same("sliding block", &a, &b);
 }
 
+/// The sliding block pushed back up the slope by a force that grows in
+/// time on its upper half (`Scene::force`, session 41): the force is the
+/// scene's, so the restarted run applies the same.
+fn pushed_block() -> Simulation<2> {
+    sim2(sliding_block_scene().force(
+        "block",
+        Some((Point::<2>::new(-1.0, 0.07), Point::<2>::new(1.0, 1.0))),
+        |t| Vector::<2>::new(-2000.0 * t, 50.0),
+    ))
+}
+
+#[test]
+fn a_restarted_block_under_an_applied_force_ends_bit_for_bit() {
+    let (a, b) = both(pushed_block, 9);
+    let (c, _) = both(sliding_block, 0);
+    // The force moved it.
+    let x = |s: &Simulation<2>| {
+        let idx = s.body_particles("block").unwrap();
+        idx.iter().map(|&i| s.particles().x()[i].x).sum::<f64>() / idx.len() as f64
+    };
+    assert!((x(&a) - x(&c)).abs() > 1e-6, "{} vs {}", x(&a), x(&c));
+    assert_same("pushed block", &a, &b);
+}
+
 #[test]
 fn a_restarted_3d_column_ends_bit_for_bit_where_the_whole_run_ends() {
     let (a, b) = both(column3d, 4);
