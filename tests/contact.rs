@@ -854,3 +854,43 @@ fn a_solid_whose_penalty_is_not_finite_is_refused() {
         "{err}"
     );
 }
+
+/// Session 41 (a review of contact across the remeshing): a hook that
+/// changes the particle set after the remeshing has the mesh remade, and
+/// the contact range just formed, never solved, went to the stash: the
+/// next range averaged the carried tractions a second time, and stick's
+/// memory faded at every such step. A hook that renumbers nothing (an
+/// identity remap, which still remakes the mesh) now leaves the run as it
+/// was, bit for bit: a block sticking on a 20° slope (μ = 0.5).
+#[test]
+fn a_remesh_by_a_hook_leaves_stick_s_memory_alone() {
+    let run = |remap: bool| {
+        let mut scene = block_on_floor(0.02, 0.2, 0.1, 20f64.to_radians(), 0.5, 1e7);
+        scene.settings.end_time = 0.3;
+        let mut s = sim(scene);
+        if remap {
+            s.add_hook(Box::new(pfem::hooks::FnHook::new("renumber").after_remesh(
+                |ctx: &mut HookContext<'_, 2>| {
+                    let n = ctx.particles().len();
+                    let map = pfem::geometry::ParticleMap {
+                        old_to_new: (0..n as u32).collect(),
+                        origin: (0..n as u32).map(pfem::geometry::Origin::Kept).collect(),
+                    };
+                    ctx.particles_mut().remap(&map).unwrap();
+                    Ok(())
+                },
+            )));
+        }
+        s.run(&mut []).unwrap();
+        (s.particles().x().to_vec(), s.steps())
+    };
+    let (plain, n) = run(false);
+    let (renumbered, m) = run(true);
+    assert_eq!(n, m);
+    let moved = plain
+        .iter()
+        .zip(&renumbered)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
+    assert_eq!(moved, 0.0, "the renumbered run moved by {moved:e} m");
+}

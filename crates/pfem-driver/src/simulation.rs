@@ -925,6 +925,9 @@ where
                 // the old set's indices (outputs written after the error
                 // read it).
                 if remesh {
+                    if matches!(point, HookPoint::AfterRemesh | HookPoint::BeforeSolve) {
+                        self.elements.keep_stash();
+                    }
                     self.elements.clear_fluid();
                     // Its own failure leaves the fluid range empty; the
                     // hook's error is the one to report.
@@ -936,6 +939,16 @@ where
             if remesh {
                 // Forces added on the old numbering are dropped.
                 self.external_force.clear();
+                // Before the solve the contact range was formed this step
+                // and never solved: its tractions are the stash's, averaged
+                // at the particles. The next range carries from the same
+                // stash, not from this one (averaged a second time, stick's
+                // memory would fade with every such remesh). Wall and
+                // solid particles keep their indices through any change of
+                // the set, so the stash still names them.
+                if matches!(point, HookPoint::AfterRemesh | HookPoint::BeforeSolve) {
+                    self.elements.keep_stash();
+                }
                 self.elements.clear_fluid();
                 if let Err(e) = self.remesh() {
                     result = Err(e);
