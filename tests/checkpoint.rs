@@ -222,20 +222,21 @@ fn a_restarted_block_in_frictional_contact_ends_bit_for_bit() {
     assert_same("sliding block", &a, &b);
 }
 
-/// The sliding block pushed back up the slope by a force that grows in
-/// time on its upper half (`Scene::force`, session 41): the force is the
-/// scene's, so the restarted run applies the same.
+/// The sliding block pushed down the slope by a force on its right face
+/// (`Scene::force`, session 41); by the checkpoint (step 15) its next
+/// column has moved 2 cm, into the force's box, where the loaded
+/// particles are chosen by where they started.
 fn pushed_block() -> Simulation<2> {
     sim2(sliding_block_scene().force(
         "block",
-        Some((Point::<2>::new(-1.0, 0.07), Point::<2>::new(1.0, 1.0))),
-        |t| Vector::<2>::new(-2000.0 * t, 50.0),
+        Some((Point::<2>::new(0.19, -1.0), Point::<2>::new(1.0, 1.0))),
+        |t| Vector::<2>::new(1000.0, 100.0 * t),
     ))
 }
 
 #[test]
 fn a_restarted_block_under_an_applied_force_ends_bit_for_bit() {
-    let (a, b) = both(pushed_block, 9);
+    let (a, b) = both(pushed_block, 15);
     let (c, _) = both(sliding_block, 0);
     // The force moved it.
     let x = |s: &Simulation<2>| {

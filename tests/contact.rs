@@ -450,6 +450,32 @@ fn a_block_dropped_onto_a_floor_lands_on_it() {
             None,
         );
     scene.validate().expect("a solid above a floor lands on it");
+    // Under a ceiling alone it has nothing to land on.
+    let hanging = Scene::<2>::new("ceiling")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .wall(
+            "ceiling",
+            Geometry::Box {
+                min: Point::<2>::new(-0.1, 0.2),
+                max: Point::<2>::new(0.2, 0.2 + h),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, h + drop),
+                max: Point::<2>::new(0.1, h + drop + 0.05),
+            },
+            h,
+            None,
+        );
+    assert!(matches!(
+        hanging.validate(),
+        Err(pfem::SceneError::Unsupported { .. })
+    ));
     let mut s = sim(scene);
     assert!(s.stages().contact);
     let block = s.body_particles("block").unwrap();

@@ -364,9 +364,20 @@ fn a_long_run_ends_on_its_end_time_without_a_sliver_step() {
 }
 
 /// Session 41: a `min_dt` above the scene's `max_dt` ran every step at
-/// `min_dt`, above the ceiling, without a word; it is refused.
+/// `min_dt`, above the ceiling, without a word; it is refused. The default
+/// `min_dt` (10⁻⁹ s) goes under a finer `max_dt` instead (a scene file
+/// cannot set it).
 #[test]
 fn a_smallest_step_above_the_largest_is_refused() {
+    let mut fine = Simulation::new(
+        block_at_rest(1e-8, 5e-10),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    fine.run(&mut []).unwrap();
+    assert_eq!(fine.time(), 1e-8);
+    assert!(fine.dt() <= 5e-10 * (1.0 + 1e-6), "{}", fine.dt());
     let params = StepParams {
         min_dt: 1e-2,
         ..StepParams::default()

@@ -484,7 +484,15 @@ where
         scene.validate_within(options.memory_budget)?;
         // The controller keeps every step within [min_dt, max_dt]: a
         // floor above the ceiling would run every step at `min_dt`,
-        // above the scene's `max_dt`, without a word.
+        // above the scene's `max_dt`, without a word. The default floor
+        // (10⁻⁹ s) goes under a scene's finer `max_dt` (a thousandth of
+        // it); one the program set is refused.
+        let floor = scene.settings.end_time * MIN_DT_OF_END_TIME;
+        if params.min_dt > scene.settings.max_dt
+            && params.min_dt == StepParams::default().min_dt.max(floor)
+        {
+            params.min_dt = (1e-3 * scene.settings.max_dt).max(floor);
+        }
         if params.min_dt > scene.settings.max_dt {
             return Err(SceneError::OutOfRange {
                 setting: "min_dt",
@@ -662,17 +670,24 @@ where
     }
 
     /// Sets the accelerations consistent with the current state (`M A =
-    /// F + f_int`, [`Integrator::initialize_acceleration`]). `new` does it;
-    /// call it again after changing velocities, pressures or constraints
-    /// by hand before the first step.
+    /// F + f_int`, [`Integrator::initialize_acceleration`]; `F` the body
+    /// force and the external forces the hooks added, none before the
+    /// first step's). `new` does it, and the first step again when a hook
+    /// adds a force before it; call it again after changing
+    /// velocities, pressures or constraints by hand before the first step.
     pub fn initialize_acceleration(&mut self) -> Result<(), RunError> {
         let (mesh, history) = self.elements.step_mesh();
+        let external = if self.external_force.len() == self.particles.len() {
+            &self.external_force[..]
+        } else {
+            &[]
+        };
         let input = StepInput {
             mesh,
             materials: &self.materials,
             constraints: self.particles.constraints(),
             body_force: self.gravity,
-            external_force: &[],
+            external_force: external,
         };
         let mut state = self.particles.state().clone();
         self.stepper
@@ -937,8 +952,16 @@ where
                 break;
             }
             if remesh {
-                // Forces added on the old numbering are dropped.
-                self.external_force.clear();
+                // Forces added on the old numbering: walls and solids come
+                // first and keep their indices through any change of the
+                // set, so theirs stay; a fluid particle's are dropped.
+                let keep = self
+                    .particles
+                    .kind()
+                    .iter()
+                    .take_while(|&&k| k != ParticleKind::Fluid)
+                    .count();
+                self.external_force.truncate(keep);
                 // Before the solve the contact range was formed this step
                 // and never solved: its tractions are the stash's, averaged
                 // at the particles. The next range carries from the same
@@ -1098,18 +1121,25 @@ where
         } else {
             self.controller.next(0.0, 0.0, self.clock.dt)
         };
-        // The step that ends the run lands on the end time: one within
-        // `END_SNAP` of a step of it is stretched to it, so that the
-        // clock's round-off (about 10⁻¹⁰ s after 10⁵ steps) leaves no
-        // sliver of `min_dt` to take after it. Past the end time (`step`
-        // called by hand) the step is the controller's.
+        // The step that ends the run lands on the end time: one that would
+        // leave less than `min_dt` (or `END_SNAP` of itself) after it is
+        // stretched to it, so that the clock's round-off (about 10⁻¹⁰ s
+        // after 10⁵ steps) leaves no sliver to take after it. Past the
+        // end time (`step` called by hand) the step is the controller's.
         let remaining = self.end_time - self.clock.time;
-        if remaining > 0.0 && dt * (1.0 + END_SNAP) >= remaining {
+        if remaining > 0.0 && remaining - dt < self.controller.dt_min.max(END_SNAP * dt) {
             dt = remaining.max(self.controller.dt_min);
         }
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();
         self.run_hooks(HookPoint::BeforeSolve)?;
+        // A load on from the start: `new`'s accelerations did not know it,
+        // and Bossak's stored acceleration lagged (the run kept `F Δt₁/2`
+        // of momentum too little, for good). They are set again with the
+        // first step's loads (its end's: exact for a constant load).
+        if self.clock.steps == 0 && !self.external_force.is_empty() {
+            self.initialize_acceleration()?;
+        }
         // The attempts, halving the step after each rejected one; the hooks
         // before the solve run again for each smaller step, so that what
         // they prescribe for `t + Δt` (a wall's velocity, a ramped body
@@ -1123,6 +1153,10 @@ where
                 self.stepper.integrator.particles_renumbered();
             }
             self.stepper.numbering = Some(numbering);
+            if !self.external_force.is_empty() {
+                self.external_force
+                    .resize(self.particles.len(), Vector::<D>::zeros());
+            }
             let (mesh, history) = self.elements.step_mesh();
             let (state, constraints) = self.particles.state_and_constraints();
             let input = StepInput {
@@ -1150,6 +1184,8 @@ where
                 }
             }
         };
+        // The forces were the step's.
+        self.external_force.clear();
         self.clock.time = if rep.dt == remaining {
             self.end_time
         } else {
@@ -1974,9 +2010,10 @@ where
 /// last place, so that every step moves the clock.
 const MIN_DT_OF_END_TIME: f64 = 1.0 / (1u64 << 50) as f64;
 
-/// A step within this fraction of the time left to the end time is
-/// stretched to it (`Simulation::step`): the last step lands on the end
-/// time, with no sliver after it.
+/// A step that would leave less than this fraction of itself (or less
+/// than `min_dt`) before the end time is stretched to it
+/// (`Simulation::step`): the last step lands on the end time, with no
+/// sliver after it.
 const END_SNAP: f64 = 1e-6;
 
 /// What a checkpoint records of a material to recognise it: its name, kind

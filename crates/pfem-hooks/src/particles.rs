@@ -256,9 +256,11 @@ where
         // (the scene's build leaves out fluid particles on another body's
         // the same way).
         let half = 0.5 * self.spacing;
+        // (Where they started: a restart runs `start` again on moved
+        // walls and solids, and must leave out the same points.)
         let blocked: Vec<Point<D>> = (0..p.len())
             .filter(|&j| p.kind()[j] != ParticleKind::Fluid)
-            .map(|j| p.x()[j])
+            .map(|j| p.initial_positions()[j])
             .filter(|x| {
                 let d = self.depth(x);
                 d > -self.spacing && d < self.zone + self.spacing

@@ -697,6 +697,8 @@ where
         // refused the folder as not empty.)
         if self.progress.is_some() && self.resume.is_none() {
             self.progress = Some(Progress::new(sim.end_time(), self.quiet));
+            // A failure of the last `run` is not this one's.
+            self.failure = None;
             return Ok(());
         }
         self.started = Some(Instant::now());

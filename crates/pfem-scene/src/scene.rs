@@ -1007,11 +1007,37 @@ where
                 // Boxes keep a structured mesh; any other geometry is meshed
                 // by `solid_mesh` (Delaunay of its particles + alpha shape).
                 // A free solid lands on a wall or another solid through
-                // contact, whether it starts on it or above it (as
-                // `Particles::solid_can_touch` at build).
+                // contact, whether it starts on it or above it: one below
+                // it along gravity (its box reaching further down), under
+                // it sideways (the boxes overlap, within a spacing, across
+                // gravity's main axis). Not a ceiling, nor a wall beside.
+                let lands = |w: &Body<D>| {
+                    let Some(g) = self.gravity else {
+                        return true;
+                    };
+                    let m = (0..D)
+                        .max_by(|&i, &j| g[i].abs().total_cmp(&g[j].abs()))
+                        .unwrap_or(0);
+                    let (b0, b1) = b.geometry.bounds();
+                    let (w0, w1) = w.geometry.bounds();
+                    let tol = b.spacing.max(w.spacing);
+                    let across = (0..D)
+                        .filter(|&k| k != m)
+                        .all(|k| w0[k] <= b1[k] + tol && b0[k] <= w1[k] + tol);
+                    let below = if g[m] < 0.0 {
+                        w0[m] < b0[m]
+                    } else {
+                        w1[m] > b1[m]
+                    };
+                    across && below
+                };
+                // (A box touching the solid's holds it too: it rests on
+                // it, or is welded to it where their particles meet.)
                 let touches = self.bodies.iter().any(|w| {
                     !std::ptr::eq(w, b)
                         && matches!(w.kind, ParticleKind::Wall | ParticleKind::Solid)
+                        && (boxes_touch(&b.geometry, &w.geometry, b.spacing.min(w.spacing))
+                            || lands(w))
                 });
                 let supported = !b.clamps.is_empty() || touches || self.gravity.is_none();
                 let floating = self.bodies.iter().any(|o| o.kind == ParticleKind::Fluid);
@@ -1282,4 +1308,14 @@ pub fn file_name_fault(name: &str) -> Option<&'static str> {
     } else {
         None
     }
+}
+
+/// Whether the bounding boxes of two geometries touch (within `tol`).
+fn boxes_touch<const D: usize>(a: &Geometry<D>, b: &Geometry<D>, tol: f64) -> bool
+where
+    Const<D>: Dim,
+{
+    let (a0, a1) = a.bounds();
+    let (b0, b1) = b.bounds();
+    (0..D).all(|k| a0[k] <= b1[k] + tol && b0[k] <= a1[k] + tol)
 }

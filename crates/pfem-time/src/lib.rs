@@ -851,6 +851,9 @@ where
                 let m = self.assembler.mass()[s];
                 if m > 0.0 {
                     a += f[p] / m;
+                    if let Some(fe) = input.external_force.get(p) {
+                        a += fe / m;
+                    }
                 }
             }
             for k in 0..D {

@@ -1626,7 +1626,15 @@ impl Nearest {
         let c = self.cell_of(x);
         let mut best: Option<(f64, usize)> = None;
         let reach = self.cells.iter().copied().max().unwrap_or(1);
+        // Far outside the samples the rings grow without finding one: past
+        // as many cells as samples, a plain pass is cheaper.
+        let mut visited = 0usize;
         for r in 0..=reach {
+            if visited > self.points.len().max(64) {
+                return (0..self.points.len())
+                    .min_by(|&a, &b| d2(a).total_cmp(&d2(b)))
+                    .unwrap_or(0);
+            }
             // The cells at Chebyshev distance r from `c`.
             let lo: Vec<usize> = c.iter().map(|&ck| ck.saturating_sub(r)).collect();
             let hi: Vec<usize> = c
@@ -1635,6 +1643,7 @@ impl Nearest {
                 .map(|(&ck, &nk)| (ck + r).min(nk - 1))
                 .collect();
             let span: Vec<usize> = (0..d).map(|k| hi[k] - lo[k] + 1).collect();
+            visited += span.iter().product::<usize>();
             let mut cur = vec![0usize; d];
             for m in 0..span.iter().product::<usize>() {
                 let mut rest = m;

@@ -105,7 +105,9 @@ where
                     why: format!("body `{}` is not a solid", self.body),
                 });
             }
-            if inside(&p.x()[i]) {
+            // By where it started (a restart runs `start` again on moved
+            // particles: the same ones must be loaded).
+            if inside(&p.initial_positions()[i]) {
                 on.push(i);
             }
         }

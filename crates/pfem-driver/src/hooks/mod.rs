@@ -206,8 +206,9 @@ where
     /// body's boundary particles by the hook. Call it in
     /// [`Hook::before_solve`]: every attempt starts with no external force
     /// (a rejected attempt, retried smaller, calls those hooks again), and
-    /// forces added before a hook changes the particle set are dropped
-    /// with the old numbering. A particle outside every element (a flying
+    /// when a later hook changes the particle set the forces on fluid
+    /// particles are dropped with the old numbering (walls' and solids'
+    /// stay: their indices do not change). A particle outside every element (a flying
     /// drop) has no mass in the system and does not feel it; a prescribed
     /// velocity component wins over it. A force that is not finite, or a
     /// particle out of range, is an error.
@@ -220,16 +221,16 @@ where
                 reason: "on a particle of the set, and finite",
             });
         }
-        if self.external_force.len() != n {
+        if self.external_force.len() > n {
             self.external_force.clear();
-            self.external_force.resize(n, Vector::<D>::zeros());
         }
+        self.external_force.resize(n, Vector::<D>::zeros());
         self.external_force[i] += f;
         Ok(())
     }
 
     /// The external forces added so far for the coming step (N; empty
-    /// when none): [`HookContext::add_force`].
+    /// when none, and after the step): [`HookContext::add_force`].
     pub fn external_forces(&self) -> &[Vector<D>] {
         self.external_force
     }

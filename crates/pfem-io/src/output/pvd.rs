@@ -12,8 +12,10 @@ use super::{write_atomic, Encoding, Frame, OutputError};
 ///
 /// Created or resumed, the file is written whole and atomically; each
 /// [`push`](Self::push) then writes its entry and the closing tags over
-/// the old closing tags, in one write (a run killed at any point leaves a
-/// valid collection of the frames written so far). Rewriting the whole
+/// the old closing tags, in one write, not synced: a run killed at any
+/// point leaves a valid collection of the frames written so far, but a
+/// write cut short (a full disk, a power cut) may leave it without its
+/// closing tags (a restart writes it whole again from the checkpoint). Rewriting the whole
 /// collection at every frame, as until session 41, wrote about 40 N²
 /// bytes over N frames (4 GB at 10⁴ frames) with two syncs a frame.
 #[derive(Debug, Clone)]
