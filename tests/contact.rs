@@ -422,6 +422,29 @@ fn an_elastic_disk_bounces_off_a_floor_and_keeps_its_energy() {
 #[test]
 fn a_block_dropped_onto_a_floor_lands_on_it() {
     let (h, drop) = (0.01, 0.03);
+    let scene_with = |g: Vector<2>| {
+        Scene::<2>::new("drop")
+            .gravity(g)
+            .wall(
+                "floor",
+                Geometry::Box {
+                    min: Point::<2>::new(-0.1, -h),
+                    max: Point::<2>::new(0.2, 0.0),
+                },
+                h,
+                WallMotion::Fixed,
+            )
+            .solid(
+                "block",
+                Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+                Geometry::Box {
+                    min: Point::<2>::new(0.0, h + drop),
+                    max: Point::<2>::new(0.1, h + drop + 0.05),
+                },
+                h,
+                None,
+            )
+    };
     let scene = Scene::<2>::new("drop")
         .gravity(Vector::<2>::new(0.0, -G))
         .settings(RunSettings {
@@ -476,6 +499,12 @@ fn a_block_dropped_onto_a_floor_lands_on_it() {
         hanging.validate(),
         Err(pfem::SceneError::Unsupported { .. })
     ));
+    // Gravity tilted past 45° still lands it on the floor below and
+    // ahead of it; zero gravity needs no support.
+    let mut tilted = scene_with(Vector::<2>::new(0.8 * G, -0.6 * G));
+    assert!(tilted.validate().is_ok());
+    tilted.gravity = Some(Vector::<2>::zeros());
+    assert!(tilted.validate().is_ok());
     let mut s = sim(scene);
     assert!(s.stages().contact);
     let block = s.body_particles("block").unwrap();

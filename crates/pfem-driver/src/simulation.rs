@@ -677,17 +677,14 @@ where
     /// velocities, pressures or constraints by hand before the first step.
     pub fn initialize_acceleration(&mut self) -> Result<(), RunError> {
         let (mesh, history) = self.elements.step_mesh();
-        let external = if self.external_force.len() == self.particles.len() {
-            &self.external_force[..]
-        } else {
-            &[]
-        };
+        // (Forces may cover a prefix of the particles after a hook's
+        // renumbering: the integrator reads each particle's, if any.)
         let input = StepInput {
             mesh,
             materials: &self.materials,
             constraints: self.particles.constraints(),
             body_force: self.gravity,
-            external_force: external,
+            external_force: &self.external_force,
         };
         let mut state = self.particles.state().clone();
         self.stepper
@@ -721,6 +718,17 @@ where
                             state.a[i][k] = 0.0;
                         }
                     }
+                }
+            }
+        }
+        // A prescribed component keeps the acceleration it has (a moving
+        // wall's law's, set by `PrescribedMotion`; 0 at `new`), where the
+        // integrator puts 0.
+        let before = &self.particles.state().a;
+        for (i, a) in state.a.iter_mut().enumerate() {
+            for k in 0..D {
+                if self.particles.constraints().is_fixed(i, k) {
+                    a[k] = before[i][k];
                 }
             }
         }
@@ -1121,14 +1129,18 @@ where
         } else {
             self.controller.next(0.0, 0.0, self.clock.dt)
         };
-        // The step that ends the run lands on the end time: one that would
-        // leave less than `min_dt` (or `END_SNAP` of itself) after it is
-        // stretched to it, so that the clock's round-off (about 10⁻¹⁰ s
-        // after 10⁵ steps) leaves no sliver to take after it. Past the
-        // end time (`step` called by hand) the step is the controller's.
+        // The step that ends the run lands on the end time: one within
+        // `END_SNAP` of it is stretched to it, and one that would leave
+        // less than `min_dt` after it is split in two halves of the rest,
+        // so that the clock's round-off (about 10⁻¹⁰ s after 10⁵ steps)
+        // leaves no sliver to take. Past the end time (`step` called by
+        // hand) the step is the controller's.
         let remaining = self.end_time - self.clock.time;
-        if remaining > 0.0 && remaining - dt < self.controller.dt_min.max(END_SNAP * dt) {
+        if remaining > 0.0 && remaining <= dt * (1.0 + END_SNAP) {
             dt = remaining.max(self.controller.dt_min);
+        } else if remaining > 0.0 && remaining - dt < self.controller.dt_min {
+            // Two steps of half the rest, not one past `max_dt`.
+            dt = (0.5 * remaining).max(self.controller.dt_min);
         }
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();
@@ -1136,7 +1148,9 @@ where
         // A load on from the start: `new`'s accelerations did not know it,
         // and Bossak's stored acceleration lagged (the run kept `F Δt₁/2`
         // of momentum too little, for good). They are set again with the
-        // first step's loads (its end's: exact for a constant load).
+        // first step's loads, those at its end `t₀ + Δt` (and gravity as
+        // the hooks set it then): exact for a constant load; a load
+        // ramped from zero keeps about `½ k Δt²` of momentum too much.
         if self.clock.steps == 0 && !self.external_force.is_empty() {
             self.initialize_acceleration()?;
         }
@@ -2010,10 +2024,10 @@ where
 /// last place, so that every step moves the clock.
 const MIN_DT_OF_END_TIME: f64 = 1.0 / (1u64 << 50) as f64;
 
-/// A step that would leave less than this fraction of itself (or less
-/// than `min_dt`) before the end time is stretched to it
-/// (`Simulation::step`): the last step lands on the end time, with no
-/// sliver after it.
+/// A step within this fraction of itself of the end time is stretched to
+/// it (`Simulation::step`; one that would leave less than `min_dt` is
+/// split in two): the last step lands on the end time, with no sliver
+/// after it.
 const END_SNAP: f64 = 1e-6;
 
 /// What a checkpoint records of a material to recognise it: its name, kind

@@ -1007,29 +1007,25 @@ where
                 // Boxes keep a structured mesh; any other geometry is meshed
                 // by `solid_mesh` (Delaunay of its particles + alpha shape).
                 // A free solid lands on a wall or another solid through
-                // contact, whether it starts on it or above it: one below
-                // it along gravity (its box reaching further down), under
-                // it sideways (the boxes overlap, within a spacing, across
-                // gravity's main axis). Not a ceiling, nor a wall beside.
+                // contact, whether it starts on it or above it: one its box
+                // meets when swept along gravity (within a spacing). Not a
+                // ceiling, nor a wall beside it.
+                let gravity = self.gravity.filter(|g| g.norm() > 0.0);
                 let lands = |w: &Body<D>| {
-                    let Some(g) = self.gravity else {
+                    let Some(g) = gravity else {
                         return true;
                     };
-                    let m = (0..D)
-                        .max_by(|&i, &j| g[i].abs().total_cmp(&g[j].abs()))
-                        .unwrap_or(0);
+                    // The solid's box swept along gravity meets `w`'s.
                     let (b0, b1) = b.geometry.bounds();
                     let (w0, w1) = w.geometry.bounds();
                     let tol = b.spacing.max(w.spacing);
-                    let across = (0..D)
-                        .filter(|&k| k != m)
-                        .all(|k| w0[k] <= b1[k] + tol && b0[k] <= w1[k] + tol);
-                    let below = if g[m] < 0.0 {
-                        w0[m] < b0[m]
-                    } else {
-                        w1[m] > b1[m]
-                    };
-                    across && below
+                    (0..D).all(|k| {
+                        // Along `+k` the sweep reaches `+∞` if `g` points
+                        // that way, along `−k` likewise.
+                        let up_to = g[k] > 0.0 || w0[k] <= b1[k] + tol;
+                        let down_to = g[k] < 0.0 || w1[k] >= b0[k] - tol;
+                        up_to && down_to
+                    })
                 };
                 // (A box touching the solid's holds it too: it rests on
                 // it, or is welded to it where their particles meet.)
@@ -1039,7 +1035,7 @@ where
                         && (boxes_touch(&b.geometry, &w.geometry, b.spacing.min(w.spacing))
                             || lands(w))
                 });
-                let supported = !b.clamps.is_empty() || touches || self.gravity.is_none();
+                let supported = !b.clamps.is_empty() || touches || gravity.is_none();
                 let floating = self.bodies.iter().any(|o| o.kind == ParticleKind::Fluid);
                 if !supported && !floating {
                     return Err(SceneError::Unsupported {
