@@ -445,33 +445,12 @@ fn a_block_dropped_onto_a_floor_lands_on_it() {
                 None,
             )
     };
-    let scene = Scene::<2>::new("drop")
-        .gravity(Vector::<2>::new(0.0, -G))
-        .settings(RunSettings {
-            end_time: 0.25,
-            max_dt: 2e-3,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall(
-            "floor",
-            Geometry::Box {
-                min: Point::<2>::new(-0.1, -h),
-                max: Point::<2>::new(0.2, 0.0),
-            },
-            h,
-            WallMotion::Fixed,
-        )
-        .solid(
-            "block",
-            Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
-            Geometry::Box {
-                min: Point::<2>::new(0.0, h + drop),
-                max: Point::<2>::new(0.1, h + drop + 0.05),
-            },
-            h,
-            None,
-        );
+    let scene = scene_with(Vector::<2>::new(0.0, -G)).settings(RunSettings {
+        end_time: 0.25,
+        max_dt: 2e-3,
+        output_interval: None,
+        ..Default::default()
+    });
     scene.validate().expect("a solid above a floor lands on it");
     // Under a ceiling alone it has nothing to land on.
     let hanging = Scene::<2>::new("ceiling")

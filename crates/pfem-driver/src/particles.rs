@@ -118,6 +118,16 @@ where
         self.state.x.len() - 1
     }
 
+    /// How many particles come before the first fluid one: the walls and
+    /// solids, whose indices no change of the set moves (`remap` refuses
+    /// to, and insertions are fluid).
+    pub fn fixed_prefix(&self) -> usize {
+        self.kind
+            .iter()
+            .take_while(|&&k| k != ParticleKind::Fluid)
+            .count()
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.state.x.len()

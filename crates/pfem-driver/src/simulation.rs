@@ -963,13 +963,7 @@ where
                 // Forces added on the old numbering: walls and solids come
                 // first and keep their indices through any change of the
                 // set, so theirs stay; a fluid particle's are dropped.
-                let keep = self
-                    .particles
-                    .kind()
-                    .iter()
-                    .take_while(|&&k| k != ParticleKind::Fluid)
-                    .count();
-                self.external_force.truncate(keep);
+                self.external_force.truncate(self.particles.fixed_prefix());
                 // Before the solve the contact range was formed this step
                 // and never solved: its tractions are the stash's, averaged
                 // at the particles. The next range carries from the same

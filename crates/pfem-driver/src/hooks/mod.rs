@@ -224,13 +224,7 @@ where
         if self.external_force.len() > n {
             // The set shrank in this call: the walls' and solids' forces
             // (a prefix that keeps its indices) stay.
-            let keep = self
-                .particles
-                .kind()
-                .iter()
-                .take_while(|&&k| k != ParticleKind::Fluid)
-                .count();
-            self.external_force.truncate(keep);
+            self.external_force.truncate(self.particles.fixed_prefix());
         }
         self.external_force.resize(n, Vector::<D>::zeros());
         self.external_force[i] += f;
