@@ -170,18 +170,14 @@ impl Offset for Sinusoidal<2> {
     }
 }
 
-/// An inflow through a pipe into a tank: the fluid volume grows at the
-/// prescribed rate `|v| × the pipe's clear height`, within 2 % (fitted
-/// slope over the run after the first 0.2 s).
-#[test]
-fn an_inflow_fills_a_tank_at_the_prescribed_rate() {
-    let h = 0.02;
-    let pipe = 0.1; // clear height between floor and ceiling particles
-    let speed = 0.5;
-    let scene = Scene::<2>::new("inflow")
+/// A pipe of clear height `pipe` (floor's top row at y = 0, ceiling's
+/// bottom row at `pipe`) into a tank 1 m long, water filling the pipe and
+/// the tank's bottom, spacing `h`, run to `end_time`.
+fn pipe_into_tank(name: &str, h: f64, pipe: f64, end_time: f64) -> Scene<2> {
+    Scene::<2>::new(name)
         .gravity(Vector::<2>::new(0.0, -G))
         .settings(RunSettings {
-            end_time: 1.0,
+            end_time,
             max_dt: 5e-3,
             output_interval: None,
             ..Default::default()
@@ -199,8 +195,21 @@ fn an_inflow_fills_a_tank_at_the_prescribed_rate() {
             Box::new(Newtonian::water()),
             boxed(-0.3, h, 0.98, pipe - h),
             h,
-        );
-    let mut sim = sim2(scene, StepParams::default());
+        )
+}
+
+/// An inflow through a pipe into a tank: the fluid volume grows at the
+/// prescribed rate `|v| × the pipe's clear height`, within 2 % (fitted
+/// slope over the run after the first 0.2 s).
+#[test]
+fn an_inflow_fills_a_tank_at_the_prescribed_rate() {
+    let h = 0.02;
+    let pipe = 0.1; // clear height between floor and ceiling particles
+    let speed = 0.5;
+    let mut sim = sim2(
+        pipe_into_tank("inflow", h, pipe, 1.0),
+        StepParams::default(),
+    );
     let inflow = Inflow::new(
         "water",
         Point::<2>::new(-0.3, h),
@@ -940,29 +949,10 @@ fn an_inflow_face_drawn_onto_the_walls_leaves_their_rows_alone() {
     let h = 0.02;
     let pipe = 0.1;
     let speed = 0.5;
-    let scene = Scene::<2>::new("inflow onto walls")
-        .gravity(Vector::<2>::new(0.0, -G))
-        .settings(RunSettings {
-            end_time: 0.3,
-            max_dt: 5e-3,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall("floor", boxed(-0.4, -h, 1.0, 0.0), h, WallMotion::Fixed)
-        .wall("end", boxed(1.0, h, 1.0 + h, 0.6), h, WallMotion::Fixed)
-        .wall(
-            "ceiling",
-            boxed(-0.4, pipe, 0.0, pipe + h),
-            h,
-            WallMotion::Fixed,
-        )
-        .fluid(
-            "water",
-            Box::new(Newtonian::water()),
-            boxed(-0.3, h, 0.98, pipe - h),
-            h,
-        );
-    let mut sim = sim2(scene, StepParams::default());
+    let mut sim = sim2(
+        pipe_into_tank("inflow onto walls", h, pipe, 0.3),
+        StepParams::default(),
+    );
     // The face from the floor's top row (y = 0) to the ceiling's (y = pipe).
     let inflow = Inflow::new(
         "water",

@@ -595,11 +595,7 @@ where
             hooks.push(Box::new(crate::hooks::PrescribedMotion::new(body, law)));
         }
         for load in forces {
-            hooks.push(Box::new(crate::hooks::AppliedForce::shared(
-                &load.body,
-                load.region,
-                load.force,
-            )));
+            hooks.push(Box::new(crate::hooks::AppliedForce::from_load(load)));
         }
         // The solid elements weigh their initial volume (eq. 46).
         let elements = Elements::new(

@@ -147,8 +147,11 @@ where
             // of that body, and the nearest pair measures the gap
             // (`CORNER_RATIO`; session 41's review).
             gap_and_normal::<D>(&x, &on, group[0].1).map(|(gap, n)| {
+                if D != 2 {
+                    return (gap, n);
+                }
                 match nearest_pair::<D>(&x, &body, &takes_part, master) {
-                    Some((d, nd, pair)) if D == 2 && gap < CORNER_RATIO * d => {
+                    Some((d, nd, pair)) if gap < CORNER_RATIO * d => {
                         (master, other) = pair;
                         (d, nd)
                     }
@@ -474,29 +477,11 @@ mod tests {
                 bodies.push(2);
             }
         }
-        let kinds = kinds_of(&bodies, 2);
         // Both diagonals of the corner square: the lattice's tie may go
         // either way. Triangle {floor (1,0), solid (1,1), side (0,1)} with
         // the corner (0,0), and the other split.
         for corner in [[0u32, 7, 4, 0, 1, 7], [0, 1, 4, 1, 7, 4]] {
-            let tess = Tessellation {
-                nv: 3,
-                simplices: corner.to_vec(),
-                neighbors: vec![crate::NO_NEIGHBOR; 6],
-            };
-            let mut out = Vec::new();
-            contact_elements::<2>(
-                &x,
-                &kinds,
-                &bodies,
-                &vec![1.0; x.len()],
-                &[false, false, true],
-                &tess,
-                1.6,
-                0.05,
-                &mut out,
-            )
-            .unwrap();
+            let out = tris_2d(&x, &bodies, &corner);
             assert!(!out.is_empty(), "{corner:?}");
             for c in &out {
                 assert!((c.gap - 1.0).abs() < 1e-12, "{corner:?}: gap {}", c.gap);
@@ -537,29 +522,7 @@ mod tests {
                 bodies.push(2);
             }
         }
-        let kinds = kinds_of(&bodies, 2);
-        let contact = |x: &[Point<2>], kinds: &[ParticleKind], bodies: &[u32], tris: &[u32]| {
-            let tess = Tessellation {
-                nv: 3,
-                simplices: tris.to_vec(),
-                neighbors: vec![crate::NO_NEIGHBOR; tris.len()],
-            };
-            let mut out = Vec::new();
-            contact_elements::<2>(
-                x,
-                kinds,
-                bodies,
-                &vec![1.0; x.len()],
-                &[false, false, true],
-                &tess,
-                1.6,
-                0.05,
-                &mut out,
-            )
-            .unwrap();
-            out
-        };
-        let out = contact(&x, &kinds, &bodies, &[1, 7, 4]);
+        let out = tris_2d(&x, &bodies, &[1, 7, 4]);
         assert_eq!(out.len(), 1);
         let c = &out[0];
         assert!((c.gap - 1.0).abs() < 1e-12, "gap {}", c.gap);
@@ -575,9 +538,33 @@ mod tests {
             Point::<2>::new(1.0, 0.0),
             Point::<2>::new(0.5, 1.0),
         ];
-        let out = contact(&x, &kinds_of(&[0, 0, 2], 2), &[0, 0, 2], &[0, 1, 2]);
+        let out = tris_2d(&x, &[0, 0, 2], &[0, 1, 2]);
         assert_eq!(out.len(), 1);
         assert!((out[0].gap - 1.0).abs() < 1e-12 && (out[0].normal.y - 1.0).abs() < 1e-12);
+    }
+
+    /// Contact elements of 2D triangles (`tris`, three indices each) of the
+    /// given bodies (body 2 a solid in contact; 0 and 1 walls).
+    fn tris_2d(x: &[Point<2>], bodies: &[u32], tris: &[u32]) -> Vec<ContactCandidate<2>> {
+        let tess = Tessellation {
+            nv: 3,
+            simplices: tris.to_vec(),
+            neighbors: vec![crate::NO_NEIGHBOR; tris.len()],
+        };
+        let mut out = Vec::new();
+        contact_elements::<2>(
+            x,
+            &kinds_of(bodies, 2),
+            bodies,
+            &vec![1.0; x.len()],
+            &[false, false, true],
+            &tess,
+            1.6,
+            0.05,
+            &mut out,
+        )
+        .unwrap();
+        out
     }
 
     /// Contact elements of single 3D tetrahedra, each of the given bodies

@@ -2,6 +2,8 @@
 
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 
+use pfem_scene::AppliedLoad;
+
 use super::{Hook, HookContext};
 use crate::RunError;
 
@@ -12,29 +14,13 @@ use crate::RunError;
 /// traction on a face, a push on a free block. Applied through
 /// [`HookContext::add_force`] before every solve; stateless, so a
 /// restarted run applies the same.
-#[derive(Clone)]
+#[derive(Debug, Clone)]
 pub struct AppliedForce<const D: usize>
 where
     Const<D>: Dim,
 {
-    body: String,
-    region: Option<(Point<D>, Point<D>)>,
-    #[allow(clippy::type_complexity)]
-    force: std::sync::Arc<dyn Fn(f64) -> Vector<D> + Send + Sync>,
+    load: AppliedLoad<D>,
     particles: Vec<usize>,
-}
-
-impl<const D: usize> std::fmt::Debug for AppliedForce<D>
-where
-    Const<D>: Dim,
-{
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("AppliedForce")
-            .field("body", &self.body)
-            .field("region", &self.region)
-            .field("particles", &self.particles.len())
-            .finish_non_exhaustive()
-    }
 }
 
 impl<const D: usize> AppliedForce<D>
@@ -48,26 +34,17 @@ where
         region: Option<(Point<D>, Point<D>)>,
         force: impl Fn(f64) -> Vector<D> + Send + Sync + 'static,
     ) -> Self {
-        Self {
+        Self::from_load(AppliedLoad {
             body: body.into(),
             region,
             force: std::sync::Arc::new(force),
-            particles: Vec::new(),
-        }
+        })
     }
 
-    /// [`AppliedForce::new`] with the force shared (a scene's
-    /// [`pfem_scene::AppliedLoad`]).
-    #[allow(clippy::type_complexity)]
-    pub fn shared(
-        body: &str,
-        region: Option<(Point<D>, Point<D>)>,
-        force: std::sync::Arc<dyn Fn(f64) -> Vector<D> + Send + Sync>,
-    ) -> Self {
+    /// The hook that applies a scene's [`AppliedLoad`] (`Scene::force`).
+    pub fn from_load(load: AppliedLoad<D>) -> Self {
         Self {
-            body: body.into(),
-            region,
-            force,
+            load,
             particles: Vec::new(),
         }
     }
@@ -85,10 +62,11 @@ where
     }
 
     fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
-        let id = ctx.body(&self.body)?;
+        let id = ctx.body(&self.load.body)?;
         let p = ctx.particles();
         let inside = |x: &Point<D>| {
-            self.region
+            self.load
+                .region
                 .is_none_or(|(lo, hi)| (0..D).all(|k| x[k] >= lo[k] && x[k] <= hi[k]))
         };
         let mut on = Vec::new();
@@ -102,7 +80,7 @@ where
             if p.kind()[i] != ParticleKind::Solid {
                 return Err(RunError::Hook {
                     hook: Self::NAME.into(),
-                    why: format!("body `{}` is not a solid", self.body),
+                    why: format!("body `{}` is not a solid", self.load.body),
                 });
             }
             // By where it started (a restart runs `start` again on moved
@@ -116,7 +94,7 @@ where
                 hook: Self::NAME.into(),
                 why: format!(
                     "no particle of body `{}` inside the load's region",
-                    self.body
+                    self.load.body
                 ),
             });
         }
@@ -125,7 +103,7 @@ where
     }
 
     fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
-        let total = (self.force)(ctx.time() + ctx.dt());
+        let total = (self.load.force)(ctx.time() + ctx.dt());
         let share = total / self.particles.len() as f64;
         for &i in &self.particles {
             ctx.add_force(i, share)?;
