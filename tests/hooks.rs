@@ -670,6 +670,102 @@ fn bad_hook_settings_and_a_set_changed_by_hand_are_handled() {
     );
 }
 
+/// A particle of `sim`'s, as a `Particle` to push.
+fn particle_of(sim: &Simulation<2>, i: usize) -> pfem::particles::Particle<2> {
+    let p = sim.particles();
+    pfem::particles::Particle {
+        x: p.x()[i],
+        v: p.v()[i],
+        pressure: p.pressure()[i],
+        kind: p.kind()[i],
+        body: p.body()[i],
+        spacing: p.spacing()[i],
+        material: p.material()[i],
+    }
+}
+
+/// Particles pushed by hand or by a hook (session 42; until then
+/// `Particles::push` took anything): a wall or solid is refused at the push
+/// (walls and solids come first and keep their indices), and a fluid
+/// particle that does not fit the simulation is a typed error when the
+/// next step meshes it. Before, a wall pushed after the fluids and a fluid
+/// particle of a body past the scene's ran without a word, and a material
+/// past the scene's was found by the assembly as an "inconsistent input".
+#[test]
+fn particles_pushed_by_hand_are_checked() {
+    use pfem::particles::NO_MATERIAL;
+    let above = Point::<2>::new(0.05, 0.13);
+    // A wall (a floor particle moved off the floor) or a wall-kind copy of
+    // a fluid particle: refused at once, the set unchanged.
+    for kind in [ParticleKind::Wall, ParticleKind::Solid] {
+        let mut sim = sim2(small_tank("pushed wall"), StepParams::default());
+        let n = sim.particles().len();
+        let mut p = particle_of(&sim, n - 1);
+        p.x = Point::<2>::new(0.35, 0.0);
+        p.kind = kind;
+        assert!(matches!(
+            sim.particles_mut().push(p),
+            Err(pfem::particles::RemapError::NotFluid(i)) if i == n
+        ));
+        assert_eq!(sim.particles().len(), n);
+        sim.run(&mut []).unwrap();
+    }
+    // Fluid particles that do not fit: (how it is spoiled, what the error says).
+    type Spoil = fn(&mut pfem::particles::Particle<2>);
+    let cases: [(Spoil, &str); 6] = [
+        (|p| p.material = 99, "no material 99"),
+        (|p| p.material = NO_MATERIAL, "no material 65535"),
+        (|p| p.body = 99, "body 99 past the scene's 2"),
+        (|p| p.body = 0, "body 0 (`floor`), a wall's or solid's"),
+        (|p| p.spacing = 0.0, "spacing 0 m"),
+        (|p| p.v.x = f64::NAN, "non-finite"),
+    ];
+    for (spoil, says) in cases {
+        let mut sim = sim2(small_tank("pushed fluid"), StepParams::default());
+        let n = sim.particles().len();
+        let mut p = particle_of(&sim, n - 1);
+        p.x = above;
+        spoil(&mut p);
+        assert_eq!(sim.particles_mut().push(p).unwrap(), n);
+        match sim.run(&mut []) {
+            Err(RunError::InvalidParticle { particle, why }) => {
+                assert_eq!(particle, n);
+                assert!(why.contains(says), "{why}");
+            }
+            other => panic!("{says}: {other:?}"),
+        }
+    }
+    // The same through a hook, after the mesh of its step is made.
+    let mut sim = sim2(small_tank("pushed by a hook"), StepParams::default());
+    let n = sim.particles().len();
+    let mut bad = particle_of(&sim, n - 1);
+    bad.x = above;
+    bad.body = 99;
+    sim.add_hook(Box::new(FnHook::new("push").after_remesh(
+        move |ctx: &mut HookContext<'_, 2>| {
+            if ctx.steps() == 2 {
+                ctx.particles_mut().push(bad).unwrap();
+            }
+            Ok(())
+        },
+    )));
+    let err = sim.run(&mut []).unwrap_err();
+    assert!(
+        matches!(err, RunError::InvalidParticle { particle, .. } if particle == n),
+        "{err}"
+    );
+    // A fluid particle that fits is meshed and run: it falls onto the water.
+    let mut sim = sim2(small_tank("pushed drop"), StepParams::default());
+    let n = sim.particles().len();
+    let mut p = particle_of(&sim, n - 1);
+    p.x = Point::<2>::new(0.05, 0.2);
+    sim.particles_mut().push(p).unwrap();
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.particles().len(), n + 1);
+    let y = sim.particles().x()[n].y;
+    assert!(y < 0.2 - 0.4 * G * 0.01 * 0.01, "the drop at {y} m");
+}
+
 /// Counts its `start` calls and records the time of the first.
 struct Starts(std::sync::Arc<std::sync::Mutex<Vec<f64>>>);
 

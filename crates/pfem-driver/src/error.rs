@@ -64,6 +64,17 @@ pub enum RunError {
         /// The smallest step (s), `StepParams::min_dt`.
         min_dt: f64,
     },
+    /// A particle added or changed by hand (`Simulation::particles_mut`)
+    /// does not fit the simulation: a material that does not exist or is
+    /// not a fluid's, a body past the scene's, a non-positive spacing or a
+    /// non-finite value. Found when the next step meshes the changed set.
+    #[error("particle {particle} does not fit the simulation: {why}")]
+    InvalidParticle {
+        /// The particle.
+        particle: usize,
+        /// What does not fit.
+        why: String,
+    },
     /// A particle position became non-finite.
     #[error("particle {particle} has a non-finite position at t = {time} s")]
     NonFinite {

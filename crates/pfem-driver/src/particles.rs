@@ -100,9 +100,21 @@ where
         }
     }
 
-    /// Appends a particle, free of constraints, at rest acceleration zero;
+    /// Appends a fluid particle, free of constraints, acceleration zero;
     /// its initial position is `p.x`. Returns its index.
-    pub fn push(&mut self, p: Particle<D>) -> usize {
+    ///
+    /// Only fluid particles may be appended: walls and solids come from the
+    /// scene and keep their indices for the whole run (they come first, and
+    /// a probe, a load or a solid's element may hold their indices), so a
+    /// wall or solid particle is refused with [`RemapError::NotFluid`] (its
+    /// would-be index) and the set is left as it was. The rest of the
+    /// particle (its material, body, spacing, finite values) is checked
+    /// against the simulation when the next step meshes the changed set
+    /// (`RunError::InvalidParticle`).
+    pub fn push(&mut self, p: Particle<D>) -> Result<usize, RemapError> {
+        if p.kind != ParticleKind::Fluid {
+            return Err(RemapError::NotFluid(self.len()));
+        }
         self.state.x.push(p.x);
         self.state.v.push(p.v);
         self.state.a.push(Vector::<D>::zeros());
@@ -115,7 +127,7 @@ where
         self.constraints.mask.push(0);
         self.constraints.velocity.push(Vector::<D>::zeros());
         self.generation += 1;
-        self.state.x.len() - 1
+        Ok(self.state.x.len() - 1)
     }
 
     /// How many particles come before the first fluid one: the walls and

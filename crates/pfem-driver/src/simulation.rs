@@ -754,6 +754,12 @@ where
     /// Regenerates the fluid mesh: Delaunay of all particles, alpha shape
     /// (§8), one fluid material per element from its fluid nodes.
     fn remesh(&mut self) -> Result<(), RunError> {
+        // A set changed since the last mesh (by a hook, particle management
+        // or by hand) has its fluid particles checked first; a refused set
+        // is checked again at the next try.
+        if self.particles.generation() != self.meshed {
+            self.check_fluid_particles()?;
+        }
         self.meshed = self.particles.generation();
         if !self.stages.remesh {
             return Ok(());
@@ -1061,6 +1067,66 @@ where
     /// `docs/benchmarks.md`).
     pub fn step(&mut self) -> Result<(), RunError> {
         rayon::scope(|_| self.step_in_pool())
+    }
+
+    /// The fluid particles of a set changed since the last mesh (by hand,
+    /// [`Particles::push`] through [`Simulation::particles_mut`], or by a
+    /// hook): each
+    /// must name a fluid material and a body of the scene, with a positive
+    /// spacing and finite values. (Walls and solids cannot be appended,
+    /// and a hook's [`HookContext::insert_fluid`] checks its own.)
+    fn check_fluid_particles(&self) -> Result<(), RunError> {
+        let p = &self.particles;
+        let bad = |particle, why: String| Err(RunError::InvalidParticle { particle, why });
+        let fixed = p.fixed_prefix();
+        // The bodies of walls and solids, which a fluid particle may not join.
+        let mut solid_body = vec![false; self.body_names.len()];
+        for &b in &p.body()[..fixed] {
+            if let Some(s) = solid_body.get_mut(b as usize) {
+                *s = true;
+            }
+        }
+        for i in fixed..p.len() {
+            let m = p.material()[i] as usize;
+            match self.materials.get(m) {
+                None => return bad(i, format!("no material {m}")),
+                Some(law) if law.kind() != pfem_constitutive::MaterialKind::Fluid => {
+                    return bad(
+                        i,
+                        format!("a fluid particle of material {m}, not a fluid's"),
+                    )
+                }
+                Some(_) => {}
+            }
+            let b = p.body()[i] as usize;
+            match solid_body.get(b) {
+                None => {
+                    let n = self.body_names.len();
+                    return bad(i, format!("body {b} past the scene's {n}"));
+                }
+                Some(true) => {
+                    let name = &self.body_names[b];
+                    return bad(
+                        i,
+                        format!("a fluid particle in body {b} (`{name}`), a wall's or solid's"),
+                    );
+                }
+                Some(false) => {}
+            }
+            let h = p.spacing()[i];
+            if !(h > 0.0 && h.is_finite()) {
+                return bad(i, format!("spacing {h} m"));
+            }
+            if !(p.pressure()[i].is_finite()
+                && p.x()[i]
+                    .iter()
+                    .chain(p.v()[i].iter())
+                    .all(|c| c.is_finite()))
+            {
+                return bad(i, "a non-finite position, velocity or pressure".into());
+            }
+        }
+        Ok(())
     }
 
     fn step_in_pool(&mut self) -> Result<(), RunError> {

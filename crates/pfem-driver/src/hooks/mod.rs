@@ -355,7 +355,10 @@ where
             });
         }
         self.moved = true;
-        Ok(self.particles.push(p))
+        self.particles.push(p).map_err(|e| RunError::Hook {
+            hook: "insert_fluid".into(),
+            why: e.to_string(),
+        })
     }
 
     /// Removes crowding fluid particles and inserts particles into oversized
