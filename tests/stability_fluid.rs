@@ -4,8 +4,8 @@
 //! `cargo test --release --test suite stability_fluid::` (the long run:
 //! `cargo test --release --test suite stability_fluid:: -- --ignored`).
 //!
-//! Every case checks (see `stability_support.rs`): the run ends at its end
-//! time or with a typed error, no NaN, no inverted fluid or solid element
+//! Every case checks (see `stability_support.rs`): the run reaches its end
+//! time with no error, no NaN, no inverted fluid or solid element
 //! after any step, and the kinetic + gravitational potential energy of the
 //! non-wall particles never exceeds its initial value by more than the
 //! stated tolerance; the default-scheme cases also check that the fluid

@@ -390,6 +390,10 @@ where
     /// by hand since ([`Simulation::particles_mut`]) is remeshed by the
     /// next step.
     meshed: u64,
+    /// The gravity the accelerations were last set with
+    /// ([`Simulation::initialize_acceleration`]): a first step under
+    /// another one (a hook's) sets them again.
+    accelerated_with: Option<Vector<D>>,
     stepper: Stepper<D>,
     contact: ContactSetup<D>,
 }
@@ -638,6 +642,7 @@ where
             start_rigid: options.free_solids_start_rigid,
             options,
             meshed: u64::MAX,
+            accelerated_with: None,
             stepper: Stepper {
                 tessellator,
                 integrator: Integrator::new(params),
@@ -686,6 +691,7 @@ where
         self.stepper
             .integrator
             .initialize_acceleration(&mut state, history, &input)?;
+        self.accelerated_with = self.gravity;
         if self.start_rigid {
             // Free solids: the rigid part of their particles' accelerations
             // (Options::free_solids_start_rigid).
@@ -1207,7 +1213,11 @@ where
         // first step's loads, those at its end `t₀ + Δt` (and gravity as
         // the hooks set it then): exact for a constant load; a load
         // ramped from zero keeps about `½ k Δt²` of momentum too much.
-        if self.clock.steps == 0 && !self.external_force.is_empty() {
+        // The same for a gravity a hook set before the first step (a scene
+        // with none, switched on by a hook: session 42).
+        if self.clock.steps == 0
+            && (!self.external_force.is_empty() || self.gravity != self.accelerated_with)
+        {
             self.initialize_acceleration()?;
         }
         // The attempts, halving the step after each rejected one; the hooks

@@ -530,6 +530,7 @@ where
     Const<D>: Dim,
 {
     name: String,
+    start: Option<StepFn<D>>,
     after_remesh: Option<StepFn<D>>,
     before_solve: Option<StepFn<D>>,
     after_step: Option<StepFn<D>>,
@@ -543,10 +544,19 @@ where
     pub fn new(name: impl Into<String>) -> Self {
         Self {
             name: name.into(),
+            start: None,
             after_remesh: None,
             before_solve: None,
             after_step: None,
         }
+    }
+    /// Runs `f` once, before the first step it sees ([`Hook::start`]).
+    pub fn start(
+        mut self,
+        f: impl FnMut(&mut HookContext<'_, D>) -> Result<(), RunError> + Send + 'static,
+    ) -> Self {
+        self.start = Some(Box::new(f));
+        self
     }
     /// Runs `f` after remeshing.
     pub fn after_remesh(
@@ -580,6 +590,9 @@ where
 {
     fn name(&self) -> &str {
         &self.name
+    }
+    fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        self.start.as_mut().map_or(Ok(()), |f| f(ctx))
     }
     fn after_remesh(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         self.after_remesh.as_mut().map_or(Ok(()), |f| f(ctx))
