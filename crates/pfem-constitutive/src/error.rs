@@ -91,6 +91,15 @@ pub enum MaterialError {
         /// [`crate::MAX_INTERNAL`].
         limit: usize,
     },
+    /// A fluid material that names internal variables: a fluid's elements
+    /// are made anew at every remeshing, so per-element state would be
+    /// reset every step without a word (a fluid's state lives at the
+    /// nodes, as its pressure does).
+    #[error("a fluid keeps no internal variables (its elements are made anew every step); it names {count}")]
+    FluidWithInternalVariables {
+        /// How many the material names.
+        count: usize,
+    },
     /// A setting that holds in one dimension only, used in another (plane
     /// stress in 3D).
     #[error("{what} does not apply in {dimension}D")]
@@ -109,6 +118,7 @@ impl MaterialError {
             MaterialError::InvalidParameter { parameter, .. } => Some(*parameter),
             MaterialError::DegenerateWaveSpeed { .. }
             | MaterialError::TooManyInternalVariables { .. }
+            | MaterialError::FluidWithInternalVariables { .. }
             | MaterialError::NotInDimension { .. } => None,
         }
     }

@@ -428,7 +428,8 @@ where
     /// [`History::internal`] (at most [`MAX_INTERNAL`]; a scene with more is
     /// refused), written to the output by name and kept by checkpoints;
     /// none by default. A fluid keeps none (its elements are rebuilt every
-    /// step).
+    /// step): a scene refuses a fluid material that names any
+    /// ([`crate::MaterialError::FluidWithInternalVariables`]).
     fn internal_variables(&self) -> &[&str] {
         &[]
     }

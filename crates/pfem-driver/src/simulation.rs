@@ -6,8 +6,8 @@ use std::time::Instant;
 use pfem_constitutive::{History, Kinematics, Material, MaterialKind};
 use pfem_core::{Const, Dim, ParticleKind, Point, Tensor, Vector};
 use pfem_geometry::{
-    alpha_shape_cutting_into, near_matter, tessellate_subset, AlphaShapeParams, GeometryError,
-    Tessellation, Tessellator,
+    alpha_shape_cutting_into, near_matter, tessellate_or_empty, tessellate_subset,
+    AlphaShapeParams, Tessellation, Tessellator,
 };
 use pfem_time::{CourantController, Integrator, StepInput, StepParams};
 
@@ -797,20 +797,13 @@ where
             .is_ok();
         if !subset {
             st.near.clear();
-            match st.tessellator.tessellate(x, &mut st.tess) {
-                Ok(()) => {}
-                // Fewer than D + 1 particles, or all on one line (2D) or
-                // plane (3D): no simplex has a measure, so there is no mesh
-                // and every fluid particle flies (§8's isolated particles).
-                // It was a fatal error: a single falling drop could not be
-                // simulated (session 40's review).
-                Err(GeometryError::Degenerate { .. }) => {
-                    st.tess.nv = D + 1;
-                    st.tess.simplices.clear();
-                    st.tess.neighbors.clear();
-                }
-                Err(e) => return Err(RunError::Geometry(e)),
-            }
+            // Fewer than D + 1 particles, or all on one line (2D) or plane
+            // (3D): no simplex has a measure, so there is no mesh and every
+            // fluid particle flies (§8's isolated particles). It was a
+            // fatal error: a single falling drop could not be simulated
+            // (session 40's review).
+            tessellate_or_empty(st.tessellator.as_mut(), x, &mut st.tess)
+                .map_err(RunError::Geometry)?;
         }
         let ts = Instant::now();
         let mut shape = self.elements.take_shape();

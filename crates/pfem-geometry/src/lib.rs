@@ -61,4 +61,4 @@ pub use particles::{
 };
 pub use quality::{mesh_quality, radius_ratio, QualityParams, QualityReport};
 pub use reach::{near_matter, tessellate_subset};
-pub use tessellation::{Tessellation, Tessellator, NO_NEIGHBOR, SEALED};
+pub use tessellation::{tessellate_or_empty, Tessellation, Tessellator, NO_NEIGHBOR, SEALED};

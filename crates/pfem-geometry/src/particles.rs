@@ -9,7 +9,10 @@ use std::ops::{Add, Mul};
 use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, MAX_NV};
 
 use crate::alpha::{check_particles, check_tessellation, gather, simplex_spacing};
-use crate::{alpha_shape, AlphaShape, AlphaShapeParams, GeometryError, Tessellation, Tessellator};
+use crate::{
+    alpha_shape, tessellate_or_empty, AlphaShape, AlphaShapeParams, GeometryError, Tessellation,
+    Tessellator,
+};
 
 /// Parameters of [`manage_particles`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -393,7 +396,7 @@ where
         let mut mid = before;
         if n_removed > 0 && n_inserted > 0 {
             let pts = &new_points[..n_after_removal];
-            tessellator.tessellate(pts, &mut out_delaunay)?;
+            tessellate_or_empty(tessellator, pts, &mut out_delaunay)?;
             let a = alpha_shape(
                 pts,
                 &new_kinds[..n_after_removal],
@@ -403,7 +406,9 @@ where
             )?;
             mid = a.kept_measure;
         }
-        tessellator.tessellate(&new_points, &mut out_delaunay)?;
+        // (Removals may leave fewer than D + 1 particles, or only
+        // collinear ones: no mesh, as the driver's remesh takes it.)
+        tessellate_or_empty(tessellator, &new_points, &mut out_delaunay)?;
         out_alpha = alpha_shape(
             &new_points,
             &new_kinds,
@@ -492,6 +497,31 @@ mod tests {
         assert_eq!(u.volume.insertion, 0.0);
         assert_eq!(u.alpha, s.a);
         assert_eq!(u.map.old_to_new, (0..36).collect::<Vec<u32>>());
+    }
+
+    /// A drop of three particles, one crowding another: removing it leaves
+    /// two, which have no simplex. Until session 42 the call failed with
+    /// `Degenerate` (the driver's own remesh takes such a set as no mesh,
+    /// every particle flying), so the management hook stopped the run.
+    #[test]
+    fn a_removal_that_leaves_no_simplex_leaves_no_mesh() {
+        let s = setup(
+            vec![
+                Point::<2>::new(0.0, 0.0),
+                Point::<2>::new(0.01, 0.0),
+                Point::<2>::new(0.0, 1.0),
+            ],
+            1.0,
+        );
+        assert_eq!(s.a.mesh.len(), 1);
+        let u = manage(&s, &ParticleManagementParams::default());
+        assert_eq!((u.removed, u.inserted), (1, 0));
+        assert_eq!(u.points.len(), 2);
+        assert_eq!(u.delaunay.len(), 0);
+        assert_eq!(u.alpha.mesh.len(), 0);
+        assert_eq!(u.volume.after, 0.0);
+        assert!(u.volume.removal < 0.0);
+        balanced(&u.volume);
     }
 
     #[test]

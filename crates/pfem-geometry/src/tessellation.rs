@@ -81,3 +81,27 @@ where
         out: &mut Tessellation,
     ) -> Result<(), GeometryError>;
 }
+
+/// [`Tessellator::tessellate`], with a set that has no simplex (fewer than
+/// `D + 1` points, or all on one line in 2D or one plane in 3D) given as
+/// an empty tessellation instead of [`GeometryError::Degenerate`]: no mesh,
+/// so every fluid particle of it flies (§8's isolated particles). Other
+/// errors are returned.
+pub fn tessellate_or_empty<const D: usize>(
+    tessellator: &mut dyn Tessellator<D>,
+    points: &[Point<D>],
+    out: &mut Tessellation,
+) -> Result<(), GeometryError>
+where
+    Const<D>: Dim,
+{
+    match tessellator.tessellate(points, out) {
+        Err(GeometryError::Degenerate { .. }) => {
+            out.nv = D + 1;
+            out.simplices.clear();
+            out.neighbors.clear();
+            Ok(())
+        }
+        r => r,
+    }
+}

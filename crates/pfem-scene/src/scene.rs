@@ -955,6 +955,14 @@ where
             }
             if let Some(m) = &b.material {
                 let count = m.internal_variables().len();
+                if count > 0 && m.kind() == MaterialKind::Fluid {
+                    return Err(SceneError::InvalidMaterial {
+                        body: b.name.clone(),
+                        source: pfem_constitutive::MaterialError::FluidWithInternalVariables {
+                            count,
+                        },
+                    });
+                }
                 if count > pfem_constitutive::MAX_INTERNAL {
                     return Err(SceneError::InvalidMaterial {
                         body: b.name.clone(),

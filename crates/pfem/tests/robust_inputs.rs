@@ -600,6 +600,59 @@ fn bad_settings_are_refused_with_the_right_message() {
         Err(e) => assert!(e.to_string().contains("density"), "{e}"),
         Ok(_) => panic!("a negative density"),
     }
+
+    // A fluid that names an internal variable (a thixotropic structure
+    // parameter, say): its elements are made anew every step, so the
+    // variable would be reset every step without a word (session 42's
+    // review; it was accepted).
+    #[derive(Debug)]
+    struct Thixotropic(Newtonian);
+    impl Material<2> for Thixotropic {
+        fn name(&self) -> &str {
+            "thixotropic"
+        }
+        fn kind(&self) -> MaterialKind {
+            MaterialKind::Fluid
+        }
+        fn density(&self) -> f64 {
+            1000.0
+        }
+        fn wave_speed(&self) -> f64 {
+            <Newtonian as Material<2>>::wave_speed(&self.0)
+        }
+        fn internal_variables(&self) -> &[&str] {
+            &["lambda"]
+        }
+        fn unified(
+            &self,
+            kin: &pfem::constitutive::Kinematics<2>,
+            h: &pfem::constitutive::History<2>,
+        ) -> pfem::constitutive::Unified<2> {
+            self.0.unified(kin, h)
+        }
+        fn update_history(
+            &self,
+            kin: &pfem::constitutive::Kinematics<2>,
+            h: &mut pfem::constitutive::History<2>,
+        ) {
+            self.0.update_history(kin, h)
+        }
+    }
+    let mut s = puddle("thixotropic");
+    s.bodies[1].material = Some(Box::new(Thixotropic(Newtonian::water())));
+    match build(s) {
+        Err(SceneError::InvalidMaterial { body, source }) => {
+            assert_eq!(body, "water");
+            assert!(
+                matches!(
+                    source,
+                    pfem::constitutive::MaterialError::FluidWithInternalVariables { count: 1 }
+                ),
+                "{source}"
+            );
+        }
+        other => panic!("a fluid with an internal variable: {other:?}"),
+    }
 }
 
 /// A validation error of a scene file names the line of the body it is
