@@ -12,7 +12,7 @@ package (`pip install vtk`).
 Sample files from the test suite (2D ASCII and base64 frames with every field
 kind, a 3D series with its .pvd):
 
-    PFEM_VTU_SAMPLE_DIR=/tmp/vtu cargo test -p pfem-io --test output_vtu write_samples
+    PFEM_VTU_SAMPLE_DIR=/tmp/vtu cargo test -p pfem-io --test output_vtu write_samples -- --ignored
     python3 docs/check_vtu.py /tmp/vtu/*.vtu /tmp/vtu/series3d.pvd
 """
 

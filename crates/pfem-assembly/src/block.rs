@@ -1640,7 +1640,9 @@ impl LinearSolver for BlockSolver {
     }
 
     fn work(&self) -> SolverWork {
-        self.work + self.direct.work()
+        let mut w = self.work + self.direct.work();
+        w.fallbacks = self.stats.fallbacks;
+        w
     }
 
     fn set_accuracy(&mut self, relative_residual: Option<f64>) {

@@ -57,6 +57,10 @@ pub struct SolverWork {
     /// instead of building anew (among [`SolverWork::factorizations`];
     /// `BlockSolver::carry_steps`).
     pub carried: u64,
+    /// Solves an iterative solver (or an external backend) could not do
+    /// and handed to its direct fallback (`BlockStats::fallbacks`); 0 for a
+    /// direct solver.
+    pub fallbacks: u64,
 }
 
 impl std::ops::Add for SolverWork {
@@ -68,6 +72,7 @@ impl std::ops::Add for SolverWork {
             resolves: self.resolves + o.resolves,
             iterations: self.iterations + o.iterations,
             carried: self.carried + o.carried,
+            fallbacks: self.fallbacks + o.fallbacks,
         }
     }
 }

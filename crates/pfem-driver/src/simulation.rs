@@ -220,6 +220,9 @@ pub struct Work {
     /// (`solver_iterations / linear_solves` is the Krylov iterations per
     /// solve).
     pub linear_solves: u64,
+    /// Solves an iterative solver handed to its direct fallback
+    /// (`pfem_assembly::BlockStats::fallbacks`; 0 for a direct solver).
+    pub solver_fallbacks: u64,
 }
 
 /// Driver options chosen at construction ([`Simulation::with_options`]):
@@ -1353,6 +1356,7 @@ where
             setups_carried: s.carried,
             solver_iterations: s.iterations,
             linear_solves: s.factorizations + s.resolves,
+            solver_fallbacks: s.fallbacks,
         }
     }
 

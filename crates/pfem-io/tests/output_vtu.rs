@@ -392,14 +392,18 @@ fn pvd_writer_escapes_and_fails_with_the_path() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Leaves a 2D and a 3D frame plus a series in `PFEM_VTU_SAMPLE_DIR` when
-/// that variable is set, for `docs/check_vtu.py` to open with VTK itself.
+/// Leaves a 2D and a 3D frame plus a series in `PFEM_VTU_SAMPLE_DIR` (or
+/// the system's temporary folder), for `docs/check_vtu.py` to open with
+/// VTK itself. Ignored (it writes files for another program to check):
+/// `PFEM_VTU_SAMPLE_DIR=/tmp/vtu cargo test -p pfem-io --test output_vtu
+/// write_samples -- --ignored`, then `python3 docs/check_vtu.py
+/// /tmp/vtu/*.vtu /tmp/vtu/series3d.pvd`.
 #[test]
+#[ignore = "writes sample files for docs/check_vtu.py (VTK); see its doc comment"]
 fn write_samples_for_vtk_when_asked() {
-    let Some(dir) = std::env::var_os("PFEM_VTU_SAMPLE_DIR") else {
-        return;
-    };
-    let dir = PathBuf::from(dir);
+    let dir = std::env::var_os("PFEM_VTU_SAMPLE_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| std::env::temp_dir().join("pfem-vtu-samples"));
     std::fs::create_dir_all(&dir).unwrap();
     check_2d(Encoding::Base64, &dir);
     check_2d(Encoding::Ascii, &dir);

@@ -358,7 +358,10 @@ impl LinearSolver for PetscSolver {
     }
 
     fn work(&self) -> SolverWork {
-        self.work
+        SolverWork {
+            fallbacks: self.stats.fallbacks,
+            ..self.work
+        }
     }
 
     /// PETSc's sparse Cholesky on the whole matrix (the time integrator's

@@ -532,12 +532,10 @@ fn trapezoidal_rule_keeps_the_beams_amplitude_and_energy() {
             loss.abs() <= 5e-4,
             "{spp} steps per period: amplitude lost {loss:e} per period"
         );
-        if spp >= 160.0 {
-            assert!(
-                range <= 1e-3,
-                "energy varies by {range:e} of the vibration's"
-            );
-        }
+        assert!(
+            range <= 1e-3,
+            "{spp} steps per period: energy varies by {range:e} of the vibration's"
+        );
     }
 }
 

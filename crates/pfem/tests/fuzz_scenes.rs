@@ -1,9 +1,12 @@
 //! A fuzz campaign over scene files (issue 17): the bundled scenes with
 //! one line mutated (a number replaced by a hostile value, the line deleted,
 //! duplicated or garbled, the file cut there). Every mutant must load to a
-//! typed error or to a scene that validates within a memory budget and runs
-//! its first steps: no panic, no hang, no allocation above the budget.
+//! typed error or to a scene that validates within a memory budget
+//! (`Options::memory_budget`: the scene's estimate of its own size is
+//! checked before anything is allocated; allocations are not counted) and
+//! runs its first steps: no panic, no hang.
 //! `cargo test --release -p pfem --test suite fuzz_scenes:: -- --nocapture`
+//! Each campaign prints its seed; `PROPTEST_RNG_SEED=<seed>` replays it.
 
 use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -14,7 +17,28 @@ use pfem::geometry::{Delaunay2, Delaunay3, Tessellator};
 use pfem::scene_file::{LoadedScene, SceneFile};
 use pfem::time::StepParams;
 use pfem::{Options, Scene, Simulation};
-use proptest::test_runner::{Config, TestRunner};
+use proptest::test_runner::{Config, RngSeed, TestRunner};
+
+/// A runner of `cases` cases whose seed is printed: `PROPTEST_RNG_SEED`'s
+/// if set (proptest reads it), else one drawn from the clock.
+fn runner(name: &str, cases: u32) -> TestRunner {
+    let mut config = Config {
+        cases,
+        failure_persistence: None,
+        ..Config::default()
+    };
+    if config.rng_seed == RngSeed::Random {
+        let t = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        config.rng_seed = RngSeed::Fixed(t ^ u64::from(std::process::id()));
+    }
+    println!(
+        "{name}: seed {} (replay: PROPTEST_RNG_SEED={0})",
+        config.rng_seed
+    );
+    TestRunner::new(config)
+}
 
 /// Memory budget of a fuzzed run (bytes): 200 MB.
 const BUDGET: f64 = 2e8;
@@ -125,11 +149,7 @@ fn kind_of(debug: &str) -> String {
 fn mutated_scene_files_never_panic() {
     let all = scenes();
     let tally: Mutex<BTreeMap<String, usize>> = Mutex::new(BTreeMap::new());
-    let mut runner = TestRunner::new(Config {
-        cases: CASES,
-        failure_persistence: None,
-        ..Config::default()
-    });
+    let mut runner = runner("mutated scene files", CASES);
     let inputs = (0usize..64, 0usize..400, 0usize..5, 0usize..64);
     runner
         .run(&inputs, |(file, line, kind, value)| {
@@ -156,8 +176,9 @@ fn mutated_scene_files_never_panic() {
 }
 
 /// The command line: random argument lists for `pfem check` and a bounded
-/// `pfem run` on a bundled scene. Each ends with status 0 or 1 (never a
-/// panic's 101, an abort's 134 or a signal) within 60 s.
+/// `pfem run` on a bundled scene. Each ends with status 0, 1 or 2 (2: a run
+/// stopped by its wall-clock cap; never a panic's 101, an abort's 134 or a
+/// signal) within 60 s.
 #[test]
 fn random_command_lines_end_cleanly() {
     let bin = env!("CARGO_BIN_EXE_pfem");
@@ -178,11 +199,7 @@ fn random_command_lines_end_cleanly() {
         &["-q"],
         &["--no-vtu"],
     ];
-    let mut runner = TestRunner::new(Config {
-        cases: 48,
-        failure_persistence: None,
-        ..Config::default()
-    });
+    let mut runner = runner("command lines", 48);
     let statuses: Mutex<BTreeMap<i32, usize>> = Mutex::new(BTreeMap::new());
     let picks = proptest::collection::vec((0usize..12, 0usize..8), 0..4);
     runner
