@@ -916,11 +916,13 @@ fn a_remesh_by_a_hook_leaves_stick_s_memory_alone() {
             )));
         }
         s.run(&mut []).unwrap();
-        (s.particles().x().to_vec(), s.steps())
+        (s.particles().x().to_vec(), s.steps(), s.work().remeshes)
     };
-    let (plain, n) = run(false);
-    let (renumbered, m) = run(true);
+    let (plain, n, remeshes) = run(false);
+    let (renumbered, m, more) = run(true);
     assert_eq!(n, m);
+    // The hook's renumbering did remesh: once more each step.
+    assert_eq!(more, remeshes + n, "remeshes {remeshes} and {more}");
     let moved = plain
         .iter()
         .zip(&renumbered)

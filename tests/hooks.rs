@@ -1039,7 +1039,11 @@ fn a_moving_wall_carries_its_law_s_acceleration() {
 /// particle of each layer on each row and drove it through the walls'
 /// particles (coincident points for the Delaunay, or inverted elements at
 /// every step). The face's points on a wall row are left out: the run
-/// goes on with the rate of the clear height.
+/// goes on at the rate of `an_inflow_fills_a_tank_at_the_prescribed_rate`
+/// (speed × the clear height between the floor's and the ceiling's rows),
+/// the volume added within one layer (`pipe h`, the layer still being
+/// filled at the face) of `speed pipe t`. Measured (session 42): 0.01400
+/// m² against 0.01500 (before, the bound was half the rate).
 #[test]
 fn an_inflow_face_drawn_onto_the_walls_leaves_their_rows_alone() {
     let h = 0.02;
@@ -1070,7 +1074,7 @@ fn an_inflow_face_drawn_onto_the_walls_leaves_their_rows_alone() {
         sim.steps(),
         sim.rejected(),
         sim.fluid_volume(),
-        speed * (pipe - h) * 0.3
+        speed * pipe * 0.3
     );
     assert!(
         sim.rejected() <= sim.steps() / 10,
@@ -1078,7 +1082,11 @@ fn an_inflow_face_drawn_onto_the_walls_leaves_their_rows_alone() {
         sim.rejected(),
         sim.steps()
     );
-    assert!(added > 0.5 * speed * (pipe - h) * 0.3, "{added}");
+    assert!(
+        (added - speed * pipe * 0.3).abs() <= pipe * h,
+        "inflow {added} m² against {} m²",
+        speed * pipe * 0.3
+    );
     // No fluid particle on a wall row inside the pipe.
     let p = sim.particles();
     for i in 0..p.len() {

@@ -46,11 +46,12 @@ fn free_fall_of_a_water_block() {
     let exact = 0.5 * G * sim.time() * sim.time();
     let err = (fall - exact).abs() / exact;
     eprintln!(
-        "free fall 3D: {} steps, fall {fall:.6e} vs {exact:.6e} ({:.3}%)",
+        "free fall 3D: {} steps, fall {fall:.6e} vs {exact:.6e} (relative error {err:e})",
         sim.steps(),
-        100.0 * err
     );
-    assert!(err < 5e-3, "centroid fell {fall} m, free fall {exact} m");
+    // The scheme is exact for a constant acceleration, and a block with no
+    // pressure falls rigidly (the bound was 5·10⁻³ until session 42).
+    assert!(err < 1e-9, "centroid fell {fall} m, free fall {exact} m");
 }
 
 /// A tiny 3D column collapse (§9.1 geometry, h = a/5, two spacings deep)

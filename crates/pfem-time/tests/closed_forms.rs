@@ -87,8 +87,14 @@ fn free_fall_of_a_detached_fluid_block() {
     }
     let y = centroid(&state.x).y;
     let exact = y0 - 0.5 * G * t * t;
+    println!(
+        "free fall on a fixed mesh: relative error {:e}",
+        ((y - exact) / (y0 - exact)).abs()
+    );
+    // Newmark is exact for a constant acceleration: measured 3.5·10⁻¹⁵
+    // (the bound was 5·10⁻³ until session 42).
     assert!(
-        ((y - exact) / (y0 - exact)).abs() < 5e-3,
+        ((y - exact) / (y0 - exact)).abs() < 1e-9,
         "centroid {y} vs {exact}"
     );
     let pmax = state.pressure.iter().fold(0.0f64, |m, p| m.max(p.abs()));
