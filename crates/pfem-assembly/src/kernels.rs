@@ -92,7 +92,7 @@ where
 
 /// Whether the volumetric term `𝒦 ε_v` of an element is integrated on the
 /// element (the paper's literal form) or through nodal averaged volumetric
-/// strain (`Gᵀ M̂⁻¹ G`, the default for fluids; see NOTES point 1).
+/// strain (`Gᵀ M̂⁻¹ G`, the default for fluids; ARCHITECTURE.md, deviation 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum VolumetricTreatment {
     /// Nodal averaged volumetric strain for fluids, element-wise for

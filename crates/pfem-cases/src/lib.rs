@@ -6,7 +6,8 @@
 //! - [`cases3d`]: 3D water column, column on a cylinder, quasi-2D slab,
 //!   3D tank at rest;
 //! - [`exact`]: cases with exact references for convergence studies
-//!   (start-up Poiseuille flow, a standing wave, the CSM cantilever);
+//!   (start-up Poiseuille flow, circular Couette flow, a standing wave,
+//!   the CSM cantilever, the dam break's self-convergence);
 //! - [`fidelity`]: the draft/standard/fine presets.
 
 pub mod cases;

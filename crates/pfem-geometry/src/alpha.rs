@@ -306,7 +306,7 @@ fn decide<const D: usize>(
 where
     Const<D>: Dim,
 {
-    // Candidates: at least one fluid node (NOTES point 4: wall-only, solid-only
+    // Candidates: at least one fluid node (the reading notes, point 4: wall-only, solid-only
     // and solid/wall bridges are not fluid elements).
     if !s.iter().any(|&v| kinds[v as usize] == ParticleKind::Fluid) {
         return (0.0, DROPPED);

@@ -9,9 +9,10 @@
 //!   insertion into oversized elements, every few steps.
 //!
 //! The driver's own hooks (the volume correction, `p = 0` on the free
-//! surface, `PrescribedMotion` for walls with a motion law, `StopWhen`,
-//! `WallClockLimit`, `FnHook`) are in `pfem_driver::hooks`; the motion laws
-//! themselves (`Sinusoidal`, `PiecewiseLinear`) in `pfem_scene::motion`.
+//! surface, `PrescribedMotion` for walls with a motion law, `AppliedForce`,
+//! `StopWhen`, `WallClockLimit`, `FnHook`) are in `pfem_driver::hooks`; the
+//! motion laws themselves (`Sinusoidal`, `PiecewiseLinear`, `Rotation`) in
+//! `pfem_scene::motion`.
 
 mod motion;
 mod particles;

@@ -387,6 +387,7 @@ where
                         NodeTag::Wall => 2,
                         NodeTag::Interface => 3,
                         NodeTag::Isolated => 4,
+                        // A wall or solid particle touching no fluid.
                         _ => 5,
                     };
                 }
@@ -404,11 +405,18 @@ where
             })
             .collect();
         let body: Vec<i32> = sim.particles().body().iter().map(|&b| b as i32).collect();
+        // Each element's material, then each isolated particle's own (a
+        // vertex cell written as 0 would show another body's material).
         let material: Vec<i32> = sim
             .elements()
             .materials()
             .iter()
             .map(|&m| m as i32)
+            .chain(
+                vertex_cells
+                    .iter()
+                    .map(|&i| sim.particles().material()[i as usize] as i32),
+            )
             .collect();
         let mut stress = vec![Tensor::<D>::zeros(); n_cells];
         // The out-of-plane normal stress of plane strain (2D only).
@@ -540,7 +548,7 @@ where
         );
         if change.abs() > VOLUME_WARNING {
             eprintln!(
-                "warning: the fluid volume changed by {:+.1}%: the run is likely unresolved (a soft bulk modulus, a coarse spacing, walls squeezing the water); see docs/robustness.md",
+                "warning: the fluid volume changed by {:+.1}%: the run is likely unresolved (a soft bulk modulus, a coarse spacing, walls squeezing the water); see the README's section \"When a run fails\"",
                 100.0 * change
             );
         }

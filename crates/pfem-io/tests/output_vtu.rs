@@ -499,3 +499,61 @@ fn standard_frames_carry_displacement_and_out_of_plane_stress() {
     assert!(biggest > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A flying drop (a fluid particle in no element) is a vertex cell whose
+/// `material` is its own fluid's: until session 42 every cell array was
+/// padded with 0 on vertex cells, and material 0 was the solid's here.
+#[test]
+fn a_flying_drop_shows_its_own_material() {
+    use pfem_constitutive::{Hypoelastic, Newtonian};
+    use pfem_driver::Simulation;
+    use pfem_io::StandardOutput;
+    use pfem_scene::{Geometry, RunSettings, Scene};
+    let h = 0.1;
+    let scene = Scene::<2>::new("drop")
+        .gravity(Vector::<2>::new(0.0, -9.81))
+        .settings(RunSettings {
+            end_time: 0.01,
+            max_dt: 5e-3,
+            output_interval: Some(0.01),
+            ..Default::default()
+        })
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(1.0, 0.3),
+            },
+            h,
+            Some((Point::<2>::new(-0.01, -0.01), Point::<2>::new(0.01, 0.31))),
+        )
+        .fluid(
+            "drop",
+            Box::new(Newtonian::water()),
+            Geometry::Particles(vec![Point::<2>::new(3.0, 1.0)]),
+            h,
+        );
+    let mut sim = Simulation::new(
+        scene,
+        Box::new(pfem_geometry::Delaunay2::default()),
+        pfem_time::StepParams::default(),
+    )
+    .unwrap();
+    let drop = sim.particles().len() - 1;
+    let fluid_material = sim.particles().material()[drop];
+    assert_ne!(fluid_material, 0, "the block's material is 0");
+    let dir = temp_dir("flying-drop");
+    std::fs::remove_dir_all(&dir).unwrap();
+    let mut out = StandardOutput::new(&dir, true, Vec::new(), true);
+    sim.run(&mut [&mut out]).unwrap();
+    let v = read_vtu(&dir.join("drop_000001.vtu"));
+    let n_simplices = sim.elements().len();
+    assert_eq!(v.n_cells, n_simplices + 1, "one vertex cell");
+    let material = find(&v.cell_data, "material");
+    assert_eq!(material.values.len(), v.n_cells);
+    assert_eq!(material.values[n_simplices], f64::from(fluid_material));
+    let tags = find(&v.point_data, "boundary_tag");
+    assert_eq!(tags.values[drop], 4.0, "isolated");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -41,7 +41,7 @@ pub enum Scheme {
     /// damps the highest frequencies (spectral radius at infinity
     /// `(1 + α_B)/(1 − α_B)`, 0.54 at α_B = −0.3); for violent flows,
     /// where remeshing feeds the undamped trapezoidal rule with
-    /// high-frequency noise (NOTES point 7). The default.
+    /// high-frequency noise (ARCHITECTURE.md, deviation 4). The default.
     #[default]
     Bossak,
     /// Backward Euler: first order, strongly damped; for violent flows.

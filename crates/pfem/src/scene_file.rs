@@ -73,7 +73,7 @@
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`]; `pressure_stabilisation` (factor α ≥ 0, default 0: [`Scene::pressure_stabilisation`]) |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` (m, s, s), `table = [[t, dx, dy], …]` (s, m) or `rotation = { center, axis (3D), rate, amplitude, period, ramp }` (m, –, rad/s, rad, s, s)), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }` (points m; values m/s or Pa), the nearest sample's value) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
-//! | `[contact]` | `stiffness` (Pa), `damping` (dimensionless: the dashpot's time constant in steps, default 0.1), `onset` (the penalty's rounded onset, a fraction of the spacing in `[0, 0.5]`, default 0.01), `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
+//! | `[contact]` | `stiffness` (Pa), `damping` (dimensionless: the dashpot's time constant in steps, default 0.1), `onset` (the penalty's rounded onset, a fraction of the contact distance, half the sum of the two bodies' spacings, in `[0, 0.5]`, default 0.01), `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
 //! | `[[force]]` | a force on a solid in time: `body`, `region = { min, max }` (m, optional: the whole body), and `value = [fx, fy]` (N; N/m in 2D) with an optional `ramp` (s), or `table = [[t, fx, fy], …]` (s, N): [`ForceSpec`] |
@@ -166,7 +166,7 @@ pub struct RunSpec {
 pub enum BodyKind {
     /// A fluid (needs a `newtonian` material).
     Fluid,
-    /// A solid (needs a `hypoelastic` material; a box).
+    /// A solid (needs a `hypoelastic` material; any geometry).
     Solid,
     /// A rigid wall (no material).
     Wall,
