@@ -102,9 +102,11 @@ pub struct StageStats {
     /// solve): count and seconds. `assemble`, `solve` and `update` count
     /// accepted attempts only.
     pub rejected: (u64, f64),
-    /// Pressure updates (eq. 62) done.
+    /// Steps that updated a nodal pressure (eq. 62), as the integrator
+    /// reports (`StepReport::pressure_updates`).
     pub pressure_updates: u64,
-    /// Solid stress updates (eq. 63) done.
+    /// Steps that updated a solid element's stress (eq. 63), as the
+    /// integrator reports (`StepReport::stress_updates`).
     pub stress_updates: u64,
 }
 
@@ -822,11 +824,13 @@ where
         .map_err(RunError::Geometry)?;
         let kind = self.particles.kind();
         let material = self.particles.material();
+        // The material most of the element's fluid nodes have (ties to the
+        // lower index): where two fluids meet, the first fluid node in the
+        // tessellation's vertex order decided, so one element of two water
+        // nodes and one oil node could be oil under one rotation and water
+        // under another (session 42's review).
         self.elements.set_fluid(shape, self.alpha.up, |el| {
-            el.iter()
-                .find(|&&p| kind[p as usize] == ParticleKind::Fluid)
-                .map(|&p| material[p as usize])
-                .unwrap_or(NO_MATERIAL)
+            majority_fluid_material(el, kind, material)
         });
         self.stats.free_surface.0 += 1;
         self.stats.free_surface.1 += ts.elapsed().as_secs_f64();
@@ -1280,10 +1284,11 @@ where
         self.stats.update.1 += rep.update_seconds;
         self.stats.rejected.0 += rep.rejections as u64;
         self.stats.rejected.1 += rep.rejected_seconds;
-        if self.stages.pressure {
+        // What the step did, not what the stages promised.
+        if rep.pressure_updates > 0 {
             self.stats.pressure_updates += 1;
         }
-        if self.stages.solid_stress {
+        if rep.stress_updates > 0 {
             self.stats.stress_updates += 1;
         }
         let tb = Instant::now();
@@ -2256,9 +2261,49 @@ where
     })
 }
 
+/// The material most of a fluid element's fluid nodes have, ties to the
+/// lower index; [`NO_MATERIAL`] with no fluid node. Independent of the
+/// order of `el`.
+fn majority_fluid_material(el: &[u32], kind: &[ParticleKind], material: &[u16]) -> u16 {
+    let fluid = |p: &u32| kind[*p as usize] == ParticleKind::Fluid;
+    let mut best = (0usize, NO_MATERIAL);
+    for p in el.iter().filter(|p| fluid(p)) {
+        let m = material[*p as usize];
+        let count = el
+            .iter()
+            .filter(|q| fluid(q) && material[**q as usize] == m)
+            .count();
+        if count > best.0 || (count == best.0 && m < best.1) {
+            best = (count, m);
+        }
+    }
+    best.1
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A fluid element takes its fluid nodes' majority material, whatever
+    /// their order (session 42: the first fluid node decided, so a
+    /// triangle of two water nodes and one oil node was oil under one of
+    /// its three rotations), ties to the lower index.
+    #[test]
+    fn a_fluid_element_takes_its_nodes_majority_material() {
+        use ParticleKind::{Fluid, Wall};
+        let kind = [Fluid, Fluid, Fluid, Wall];
+        let material = [3u16, 3, 1, NO_MATERIAL];
+        for el in [[0u32, 1, 2], [1, 2, 0], [2, 0, 1]] {
+            assert_eq!(majority_fluid_material(&el, &kind, &material), 3);
+        }
+        for el in [[2u32, 0, 3], [3, 0, 2], [0, 3, 2]] {
+            assert_eq!(majority_fluid_material(&el, &kind, &material), 1);
+        }
+        assert_eq!(
+            majority_fluid_material(&[3, 3, 3], &kind, &material),
+            NO_MATERIAL
+        );
+    }
 
     /// The rigid part keeps a rigid field (translation + rotation) as it is,
     /// keeps the net force and torque of any field, and removes a field

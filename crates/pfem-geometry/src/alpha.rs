@@ -850,6 +850,26 @@ where
     check_tessellation::<D>(delaunay, points.len())?;
     let nv = <Const<D> as Dim>::NV;
     let ns = delaunay.simplices.len() / nv;
+    // No fluid particle (a scene of solids in contact): nothing can be
+    // kept, and the passes below (per simplex, and in 3D the sealed voids'
+    // and wall pockets' searches over every wall-only simplex) would find
+    // nothing (session 42's review).
+    if !kinds.contains(&ParticleKind::Fluid) {
+        out.kept.clear();
+        out.kept.resize(ns, false);
+        out.source.clear();
+        out.candidate_measure = 0.0;
+        out.kept_measure = 0.0;
+        out.sealed = 0;
+        out.closures.clear();
+        out.wall_pockets.clear();
+        out.pocket_weights.clear();
+        out.surface_cuts.clear();
+        out.mesh.nv = nv;
+        out.mesh.simplices.clear();
+        out.mesh.neighbors.clear();
+        return Ok(());
+    }
     let alpha = params.alpha;
     // The sliver test: flat to round-off in 2D, below the element quality
     // in 3D (`AlphaShapeParams::min_quality_3d`).

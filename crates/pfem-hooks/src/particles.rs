@@ -345,13 +345,16 @@ where
                 }
             }
         }
-        let p = ctx.particles_mut();
-        for i in drive {
-            p.constraints_mut().fix(i, v);
-            p.v_mut()[i] = v;
+        // Constraints and velocities only: no particle moves, so the driver
+        // does not measure the fluid volume again at each attempt.
+        for &i in &drive {
+            ctx.constraints_mut().fix(i, v);
+        }
+        for &i in &drive {
+            ctx.v_mut()[i] = v;
         }
         for i in release {
-            p.constraints_mut().mask[i] = 0;
+            ctx.constraints_mut().mask[i] = 0;
         }
         Ok(())
     }

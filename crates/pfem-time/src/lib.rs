@@ -719,6 +719,13 @@ pub struct StepReport {
     /// Wall time spent in the rejected attempts before this one (s): the
     /// three times above are the accepted attempt's only.
     pub rejected_seconds: f64,
+    /// Nodal pressures updated by the accepted attempt (eq. 62, or the
+    /// stabilised increments): the fluid nodes; 0 in a step with no fluid
+    /// element.
+    pub pressure_updates: usize,
+    /// Solid elements whose stress was updated by the accepted attempt
+    /// (eq. 63); 0 in a step with no solid element.
+    pub stress_updates: usize,
 }
 
 /// The Newmark–Picard integrator: owns the assembler, the linear solver
@@ -1371,6 +1378,8 @@ where
                 what: format!("particle {p}'s pressure after `update_pressure`"),
             });
         }
+        rep.stress_updates = new_history.len();
+        rep.pressure_updates = new_pressure.len();
         for (e, h) in new_history {
             history[e] = h;
         }

@@ -64,6 +64,7 @@ pub use motion::PrescribedMotion;
 pub use pfem_scene::motion::{MotionLaw, PiecewiseLinear, Rotation, Sinusoidal};
 pub use volume::{FreeSurfacePressureZero, VolumeCorrection};
 
+use pfem_assembly::Constraints;
 use pfem_constitutive::Material;
 use pfem_core::{Const, Dim, ParticleKind, Vector};
 use pfem_geometry::{AlphaShapeParams, ParticleManagementParams, Tessellation, Tessellator};
@@ -247,6 +248,20 @@ where
     pub fn particles_mut(&mut self) -> &mut Particles<D> {
         self.moved = true;
         self.particles
+    }
+
+    /// The velocity constraints, to change (a wall's prescribed velocity,
+    /// an inlet's drive): unlike [`HookContext::particles_mut`] the driver
+    /// does not measure the fluid volume again after the call, since no
+    /// particle moved.
+    pub fn constraints_mut(&mut self) -> &mut Constraints<D> {
+        self.particles.constraints_mut()
+    }
+
+    /// The velocities, to change (m/s); as [`HookContext::constraints_mut`],
+    /// no particle moves, so the fluid volume is not measured again.
+    pub fn v_mut(&mut self) -> &mut [Vector<D>] {
+        self.particles.v_mut()
     }
 
     /// The elements of the step (the mesh of the current step: after a
