@@ -982,3 +982,45 @@ fn a_run_continued_in_process_keeps_its_outputs_and_goes_past_a_stop() {
     assert_eq!(t.len() as u64, sim.steps() + 1);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A checkpoint's fluid particles are checked as a changed set's when it is
+/// restored (session 42's review): a checkpoint taken right after a fluid
+/// particle of a solid's material was pushed by hand, restored into a
+/// simulation whose last mesh had the same generation, was accepted
+/// (`RunError::InvalidParticle` was skipped) and ran the particle as
+/// solid.
+#[test]
+fn a_restored_checkpoint_s_fluid_particles_are_checked() {
+    let particle = |sim: &Simulation<2>, material: u16| {
+        let p = sim.particles();
+        let i = p.len() - 1;
+        assert_eq!(p.kind()[i], ParticleKind::Fluid);
+        pfem::particles::Particle {
+            x: Point::<2>::new(p.x()[i].x, p.x()[i].y + 0.05),
+            v: p.v()[i],
+            pressure: 0.0,
+            kind: ParticleKind::Fluid,
+            body: p.body()[i],
+            spacing: p.spacing()[i],
+            material,
+        }
+    };
+    let mut a = gate();
+    let solid = a.elements().solid_material()[0];
+    let p = particle(&a, solid);
+    a.particles_mut().push(p).unwrap();
+    let ck = a.checkpoint();
+    let mut b = gate();
+    let water = b.particles().material()[b.particles().len() - 1];
+    let p = particle(&b, water);
+    b.particles_mut().push(p).unwrap();
+    b.step().unwrap();
+    match b.restore(&ck) {
+        Err(RunError::InvalidParticle { why, .. }) => {
+            assert!(why.contains("not a fluid's"), "{why}")
+        }
+        other => panic!("restored: {other:?}"),
+    }
+    // Refused, the simulation is as it was and runs on.
+    b.step().unwrap();
+}

@@ -1144,7 +1144,9 @@ where
                     None => Some((e, true)),
                 }
             })
-            .find_any(|r| r.is_some())
+            // The first bad element, whatever the threads did: the error (and
+            // the rejection cause a checkpoint keeps) is the same every run.
+            .find_first(|r| r.is_some())
             .flatten();
         self.states = states;
         self.unified = unified;

@@ -319,14 +319,17 @@ impl SplitSystem<'_> {
                 t.push(faer::sparse::Triplet::new(i, j, *v));
             }
         }
+        // Every product, zero or not: the matrix's pattern must follow the
+        // patterns of `A_v` and `C` alone, since a solver keeps its symbolic
+        // analysis while the generation does not change (a zero product
+        // left out in one Picard iterate and not in the next gave an entry
+        // outside the analysed pattern: session 42's review).
         for r in 0..self.c_rows() {
             let (s, e) = (self.c_ptr[r], self.c_ptr[r + 1]);
             for p in s..e {
                 for q in s..e {
                     let v = self.c_val[p] * self.c_val[q];
-                    if v != 0.0 {
-                        t.push(faer::sparse::Triplet::new(self.c_idx[p], self.c_idx[q], v));
-                    }
+                    t.push(faer::sparse::Triplet::new(self.c_idx[p], self.c_idx[q], v));
                 }
             }
         }
@@ -1248,6 +1251,44 @@ mod tests {
             }
         }
         SparseColMat::try_new_from_triplets(n, n, &t).unwrap()
+    }
+
+    /// `A_v + CᵀC` has one pattern whatever `C`'s values: an exact zero
+    /// in `C` (by symmetry on a lattice) keeps its products as explicit
+    /// zeros, so a direct solver's analysis kept for the generation fits
+    /// every Picard iterate's matrix.
+    #[test]
+    fn the_eliminated_matrix_s_pattern_does_not_follow_c_s_values() {
+        let a = laplacian(4);
+        let c_ptr = [0usize, 3];
+        let c_idx = [0usize, 1, 3];
+        let pattern = |c_val: &[f64]| {
+            let sys = SplitSystem {
+                a_v: a.as_ref(),
+                c_ptr: &c_ptr,
+                c_idx: &c_idx,
+                c_val,
+                block_size: 1,
+                coords: &[],
+                rhs: &[0.0; 4],
+                stabilisation: None,
+            };
+            let m = sys.to_matrix().unwrap();
+            (
+                m.symbolic().col_ptr().to_vec(),
+                m.symbolic().row_idx().to_vec(),
+                m.val().to_vec(),
+            )
+        };
+        let (p0, r0, v0) = pattern(&[1.0, 0.0, 2.0]);
+        let (p1, r1, v1) = pattern(&[1.0, 0.5, 2.0]);
+        assert_eq!((&p0, &r0), (&p1, &r1));
+        // Entry (1, 3): C's 0.0 × 2.0 stored as an explicit zero in the
+        // first, 0.5 × 2.0 in the second (A_v has none there).
+        let k = (p0[3]..p0[4])
+            .find(|&k| r0[k] == 1)
+            .expect("entry (1, 3) is stored");
+        assert_eq!((v0[k], v1[k]), (0.0, 1.0));
     }
 
     #[test]

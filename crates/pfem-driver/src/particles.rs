@@ -64,11 +64,82 @@ pub enum RemapError {
     },
 }
 
+/// What keeps `p` from being a fluid particle of a simulation with these
+/// materials and bodies (`fixed_body[b]`: body `b` is a wall's or
+/// solid's), if anything: the one check of [`Particles::push`]ed particles
+/// at the next mesh and of `HookContext::insert_fluid`.
+pub(crate) fn fluid_particle_fault<const D: usize>(
+    p: &Particle<D>,
+    materials: &[Box<dyn pfem_constitutive::Material<D>>],
+    body_names: &[String],
+    fixed_body: &[bool],
+) -> Option<String>
+where
+    Const<D>: Dim,
+{
+    if p.kind != ParticleKind::Fluid {
+        return Some("not a fluid particle".into());
+    }
+    let m = p.material as usize;
+    match materials.get(m) {
+        None => return Some(format!("no material {m}")),
+        Some(law) if law.kind() != pfem_constitutive::MaterialKind::Fluid => {
+            return Some(format!("a fluid particle of material {m}, not a fluid's"))
+        }
+        Some(_) => {}
+    }
+    let b = p.body as usize;
+    match fixed_body.get(b) {
+        None => return Some(format!("body {b} past the scene's {}", body_names.len())),
+        Some(true) => {
+            let name = body_names.get(b).map_or("?", String::as_str);
+            return Some(format!(
+                "a fluid particle in body {b} (`{name}`), a wall's or solid's"
+            ));
+        }
+        Some(false) => {}
+    }
+    if !(p.spacing > 0.0 && p.spacing.is_finite()) {
+        return Some(format!("spacing {} m", p.spacing));
+    }
+    if !(p.pressure.is_finite() && p.x.iter().chain(p.v.iter()).all(|c| c.is_finite())) {
+        return Some("a non-finite position, velocity or pressure".into());
+    }
+    None
+}
+
 impl<const D: usize> Particles<D>
 where
     Const<D>: Dim,
 {
-    /// An empty set.
+    /// Particle `i` as a [`Particle`] (its state, kind, body, spacing and
+    /// material).
+    pub fn get(&self, i: usize) -> Particle<D> {
+        Particle {
+            x: self.state.x[i],
+            v: self.state.v[i],
+            pressure: self.state.pressure[i],
+            kind: self.kind[i],
+            body: self.body[i],
+            spacing: self.spacing[i],
+            material: self.material[i],
+        }
+    }
+
+    /// Which bodies are walls' or solids': those of the walls-and-solids
+    /// prefix (a fluid particle may not join one), `n_bodies` long.
+    pub(crate) fn fixed_bodies(&self, n_bodies: usize) -> Vec<bool> {
+        let mut fixed = vec![false; n_bodies];
+        for &b in &self.body[..self.fixed_prefix()] {
+            if let Some(f) = fixed.get_mut(b as usize) {
+                *f = true;
+            }
+        }
+        fixed
+    }
+
+    /// An empty set (to which only fluid particles can be pushed: a set
+    /// with walls and solids comes from a scene, [`Particles::from_cloud`]).
     pub fn new() -> Self {
         Self::default()
     }
@@ -100,7 +171,9 @@ where
         }
     }
 
-    /// Appends a fluid particle, free of constraints, acceleration zero;
+    /// Appends a fluid particle, free of constraints, acceleration zero
+    /// (set it with [`Particles::a_mut`] when it is not: a flying
+    /// particle's is the body force, and the time scheme starts from it);
     /// its initial position is `p.x`. Returns its index.
     ///
     /// Only fluid particles may be appended: walls and solids come from the

@@ -679,7 +679,8 @@ where
     /// F + f_int`, [`Integrator::initialize_acceleration`]; `F` the body
     /// force and the external forces the hooks added, none before the
     /// first step's). `new` does it, and the first step again when a hook
-    /// adds a force before it; call it again after changing
+    /// adds a force or sets another gravity before it (the accelerations
+    /// a program set by hand are then replaced); call it again after changing
     /// velocities, pressures or constraints by hand before the first step.
     pub fn initialize_acceleration(&mut self) -> Result<(), RunError> {
         let (mesh, history) = self.elements.step_mesh();
@@ -1076,60 +1077,22 @@ where
     }
 
     /// The fluid particles of a set changed since the last mesh (by hand,
-    /// [`Particles::push`] through [`Simulation::particles_mut`], or by a
-    /// hook): each
-    /// must name a fluid material and a body of the scene, with a positive
-    /// spacing and finite values. (Walls and solids cannot be appended,
-    /// and a hook's [`HookContext::insert_fluid`] checks its own.)
+    /// [`Particles::push`] through [`Simulation::particles_mut`], by a hook,
+    /// or restored from a checkpoint): each must name a fluid material and
+    /// a fluid body of the scene, with a positive spacing and finite
+    /// values (`fluid_particle_fault`, which [`HookContext::insert_fluid`]
+    /// shares). Walls and solids cannot be appended.
     fn check_fluid_particles(&self) -> Result<(), RunError> {
         let p = &self.particles;
-        let bad = |particle, why: String| Err(RunError::InvalidParticle { particle, why });
-        let fixed = p.fixed_prefix();
-        // The bodies of walls and solids, which a fluid particle may not join.
-        let mut solid_body = vec![false; self.body_names.len()];
-        for &b in &p.body()[..fixed] {
-            if let Some(s) = solid_body.get_mut(b as usize) {
-                *s = true;
-            }
-        }
-        for i in fixed..p.len() {
-            let m = p.material()[i] as usize;
-            match self.materials.get(m) {
-                None => return bad(i, format!("no material {m}")),
-                Some(law) if law.kind() != pfem_constitutive::MaterialKind::Fluid => {
-                    return bad(
-                        i,
-                        format!("a fluid particle of material {m}, not a fluid's"),
-                    )
-                }
-                Some(_) => {}
-            }
-            let b = p.body()[i] as usize;
-            match solid_body.get(b) {
-                None => {
-                    let n = self.body_names.len();
-                    return bad(i, format!("body {b} past the scene's {n}"));
-                }
-                Some(true) => {
-                    let name = &self.body_names[b];
-                    return bad(
-                        i,
-                        format!("a fluid particle in body {b} (`{name}`), a wall's or solid's"),
-                    );
-                }
-                Some(false) => {}
-            }
-            let h = p.spacing()[i];
-            if !(h > 0.0 && h.is_finite()) {
-                return bad(i, format!("spacing {h} m"));
-            }
-            if !(p.pressure()[i].is_finite()
-                && p.x()[i]
-                    .iter()
-                    .chain(p.v()[i].iter())
-                    .all(|c| c.is_finite()))
-            {
-                return bad(i, "a non-finite position, velocity or pressure".into());
+        let fixed_body = p.fixed_bodies(self.body_names.len());
+        for i in p.fixed_prefix()..p.len() {
+            if let Some(why) = crate::particles::fluid_particle_fault(
+                &p.get(i),
+                &self.materials,
+                &self.body_names,
+                &fixed_body,
+            ) {
+                return Err(RunError::InvalidParticle { particle: i, why });
             }
         }
         Ok(())
@@ -1997,6 +1960,7 @@ where
             volume_now: self.volume_now,
             gravity: self.gravity,
             body_force: self.stages.body_force,
+            meshed: self.meshed,
             hooks: self
                 .hooks
                 .iter()
@@ -2028,6 +1992,10 @@ where
             self.elements.set_solid_history(&solid_history);
             self.elements.set_stash(stash);
             self.elements.clear_fluid();
+            // The checkpoint's particles are checked as a changed set's
+            // (`check_fluid_particles`): its generation may equal the one
+            // this simulation last meshed.
+            self.meshed = u64::MAX;
             self.remesh()?;
             self.elements.keep_stash();
             Ok(())
@@ -2048,6 +2016,7 @@ where
                 self.stepper.tess = before.tess;
                 self.stepper.near = before.near;
                 self.stop = before.stop;
+                self.meshed = before.meshed;
                 self.clock = before.clock;
                 self.volume = before.volume;
                 self.volume_now = before.volume_now;
@@ -2086,6 +2055,7 @@ where
     gravity: Option<Vector<D>>,
     body_force: bool,
     hooks: Vec<Vec<u8>>,
+    meshed: u64,
 }
 
 /// The smallest `min_dt` over the end time: `2⁻⁵⁰`, four units in the

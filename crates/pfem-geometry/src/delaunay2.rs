@@ -527,10 +527,18 @@ mod tests {
     /// cloud's extent squared; fewer than three distinct points included).
     fn collinear(p: &[Point<2>]) -> bool {
         let Some(a) = p.first() else { return true };
-        let Some(b) = p.iter().find(|q| *q != a) else {
+        // The line through `a` and the point farthest from it (a near
+        // duplicate of `a` would fit any cloud).
+        let Some(b) = p
+            .iter()
+            .max_by(|q, r| (*q - a).norm().total_cmp(&(*r - a).norm()))
+        else {
             return true;
         };
-        let extent = p.iter().map(|q| (q - a).norm()).fold(0.0, f64::max);
+        let extent = (b - a).norm();
+        if extent == 0.0 {
+            return true;
+        }
         let d = b - a;
         p.iter().all(|c| {
             let e = c - a;

@@ -66,7 +66,7 @@ pub use volume::{FreeSurfacePressureZero, VolumeCorrection};
 
 use pfem_assembly::Constraints;
 use pfem_constitutive::Material;
-use pfem_core::{Const, Dim, ParticleKind, Vector};
+use pfem_core::{Const, Dim, Vector};
 use pfem_geometry::{AlphaShapeParams, ParticleManagementParams, Tessellation, Tessellator};
 
 use crate::checkpoint::{CheckpointError, Decoder, Encoder};
@@ -341,32 +341,13 @@ where
     /// Appends a fluid particle (acceleration zero, no constraint); the mesh
     /// is remade before the next hook runs. Returns its index.
     pub fn insert_fluid(&mut self, p: Particle<D>) -> Result<usize, RunError> {
-        if p.kind != ParticleKind::Fluid {
-            return Err(RunError::Hook {
-                hook: "insert_fluid".into(),
-                why: "only fluid particles may be inserted".into(),
-            });
-        }
-        if self.materials.get(p.material as usize).is_none()
-            || (p.body as usize) >= self.body_names.len()
+        let fixed_body = self.particles.fixed_bodies(self.body_names.len());
+        if let Some(why) =
+            crate::particles::fluid_particle_fault(&p, self.materials, self.body_names, &fixed_body)
         {
             return Err(RunError::Hook {
                 hook: "insert_fluid".into(),
-                why: format!("no material {} or body {}", p.material, p.body),
-            });
-        }
-        if !(p.spacing > 0.0 && p.spacing.is_finite() && p.pressure.is_finite())
-            || p.x.iter().chain(p.v.iter()).any(|c| !c.is_finite())
-        {
-            return Err(RunError::Hook {
-                hook: "insert_fluid".into(),
-                why: "non-finite position, velocity or pressure, or non-positive spacing".into(),
-            });
-        }
-        if self.materials[p.material as usize].kind() != pfem_constitutive::MaterialKind::Fluid {
-            return Err(RunError::Hook {
-                hook: "insert_fluid".into(),
-                why: format!("material {} is not a fluid's", p.material),
+                why,
             });
         }
         self.moved = true;
