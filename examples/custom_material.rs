@@ -159,6 +159,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut output =
         StandardOutput::new(&out, !args.no_vtu, probes, args.quiet).overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
+    pfem::cli::exit_if_stopped(&sim);
     let front = output.probe_series("front_x");
     println!(
         "Bingham mud column: front {:.4} m -> {:.4} m after {} s",

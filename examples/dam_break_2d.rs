@@ -28,6 +28,15 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut case = DamBreak::default();
     case.width = args.number("width", case.width)?;
     case.aspect = args.number("aspect", case.aspect)?;
+    // Martin & Moyce measured the square column (n² = 1) and the column
+    // twice as high as wide (n² = 2): another aspect has no measurement.
+    if case.aspect != 1.0 && case.aspect != 2.0 {
+        return Err(format!(
+            "--aspect {}: Martin & Moyce measured n² = 1 and n² = 2 only",
+            case.aspect
+        )
+        .into());
+    }
     case.tank_length = args.number("tank-length", 10.0 * case.width)?;
     case.spacing = args.spacing.unwrap_or(case.width / 20.0);
     let t_scale = if case.aspect == 1.0 {
@@ -55,6 +64,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
+    pfem::cli::exit_if_stopped(&sim);
 
     // Compare with Martin & Moyce.
     let a = case.width;

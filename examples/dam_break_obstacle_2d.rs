@@ -42,6 +42,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
+    pfem::cli::exit_if_stopped(&sim);
     let ux = output.probe_series("ux_top");
     let fx = output.probe_series("force_x");
     let (t_max, ux_max) =

@@ -70,6 +70,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
+    pfem::cli::exit_if_stopped(&sim);
 
     let ux = output.probe_series("ux_tip");
     let uy = output.probe_series("uy_tip");

@@ -30,6 +30,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
+    pfem::cli::exit_if_stopped(&sim);
     let p = output.probe_series("bottom_pressure");
     let vmax = output
         .probe_series("max_speed")

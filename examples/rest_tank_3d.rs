@@ -23,6 +23,7 @@ fn main() {
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env()?;
     args.reject_unknown(&[])?;
+    args.reject_output_options("rest_tank_3d")?;
     let case = RestTank3d {
         spacing: args.spacing.unwrap_or(0.05),
         end_time: args.end_time.unwrap_or(2.0),
@@ -48,12 +49,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     };
     report(&sim);
     let mut next = 0.05;
-    while sim.time() < end - 1e-12 {
+    // (`--max-wall-time` stops the run through a hook.)
+    while sim.time() < end - 1e-12 && sim.stopped().is_none() {
         sim.step()?;
         if sim.time() >= next - 1e-12 {
             report(&sim);
             next += if next < 0.2 { 0.05 } else { 0.25 };
         }
     }
+    pfem::cli::exit_if_stopped(&sim);
     Ok(())
 }

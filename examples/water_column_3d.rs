@@ -55,6 +55,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
     sim.run(&mut [&mut output])?;
+    pfem::cli::exit_if_stopped(&sim);
     // Surge front at the paper's snapshot times.
     let front = output.probe_series("front_x");
     for t in [0.1, 0.2, 0.3, 0.4] {

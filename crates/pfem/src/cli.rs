@@ -48,6 +48,25 @@ pub fn asks(args: &[String], names: [&str; 2]) -> bool {
     false
 }
 
+/// Ends an example whose run a hook stopped before its end time (the
+/// wall-clock cap, `--max-wall-time`): prints why and where, and exits with
+/// status 2, as `pfem run` does, so that no comparison or figure is made
+/// from a series cut short. The outputs written so far stay (their
+/// `summary.json` says `"stopped"`). Returns when the run was not stopped.
+pub fn exit_if_stopped<const D: usize>(sim: &pfem_driver::Simulation<D>)
+where
+    pfem_core::Const<D>: pfem_core::Dim,
+{
+    if let Some(reason) = sim.stopped() {
+        eprintln!(
+            "the run stopped at t = {} s of {} s ({reason}): no comparison is made",
+            sim.time(),
+            sim.end_time()
+        );
+        std::process::exit(2);
+    }
+}
+
 /// The options that take no value.
 pub const FLAGS: [&str; 6] = [
     "--quiet",
@@ -82,8 +101,33 @@ impl Args {
             std::process::exit(0);
         }
         let parsed = Self::parse(args)?;
+        parsed.reject_positional()?;
         parsed.apply_threads()?;
         Ok(parsed)
+    }
+
+    /// Refuses bare words: an example takes options only, and a bare word
+    /// is a mistake (`-quiet`, or a folder given without `--out`), not
+    /// something to ignore ([`Args::from_env`] asks).
+    pub fn reject_positional(&self) -> Result<(), ArgsError> {
+        match self.positional.first() {
+            Some(word) => Err(ArgsError(format!(
+                "unexpected argument `{word}`: the examples take `--name value` options only (see --help)"
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// Whether the output options (`--out`, `--no-vtu`, `--overwrite`,
+    /// `--quiet`) were given: for the examples that write nothing, which
+    /// refuse them rather than ignore them.
+    pub fn reject_output_options(&self, example: &str) -> Result<(), ArgsError> {
+        if self.out.is_some() || self.no_vtu || self.overwrite || self.quiet {
+            return Err(ArgsError(format!(
+                "{example} prints its figures and writes no files: --out, --no-vtu, --overwrite and --quiet do not apply"
+            )));
+        }
+        Ok(())
     }
 
     /// Sizes rayon's global pool from `--threads N` (no-op without it).
@@ -115,6 +159,13 @@ impl Args {
                             "--{name} needs a value (or is not an option: see --help)"
                         ))
                     })?;
+                    // `--out --no-vtu` is a forgotten value, not a folder
+                    // named `--no-vtu`.
+                    if value.starts_with("--") || FLAGS.contains(&value.as_str()) {
+                        return Err(ArgsError(format!(
+                            "--{name} needs a value, got the option `{value}`"
+                        )));
+                    }
                     match name.as_str() {
                         "out" if value.is_empty() => {
                             return Err(ArgsError(
@@ -553,6 +604,22 @@ mod tests {
         assert!(a.reject_unknown(&[]).is_err());
         assert!(Args::parse(["--spacing", "-1"].map(String::from)).is_err());
         assert!(Args::parse(["--out"].map(String::from)).is_err());
+        // Session 42's review: an option as a value was taken for it (a
+        // folder named `--no-vtu`), and bare words were ignored.
+        for flag in ["--no-vtu", "--quiet", "-q", "--end-time"] {
+            let e = Args::parse(["--out", flag].map(String::from)).unwrap_err();
+            assert!(e.0.contains("needs a value"), "{e}");
+        }
+        let bare = Args::parse(["out/run1", "-quiet"].map(String::from)).unwrap();
+        assert_eq!(bare.positional, ["out/run1", "-quiet"]);
+        assert!(bare
+            .reject_positional()
+            .unwrap_err()
+            .0
+            .contains("`out/run1`"));
+        assert!(a.reject_positional().is_ok());
+        assert!(a.reject_output_options("x").is_err());
+        assert!(Args::default().reject_output_options("x").is_ok());
     }
 
     /// `--solver petsc` builds PETSc's solver with the `petsc` feature and

@@ -339,9 +339,28 @@ where
     if let Some(reason) = sim.stopped() {
         // The run did not reach its end time: say how to go on, and end
         // with a status a script sees.
+        // The command that continues: this one's arguments (a restart
+        // must repeat them) with `--out` and `--restart` set, and without
+        // `--overwrite` (the restart resumes the folder's series).
+        let mut again: Vec<String> = Vec::new();
+        let mut given = std::env::args_os()
+            .skip(1)
+            .map(|a| a.to_string_lossy().into_owned());
+        while let Some(a) = given.next() {
+            if a == "--out" || a == "--restart" {
+                given.next();
+            } else if a != "--overwrite" {
+                again.push(a);
+            }
+        }
+        let when = if reason.contains("at t =") {
+            String::new()
+        } else {
+            format!(" at t = {} s", sim.time())
+        };
         eprintln!(
-            "{reason} at t = {} s; continue with: pfem run FILE --out {} --restart {}",
-            sim.time(),
+            "{reason}{when}; continue with: pfem {} --out {} --restart {}",
+            again.join(" "),
             out.display(),
             output.checkpoint_path().display()
         );
