@@ -366,6 +366,9 @@ where
     /// [`Assembler::particles_renumbered`] was called since the last
     /// [`Assembler::prepare`].
     renumbered: bool,
+    /// The last [`Assembler::prepare`] failed: nothing is assembled until
+    /// one succeeds.
+    failed_prepare: bool,
     c_row: Vec<u32>,
     c_ptr: Vec<usize>,
     c_idx: Vec<usize>,
@@ -692,19 +695,29 @@ where
                 .iter()
                 .all(|&m| (m as usize) < materials.len())
         {
+            self.failed_prepare = false;
             return Ok(());
         }
         // Forget the last mesh first: a failed build must not be reused.
         self.last_mesh.3 = usize::MAX;
+        // The last assembly's element states belong to the last mesh: an
+        // internal force asked before the next assembly is refused
+        // (session 42's review: it returned the old mesh's states on the
+        // new connectivity).
+        self.states.clear();
+        self.unified.clear();
         if let Err(e) = self.prepare_new(n_particles, mesh, materials) {
-            // Nothing half-built may be assembled: an assembly now fits
-            // no input but an empty one (session 35's review: it indexed
-            // the half-built maps).
+            // Nothing half-built may be assembled (session 35's review: it
+            // indexed the half-built maps; session 42's: an empty input
+            // then met the last pattern and panicked): every assembly is
+            // refused until a `prepare` succeeds.
             self.n_particles = 0;
             self.n_elements = 0;
             self.particle_of.clear();
+            self.failed_prepare = true;
             return Err(e);
         }
+        self.failed_prepare = false;
         self.ids_valid = !renumbered;
         self.work.patterns_built += 1;
         let last = &mut self.last_mesh;
@@ -1018,6 +1031,11 @@ where
         &mut self,
         input: &AssemblyInput<'_, D>,
     ) -> Result<AssemblyInfo, AssemblyError> {
+        if self.failed_prepare {
+            return Err(AssemblyError::MeshMismatch {
+                what: "the last prepare failed: prepare a mesh before assembling",
+            });
+        }
         let nv = <Const<D> as Dim>::NV;
         let ne = self.n_elements;
         let n_local = nv * D;

@@ -200,8 +200,8 @@ pub struct BlockSolver {
     /// [`KEPT_FACTOR_ITERATIONS`].
     pub kept_factor_iterations: usize,
     /// The stabilised multigrid path: keep the multigrid set-up across
-    /// solves with the same pattern generation (the Picard iterates of a
-    /// step).
+    /// solves with the same pattern generation within one Picard loop (the
+    /// iterates of an attempt; a retried attempt builds anew).
     pub stabilised_reuse: bool,
     /// The stabilised multigrid path: carry the pressure hierarchy over
     /// to the next pattern (the next step's remeshing) for at most this
@@ -241,7 +241,8 @@ pub struct BlockSolver {
     solve_scratch: SolveScratch,
     /// The last stabilised multigrid solve ran on a carried hierarchy.
     used_carried: bool,
-    /// The Cholesky path's factor was built in the current Picard loop
+    /// The set-up (the Cholesky path's factor, the stabilised path's
+    /// hierarchy) was built in the current Picard loop
     /// ([`LinearSolver::begin_loop`]) and may be kept.
     keepable: bool,
     /// The caller's accuracy ([`LinearSolver::set_accuracy`]): the
@@ -1690,7 +1691,12 @@ impl BlockSolver {
         blocks.refresh(sys, generation);
         let (a, c, ct, l) = (&blocks.a, &blocks.c, &blocks.ct, &blocks.l);
         let (n, m) = (a.nrows, c.nrows);
+        // Kept within one Picard loop only: a retried attempt (the step
+        // halved on the same mesh) has another `Δt`, and `C Â⁻¹ Cᵀ` moves
+        // with it (session 42's review: the failed attempt's hierarchy
+        // served the retry unscaled).
         let keep = self.stabilised_reuse
+            && self.keepable
             && self
                 .setup
                 .as_ref()
@@ -1718,6 +1724,7 @@ impl BlockSolver {
             }
         };
         self.used_carried = setup.age > 0;
+        self.keepable = true;
         let t1 = Instant::now();
         self.stats.setup_seconds += (t1 - t0).as_secs_f64();
         let Prec::Blocks { velocity, schur } = &setup.prec else {
@@ -3040,6 +3047,39 @@ mod tests {
             "{relaxed:?} against {full:?}"
         );
         assert_eq!(again, full);
+    }
+
+    /// The stabilised multigrid set-up serves the later solves of its own
+    /// Picard loop and no other: a retried attempt (a new loop on the same
+    /// mesh, with another `Δt`) builds anew (session 42's review: it kept
+    /// the failed attempt's hierarchy).
+    #[test]
+    fn the_stabilised_set_up_is_kept_within_its_picard_loop_only() {
+        let n: usize = 600;
+        let (ptr, idx, val) = path_graph(n);
+        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
+        let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
+        let (mut c, _) = sample(n / 3, n, 5);
+        c.val.iter_mut().for_each(|v| *v *= 30.0);
+        let mut l = c.matmul(&c.transpose());
+        l.val.iter_mut().for_each(|v| *v *= 1e-3);
+        let offset: Vec<f64> = (0..c.nrows).map(|i| (i as f64 * 0.1).cos()).collect();
+        let coords: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let sys = split(a_v, &c, Some((&l, &offset[..])), &coords, &rhs);
+        let mut solver = BlockSolver {
+            pressure: PressureSolve::Multigrid,
+            ..BlockSolver::default()
+        };
+        let mut x = vec![0.0; n];
+        solver.begin_loop();
+        solver.solve_split(&sys, 1, &mut x).unwrap();
+        solver.solve_split(&sys, 1, &mut x).unwrap();
+        assert_eq!(solver.stats.setups, 1, "kept within the loop");
+        solver.begin_loop();
+        solver.solve_split(&sys, 1, &mut x).unwrap();
+        assert_eq!(solver.stats.setups, 2, "built anew in the next loop");
+        assert_eq!(solver.stats.fallbacks, 0);
     }
 
     /// The Cholesky path runs a later solve of the same pattern on the

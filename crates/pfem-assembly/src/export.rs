@@ -75,8 +75,11 @@ impl MatrixExport {
 
     fn write(&mut self, a: SparseColMatRef<'_, usize, f64>, b: &[f64]) {
         let go = || -> std::io::Result<()> {
-            let mut f =
-                std::io::BufWriter::new(std::fs::File::create(self.stem.with_extension("mtx"))?);
+            // `STEM.mtx` and `STEM_rhs.mtx`, the stem kept whole (a dot in
+            // it is no extension to replace: `sys.t5` wrote `sys.mtx`).
+            let mut matrix = self.stem.clone().into_os_string();
+            matrix.push(".mtx");
+            let mut f = std::io::BufWriter::new(std::fs::File::create(matrix)?);
             write_matrix_market(&mut f, a)?;
             f.flush()?;
             let mut stem = self.stem.clone().into_os_string();
@@ -140,6 +143,7 @@ impl LinearSolver for MatrixExport {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
+        sys.check("matrix export", x)?;
         if self.seen == self.at {
             if sys.stabilisation.is_some() {
                 let (k, b) = crate::block::saddle_system(sys)?;
@@ -158,6 +162,33 @@ impl LinearSolver for MatrixExport {
 mod tests {
     use super::*;
     use faer::sparse::{SparseColMat, Triplet};
+
+    /// The two files are `STEM.mtx` and `STEM_rhs.mtx` with the stem kept
+    /// whole: a stem with a dot (`sys.t5`) wrote `sys.mtx` before session
+    /// 42 (and `sys.t5_rhs.mtx`).
+    #[test]
+    fn a_stem_with_a_dot_names_both_files() {
+        let dir = std::env::temp_dir().join(format!("pfem-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(
+            2,
+            2,
+            &[Triplet::new(0, 0, 2.0), Triplet::new(1, 1, 3.0)],
+        )
+        .unwrap();
+        let mut x = vec![0.0; 2];
+        let mut e = MatrixExport::new(
+            Box::new(crate::DirectSolver::default()),
+            dir.join("sys.t5"),
+            0,
+        );
+        e.solve(a.as_ref(), 0, &[1.0, 1.0], &mut x).unwrap();
+        assert_eq!(e.written(), Ok(true));
+        assert!(dir.join("sys.t5.mtx").is_file());
+        assert!(dir.join("sys.t5_rhs.mtx").is_file());
+        assert!(!dir.join("sys.mtx").exists());
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn a_matrix_reads_back_from_its_matrix_market_text() {

@@ -102,3 +102,65 @@ fn bad_reference_volumes_are_refused() {
         );
     }
 }
+
+/// After a `prepare` that fails, every assembly is refused until one
+/// succeeds, an empty input too (session 42's review: the empty input met
+/// the last pattern and panicked); and the internal force of a newly
+/// prepared mesh is refused until it is assembled (it returned the last
+/// mesh's element states on the new connectivity).
+#[test]
+fn a_failed_or_unassembled_prepare_is_refused_not_misread() {
+    let (mut asm, r) = assemble(&[0.5, 0.5]);
+    r.unwrap();
+    let materials: Vec<Box<dyn Material<2>>> = vec![
+        Box::new(Hypoelastic::new(2500.0, 1e6, 0.3).unwrap()),
+        Box::new(Newtonian::water()),
+    ];
+    let mesh = |elements: &'static [u32], element_material: &'static [u16]| StepMesh {
+        elements,
+        element_material,
+        ..Default::default()
+    };
+    // A particle past the set: refused, and so is an empty assembly.
+    assert!(asm.prepare(5, mesh(&[0, 1, 9], &[1]), &materials).is_err());
+    let dt = 1e-3;
+    let empty = AssemblyInput::<2> {
+        x: &[],
+        x_n: &[],
+        v: &[],
+        v_n: &[],
+        a_n: &[],
+        pressure_n: &[],
+        element_history: &[],
+        materials: &materials,
+        constraints: &Constraints::<2>::free(0),
+        body_force: None,
+        dt,
+        inertia: Inertia {
+            mass_factor: 2.0 / dt,
+            acceleration_factor: 1.0,
+            displacement_weight: 0.5 * dt,
+        },
+        external_force: &[],
+    };
+    assert!(matches!(
+        asm.assemble(&empty),
+        Err(AssemblyError::MeshMismatch { .. })
+    ));
+    // A good mesh of one fluid triangle, prepared and not assembled: no
+    // internal force.
+    asm.prepare(5, mesh(&[3, 2, 4], &[1]), &materials).unwrap();
+    let zeros = vec![Vector::<2>::zeros(); 5];
+    let p = vec![0.0; 5];
+    let input = AssemblyInput::<2> {
+        x: &[Point::<2>::new(0.0, 0.0); 5],
+        v: &zeros,
+        pressure_n: &p,
+        ..empty
+    };
+    let mut f = vec![Vector::<2>::zeros(); 5];
+    assert!(matches!(
+        asm.internal_force(&input, &mut f),
+        Err(AssemblyError::MeshMismatch { .. })
+    ));
+}

@@ -375,6 +375,7 @@ impl LinearSolver for PetscSolver {
         b: &[f64],
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
+        SolveError::check_dimensions(NAME, a.nrows(), a.ncols(), b.len(), x.len())?;
         check_finite(b)?;
         let fail = |detail: String| SolveError::Factorization {
             solver: NAME,
@@ -414,6 +415,9 @@ impl LinearSolver for PetscSolver {
         generation: u64,
         x: &mut [f64],
     ) -> Result<SolveReport, SolveError> {
+        // The sizes and `C`'s structure first, as every solver checks them
+        // (a short `x` panicked in `c_times`).
+        sys.check(NAME, x)?;
         check_finite(sys.rhs)?;
         let n = sys.a_v.nrows();
         let m = sys.c_rows();

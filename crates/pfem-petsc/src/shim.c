@@ -6,6 +6,19 @@
 #include <stdint.h>
 #include <string.h>
 
+/* The values cross as double: a complex or single-precision PETSc would
+ * read them as something else. */
+#if defined(PETSC_USE_COMPLEX) || !defined(PETSC_USE_REAL_DOUBLE)
+#error "pfem's PETSc backend needs a real, double-precision PETSc (PetscScalar = double)"
+#endif
+
+/* The largest PetscInt (its width is PETSc's configuration). */
+#if defined(PETSC_INT_MAX)
+#define PFEM_INT_MAX PETSC_INT_MAX
+#else
+#define PFEM_INT_MAX PETSC_MAX_INT
+#endif
+
 static void message(PetscErrorCode code, const char *what, char *msg, size_t len)
 {
   const char *text = NULL;
@@ -94,6 +107,15 @@ int pfem_petsc_create(int64_t n, int64_t nv, int64_t bs, const int64_t *ptr, con
   int64_t        k, nnz = ptr[n];
 
   *out = NULL;
+  /* Indices past PetscInt's range would be narrowed without a word. */
+  if (n > (int64_t)PFEM_INT_MAX || nnz > (int64_t)PFEM_INT_MAX) {
+    if (msg && len)
+      snprintf(msg, len,
+               "the system (%lld rows, %lld entries) is past PETSc's integer range: "
+               "configure PETSc with --with-64-bit-indices",
+               (long long)n, (long long)nnz);
+    return (int)PETSC_ERR_ARG_OUTOFRANGE;
+  }
   TRY(PetscCalloc1(1, &h), "PetscCalloc1");
   TRY(PetscMalloc1(n + 1, &pi), "PetscMalloc1");
   TRY(PetscMalloc1(nnz > 0 ? nnz : 1, &pj), "PetscMalloc1");
