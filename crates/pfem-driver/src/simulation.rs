@@ -2225,10 +2225,17 @@ fn up_of<const D: usize>(gravity: Option<Vector<D>>) -> Option<[f64; 3]>
 where
     Const<D>: Dim,
 {
-    gravity.filter(|g| g.norm() > 0.0).map(|g| {
-        let u = -g / g.norm();
-        [u[0], u[1], if D == 3 { u[D - 1] } else { 0.0 }]
-    })
+    // Scaled by its largest component first: the norm of a gravity of
+    // 10²⁰⁰ overflows (an `up` of zero, refused by the alpha shape with a
+    // confusing error) and that of 10⁻²⁰⁰ underflows (no `up` at all).
+    gravity
+        .map(|g| (g, g.amax()))
+        .filter(|(_, m)| *m > 0.0 && m.is_finite())
+        .map(|(g, m)| {
+            let g = g / m;
+            let u = -g / g.norm();
+            [u[0], u[1], if D == 3 { u[D - 1] } else { 0.0 }]
+        })
 }
 
 /// The material most of a fluid element's fluid nodes have, ties to the
@@ -2253,6 +2260,18 @@ fn majority_fluid_material(el: &[u32], kind: &[ParticleKind], material: &[u16]) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The direction against gravity whatever its size: 10²⁰⁰ overflowed
+    /// the norm (an `up` of zero) and 10⁻²⁰⁰ underflowed it (no `up`).
+    #[test]
+    fn up_is_against_gravity_at_any_size() {
+        for s in [1e-200, 1.0, 9.81, 1e200] {
+            let up = up_of(Some(Vector::<3>::new(0.0, -3.0 * s, -4.0 * s))).unwrap();
+            assert!((up[1] - 0.6).abs() < 1e-15 && (up[2] - 0.8).abs() < 1e-15, "{s}: {up:?}");
+        }
+        assert_eq!(up_of(Some(Vector::<2>::zeros())), None);
+        assert_eq!(up_of::<2>(None), None);
+    }
 
     /// A fluid element takes its fluid nodes' majority material, whatever
     /// their order (session 42: the first fluid node decided, so a
