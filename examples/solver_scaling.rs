@@ -7,7 +7,7 @@
 //! ```text
 //! cargo run --release --example solver_scaling -- \
 //!     [--case dam2d|column3d|all] [--sizes 20,40,80] [--steps 10] [--warmup 0] \
-//!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] [--end-time T] \
+//!     [--solvers direct,block,amg] [--stabilisation A] [--bulk K] \
 //!     [--scheme S] [--picard-tol X] [--picard-stop change|estimate] \
 //!     [--first-iterate start|predicted] [--picard-forcing F]
 //! ```
@@ -214,7 +214,32 @@ fn run() -> Res<()> {
             .position(|a| a == &format!("--{name}"))
             .and_then(|i| args.get(i + 1).cloned())
     };
-    let steps: u64 = opt("steps").map(|s| s.parse()).transpose()?.unwrap_or(10);
+    // Every `--name` must be one this program reads (a typo such as
+    // `--solver` for `--solvers` ran the defaults without a word).
+    const KNOWN: [&str; 9] = [
+        "steps",
+        "warmup",
+        "stabilisation",
+        "bulk",
+        "export",
+        "one",
+        "case",
+        "solvers",
+        "sizes",
+    ];
+    for a in args.iter().filter(|a| a.starts_with("--")) {
+        let name = &a[2..];
+        if !KNOWN.contains(&name) && !PICARD_OPTIONS.contains(&name) {
+            return Err(format!("unknown option {a} (see the doc comment)").into());
+        }
+    }
+    let steps: u64 = opt("steps")
+        .map(|s| s.parse().map_err(|e| format!("--steps {s}: {e}")))
+        .transpose()?
+        .unwrap_or(10);
+    if steps == 0 {
+        return Err("--steps must be at least 1".into());
+    }
     // Steps run before the timed ones (the first steps from rest reject
     // attempts at every size; a running flow says more).
     let warmup: u64 = opt("warmup").map(|s| s.parse()).transpose()?.unwrap_or(0);
@@ -273,8 +298,11 @@ fn run() -> Res<()> {
     let solvers = opt("solvers").unwrap_or_else(|| "direct,block".into());
     let cases: Vec<&str> = match case.as_str() {
         "all" => vec!["dam2d", "column3d"],
-        c => vec![if c == "dam2d" { "dam2d" } else { "column3d" }],
+        "dam2d" => vec!["dam2d"],
+        "column3d" => vec!["column3d"],
+        other => return Err(format!("--case {other}: all, dam2d or column3d").into()),
     };
+    let mut failed = 0usize;
     let exe = std::env::current_exe()?;
     println!(
         "{:<9} {:>4} {:<7} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>5} {:>8}",
@@ -324,6 +352,7 @@ fn run() -> Res<()> {
                         "{case:<9} {n:>4} {s:<7} failed: {}",
                         String::from_utf8_lossy(&out.stderr).trim()
                     );
+                    failed += 1;
                     continue;
                 };
                 let v: Vec<f64> = line
@@ -347,6 +376,9 @@ fn run() -> Res<()> {
                 pfem::exact::slope(pts)
             );
         }
+    }
+    if failed > 0 {
+        return Err(format!("{failed} of the runs failed (above)").into());
     }
     Ok(())
 }

@@ -2267,7 +2267,10 @@ mod tests {
     fn up_is_against_gravity_at_any_size() {
         for s in [1e-200, 1.0, 9.81, 1e200] {
             let up = up_of(Some(Vector::<3>::new(0.0, -3.0 * s, -4.0 * s))).unwrap();
-            assert!((up[1] - 0.6).abs() < 1e-15 && (up[2] - 0.8).abs() < 1e-15, "{s}: {up:?}");
+            assert!(
+                (up[1] - 0.6).abs() < 1e-15 && (up[2] - 0.8).abs() < 1e-15,
+                "{s}: {up:?}"
+            );
         }
         assert_eq!(up_of(Some(Vector::<2>::zeros())), None);
         assert_eq!(up_of::<2>(None), None);
