@@ -524,13 +524,17 @@ fn run() -> Res<()> {
         match a.as_str() {
             "--out" => out = Some(args.next().ok_or("--out needs a value")?.into()),
             "--quick" => quick = true,
+            "-h" | "--help" => {
+                println!("cargo run --release --example accuracy_cost -- [--out DIR] [--quick]");
+                return Ok(());
+            }
             other => {
                 return Err(format!("unknown argument `{other}` (use --out DIR [--quick])").into())
             }
         }
     }
     let out = out.unwrap_or_else(|| "out/accuracy_cost".into());
-    std::fs::create_dir_all(&out)?;
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     let started = Instant::now();
     let cases = cases(quick)?;
     let total: usize = cases.iter().map(|c| c.points().len()).sum();
