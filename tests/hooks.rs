@@ -670,6 +670,57 @@ fn bad_hook_settings_and_a_set_changed_by_hand_are_handled() {
     );
 }
 
+/// A solid that overlaps a wall driven by a motion law is refused (session
+/// 42's review): its particles on the wall's would have been welded to
+/// the wall and held still (a law moves only the wall's own particles)
+/// while the wall moved through the solid. On a fixed wall the weld
+/// stays.
+#[test]
+fn a_solid_welded_to_a_moving_wall_is_refused() {
+    let h = 0.01;
+    let scene = |motion: WallMotion<2>| {
+        Scene::<2>::new("flap on a paddle")
+            .settings(RunSettings {
+                end_time: 0.01,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall("paddle", boxed(0.0, 0.0, 0.02, 0.3), h, motion)
+            .solid(
+                "flap",
+                Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+                boxed(0.02, 0.1, 0.04, 0.3),
+                h,
+                None,
+            )
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(0.5, 0.0, 0.6, 0.1),
+                h,
+            )
+    };
+    let law = Sinusoidal {
+        amplitude: Vector::<2>::new(0.05, 0.0),
+        period: 1.0,
+        ramp: 1.0,
+    };
+    let err = Simulation::new(
+        scene(WallMotion::Law(std::sync::Arc::new(law))),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("moving wall"), "{err}");
+    assert!(Simulation::new(
+        scene(WallMotion::Fixed),
+        Box::new(Delaunay2::default()),
+        StepParams::default()
+    )
+    .is_ok());
+}
+
 /// A particle of `sim`'s, as a `Particle` to push.
 fn particle_of(sim: &Simulation<2>, i: usize) -> pfem::particles::Particle<2> {
     let p = sim.particles();

@@ -300,6 +300,25 @@ where
                 let mut weld: Option<Vector<D>> = None;
                 if let Some(j) = grid.find(p, tol, particles.x()) {
                     match (b.kind, particles.kind()[j]) {
+                        // A wall driven by a motion law moves only its own
+                        // particles (`PrescribedMotion`): a solid particle
+                        // welded to it would stay where it started while
+                        // the wall moves through the solid (session 42's
+                        // review). Refused.
+                        (ParticleKind::Solid, ParticleKind::Wall)
+                            if laws
+                                .iter()
+                                .any(|(n, _)| *n == body_names[particles.body()[j] as usize]) =>
+                        {
+                            return Err(SceneError::InvalidGeometry {
+                                body: b.name.clone(),
+                                why: format!(
+                                    "particle at {:?} lies on a particle of wall `{}`, which moves by a motion law: a solid cannot be welded to a moving wall (it would stay where it started); leave a spacing between them, or clamp the solid",
+                                    p.as_slice(),
+                                    body_names[particles.body()[j] as usize]
+                                ),
+                            });
+                        }
                         // A solid particle on a wall's replaces it and is
                         // welded to the wall: it moves with the wall.
                         (ParticleKind::Solid, ParticleKind::Wall) if is_replaced.insert(j) => {

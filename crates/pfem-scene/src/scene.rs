@@ -858,7 +858,7 @@ where
                 return Err(SceneError::InvalidGeometry {
                     body: b.name.clone(),
                     why: format!(
-                        "a coordinate of {far:e} m is more than {MAX_COORDINATE_SPACINGS:e} spacings ({:e} m) from the origin, where a double resolves positions only to {:e} m: move the scene nearer the origin",
+                        "a coordinate of {far:e} m is more than {MAX_COORDINATE_SPACINGS:e} spacings ({:e} m) from the origin, where a double resolves positions only to {:e} m: move the scene nearer the origin, or coarsen a spacing this fine",
                         b.spacing,
                         far * f64::EPSILON
                     ),

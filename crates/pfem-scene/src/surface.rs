@@ -14,6 +14,10 @@ use std::path::Path;
 
 use pfem_core::{Const, Dim, Point};
 
+/// Most grid entries the polygon crossing check stores (one per edge and
+/// grid cell its box touches): 5·10⁷, 200 MB.
+const MAX_CROSSING_ENTRIES: usize = 50_000_000;
+
 /// A closed boundary: `vertices` and `facets` of `D` vertex indices each
 /// (segments in 2D, triangles in 3D).
 #[derive(Debug, Clone, PartialEq)]
@@ -150,6 +154,30 @@ where
                 )
             });
         }
+        if D == 3 {
+            // Consistently oriented: each edge is crossed as often one way
+            // as the other. A cube with some faces reversed is closed but
+            // encloses a signed volume near zero, and the memory estimate
+            // (from that volume) let its fill place 10⁸ particles (session
+            // 42's review).
+            let mut net: HashMap<(u32, u32), i64> = HashMap::new();
+            for f in self.facets.chunks_exact(3) {
+                for a in 0..3 {
+                    let (p, q) = (f[a], f[(a + 1) % 3]);
+                    *net.entry((p.min(q), p.max(q))).or_default() += if p < q { 1 } else { -1 };
+                }
+            }
+            if let Some((k, _)) = net
+                .iter()
+                .filter(|(_, c)| **c != 0)
+                .min_by_key(|(k, _)| **k)
+            {
+                return Err(format!(
+                    "the surface's triangles are not consistently oriented: edge ({}, {}) is crossed the same way by two of them (a face reversed?)",
+                    k.0, k.1
+                ));
+            }
+        }
         if D == 2 {
             // A polygon that crosses itself (a bowtie) has no inside to
             // fill: two edges that share no vertex must not meet.
@@ -188,6 +216,24 @@ where
             let (wx, wy) = (size(lo.0, hi.0), size(lo.1, hi.1));
             let cell =
                 |x: f64, w: f64, o: f64| (((x - o) / w).floor().max(0.0) as usize).min(side - 1);
+            // Each edge goes into every cell its box touches: long edges
+            // across the polygon (vertices listed out of order, long
+            // spokes) would fill side² cells each. Counted before anything
+            // is stored, and refused above 5·10⁷ entries (200 MB; a polygon
+            // of 2·10⁵ shuffled vertices would have needed 4·10⁹).
+            let mut entries = 0usize;
+            for e in &edges {
+                let (a, b) = (p(e[0]), p(e[1]));
+                let (i0, i1) = (cell(a.0.min(b.0), wx, lo.0), cell(a.0.max(b.0), wx, lo.0));
+                let (j0, j1) = (cell(a.1.min(b.1), wy, lo.1), cell(a.1.max(b.1), wy, lo.1));
+                entries = entries.saturating_add((i1 - i0 + 1) * (j1 - j0 + 1));
+            }
+            if entries > MAX_CROSSING_ENTRIES {
+                return Err(format!(
+                    "the polygon's {} edges are too long for their number to be checked for crossings ({entries} grid entries, at most {MAX_CROSSING_ENTRIES}): are its vertices in order along the boundary?",
+                    edges.len()
+                ));
+            }
             let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); side * side];
             for (k, e) in edges.iter().enumerate() {
                 let (a, b) = (p(e[0]), p(e[1]));
@@ -227,6 +273,18 @@ where
                     }
                 }
             }
+        }
+        // Last: a boundary that encloses nothing (a polygon back and forth along
+        // a line) would still place particles where its line meets the
+        // lattice (session 42's review).
+        let (lo, hi) = self.bounds();
+        let extent = (0..D).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+        if !(self.enclosed_measure() > 1e-12 * extent.powi(D as i32)) {
+            return Err(format!(
+                "the boundary encloses no {} (its vertices lie on one {})",
+                if D == 2 { "area" } else { "volume" },
+                if D == 2 { "line" } else { "plane" }
+            ));
         }
         Ok(())
     }
@@ -689,6 +747,40 @@ mod tests {
         let mut c = cube(1.0);
         c.vertices[0][0] = f64::NAN;
         assert!(c.check().is_err());
+        // Closed but with faces reversed (session 42's review): its signed
+        // volume is near zero, and the memory estimate made from it let
+        // the fill place 10⁸ particles.
+        let mut c = cube(1.0);
+        for f in c.facets[..12].chunks_exact_mut(3) {
+            f.swap(1, 2);
+        }
+        assert!(c.check().unwrap_err().contains("not consistently oriented"));
+        // Every face reversed is consistent (inside out is still closed).
+        let mut c = cube(1.0);
+        for f in c.facets.chunks_exact_mut(3) {
+            f.swap(1, 2);
+        }
+        c.check().unwrap();
+        // A polygon of many vertices out of order: refused before its
+        // crossing grid is stored (its edges span the whole polygon).
+        let n = 20_000u32;
+        let ring: Vec<Point<2>> = (0..n)
+            .map(|k| {
+                // Every 7 919th vertex of a circle: a star of long chords.
+                let t = 2.0 * std::f64::consts::PI * f64::from((k * 7_919) % n) / f64::from(n);
+                Point::<2>::new(t.cos(), t.sin())
+            })
+            .collect();
+        let why = ClosedSurface::polygon(ring).check().unwrap_err();
+        assert!(why.contains("too long"), "{why}");
+        // Back and forth along a line: no area, refused (it placed the
+        // lattice nodes on the line).
+        let line = ClosedSurface::polygon(vec![
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 1.0),
+            Point::<2>::new(2.0, 2.0),
+        ]);
+        assert!(line.check().unwrap_err().contains("encloses no area"));
     }
 
     #[test]

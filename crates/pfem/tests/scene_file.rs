@@ -595,12 +595,13 @@ fn mistakes_that_used_to_run_are_refused() {
     assert!(why.contains("clamp.min") && why.contains("finite"), "{why}");
     // The clamp the review's block needed holds it.
     assert!(build(&clamped_block("{ min = [0.2, 0.05], max = [0.24, 0.051] }")).is_ok());
-    // A fluid that places no particle: collinear polygon, or a box inside
-    // the floor.
+    // A fluid that places no particle: collinear polygon (refused as
+    // enclosing no area since session 42: a line through lattice nodes
+    // placed particles on it), or a box inside the floor.
     let flat = "material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }\ngeometry.polygon = [[0.0, 0.1], [0.1, 0.1], [0.2, 0.1]]";
     let why = any_error(&puddle("", "end_time = 0.01", flat));
     assert!(
-        why.contains("water") && why.contains("places no particle"),
+        why.contains("water") && why.contains("encloses no area"),
         "{why}"
     );
     let inside = WATER.replace(
