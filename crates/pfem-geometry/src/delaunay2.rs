@@ -535,14 +535,16 @@ mod tests {
         else {
             return true;
         };
+        // In units of the extent: the products of coordinates of 10¹⁵⁵
+        // overflow (two points were then "not collinear").
         let extent = (b - a).norm();
-        if extent == 0.0 {
+        if p.len() < 3 || extent == 0.0 {
             return true;
         }
-        let d = b - a;
+        let d = (b - a) / extent;
         p.iter().all(|c| {
-            let e = c - a;
-            (d.x * e.y - d.y * e.x).abs() <= 1e-9 * extent * extent
+            let e = (c - a) / extent;
+            (d.x * e.y - d.y * e.x).abs() <= 1e-9
         })
     }
 

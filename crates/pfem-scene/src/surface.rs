@@ -279,7 +279,8 @@ where
         // lattice (session 42's review).
         let (lo, hi) = self.bounds();
         let extent = (0..D).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
-        if !(self.enclosed_measure() > 1e-12 * extent.powi(D as i32)) {
+        let measure = self.enclosed_measure();
+        if measure.is_nan() || measure <= 1e-12 * extent.powi(D as i32) {
             return Err(format!(
                 "the boundary encloses no {} (its vertices lie on one {})",
                 if D == 2 { "area" } else { "volume" },
