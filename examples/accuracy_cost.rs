@@ -36,8 +36,8 @@
 //! the presets on every case) and `DIR/<case>.png` (log10 error against
 //! log10 wall time: one curve per knob, the presets, the Pareto front),
 //! `DIR/convergence.png` (log10 error against log10 relative spacing).
-//! The full study (73 runs) took 76 s on 2 cores when its figures were
-//! made (6 December 2026); `--quick` runs 53 smaller ones.
+//! The full study (73 runs) took 74–77 s on 2 cores (6 December 2026);
+//! `--quick` runs 53 smaller ones.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

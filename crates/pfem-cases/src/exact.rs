@@ -62,7 +62,7 @@ fn fluid(density: f64, viscosity: f64, bulk_modulus: f64) -> Result<Newtonian, S
 /// (2.2·10⁷ Pa: 7.49·10⁻³), the volume correction (off: 7.13·10⁻³) and
 /// `p = 0` on the surface (off: 7.50·10⁻³) barely move it, α some (1.15:
 /// 7.44·10⁻³, 1.6: 5.93·10⁻³)). The profile error therefore converges from 4
-/// to 16 cells (order 2.7) and rises at 32. The column's ends are moving
+/// to 16 cells (order 3.1 in the study of 6 December 2026) and rises at 32. The column's ends are moving
 /// contact lines on no-slip plates, where the continuum stress is
 /// singular (Huh & Scriven 1971) and the discrete model regularises it at
 /// the spacing: a force there that changes with `h` is expected, though
@@ -385,8 +385,9 @@ impl CircularCouette {
 /// a second-order time scheme with the step ∝ `h` should give second
 /// order; the no-slip side walls, which hold the velocity at zero where the
 /// mode's vertical velocity is largest, add an `O(h)` part that would show
-/// at fine resolutions (measured: order 2.1 from 10 to 40 cells,
-/// `tests/convergence.rs`).
+/// at fine resolutions (measured: order 2.6 from 10 to 40 cells in the
+/// accuracy study, `docs/accuracy-cost.md`; `tests/convergence.rs`
+/// asserts at least 1.8).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StandingWave {
     /// Tank width (m), default 1.
