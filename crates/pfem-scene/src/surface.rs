@@ -61,18 +61,74 @@ impl ClosedSurface<3> {
         }
         let mut file = std::fs::File::open(path)
             .map_err(|e| format!("cannot open STL file {}: {e}", path.display()))?;
-        let mesh = stl_io::read_stl(&mut file)
-            .map_err(|e| format!("cannot read STL file {}: {e}", path.display()))?;
+        // Binary or ASCII by the file's length, not by its first word: a
+        // binary file's 80-byte header may begin with "solid" (some CAD
+        // programs write it), which `stl_io` reads as text and refuses.
+        let mut head = [0u8; 84];
+        let binary = {
+            use std::io::Read;
+            let n = file.read(&mut head).unwrap_or(0);
+            let count = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
+            let is_text = head[..n.min(5)] == *b"solid";
+            if n == 84 && meta.len() == 84 + 50 * count {
+                true
+            } else if n == 84 && !is_text {
+                return Err(format!(
+                    "STL file {}: binary, its header counts {count} triangles ({} bytes) but the file has {} bytes",
+                    path.display(),
+                    84 + 50 * count,
+                    meta.len()
+                ));
+            } else {
+                false
+            }
+        };
+        let triangles: Vec<[[f32; 3]; 3]> = if binary {
+            use std::io::Read;
+            let mut bytes = Vec::new();
+            file.read_to_end(&mut bytes)
+                .map_err(|e| format!("cannot read STL file {}: {e}", path.display()))?;
+            bytes
+                .chunks_exact(50)
+                .map(|t| {
+                    let f = |k: usize| {
+                        let o = 12 + 4 * k;
+                        f32::from_le_bytes([t[o], t[o + 1], t[o + 2], t[o + 3]])
+                    };
+                    [[f(0), f(1), f(2)], [f(3), f(4), f(5)], [f(6), f(7), f(8)]]
+                })
+                .collect()
+        } else {
+            use std::io::Seek;
+            file.rewind()
+                .map_err(|e| format!("cannot read STL file {}: {e}", path.display()))?;
+            let mesh = stl_io::read_stl(&mut file)
+                .map_err(|e| format!("cannot read STL file {}: {e}", path.display()))?;
+            let mut out = Vec::with_capacity(mesh.faces.len());
+            for f in &mesh.faces {
+                let mut t = [[0f32; 3]; 3];
+                for (a, &vi) in f.vertices.iter().enumerate() {
+                    let v = mesh
+                        .vertices
+                        .get(vi)
+                        .ok_or_else(|| format!("STL file {}: bad vertex index", path.display()))?;
+                    t[a] = [v[0], v[1], v[2]];
+                }
+                out.push(t);
+            }
+            out
+        };
         let mut index: HashMap<[u32; 3], u32> = HashMap::new();
         let mut vertices = Vec::new();
-        let mut facets = Vec::with_capacity(3 * mesh.faces.len());
-        for f in &mesh.faces {
-            for &vi in &f.vertices {
-                let v = mesh
-                    .vertices
-                    .get(vi)
-                    .ok_or_else(|| format!("STL file {}: bad vertex index", path.display()))?;
-                let key = [v[0].to_bits(), v[1].to_bits(), v[2].to_bits()];
+        let mut facets = Vec::with_capacity(3 * triangles.len());
+        for t in &triangles {
+            for v in t {
+                // `+ 0.0` makes −0.0 and +0.0 one vertex.
+                let key = [
+                    (v[0] + 0.0).to_bits(),
+                    (v[1] + 0.0).to_bits(),
+                    (v[2] + 0.0).to_bits(),
+                ];
                 let id = *index.entry(key).or_insert_with(|| {
                     vertices.push(Point::<3>::new(
                         v[0] as f64 * scale + offset[0],
@@ -813,6 +869,53 @@ mod tests {
         assert_eq!(lo, Point::<3>::new(1.0, 0.0, 0.0));
         assert_eq!(hi, Point::<3>::new(2.0, 1.0, 1.0));
         assert!(ClosedSurface::read_stl(Path::new("/nonexistent.stl"), 1.0, [0.0; 3]).is_err());
+    }
+
+    /// Binary STL files as CAD programs write them (session 42's review):
+    /// a header that begins with "solid" (read as text and refused), a
+    /// vertex written −0.0 in one triangle and 0.0 in another (two vertices:
+    /// "not closed"), and a header count that does not match the data
+    /// (read short without a word).
+    #[test]
+    fn binary_stl_files_are_read_by_their_length() {
+        let c = cube(0.5);
+        let binary = |header: &[u8], count: u32, negative_zero: bool| {
+            let mut b = vec![b' '; 80];
+            b[..header.len()].copy_from_slice(header);
+            b.extend_from_slice(&count.to_le_bytes());
+            for (k, f) in c.facets.chunks_exact(3).enumerate() {
+                b.extend_from_slice(&[0u8; 12]);
+                for &v in f {
+                    for x in c.vertices[v as usize].iter() {
+                        let mut x = *x as f32;
+                        if negative_zero && k == 0 && x == 0.0 {
+                            x = -0.0;
+                        }
+                        b.extend_from_slice(&x.to_le_bytes());
+                    }
+                }
+                b.extend_from_slice(&[0u8; 2]);
+            }
+            b
+        };
+        let read = |bytes: Vec<u8>| {
+            let path = std::env::temp_dir().join(format!(
+                "pfem-cube-bin-{}-{}.stl",
+                std::process::id(),
+                bytes.len() ^ bytes[0] as usize
+            ));
+            std::fs::write(&path, bytes).unwrap();
+            let r = ClosedSurface::read_stl(&path, 1.0, [0.0; 3]);
+            std::fs::remove_file(&path).ok();
+            r
+        };
+        for header in [&b"solid exported by a CAD program"[..], b"binary"] {
+            let s = read(binary(header, 12, true)).unwrap();
+            s.check().unwrap();
+            assert_eq!((s.vertices.len(), s.facets.len()), (8, 36));
+        }
+        let why = read(binary(b"binary", 11, false)).unwrap_err();
+        assert!(why.contains("counts 11 triangles"), "{why}");
     }
 
     /// Session 41 (a review of hostile inputs): the crossing check took
