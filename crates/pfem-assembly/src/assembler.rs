@@ -678,10 +678,16 @@ where
         // `vⁿ`, `aⁿ` and `Δt`): decided again at the first assembly of
         // this attempt.
         self.frozen.clear();
-        self.set_cuts(
+        if let Err(e) = self.set_cuts(
             mesh.elements.len() / <Const<D> as Dim>::NV,
             mesh.surface_cuts,
-        )?;
+        ) {
+            // The cut tables are half written: nothing is assembled until
+            // a `prepare` succeeds, and the next builds anew.
+            self.failed_prepare = true;
+            self.last_mesh.3 = usize::MAX;
+            return Err(e);
+        }
         self.ref_vol.clear();
         self.ref_vol.extend_from_slice(mesh.reference_volumes);
         let (ref le, ref lm, ref lc, ln) = self.last_mesh;
@@ -1904,7 +1910,9 @@ where
         // sliver's signed weight is taken at zero when negative (an
         // inverted one): a share is a weight of an average.
         self.mixed_shares.clear();
-        if self.any_mixed {
+        // (Nothing before the mesh's first assembly: the shares read its
+        // element states.)
+        if self.any_mixed && !self.failed_prepare && self.states.len() >= self.n_elements {
             for e in 0..self.n_elements {
                 if !self.elem_fluid[e] {
                     continue;
@@ -2060,7 +2068,10 @@ where
                 what: "the velocities, pressures or forces do not cover the prepared particles",
             });
         }
-        if self.states.len() < self.n_elements || self.unified.len() < self.n_elements {
+        if self.failed_prepare
+            || self.states.len() < self.n_elements
+            || self.unified.len() < self.n_elements
+        {
             return Err(AssemblyError::MeshMismatch {
                 what: "no assembly since the mesh was prepared",
             });

@@ -77,12 +77,17 @@ impl MatrixExport {
         let go = || -> std::io::Result<()> {
             // `STEM.mtx` and `STEM_rhs.mtx`, the stem kept whole (a dot in
             // it is no extension to replace: `sys.t5` wrote `sys.mtx`).
-            let mut matrix = self.stem.clone().into_os_string();
+            // (A stem given with its `.mtx` is taken without it.)
+            let stem = match self.stem.to_str().and_then(|s| s.strip_suffix(".mtx")) {
+                Some(s) => std::path::PathBuf::from(s),
+                None => self.stem.clone(),
+            };
+            let mut matrix = stem.clone().into_os_string();
             matrix.push(".mtx");
             let mut f = std::io::BufWriter::new(std::fs::File::create(matrix)?);
             write_matrix_market(&mut f, a)?;
             f.flush()?;
-            let mut stem = self.stem.clone().into_os_string();
+            let mut stem = stem.into_os_string();
             stem.push("_rhs.mtx");
             let mut f = std::io::BufWriter::new(std::fs::File::create(stem)?);
             write_vector_market(&mut f, b)?;
@@ -187,6 +192,13 @@ mod tests {
         assert!(dir.join("sys.t5.mtx").is_file());
         assert!(dir.join("sys.t5_rhs.mtx").is_file());
         assert!(!dir.join("sys.mtx").exists());
+        let mut e = MatrixExport::new(
+            Box::new(crate::DirectSolver::default()),
+            dir.join("m.mtx"),
+            0,
+        );
+        e.solve(a.as_ref(), 0, &[1.0, 1.0], &mut x).unwrap();
+        assert!(dir.join("m.mtx").is_file() && dir.join("m_rhs.mtx").is_file());
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -147,6 +147,11 @@ fn a_failed_or_unassembled_prepare_is_refused_not_misread() {
         asm.assemble(&empty),
         Err(AssemblyError::MeshMismatch { .. })
     ));
+    // Nor an internal force of nothing (it returned Ok with zero forces).
+    assert!(matches!(
+        asm.internal_force(&empty, &mut []),
+        Err(AssemblyError::MeshMismatch { .. })
+    ));
     // A good mesh of one fluid triangle, prepared and not assembled: no
     // internal force.
     asm.prepare(5, mesh(&[3, 2, 4], &[1]), &materials).unwrap();

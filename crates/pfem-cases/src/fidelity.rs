@@ -50,16 +50,16 @@ pub enum Fidelity {
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
     /// Couette 0.33 % (0.7 s), standing wave 0.65 % (0.06 s), cantilever
     /// static 12.5 % and frequency 6.5 %, dam break (a/20) 2.2 % against
-    /// a/45 and 1.8 % against the experiment; about 2.3 s together.
+    /// a/45 and 1.8 % against the experiment; about 2.2 s together.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
     /// Couette 0.19 % (1.0 s), standing wave 0.27 % (0.2 s), cantilever
     /// static 6.5 % and frequency 3.1 %, dam break (a/29) 1.4 % against
-    /// a/45 and 1.1 % against the experiment; about 6.5 s together: about
+    /// a/45 and 1.1 % against the experiment; about 6.3 s together: about
     /// 3.5× Standard's time on the dam break for 0.65 of its difference to
-    /// a/45 (a biased measure, `docs/accuracy-cost.md`: about 0.84 of
-    /// Standard's error with the order its points also fit).
+    /// a/45 (a biased measure, `docs/accuracy-cost.md`: 0.74 to 0.86 of
+    /// Standard's error with the orders its four points also fit).
     Fine,
 }
 

@@ -64,21 +64,33 @@ impl ClosedSurface<3> {
         // Binary or ASCII by the file's length, not by its first word: a
         // binary file's 80-byte header may begin with "solid" (some CAD
         // programs write it), which `stl_io` reads as text and refuses.
-        let mut head = [0u8; 84];
         let binary = {
             use std::io::Read;
-            let n = file.read(&mut head).unwrap_or(0);
-            let count = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
-            let is_text = head[..n.min(5)] == *b"solid";
-            if n == 84 && meta.len() == 84 + 50 * count {
-                true
-            } else if n == 84 && !is_text {
-                return Err(format!(
-                    "STL file {}: binary, its header counts {count} triangles ({} bytes) but the file has {} bytes",
-                    path.display(),
-                    84 + 50 * count,
-                    meta.len()
-                ));
+            let mut head = Vec::with_capacity(84);
+            (&mut file)
+                .take(84)
+                .read_to_end(&mut head)
+                .map_err(|e| format!("cannot read STL file {}: {e}", path.display()))?;
+            let is_text = head
+                .iter()
+                .skip_while(|b| b.is_ascii_whitespace())
+                .take(5)
+                .map(u8::to_ascii_lowercase)
+                .eq(b"solid".iter().copied());
+            if head.len() == 84 {
+                let count = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
+                if meta.len() == 84 + 50 * count {
+                    true
+                } else if !is_text {
+                    return Err(format!(
+                        "STL file {}: not text (it does not begin with `solid`), and not binary either: its header counts {count} triangles ({} bytes) but the file has {} bytes",
+                        path.display(),
+                        84 + 50 * count,
+                        meta.len()
+                    ));
+                } else {
+                    false
+                }
             } else {
                 false
             }
@@ -210,6 +222,24 @@ where
                 )
             });
         }
+        if D == 2 {
+            // Consistently oriented (a polygon built by hand): each vertex
+            // starts as many segments as it ends.
+            let mut net: HashMap<u32, i64> = HashMap::new();
+            for f in self.facets.chunks_exact(2) {
+                *net.entry(f[0]).or_default() += 1;
+                *net.entry(f[1]).or_default() -= 1;
+            }
+            if let Some((v, _)) = net
+                .iter()
+                .filter(|(_, c)| **c != 0)
+                .min_by_key(|(v, _)| **v)
+            {
+                return Err(format!(
+                    "the polygon's segments are not consistently oriented at vertex {v}"
+                ));
+            }
+        }
         if D == 3 {
             // Consistently oriented: each edge is crossed as often one way
             // as the other. A cube with some faces reversed is closed but
@@ -335,12 +365,12 @@ where
         // lattice (session 42's review).
         let (lo, hi) = self.bounds();
         let extent = (0..D).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
-        let measure = self.enclosed_measure();
-        if measure.is_nan() || measure <= 1e-12 * extent.powi(D as i32) {
+        // (As a length against the extent: no power of a far coordinate.)
+        let size = self.enclosed_measure().powf(1.0 / D as f64);
+        if size.is_nan() || size <= 1e-6 * extent {
             return Err(format!(
-                "the boundary encloses no {} (its vertices lie on one {})",
+                "the boundary encloses no {} (it is flat)",
                 if D == 2 { "area" } else { "volume" },
-                if D == 2 { "line" } else { "plane" }
             ));
         }
         Ok(())
@@ -349,18 +379,47 @@ where
     /// The volume (area in 2D) enclosed, from the divergence theorem
     /// (positive whatever the orientation).
     pub fn enclosed_measure(&self) -> f64 {
-        let mut s = 0.0;
+        // Per connected part (facets joined through shared vertices), each
+        // part's own measure taken positive: a part reversed as a whole (a
+        // mirrored copy whose winding was not flipped) balances at every
+        // edge and would cancel another's volume in a plain sum, and the
+        // memory estimate is made from this measure (session 42's review).
+        // About the box's corner, so that far coordinates do not cancel.
+        let n = self.vertices.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn root(parent: &mut [u32], mut i: u32) -> u32 {
+            while parent[i as usize] != i {
+                parent[i as usize] = parent[parent[i as usize] as usize];
+                i = parent[i as usize];
+            }
+            i
+        }
         for f in self.facets.chunks_exact(D) {
-            let v = |a: usize| self.vertices[f[a] as usize];
-            s += if D == 2 {
+            if f.iter().any(|&v| v as usize >= n) {
+                continue;
+            }
+            for &v in &f[1..] {
+                let (a, b) = (root(&mut parent, f[0]), root(&mut parent, v));
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+        let (o, _) = self.bounds();
+        let mut part: HashMap<u32, f64> = HashMap::new();
+        for f in self.facets.chunks_exact(D) {
+            if f.iter().any(|&v| v as usize >= n) {
+                continue;
+            }
+            let v = |a: usize| self.vertices[f[a] as usize] - o;
+            let s = if D == 2 {
                 v(0)[0] * v(1)[1] - v(1)[0] * v(0)[1]
             } else {
                 let (a, b, c) = (v(0), v(1), v(2));
                 a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
                     + a[2] * (b[0] * c[1] - b[1] * c[0])
             };
+            *part.entry(root(&mut parent, f[0])).or_default() += s;
         }
-        s.abs() / if D == 2 { 2.0 } else { 6.0 }
+        part.values().map(|s| s.abs()).sum::<f64>() / if D == 2 { 2.0 } else { 6.0 }
     }
 
     /// Lattice lines (along x) across the bounding box at spacing `h`:
@@ -812,6 +871,21 @@ mod tests {
             f.swap(1, 2);
         }
         assert!(c.check().unwrap_err().contains("not consistently oriented"));
+        // Two cubes, one reversed as a whole: each is consistent, and the
+        // measure is the sum of both (it cancelled to zero).
+        let mut two = cube(1.0);
+        let mut other = cube(1.0);
+        for v in &mut other.vertices {
+            v[0] += 3.0;
+        }
+        for f in other.facets.chunks_exact_mut(3) {
+            f.swap(1, 2);
+        }
+        two.facets
+            .extend(other.facets.iter().map(|&i| i + two.vertices.len() as u32));
+        two.vertices.extend(other.vertices);
+        two.check().unwrap();
+        assert!((two.enclosed_measure() - 2.0).abs() < 1e-12);
         // Every face reversed is consistent (inside out is still closed).
         let mut c = cube(1.0);
         for f in c.facets.chunks_exact_mut(3) {
@@ -838,6 +912,15 @@ mod tests {
             Point::<2>::new(2.0, 2.0),
         ]);
         assert!(line.check().unwrap_err().contains("encloses no area"));
+        // A polygon built by hand with one segment reversed.
+        let mut p = ClosedSurface::polygon(vec![
+            Point::<2>::new(0.0, 0.0),
+            Point::<2>::new(1.0, 0.0),
+            Point::<2>::new(1.0, 1.0),
+            Point::<2>::new(0.0, 1.0),
+        ]);
+        p.facets.swap(2, 3);
+        assert!(p.check().unwrap_err().contains("not consistently oriented"));
     }
 
     #[test]
@@ -916,6 +999,8 @@ mod tests {
         }
         let why = read(binary(b"binary", 11, false)).unwrap_err();
         assert!(why.contains("counts 11 triangles"), "{why}");
+        // Cut short of its 84-byte header: refused, not a panic.
+        assert!(read(binary(b"binary", 12, false)[..40].to_vec()).is_err());
     }
 
     /// Session 41 (a review of hostile inputs): the crossing check took

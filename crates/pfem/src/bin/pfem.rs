@@ -358,11 +358,24 @@ where
         } else {
             format!(" at t = {} s", sim.time())
         };
+        // Each word quoted for a POSIX shell where it needs it (a path
+        // with a space).
+        let quote = |w: &str| {
+            if !w.is_empty()
+                && w.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "_-./:=+,@%".contains(c))
+            {
+                w.to_string()
+            } else {
+                format!("'{}'", w.replace('\'', r"'\''"))
+            }
+        };
+        let words: Vec<String> = again.iter().map(|w| quote(w)).collect();
         eprintln!(
             "{reason}{when}; continue with: pfem {} --out {} --restart {}",
-            again.join(" "),
-            out.display(),
-            output.checkpoint_path().display()
+            words.join(" "),
+            quote(&out.to_string_lossy()),
+            quote(&output.checkpoint_path().to_string_lossy())
         );
         if reason == pfem::hooks::Interrupt::REASON {
             return Err(INTERRUPTED.into());
