@@ -927,6 +927,15 @@ where
             }
         });
         self.generation += 1;
+        // Block positions and patch slots are stored as `u32` (half the
+        // memory of the element tables): past 2³² they would wrap into
+        // other entries without a word (about 6·10⁷ nodes in 3D with the
+        // unsplit pattern). Refused instead (session 42's review).
+        if self.pattern.adj_idx.len() >= NONE as usize || self.patch_nodes.len() >= NONE as usize {
+            return Err(AssemblyError::MeshMismatch {
+                what: "the system has 2³² node-pair blocks or more, past what the assembly's 32-bit tables index",
+            });
+        }
         // Block positions.
         self.elem_blocks.clear();
         self.elem_slots.clear();

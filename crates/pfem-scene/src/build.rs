@@ -237,6 +237,20 @@ where
         // Wall particles replaced by a solid's (removed after placement).
         let mut replaced: Vec<usize> = Vec::new();
         let mut is_replaced = std::collections::HashSet::new();
+        // The walls that are boxes, for the fluid-inside-a-wall check
+        // after placement: (body, interior shrunk by half its spacing).
+        let wall_boxes: Vec<(usize, Point<D>, Point<D>)> = bodies
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| b.kind == ParticleKind::Wall)
+            .filter_map(|(i, b)| match &b.geometry {
+                Geometry::Box { min, max } => {
+                    let m = 0.5 * b.spacing;
+                    Some((i, min.map(|v| v + m), max.map(|v| v - m)))
+                }
+                _ => None,
+            })
+            .collect();
         let mut bodies: Vec<Option<crate::scene::Body<D>>> = bodies.into_iter().map(Some).collect();
         let cell = bodies
             .iter()
@@ -490,6 +504,28 @@ where
         let n = particles.len();
         for (i, vel) in fixed {
             particles.fixed[i] = Some(vel);
+        }
+        // A fluid particle inside a wall's box (deeper than half the wall's
+        // spacing): only boxes against boxes are refused before placement,
+        // and placement drops a fluid particle only on another particle, so
+        // a polygon, ball or STL fluid drawn into a wall kept the particles
+        // between the wall's lattice rows (session 42's review).
+        if !wall_boxes.is_empty() {
+            for i in 0..n {
+                if particles.kind()[i] != ParticleKind::Fluid {
+                    continue;
+                }
+                let x = particles.x()[i];
+                if let Some((w, _, _)) = wall_boxes
+                    .iter()
+                    .find(|(_, lo, hi)| (0..D).all(|k| x[k] > lo[k] && x[k] < hi[k]))
+                {
+                    return Err(SceneError::Overlap {
+                        first: body_names[*w].clone(),
+                        second: body_names[particles.body()[i] as usize].clone(),
+                    });
+                }
+            }
         }
         // A solid under gravity needs a clamp, a weld, a fluid to rest in,
         // or something to rest on through contact (a wall, another solid).

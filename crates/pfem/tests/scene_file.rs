@@ -877,3 +877,38 @@ geometry.box = {{ min = [1.0, 0.0], max = [1.1, 0.1] }}
         assert!(err.contains(why), "{bad}: {err}");
     }
 }
+
+/// A fluid drawn into a wall (session 42's review): only a box against a
+/// box was refused, and placement drops a fluid particle only on another
+/// particle, so a polygon of water reaching into a thick floor kept the
+/// particles between the floor's rows, inside the wall.
+#[test]
+fn a_fluid_polygon_drawn_into_a_wall_is_refused() {
+    let scene = |bottom: f64| {
+        format!(
+            r#"name = "into the floor"
+dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.025
+
+[run]
+end_time = 0.01
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = {{ min = [-0.1, -0.1], max = [0.3, 0.0] }}
+
+[[body]]
+name = "water"
+kind = "fluid"
+material.newtonian = {{ density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }}
+geometry.polygon = [[0.0, {bottom}], [0.2, {bottom}], [0.2, 0.2], [0.0, 0.2]]
+"#
+        )
+    };
+    let why = any_error(&scene(-0.06));
+    assert!(why.contains("floor") && why.contains("water"), "{why}");
+    // Resting on the floor's top row: accepted.
+    assert!(build(&scene(0.025)).is_ok());
+}
