@@ -992,18 +992,12 @@ fn a_run_continued_in_process_keeps_its_outputs_and_goes_past_a_stop() {
 #[test]
 fn a_restored_checkpoint_s_fluid_particles_are_checked() {
     let particle = |sim: &Simulation<2>, material: u16| {
-        let p = sim.particles();
-        let i = p.len() - 1;
-        assert_eq!(p.kind()[i], ParticleKind::Fluid);
-        pfem::particles::Particle {
-            x: Point::<2>::new(p.x()[i].x, p.x()[i].y + 0.05),
-            v: p.v()[i],
-            pressure: 0.0,
-            kind: ParticleKind::Fluid,
-            body: p.body()[i],
-            spacing: p.spacing()[i],
-            material,
-        }
+        let mut p = sim.particles().get(sim.particles().len() - 1);
+        assert_eq!(p.kind, ParticleKind::Fluid);
+        p.x.y += 0.05;
+        p.pressure = 0.0;
+        p.material = material;
+        p
     };
     let mut a = gate();
     let solid = a.elements().solid_material()[0];

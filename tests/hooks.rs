@@ -721,20 +721,6 @@ fn a_solid_welded_to_a_moving_wall_is_refused() {
     .is_ok());
 }
 
-/// A particle of `sim`'s, as a `Particle` to push.
-fn particle_of(sim: &Simulation<2>, i: usize) -> pfem::particles::Particle<2> {
-    let p = sim.particles();
-    pfem::particles::Particle {
-        x: p.x()[i],
-        v: p.v()[i],
-        pressure: p.pressure()[i],
-        kind: p.kind()[i],
-        body: p.body()[i],
-        spacing: p.spacing()[i],
-        material: p.material()[i],
-    }
-}
-
 /// Particles pushed by hand or by a hook (session 42; until then
 /// `Particles::push` took anything): a wall or solid is refused at the push
 /// (walls and solids come first and keep their indices), and a fluid
@@ -751,7 +737,7 @@ fn particles_pushed_by_hand_are_checked() {
     for kind in [ParticleKind::Wall, ParticleKind::Solid] {
         let mut sim = sim2(small_tank("pushed wall"), StepParams::default());
         let n = sim.particles().len();
-        let mut p = particle_of(&sim, n - 1);
+        let mut p = sim.particles().get(n - 1);
         p.x = Point::<2>::new(0.35, 0.0);
         p.kind = kind;
         assert!(matches!(
@@ -774,7 +760,7 @@ fn particles_pushed_by_hand_are_checked() {
     for (spoil, says) in cases {
         let mut sim = sim2(small_tank("pushed fluid"), StepParams::default());
         let n = sim.particles().len();
-        let mut p = particle_of(&sim, n - 1);
+        let mut p = sim.particles().get(n - 1);
         p.x = above;
         spoil(&mut p);
         assert_eq!(sim.particles_mut().push(p).unwrap(), n);
@@ -789,7 +775,7 @@ fn particles_pushed_by_hand_are_checked() {
     // The same through a hook, after the mesh of its step is made.
     let mut sim = sim2(small_tank("pushed by a hook"), StepParams::default());
     let n = sim.particles().len();
-    let mut bad = particle_of(&sim, n - 1);
+    let mut bad = sim.particles().get(n - 1);
     bad.x = above;
     bad.body = 99;
     sim.add_hook(Box::new(FnHook::new("push").after_remesh(
@@ -814,7 +800,7 @@ fn particles_pushed_by_hand_are_checked() {
         StepParams::default(),
     );
     let n = sim.particles().len();
-    let mut p = particle_of(&sim, n - 1);
+    let mut p = sim.particles().get(n - 1);
     p.x = Point::<2>::new(0.05, 0.5);
     sim.particles_mut().push(p).unwrap();
     sim.particles_mut().a_mut()[n] = Vector::<2>::new(0.0, -G);

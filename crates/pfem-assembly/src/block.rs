@@ -3003,26 +3003,61 @@ mod tests {
         (ptr, idx, val)
     }
 
+    /// A stabilised split system on `n` velocity dofs: a mass-dominated
+    /// velocity block (a path graph), `C` on `n/3` pressure rows and a
+    /// stabilisation Laplacian `L̃ = ε C Cᵀ`, owned.
+    struct StabilisedPath {
+        n: usize,
+        a: (Vec<usize>, Vec<usize>, Vec<f64>),
+        c: Csr,
+        l: Csr,
+        offset: Vec<f64>,
+        coords: Vec<f64>,
+        rhs: Vec<f64>,
+    }
+
+    impl StabilisedPath {
+        fn new(n: usize) -> Self {
+            let (mut c, _) = sample(n / 3, n, 5);
+            c.val.iter_mut().for_each(|v| *v *= 30.0);
+            let mut l = c.matmul(&c.transpose());
+            l.val.iter_mut().for_each(|v| *v *= 1e-3);
+            Self {
+                n,
+                a: path_graph(n),
+                offset: (0..c.nrows).map(|i| (i as f64 * 0.1).cos()).collect(),
+                coords: (0..n).map(|i| i as f64).collect(),
+                rhs: (0..n).map(|i| (i as f64 * 0.37).sin()).collect(),
+                c,
+                l,
+            }
+        }
+
+        fn sys(&self) -> SplitSystem<'_> {
+            let (ptr, idx, val) = &self.a;
+            let sym =
+                faer::sparse::SymbolicSparseColMatRef::new_checked(self.n, self.n, ptr, None, idx);
+            let a_v = faer::sparse::SparseColMatRef::new(sym, val);
+            split(
+                a_v,
+                &self.c,
+                Some((&self.l, &self.offset[..])),
+                &self.coords,
+                &self.rhs,
+            )
+        }
+    }
+
     /// The caller's accuracy ([`LinearSolver::set_accuracy`]): a solve
     /// asked for less stops earlier, at a residual within what it was
     /// asked, and is accepted although that is above the residual limit;
     /// asked for nothing, it goes back to its own target.
     #[test]
     fn a_solve_asked_for_less_stops_earlier() {
-        // A mass-dominated velocity block (a path graph), `C` and a
-        // stabilisation Laplacian `L̃ = ε C Cᵀ` on 400 pressure rows.
+        // 400 pressure rows.
         let n: usize = 1200;
-        let (ptr, idx, val) = path_graph(n);
-        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
-        let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
-        let (mut c, _) = sample(n / 3, n, 5);
-        c.val.iter_mut().for_each(|v| *v *= 30.0);
-        let mut l = c.matmul(&c.transpose());
-        l.val.iter_mut().for_each(|v| *v *= 1e-3);
-        let offset: Vec<f64> = (0..c.nrows).map(|i| (i as f64 * 0.1).cos()).collect();
-        let coords: Vec<f64> = (0..n).map(|i| i as f64).collect();
-        let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
-        let sys = split(a_v, &c, Some((&l, &offset[..])), &coords, &rhs);
+        let path = StabilisedPath::new(n);
+        let sys = path.sys();
         let mut solver = BlockSolver {
             pressure: PressureSolve::Multigrid,
             ..BlockSolver::default()
@@ -3056,17 +3091,8 @@ mod tests {
     #[test]
     fn the_stabilised_set_up_is_kept_within_its_picard_loop_only() {
         let n: usize = 600;
-        let (ptr, idx, val) = path_graph(n);
-        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &idx);
-        let a_v = faer::sparse::SparseColMatRef::new(sym, &val);
-        let (mut c, _) = sample(n / 3, n, 5);
-        c.val.iter_mut().for_each(|v| *v *= 30.0);
-        let mut l = c.matmul(&c.transpose());
-        l.val.iter_mut().for_each(|v| *v *= 1e-3);
-        let offset: Vec<f64> = (0..c.nrows).map(|i| (i as f64 * 0.1).cos()).collect();
-        let coords: Vec<f64> = (0..n).map(|i| i as f64).collect();
-        let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
-        let sys = split(a_v, &c, Some((&l, &offset[..])), &coords, &rhs);
+        let path = StabilisedPath::new(n);
+        let sys = path.sys();
         let mut solver = BlockSolver {
             pressure: PressureSolve::Multigrid,
             ..BlockSolver::default()

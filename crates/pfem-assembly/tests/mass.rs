@@ -11,6 +11,15 @@ use pfem_assembly::{
 use pfem_constitutive::{History, Hypoelastic, Material, Newtonian};
 use pfem_core::{Point, Vector};
 
+/// The trapezoidal rule's inertia weights for a step `dt`.
+fn trapezoidal(dt: f64) -> Inertia {
+    Inertia {
+        mass_factor: 2.0 / dt,
+        acceleration_factor: 1.0,
+        displacement_weight: 0.5 * dt,
+    }
+}
+
 /// Two solid triangles (the unit square, material 0) and a fluid one
 /// above them (material 1), stretched by 10 % along x at `tⁿ`: the
 /// solid's area is 1.1 against 1 at the start.
@@ -59,11 +68,7 @@ fn assemble(reference_volumes: &[f64]) -> (Assembler<2>, Result<(), AssemblyErro
             constraints: &Constraints::<2>::free(n),
             body_force: None,
             dt,
-            inertia: Inertia {
-                mass_factor: 2.0 / dt,
-                acceleration_factor: 1.0,
-                displacement_weight: 0.5 * dt,
-            },
+            inertia: trapezoidal(dt),
             external_force: &[],
         })
         .map(|_| ());
@@ -136,11 +141,7 @@ fn a_failed_or_unassembled_prepare_is_refused_not_misread() {
         constraints: &Constraints::<2>::free(0),
         body_force: None,
         dt,
-        inertia: Inertia {
-            mass_factor: 2.0 / dt,
-            acceleration_factor: 1.0,
-            displacement_weight: 0.5 * dt,
-        },
+        inertia: trapezoidal(dt),
         external_force: &[],
     };
     assert!(matches!(

@@ -364,6 +364,9 @@ where
     elements: Elements<D>,
     materials: Vec<Box<dyn Material<D>>>,
     body_names: Vec<String>,
+    /// Which bodies are walls' or solids' (a fluid particle may not join
+    /// one): fixed for the run, since walls and solids never come or go.
+    fixed_body: Vec<bool>,
     hooks: Vec<Box<dyn Hook<D>>>,
     /// External forces the hooks added for the coming attempt (N; empty
     /// for none): `HookContext::add_force`.
@@ -614,12 +617,14 @@ where
             options.close_sealed_voids,
             options.count_wall_pockets,
         );
+        let fixed_body = particles.fixed_bodies(body_names.len());
         let mut sim = Self {
             name,
             particles,
             elements,
             materials,
             body_names,
+            fixed_body,
             hooks,
             external_force: Vec::new(),
             started: 0,
@@ -929,6 +934,7 @@ where
                 elements: &self.elements,
                 materials: &self.materials,
                 body_names: &self.body_names,
+                fixed_body: &self.fixed_body,
                 gravity: &mut self.gravity,
                 stop: &mut self.stop,
                 external_force: &mut self.external_force,
@@ -1084,13 +1090,12 @@ where
     /// shares). Walls and solids cannot be appended.
     fn check_fluid_particles(&self) -> Result<(), RunError> {
         let p = &self.particles;
-        let fixed_body = p.fixed_bodies(self.body_names.len());
         for i in p.fixed_prefix()..p.len() {
             if let Some(why) = crate::particles::fluid_particle_fault(
                 &p.get(i),
                 &self.materials,
                 &self.body_names,
-                &fixed_body,
+                &self.fixed_body,
             ) {
                 return Err(RunError::InvalidParticle { particle: i, why });
             }

@@ -564,38 +564,54 @@ fn bad_settings_are_refused_with_the_right_message() {
     s.settings.alpha = 1.0;
     assert!(build(s).is_ok());
 
+    /// Water with another density or named internal variables: the
+    /// fluids the two checks below must refuse.
     #[derive(Debug)]
-    struct Negative(Newtonian);
-    impl Material<2> for Negative {
+    struct Altered {
+        water: Newtonian,
+        density: f64,
+        internal: &'static [&'static str],
+    }
+    impl Material<2> for Altered {
         fn name(&self) -> &str {
-            "negative"
+            "altered water"
         }
         fn kind(&self) -> MaterialKind {
             MaterialKind::Fluid
         }
         fn density(&self) -> f64 {
-            -1000.0
+            self.density
         }
         fn wave_speed(&self) -> f64 {
-            <Newtonian as Material<2>>::wave_speed(&self.0)
+            <Newtonian as Material<2>>::wave_speed(&self.water)
+        }
+        fn internal_variables(&self) -> &[&str] {
+            self.internal
         }
         fn unified(
             &self,
             kin: &pfem::constitutive::Kinematics<2>,
             h: &pfem::constitutive::History<2>,
         ) -> pfem::constitutive::Unified<2> {
-            self.0.unified(kin, h)
+            self.water.unified(kin, h)
         }
         fn update_history(
             &self,
             kin: &pfem::constitutive::Kinematics<2>,
             h: &mut pfem::constitutive::History<2>,
         ) {
-            self.0.update_history(kin, h)
+            self.water.update_history(kin, h)
         }
     }
+    let altered = |density, internal| {
+        Box::new(Altered {
+            water: Newtonian::water(),
+            density,
+            internal,
+        })
+    };
     let mut s = puddle("negative");
-    s.bodies[1].material = Some(Box::new(Negative(Newtonian::water())));
+    s.bodies[1].material = Some(altered(-1000.0, &[]));
     match build(s) {
         Err(e) => assert!(e.to_string().contains("density"), "{e}"),
         Ok(_) => panic!("a negative density"),
@@ -605,41 +621,8 @@ fn bad_settings_are_refused_with_the_right_message() {
     // parameter, say): its elements are made anew every step, so the
     // variable would be reset every step without a word (session 42's
     // review; it was accepted).
-    #[derive(Debug)]
-    struct Thixotropic(Newtonian);
-    impl Material<2> for Thixotropic {
-        fn name(&self) -> &str {
-            "thixotropic"
-        }
-        fn kind(&self) -> MaterialKind {
-            MaterialKind::Fluid
-        }
-        fn density(&self) -> f64 {
-            1000.0
-        }
-        fn wave_speed(&self) -> f64 {
-            <Newtonian as Material<2>>::wave_speed(&self.0)
-        }
-        fn internal_variables(&self) -> &[&str] {
-            &["lambda"]
-        }
-        fn unified(
-            &self,
-            kin: &pfem::constitutive::Kinematics<2>,
-            h: &pfem::constitutive::History<2>,
-        ) -> pfem::constitutive::Unified<2> {
-            self.0.unified(kin, h)
-        }
-        fn update_history(
-            &self,
-            kin: &pfem::constitutive::Kinematics<2>,
-            h: &mut pfem::constitutive::History<2>,
-        ) {
-            self.0.update_history(kin, h)
-        }
-    }
     let mut s = puddle("thixotropic");
-    s.bodies[1].material = Some(Box::new(Thixotropic(Newtonian::water())));
+    s.bodies[1].material = Some(altered(1000.0, &["lambda"]));
     match build(s) {
         Err(SceneError::InvalidMaterial { body, source }) => {
             assert_eq!(body, "water");

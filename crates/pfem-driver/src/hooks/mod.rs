@@ -155,6 +155,8 @@ where
     pub(crate) elements: &'a Elements<D>,
     pub(crate) materials: &'a [Box<dyn Material<D>>],
     pub(crate) body_names: &'a [String],
+    /// Which bodies are walls' or solids' (`Simulation`'s, fixed for the run).
+    pub(crate) fixed_body: &'a [bool],
     pub(crate) gravity: &'a mut Option<Vector<D>>,
     pub(crate) stop: &'a mut Option<String>,
     pub(crate) external_force: &'a mut Vec<Vector<D>>,
@@ -341,10 +343,12 @@ where
     /// Appends a fluid particle (acceleration zero, no constraint); the mesh
     /// is remade before the next hook runs. Returns its index.
     pub fn insert_fluid(&mut self, p: Particle<D>) -> Result<usize, RunError> {
-        let fixed_body = self.particles.fixed_bodies(self.body_names.len());
-        if let Some(why) =
-            crate::particles::fluid_particle_fault(&p, self.materials, self.body_names, &fixed_body)
-        {
+        if let Some(why) = crate::particles::fluid_particle_fault(
+            &p,
+            self.materials,
+            self.body_names,
+            self.fixed_body,
+        ) {
             return Err(RunError::Hook {
                 hook: "insert_fluid".into(),
                 why,
