@@ -251,3 +251,94 @@ fn the_pressure_output_on_a_fine_plate_is_the_waters() {
         100.0 * worst
     );
 }
+
+/// Oil (800 kg/m³, 0.1 m) resting on water (0.3 m) in a tank, two fluid
+/// bodies: the water starts with the oil's weight on it, and both stay at
+/// rest for 1 s (largest speed ≤ 2·10⁻³ √(gH), acceptance 1's bound).
+///
+/// Two fixes, session 43 (`cargo test --release --test suite
+/// oil_resting -- --nocapture`):
+/// - the start followed each body to its own highest particle, so the
+///   water started 809 Pa short of the oil's weight (now within 10⁻¹² Pa
+///   of the field whose interface lies midway between the two bodies'
+///   rows, `pfem_scene`'s hydrostatic start);
+/// - an element between the two fluids' rows weighed its majority's
+///   density, 1000 or 800 as the diagonals fell: the interface's rows
+///   rose and sank in alternate columns from rest, 1.6·10⁻² √(gH) at
+///   0.3 s and growing (2·10⁻² with the first fix alone). At the midrange
+///   of its fluids' densities (`pfem_constitutive::fluid_element_density`)
+///   the largest speed is 1.5·10⁻³ √(gH), at the oil's surface by the
+///   walls as in a tank of one fluid.
+#[test]
+fn oil_resting_on_water_starts_and_stays_at_rest() {
+    let h = 0.025;
+    let (w, hw, ho) = (0.5, 0.3, 0.1);
+    let b = |a: (f64, f64), c: (f64, f64)| Geometry::Box {
+        min: Point::<2>::new(a.0, a.1),
+        max: Point::<2>::new(c.0, c.1),
+    };
+    let end = 1.0;
+    let scene = Scene::<2>::new("oil_on_water")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: end,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", b((-h, -h), (w + h, 0.0)), h, WallMotion::Fixed)
+        .wall("left", b((-h, 0.0), (0.0, 0.6)), h, WallMotion::Fixed)
+        .wall("right", b((w, 0.0), (w + h, 0.6)), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            b((0.0, 0.0), (w, hw)),
+            h,
+        )
+        .fluid(
+            "oil",
+            Box::new(Newtonian::new(800.0, 1e-2, 1.5e9).unwrap()),
+            b((0.0, hw), (w, hw + ho)),
+            h,
+        );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    // The lattice's rows lie on the boxes' edges: the oil's top row on the
+    // surface, the water's on the interface, which the discrete fluid has
+    // midway between the two bodies' rows.
+    let interface = hw + 0.5 * h;
+    let exact = |y: f64| {
+        if y > interface {
+            800.0 * G * (hw + ho - y)
+        } else {
+            800.0 * G * (hw + ho - interface) + 1000.0 * G * (interface - y)
+        }
+    };
+    let p = sim.particles();
+    let mut worst_start: f64 = 0.0;
+    for i in 0..p.len() {
+        if p.kind()[i] == ParticleKind::Fluid {
+            let y = p.x()[i][1];
+            worst_start = worst_start.max((p.pressure()[i] - exact(y)).abs());
+        }
+    }
+    assert!(
+        worst_start < 1e-9 * exact(0.0),
+        "start off by {worst_start} Pa"
+    );
+    let c = (G * (hw + ho)).sqrt();
+    let mut max_speed: f64 = 0.0;
+    while sim.time() < end - 1e-12 {
+        sim.step().unwrap();
+        let p = sim.particles();
+        for i in 0..p.len() {
+            if p.kind()[i] == ParticleKind::Fluid {
+                max_speed = max_speed.max(p.v()[i].norm() / c);
+            }
+        }
+    }
+    println!(
+        "oil on water: start within {worst_start:.2e} Pa, largest speed {max_speed:.2e} sqrt(gH) over {end} s"
+    );
+    assert!(max_speed <= 2e-3, "largest speed {max_speed} sqrt(gH)");
+}

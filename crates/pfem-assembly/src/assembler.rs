@@ -20,7 +20,7 @@
 //! in eq. 57 ([`VolumetricTreatment::ElementWise`]). The fluid history force
 //! `−D σ̂⁽ⁿ⁾` with `σ̂ = −pⁿ I` is `Gᵀ pⁿ` in both cases.
 
-use pfem_constitutive::{History, Material, MaterialKind, Unified};
+use pfem_constitutive::{fluid_element_density, History, Material, MaterialKind, Unified};
 use pfem_core::{
     below_water_line, weighted_shape_gradients, Const, Dim, Point, Tensor, Vector, MAX_NV,
 };
@@ -140,6 +140,15 @@ pub struct StepMesh<'a> {
     /// only by `p / K`) weigh `ρ Vⁿ`. Empty by default: every element
     /// weighs `ρ Vⁿ`, so a solid's mass drifted with its volume strain.
     pub reference_volumes: &'a [f64],
+    /// Material index of each particle (the elements' indexing), or empty.
+    /// Where fluids of different densities meet (oil on water), a fluid
+    /// element takes its nodes' majority material for its viscosity and
+    /// bulk modulus, but its mass density is
+    /// [`pfem_constitutive::fluid_element_density`]'s,
+    /// the same for every element of the band between the two fluids'
+    /// rows whichever diagonals the tessellation drew. Empty: every
+    /// element weighs its material's density.
+    pub node_material: &'a [u16],
 }
 
 /// Fluid elements that join free-surface particles to a solid
@@ -285,6 +294,10 @@ where
     /// Element connectivity in system node numbers.
     elem_sys: Vec<u32>,
     elem_material: Vec<u16>,
+    /// Each element's mass density (kg/m³): its material's, or for a
+    /// fluid element with `StepMesh::node_material`,
+    /// [`pfem_constitutive::fluid_element_density`].
+    elem_density: Vec<f64>,
     /// Whether each element is a fluid element (pressure on nodes).
     elem_fluid: Vec<bool>,
     /// Whether each element's volumetric term is assembled on it.
@@ -670,6 +683,11 @@ where
                 what: "a reference volume that is not a positive number",
             });
         }
+        if !mesh.node_material.is_empty() && mesh.node_material.len() != n_particles {
+            return Err(AssemblyError::MeshMismatch {
+                what: "node materials and particles have different lengths",
+            });
+        }
         let renumbered = std::mem::take(&mut self.renumbered);
         if renumbered {
             self.ids_valid = false;
@@ -701,6 +719,8 @@ where
                 .iter()
                 .all(|&m| (m as usize) < materials.len())
         {
+            // (The particles' materials may have changed.)
+            self.set_densities(&mesh, materials);
             self.failed_prepare = false;
             return Ok(());
         }
@@ -735,6 +755,31 @@ where
         last.2.extend_from_slice(mesh.closures);
         last.3 = n_particles;
         Ok(())
+    }
+
+    /// Each element's mass density: its material's, a fluid element's
+    /// from its nodes' fluids where the mesh gives the particles'
+    /// materials ([`pfem_constitutive::fluid_element_density`]).
+    fn set_densities(&mut self, mesh: &StepMesh<'_>, materials: &[Box<dyn Material<D>>]) {
+        let nv = <Const<D> as Dim>::NV;
+        self.elem_density.clear();
+        self.elem_density.extend(
+            mesh.element_material
+                .iter()
+                .zip(mesh.elements.chunks_exact(nv))
+                .map(|(&m, el)| {
+                    let mat = &materials[m as usize];
+                    if mat.kind() == MaterialKind::Fluid && !mesh.node_material.is_empty() {
+                        fluid_element_density(
+                            materials,
+                            el.iter().map(|&p| mesh.node_material[p as usize]),
+                            m,
+                        )
+                    } else {
+                        mat.density()
+                    }
+                }),
+        );
     }
 
     /// Records the surface cuts of a step's mesh.
@@ -842,6 +887,7 @@ where
             self.elem_vol
                 .push(volumetric_on_element(kind, self.treatment));
         }
+        self.set_densities(&mesh, materials);
         // Nodal patches of fluid elements.
         let mut count = vec![0usize; ns + 1];
         for e in 0..ne {
@@ -1236,7 +1282,7 @@ where
         let (states, unified) = (&self.states, &self.unified);
         let (elem_vol, elem_fluid) = (&self.elem_vol, &self.elem_fluid);
         let (elem_sys, elem_blocks) = (&self.elem_sys, &self.elem_blocks);
-        let elem_material = &self.elem_material;
+        let elem_density = &self.elem_density;
         let ref_vol = &self.ref_vol;
         let (cut_of, cut_share) = (&self.cut_of, &self.cut_share);
         let (pattern, particle_of) = (&self.pattern, &self.particle_of);
@@ -1265,7 +1311,7 @@ where
                 }
                 let (k, f) = (&*k, &*f);
                 let el = &elem_sys[e * nv..(e + 1) * nv];
-                let rho = input.materials[elem_material[e] as usize].density();
+                let rho = elem_density[e];
                 // Lumped mass `ρ₀ V₀` (eq. 46) where the element has a
                 // reference, else `ρ Vⁿ`.
                 let weight = rho * ref_vol.get(e).copied().unwrap_or(states[e].volume_n);

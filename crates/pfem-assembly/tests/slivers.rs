@@ -109,6 +109,7 @@ where
             closures: &[],
             surface_cuts: Default::default(),
             reference_volumes: &[],
+            node_material: &[],
         },
         mesh.materials,
     )

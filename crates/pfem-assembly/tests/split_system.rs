@@ -107,6 +107,7 @@ fn prepared(t: &Tank, split: bool, alpha: f64) -> Assembler<2> {
             closures: &[],
             surface_cuts: Default::default(),
             reference_volumes: &[],
+            node_material: &[],
         },
         &t.materials,
     )
@@ -560,6 +561,7 @@ fn rows_name_no_particles_after_a_renumbering() {
                 closures: &[],
                 surface_cuts: Default::default(),
                 reference_volumes: &[],
+                node_material: &[],
             },
             &t.materials,
         )

@@ -476,3 +476,75 @@ where
         h.pressure
     }
 }
+
+/// The mass density of a fluid element (kg/m³): the midrange of its
+/// fluid nodes' densities, `(ρ_min + ρ_max)/2`,
+/// over `node_materials` (each node's material index; walls' and solids'
+/// nodes, whose material is none or not a fluid's, are left out), or its
+/// own material's `element_material` when no node is fluid.
+///
+/// Where two fluids meet, the elements between the last row of one and
+/// the first row of the other have two nodes of one fluid or two of the
+/// other, as the tessellation's diagonals fall. By majority they weighed
+/// `ρ₁` or `ρ₂`: each interface node's lumped weight then hung on the
+/// diagonals around it, no hydrostatic pressure balanced it, and the
+/// rows moved in alternate columns from rest, remeshing flipping the
+/// diagonals on. At the midrange every element of the band weighs
+/// `(ρ₁ + ρ₂)/2`: the fluid is three layers, each of one density, and
+/// the hydrostatic pressure with its kinks on the rows (the scene's
+/// start) is a discrete equilibrium on any tessellation. The element's
+/// viscosity and bulk modulus stay its majority material's
+/// (session 43).
+pub fn fluid_element_density<const D: usize>(
+    materials: &[Box<dyn Material<D>>],
+    node_materials: impl IntoIterator<Item = u16>,
+    element_material: u16,
+) -> f64
+where
+    Const<D>: Dim,
+{
+    let (lo, hi) = node_materials
+        .into_iter()
+        .filter_map(|m| materials.get(m as usize))
+        .filter(|m| m.kind() == MaterialKind::Fluid)
+        .map(|m| m.density())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+            (lo.min(r), hi.max(r))
+        });
+    if lo <= hi {
+        if lo == hi {
+            lo
+        } else {
+            0.5 * (lo + hi)
+        }
+    } else {
+        materials[element_material as usize].density()
+    }
+}
+
+#[cfg(test)]
+mod density_tests {
+    use super::*;
+    use crate::{Hypoelastic, Newtonian};
+
+    /// Water, oil, a steel solid and a wall (no material): an element of
+    /// one fluid weighs that fluid's density bit for bit, one where two
+    /// meet the midrange whichever of them holds more nodes, and walls'
+    /// and solids' nodes count for nothing.
+    #[test]
+    fn a_fluid_element_weighs_the_midrange_of_its_fluids() {
+        let materials: Vec<Box<dyn Material<2>>> = vec![
+            Box::new(Newtonian::water()),
+            Box::new(Newtonian::new(800.0, 1e-2, 1.5e9).unwrap()),
+            Box::new(Hypoelastic::new(7800.0, 2e11, 0.3).unwrap()),
+        ];
+        let wall = u16::MAX;
+        assert_eq!(fluid_element_density(&materials, [0, 0, 0], 0), 1000.0);
+        assert_eq!(fluid_element_density(&materials, [0, 0, 1], 0), 900.0);
+        assert_eq!(fluid_element_density(&materials, [1, 1, 0], 1), 900.0);
+        assert_eq!(fluid_element_density(&materials, [1, wall, 2], 1), 800.0);
+        assert_eq!(fluid_element_density(&materials, [wall, 2, 0], 0), 1000.0);
+        // No fluid node (a hand-built mesh): the element's own material.
+        assert_eq!(fluid_element_density(&materials, [wall, 2, 2], 1), 800.0);
+    }
+}

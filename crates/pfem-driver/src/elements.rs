@@ -249,6 +249,7 @@ where
                     up: self.up,
                 },
                 reference_volumes: &self.reference_volumes,
+                node_material: &[],
             },
             &mut self.history,
         )

@@ -311,9 +311,12 @@ where
         &mut self.constraints
     }
 
-    /// Mutable state and constraints together (the integrator reads both).
-    pub(crate) fn state_and_constraints(&mut self) -> (&mut ParticleState<D>, &Constraints<D>) {
-        (&mut self.state, &self.constraints)
+    /// Mutable state, the constraints and each particle's material together
+    /// (the integrator reads them all).
+    pub(crate) fn state_and_constraints(
+        &mut self,
+    ) -> (&mut ParticleState<D>, &Constraints<D>, &[u16]) {
+        (&mut self.state, &self.constraints, &self.material)
     }
 
     /// Mutable state.

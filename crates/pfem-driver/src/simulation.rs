@@ -688,7 +688,8 @@ where
     /// a program set by hand are then replaced); call it again after changing
     /// velocities, pressures or constraints by hand before the first step.
     pub fn initialize_acceleration(&mut self) -> Result<(), RunError> {
-        let (mesh, history) = self.elements.step_mesh();
+        let (mut mesh, history) = self.elements.step_mesh();
+        mesh.node_material = self.particles.material();
         // (Forces may cover a prefix of the particles after a hook's
         // renumbering: the integrator reads each particle's, if any.)
         let input = StepInput {
@@ -1205,8 +1206,9 @@ where
                 self.external_force
                     .resize(self.particles.len(), Vector::<D>::zeros());
             }
-            let (mesh, history) = self.elements.step_mesh();
-            let (state, constraints) = self.particles.state_and_constraints();
+            let (mut mesh, history) = self.elements.step_mesh();
+            let (state, constraints, material) = self.particles.state_and_constraints();
+            mesh.node_material = material;
             let input = StepInput {
                 mesh,
                 materials: &self.materials,

@@ -197,11 +197,18 @@ where
                 continue;
             };
             let p_sum: f64 = el.iter().map(|&q| pressure[q as usize]).sum();
+            // The assembly's lumped mass: the midrange of the element's
+            // fluids (`pfem_constitutive::fluid_element_density`).
             let rho = el
                 .iter()
                 .find(|&&q| kind[q as usize] == ParticleKind::Fluid)
-                .map(|&q| self.materials()[material[q as usize] as usize].density())
-                .unwrap_or(0.0);
+                .map_or(0.0, |&f| {
+                    pfem_constitutive::fluid_element_density(
+                        self.materials(),
+                        el.iter().map(|&q| material[q as usize]),
+                        material[f as usize],
+                    )
+                });
             for (k, &q) in el.iter().enumerate() {
                 if body[q as usize] == id {
                     f += g[k] * (p_sum * vol / nv as f64);

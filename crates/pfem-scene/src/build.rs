@@ -543,63 +543,23 @@ where
                 }
             }
         }
-        // Hydrostatic initial pressure in fluids at rest under gravity:
-        // p = ρ g·(x_top − x) with x_top the body's highest particle along g.
+        // Hydrostatic initial pressure in fluids at rest under gravity,
+        // each column from its own top, loaded by the fluids resting on it
+        // (`crate::hydrostatic`).
         if let Some(g) = gravity {
-            let gn = g.norm();
-            if gn > 0.0 {
-                let dir = g / gn;
-                let kind = particles.kind().to_vec();
-                let body = particles.body().to_vec();
-                let spacing = particles.spacing().to_vec();
-                let material_of = particles.material().to_vec();
-                let x = particles.x().to_vec();
-                let pressure = &mut particles.pressure;
-                for (bi, _) in body_names.iter().enumerate() {
-                    let idx: Vec<usize> = (0..n)
-                        .filter(|&i| body[i] == bi as u32 && kind[i] == ParticleKind::Fluid)
-                        .collect();
-                    if idx.is_empty() {
-                        continue;
-                    }
-                    let top = idx
-                        .iter()
-                        .map(|&i| x[i].dot(&dir))
-                        .fold(f64::INFINITY, f64::min);
-                    let rho = materials[material_of[idx[0]] as usize].density();
-                    for &i in &idx {
-                        pressure[i] = rho * gn * (x[i].dot(&dir) - top);
-                    }
-                    // Wall and solid particles bounding the fluid carry the
-                    // same hydrostatic nodal pressure (eq. 62 puts pressure
-                    // on every node of a fluid element).
-                    let (lo, hi) = idx.iter().fold(
-                        (
-                            Point::<D>::repeat(f64::INFINITY),
-                            Point::<D>::repeat(f64::NEG_INFINITY),
-                        ),
-                        |(lo, hi), &i| (lo.inf(&x[i]), hi.sup(&x[i])),
-                    );
-                    // Within a spacing above the water line the hydrostatic
-                    // field goes on linearly (negative) on solids: a solid
-                    // node there is a vertex of an element cut at the water
-                    // line (issue 19, `AlphaShapeParams::cut_dry_bridges`),
-                    // whose pressure must be the linear field's for the
-                    // water to start in equilibrium. Walls are not cut.
-                    let h = spacing[idx[0]] * 1.01;
-                    for i in 0..n {
-                        let inside = (0..D).all(|k| x[i][k] >= lo[k] - h && x[i][k] <= hi[k] + h);
-                        if kind[i] != ParticleKind::Fluid && inside {
-                            let depth = x[i].dot(&dir) - top;
-                            pressure[i] = if kind[i] == ParticleKind::Solid && depth >= -h {
-                                rho * gn * depth
-                            } else {
-                                (rho * gn * depth).max(0.0)
-                            };
-                        }
-                    }
-                }
-            }
+            let density: Vec<f64> = (0..n)
+                .map(|i| match particles.kind()[i] {
+                    ParticleKind::Fluid => materials[particles.material()[i] as usize].density(),
+                    _ => 0.0,
+                })
+                .collect();
+            particles.pressure = crate::hydrostatic::pressures(
+                particles.x(),
+                particles.kind(),
+                particles.spacing(),
+                &density,
+                &g,
+            );
         }
         // A gravity finite but so large that ρ g H overflows (or its norm
         // does) leaves the hydrostatic start without numbers.

@@ -291,10 +291,9 @@ where
         self.find(p, tol, points).is_some()
     }
 
-    /// The nearest recorded point within `tol` of `p`, if any. Searches
-    /// every cell `tol` can reach on the finest level whose cell is no
-    /// smaller than `tol` (or the coarsest level).
-    pub fn find(&self, p: &Point<D>, tol: f64, points: &[Point<D>]) -> Option<usize> {
+    /// Calls `f` with every recorded point within `tol` of `p` (in the
+    /// grid's order), from the same cells as [`HashGrid::find`].
+    pub fn visit(&self, p: &Point<D>, tol: f64, points: &[Point<D>], mut f: impl FnMut(usize)) {
         let (cell, map) = self
             .levels
             .iter()
@@ -303,22 +302,33 @@ where
         let k = Self::key(*cell, p);
         let r = ((tol / cell).ceil() as i64).max(1);
         let zr = if D == 3 { -r..=r } else { 0..=0 };
-        let mut best: Option<(f64, usize)> = None;
         for dz in zr {
             for dy in -r..=r {
                 for dx in -r..=r {
                     let kk = [k[0] + dx, k[1] + dy, k[2] + dz];
                     if let Some(v) = map.get(&kk) {
                         for &i in v {
-                            let d = (points[i] - p).norm();
-                            if d < tol && best.is_none_or(|(b, _)| d < b) {
-                                best = Some((d, i));
+                            if (points[i] - p).norm() <= tol {
+                                f(i);
                             }
                         }
                     }
                 }
             }
         }
+    }
+
+    /// The nearest recorded point within `tol` of `p`, if any. Searches
+    /// every cell `tol` can reach on the finest level whose cell is no
+    /// smaller than `tol` (or the coarsest level).
+    pub fn find(&self, p: &Point<D>, tol: f64, points: &[Point<D>]) -> Option<usize> {
+        let mut best: Option<(f64, usize)> = None;
+        self.visit(p, tol, points, |i| {
+            let d = (points[i] - p).norm();
+            if d < tol && best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, i));
+            }
+        });
         best.map(|(_, i)| i)
     }
 }

@@ -16,6 +16,7 @@
 
 pub mod build;
 pub mod error;
+mod hydrostatic;
 pub mod lattice;
 pub mod motion;
 pub mod scene;

@@ -112,6 +112,7 @@ fn prepared(t: &Tank, split: bool) -> Assembler<2> {
             closures: &[],
             surface_cuts: Default::default(),
             reference_volumes: &[],
+            node_material: &[],
         },
         &t.materials,
     )

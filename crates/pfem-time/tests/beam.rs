@@ -146,6 +146,7 @@ impl<'b> Sim<'b> {
                     closures: &[],
                     surface_cuts: Default::default(),
                     reference_volumes: &[],
+                    node_material: &[],
                 },
                 materials: &self.materials,
                 constraints: &self.b.constraints,

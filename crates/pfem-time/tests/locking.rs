@@ -83,6 +83,7 @@ fn collapse(treatment: VolumetricTreatment, union_jack: bool, t_end: f64) -> Col
             closures: &[],
             surface_cuts: Default::default(),
             reference_volumes: &[],
+            node_material: &[],
         },
         materials: &materials,
         constraints: &constraints,

@@ -88,6 +88,7 @@ where
             closures: &[],
             surface_cuts: Default::default(),
             reference_volumes: &[],
+            node_material: &[],
         },
         materials: &materials,
         constraints: &constraints,

@@ -111,6 +111,7 @@ where
                 closures: &[],
                 surface_cuts: Default::default(),
                 reference_volumes: &[],
+                node_material: &[],
             },
             materials: &self.materials,
             constraints: &constraints,
