@@ -1305,3 +1305,49 @@ fn a_load_pushes_a_free_block_by_newton_s_law() {
     )));
     assert!(sim.step().is_err());
 }
+
+/// A particle inserted where two fluids meet takes its parents' majority
+/// fluid, whatever their order (session 43's review: it took the first
+/// fluid parent, so an oil particle appeared in the water as the
+/// tessellation listed the vertices).
+#[test]
+fn an_inserted_particle_takes_its_parents_majority_fluid() {
+    use pfem::geometry::{Origin, ParticleMap};
+    let h = 0.05;
+    let scene = small_tank("oil on water").fluid(
+        "oil",
+        Box::new(Newtonian::new(800.0, 1e-2, 1.5e9).unwrap()),
+        boxed(0.0, 0.15, 0.1, 0.25),
+        h,
+    );
+    let mut sim = sim2(scene, StepParams::default());
+    let p = sim.particles();
+    let n = p.len();
+    let of = |m: f64| {
+        (0..n)
+            .filter(|&i| {
+                p.kind()[i] == ParticleKind::Fluid
+                    && sim.materials()[p.material()[i] as usize].density() == m
+            })
+            .collect::<Vec<_>>()
+    };
+    let (water, oil) = (of(1000.0), of(800.0));
+    assert!(!water.is_empty() && oil.len() >= 2);
+    let (w, o1, o2) = (water[0] as u32, oil[0] as u32, oil[1] as u32);
+    let (oil_material, oil_body) = (p.material()[o1 as usize], p.body()[o1 as usize]);
+    let mut origin: Vec<Origin> = (0..n as u32).map(Origin::Kept).collect();
+    let mut nodes = [0u32; pfem::core::MAX_NV];
+    nodes[..3].copy_from_slice(&[w, o1, o2]);
+    let mut weights = [0.0; pfem::core::MAX_NV];
+    weights[..3].copy_from_slice(&[1.0 / 3.0; 3]);
+    origin.push(Origin::Inserted { nodes, weights });
+    let map = ParticleMap {
+        old_to_new: (0..n as u32).collect(),
+        origin,
+    };
+    sim.particles_mut().remap(&map).unwrap();
+    let p = sim.particles();
+    assert_eq!(p.len(), n + 1);
+    assert_eq!(p.material()[n], oil_material, "the oil's material");
+    assert_eq!(p.body()[n], oil_body, "the oil's body");
+}

@@ -378,11 +378,18 @@ where
                 why: "an old particle `old_to_new` keeps is not among the new ones",
             });
         }
+        // The first parent of the parents' majority fluid (an inserted
+        // particle where two fluids meet took the first fluid parent in
+        // the tessellation's order, whichever fluid it was: session 43's
+        // review).
         let fluid_parent = |nodes: &[u32]| {
+            let m = crate::simulation::majority_fluid_material(nodes, &self.kind, &self.material);
             nodes
                 .iter()
                 .copied()
-                .find(|&q| self.kind[q as usize] == ParticleKind::Fluid)
+                .find(|&q| {
+                    self.kind[q as usize] == ParticleKind::Fluid && self.material[q as usize] == m
+                })
                 .unwrap_or(nodes[0]) as usize
         };
         let x = map.apply_with(&self.state.x, |nodes, w| {

@@ -2248,7 +2248,7 @@ where
 /// The material most of a fluid element's fluid nodes have, ties to the
 /// lower index; [`NO_MATERIAL`] with no fluid node. Independent of the
 /// order of `el`.
-fn majority_fluid_material(el: &[u32], kind: &[ParticleKind], material: &[u16]) -> u16 {
+pub(crate) fn majority_fluid_material(el: &[u32], kind: &[ParticleKind], material: &[u16]) -> u16 {
     let fluid = |p: &u32| kind[*p as usize] == ParticleKind::Fluid;
     let mut best = (0usize, NO_MATERIAL);
     for p in el.iter().filter(|p| fluid(p)) {

@@ -27,6 +27,13 @@ pub struct ParticleManagementParams {
     /// nodes, as in the alpha shape; √3/4·h² in 2D, h³/(6√2) in 3D).
     /// Dimensionless, `≥ 1` (below, particles would be inserted closer than
     /// their spacing); `f64::INFINITY` disables insertion. Default `2.0`.
+    ///
+    /// A lattice's own simplices measure 1.15 times the regular one in 2D
+    /// (a square cut in two) and 1.41 times in 3D (a cube cut in six; the
+    /// central tetrahedron of a cube cut in five, 2.83 times): below about
+    /// 1.42 in 3D every cell of water at rest is refined (a resting 3D
+    /// tank of 1 384 particles grew to 4 900 in three steps at 1.2; none
+    /// at 1.5, 1.9 or the default, session 43).
     pub insertion_factor: f64,
 }
 

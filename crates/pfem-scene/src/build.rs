@@ -527,6 +527,27 @@ where
                 }
             }
         }
+        // A fluid particle inside another body, whatever its shape: another
+        // body's particles on both sides of it along every axis (within
+        // 1.5 spacings, 0.75 across). A fluid drawn into another fluid, a
+        // solid or a polygon or STL wall off their lattice kept its
+        // particles between theirs (0.7 spacing apart, none merged): a
+        // drop of oil in water weighed the midrange of the two, a ball of
+        // solid was full of water (session 43's review). Bodies side by
+        // side, a fluid in a gap between two bodies or along a plate are
+        // on one side only.
+        if let Some(i) = crate::lattice::fluid_inside_another_body(
+            particles.x(),
+            particles.kind(),
+            particles.body(),
+            particles.spacing(),
+        ) {
+            let (inside, of) = i;
+            return Err(SceneError::Overlap {
+                first: body_names[of as usize].clone(),
+                second: body_names[particles.body()[inside] as usize].clone(),
+            });
+        }
         // A solid under gravity needs a clamp, a weld, a fluid to rest in,
         // or something to rest on through contact (a wall, another solid).
         let has_fluid = particles.kind().contains(&ParticleKind::Fluid);

@@ -1,7 +1,7 @@
 //! Lattices of particles filling simple shapes, and the structured simplex
 //! mesh of a box lattice (the own mesh of a solid body).
 
-use pfem_core::{simplex_measure, Const, Dim, Point};
+use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point};
 
 fn counts<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> [usize; 3]
 where
@@ -331,6 +331,70 @@ where
         });
         best.map(|(_, i)| i)
     }
+}
+
+/// The first fluid particle with particles of one other body on both
+/// sides of it along every axis (within 1.5 spacings along, 0.75 across,
+/// the larger spacing of the pair), and that body: a fluid drawn inside
+/// another body off its lattice. `None` when there is none.
+pub fn fluid_inside_another_body<const D: usize>(
+    x: &[Point<D>],
+    kind: &[ParticleKind],
+    body: &[u32],
+    spacing: &[f64],
+) -> Option<(usize, u32)>
+where
+    Const<D>: Dim,
+{
+    let s_max = spacing.iter().copied().fold(0.0, f64::max);
+    if !(s_max > 0.0 && s_max.is_finite()) {
+        return None;
+    }
+    let mut grid = HashGrid::<D>::new(1.5 * s_max);
+    for (i, p) in x.iter().enumerate() {
+        grid.insert(p, i);
+    }
+    // Per other body near a particle: (below, above) along each axis.
+    let mut sides: Vec<(u32, [[bool; 2]; 3])> = Vec::new();
+    for i in 0..x.len() {
+        if kind[i] != ParticleKind::Fluid {
+            continue;
+        }
+        sides.clear();
+        grid.visit(&x[i], 1.5 * s_max, x, |j| {
+            if body[j] == body[i] {
+                return;
+            }
+            let s = spacing[i].max(spacing[j]);
+            let d = x[j] - x[i];
+            if d.norm() > 1.5 * s {
+                return;
+            }
+            let k = match sides.iter().position(|(b, _)| *b == body[j]) {
+                Some(k) => k,
+                None => {
+                    sides.push((body[j], [[false; 2]; 3]));
+                    sides.len() - 1
+                }
+            };
+            for a in 0..D {
+                if (0..D).all(|c| c == a || d[c].abs() <= 0.75 * s) {
+                    if d[a] < -0.25 * s {
+                        sides[k].1[a][0] = true;
+                    } else if d[a] > 0.25 * s {
+                        sides[k].1[a][1] = true;
+                    }
+                }
+            }
+        });
+        if let Some((b, _)) = sides
+            .iter()
+            .find(|(_, f)| (0..D).all(|a| f[a][0] && f[a][1]))
+        {
+            return Some((i, *b));
+        }
+    }
+    None
 }
 
 #[cfg(test)]

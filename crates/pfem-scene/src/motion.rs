@@ -35,10 +35,10 @@ where
 }
 
 /// An upper bound of `|r(t) ω cos(ωt) + r'(t) sin(ωt)|` for the ramp `r`
-/// over `ramp` seconds and `ω = 2π / period`.
+/// over `ramp` seconds and `ω = 2π / period` (`r' ≤ 15/8 / ramp`).
 fn oscillation_rate(period: f64, ramp: f64) -> f64 {
     let w = 2.0 * std::f64::consts::PI / period;
-    w + if ramp > 0.0 { 1.0 / ramp } else { 0.0 }
+    w + if ramp > 0.0 { 1.875 / ramp } else { 0.0 }
 }
 
 /// A sinusoidal translation `d(t) = A sin(2π t / T)`: a piston or flap
@@ -52,8 +52,13 @@ where
     pub amplitude: Vector<D>,
     /// Period `T` (s).
     pub period: f64,
-    /// Duration of a linear ramp of the amplitude from 0 (s); 0 for none.
-    /// A ramp over a period or two spares the fluid the start-up jerk.
+    /// Duration of a ramp of the amplitude from 0 (s); 0 for none. A ramp
+    /// over a period or two spares the fluid the start-up jerk. The ramp
+    /// is `6s⁵ − 15s⁴ + 10s³` of `s = t / ramp`: the wall's velocity and
+    /// acceleration are continuous at both of its ends, whatever its length
+    /// (a linear ramp, before session 43, ended with a jump of
+    /// `A sin(2π ramp / T) / ramp` in velocity unless the ramp was a
+    /// multiple of half the period).
     pub ramp: f64,
 }
 
@@ -66,23 +71,34 @@ where
     }
 }
 
-/// A linear ramp from 0 to 1 over `ramp` seconds (none when 0) and its rate:
-/// `(r(t), r'(t))`.
+/// A smooth ramp from 0 to 1 over `ramp` seconds (none when 0), `r(s) =
+/// 6s⁵ − 15s⁴ + 10s³` of `s = t / ramp`, whose first and second
+/// derivatives vanish at both ends, and its rate: `(r(t), r'(t))`.
 fn ramp_factor(ramp: f64, t: f64) -> (f64, f64) {
+    let (r, dr, _) = ramp_derivatives(ramp, t);
+    (r, dr)
+}
+
+/// `(r, r', r'')` of [`ramp_factor`]'s ramp at `t`.
+fn ramp_derivatives(ramp: f64, t: f64) -> (f64, f64, f64) {
     if ramp > 0.0 && t < ramp {
-        (t / ramp, 1.0 / ramp)
+        let s = (t / ramp).max(0.0);
+        (
+            s * s * s * (10.0 + s * (6.0 * s - 15.0)),
+            30.0 * s * s * (1.0 - s) * (1.0 - s) / ramp,
+            60.0 * s * (1.0 - s) * (1.0 - 2.0 * s) / (ramp * ramp),
+        )
     } else {
-        (1.0, 0.0)
+        (1.0, 0.0, 0.0)
     }
 }
 
 /// The second derivative of `r(t) sin(ω t)` (`ω = 2π / period`, `r` the
-/// ramp): `2 r' ω cos(ω t) − r ω² sin(ω t)` (the ramp is linear, `r'' = 0`
-/// but at its end).
+/// ramp): `r'' sin(ω t) + 2 r' ω cos(ω t) − r ω² sin(ω t)`.
 fn oscillation_acceleration(period: f64, ramp: f64, t: f64) -> f64 {
     let w = 2.0 * std::f64::consts::PI / period;
-    let (r, dr) = ramp_factor(ramp, t);
-    2.0 * dr * w * (w * t).cos() - r * w * w * (w * t).sin()
+    let (r, dr, ddr) = ramp_derivatives(ramp, t);
+    ddr * (w * t).sin() + 2.0 * dr * w * (w * t).cos() - r * w * w * (w * t).sin()
 }
 
 impl<const D: usize> MotionLaw<D> for Sinusoidal<D>
@@ -419,6 +435,36 @@ mod tests {
         for &t in &[0.0, 0.13, 0.5, 0.77, 1.9] {
             check_acceleration(&piston, Point::<2>::new(0.1, 0.3), t);
             check_acceleration(&table, Point::<2>::new(0.1, 0.3), t);
+        }
+    }
+
+    /// A ramp of any length ends without a jump in velocity or in
+    /// acceleration (the linear ramp, before session 43, jumped by
+    /// `A sin(2π ramp / T) / ramp`: 0.059 m/s here), and the speed stays
+    /// within `max_speed`.
+    #[test]
+    fn a_ramp_of_any_length_ends_smoothly() {
+        let piston = Sinusoidal::<2> {
+            amplitude: Vector::<2>::new(0.05, 0.0),
+            period: 0.8,
+            ramp: 0.3,
+        };
+        let x0 = Point::<2>::new(0.0, 0.0);
+        let e = 1e-9;
+        let (v0, v1) = (piston.velocity(&x0, 0.3 - e), piston.velocity(&x0, 0.3 + e));
+        assert!((v1 - v0).norm() < 1e-6, "{v0} then {v1}");
+        let a0 = piston.acceleration(&x0, 0.3 - e).unwrap();
+        let a1 = piston.acceleration(&x0, 0.3 + e).unwrap();
+        assert!((a1 - a0).norm() < 1e-5, "{a0} then {a1}");
+        let bound = piston.max_speed(&x0, &x0).unwrap();
+        for k in 0..=1000 {
+            let t = k as f64 * 1e-3;
+            let v = piston.velocity(&x0, t).norm();
+            assert!(v <= bound, "t = {t}: {v} above {bound}");
+            // The velocity is the position's derivative through the ramp.
+            let fd = (piston.position(&x0, t + 1e-7) - piston.position(&x0, t)) / 1e-7;
+            assert!((fd - piston.velocity(&x0, t)).norm() < 1e-5, "t = {t}");
+            check_acceleration(&piston, x0, t.max(2e-6));
         }
     }
 

@@ -151,6 +151,14 @@ impl ClosedSurface<3> {
                 });
                 facets.push(id);
             }
+            // A triangle repeating a vertex (CAD exports write some) has no
+            // area and adds each of its edges once each way: dropped, it
+            // changes nothing (it was refused as degenerate before session
+            // 43).
+            let f = &facets[facets.len() - 3..];
+            if f[0] == f[1] || f[1] == f[2] || f[0] == f[2] {
+                facets.truncate(facets.len() - 3);
+            }
         }
         Ok(Self { vertices, facets })
     }
@@ -360,6 +368,9 @@ where
                 }
             }
         }
+        if D == 3 {
+            self.check_surface_crossings()?;
+        }
         // Last: a boundary that encloses nothing (a polygon back and forth along
         // a line) would still place particles where its line meets the
         // lattice (session 42's review).
@@ -372,6 +383,127 @@ where
                 "the boundary encloses no {} (it is flat)",
                 if D == 2 { "area" } else { "volume" },
             ));
+        }
+        Ok(())
+    }
+
+    /// 3D: no edge of the surface pierces one of its triangles that it
+    /// shares no vertex with. Two closed parts that overlap (a CAD
+    /// assembly exported as separate bodies, two cubes run into each
+    /// other) or a surface through itself have no inside the fill can
+    /// find: it counts crossings by parity, so the overlap was left empty,
+    /// a hidden cavity (session 43's review). A part wholly inside another
+    /// (a cavity) crosses nothing and stays a cavity. A grid of the
+    /// triangles' boxes, about one triangle a cell, as the polygon's
+    /// crossing check; an edge touching a triangle's plane (two parts face
+    /// to face) is no crossing.
+    fn check_surface_crossings(&self) -> Result<(), String> {
+        let tris: Vec<&[u32]> = self.facets.chunks_exact(3).collect();
+        let v = |i: u32| {
+            let p = &self.vertices[i as usize];
+            [p[0], p[1], p[D - 1]]
+        };
+        let (lo, hi) = self.bounds();
+        let (lo, hi) = ([lo[0], lo[1], lo[D - 1]], [hi[0], hi[1], hi[D - 1]]);
+        let side = ((tris.len() as f64).cbrt().ceil() as usize).clamp(1, 256);
+        let w: [f64; 3] = std::array::from_fn(|k| {
+            if hi[k] > lo[k] {
+                (hi[k] - lo[k]) / side as f64
+            } else {
+                1.0
+            }
+        });
+        let cell =
+            |x: f64, k: usize| (((x - lo[k]) / w[k]).floor().max(0.0) as usize).min(side - 1);
+        let range = |pts: &[[f64; 3]]| -> [(usize, usize); 3] {
+            std::array::from_fn(|k| {
+                let a = pts.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+                let b = pts.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+                (cell(a, k), cell(b, k))
+            })
+        };
+        let count = |r: &[(usize, usize); 3]| {
+            r.iter()
+                .fold(1usize, |n, (a, b)| n.saturating_mul(b - a + 1))
+        };
+        let mut entries = 0usize;
+        for t in &tris {
+            entries = entries.saturating_add(count(&range(&[v(t[0]), v(t[1]), v(t[2])])));
+        }
+        if entries > MAX_CROSSING_ENTRIES {
+            return Err(format!(
+                "the surface's {} triangles are too large for their number to be checked for crossings ({entries} grid entries, at most {MAX_CROSSING_ENTRIES})",
+                tris.len()
+            ));
+        }
+        let mut buckets: HashMap<usize, Vec<u32>> = HashMap::new();
+        for (k, t) in tris.iter().enumerate() {
+            let r = range(&[v(t[0]), v(t[1]), v(t[2])]);
+            for i in r[0].0..=r[0].1 {
+                for j in r[1].0..=r[1].1 {
+                    for l in r[2].0..=r[2].1 {
+                        buckets
+                            .entry((i * side + j) * side + l)
+                            .or_default()
+                            .push(k as u32);
+                    }
+                }
+            }
+        }
+        let orient = |a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]| {
+            let (u, w, x) = (
+                [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+                [d[0] - a[0], d[1] - a[1], d[2] - a[2]],
+            );
+            u[0] * (w[1] * x[2] - w[2] * x[1]) - u[1] * (w[0] * x[2] - w[2] * x[0])
+                + u[2] * (w[0] * x[1] - w[1] * x[0])
+        };
+        let mut seen: std::collections::HashSet<(u32, u32)> = Default::default();
+        let mut near: Vec<u32> = Vec::new();
+        for t in &tris {
+            for a in 0..3 {
+                let (e0, e1) = (t[a].min(t[(a + 1) % 3]), t[a].max(t[(a + 1) % 3]));
+                if !seen.insert((e0, e1)) {
+                    continue;
+                }
+                let (p, q) = (v(e0), v(e1));
+                let r = range(&[p, q]);
+                near.clear();
+                for i in r[0].0..=r[0].1 {
+                    for j in r[1].0..=r[1].1 {
+                        for l in r[2].0..=r[2].1 {
+                            if let Some(b) = buckets.get(&((i * side + j) * side + l)) {
+                                near.extend_from_slice(b);
+                            }
+                        }
+                    }
+                }
+                near.sort_unstable();
+                near.dedup();
+                for &fi in &near {
+                    let f = tris[fi as usize];
+                    if f.contains(&e0) || f.contains(&e1) {
+                        continue;
+                    }
+                    let (a, b, c) = (v(f[0]), v(f[1]), v(f[2]));
+                    let (o1, o2) = (orient(a, b, c, p), orient(a, b, c, q));
+                    if o1 * o2 >= 0.0 || (o1 * o2).is_nan() {
+                        continue;
+                    }
+                    let (s1, s2, s3) = (orient(p, q, a, b), orient(p, q, b, c), orient(p, q, c, a));
+                    // Through the closed triangle (its edges too: two
+                    // cubes run corner into corner cross on diagonals).
+                    if (s1 >= 0.0 && s2 >= 0.0 && s3 >= 0.0)
+                        || (s1 <= 0.0 && s2 <= 0.0 && s3 <= 0.0)
+                    {
+                        return Err(format!(
+                            "the surface crosses itself: edge ({e0}, {e1}) pierces triangle ({}, {}, {}) (two overlapping parts? they must be one closed surface, or apart)",
+                            f[0], f[1], f[2]
+                        ));
+                    }
+                }
+            }
         }
         Ok(())
     }
@@ -941,12 +1073,23 @@ mod tests {
             })
             .collect();
         let path = std::env::temp_dir().join(format!("pfem-cube-{}.stl", std::process::id()));
+        // With a triangle repeating a vertex (no area) among them: dropped.
+        let mut tris = tris;
+        tris.push(stl_io::Triangle {
+            normal: stl_io::Vector::new([0.0, 0.0, 0.0]),
+            vertices: [
+                tris[0].vertices[0],
+                tris[0].vertices[0],
+                tris[0].vertices[1],
+            ],
+        });
         let mut f = std::fs::File::create(&path).unwrap();
         stl_io::write_stl(&mut f, tris.iter()).unwrap();
         drop(f);
         let back = ClosedSurface::read_stl(&path, 2.0, [1.0, 0.0, 0.0]).unwrap();
         std::fs::remove_file(&path).ok();
         back.check().unwrap();
+        assert_eq!(back.facets.len(), 36);
         assert_eq!(back.vertices.len(), 8);
         let (lo, hi) = back.bounds();
         assert_eq!(lo, Point::<3>::new(1.0, 0.0, 0.0));
@@ -1023,5 +1166,35 @@ mod tests {
         bowtie.swap(1000, 1001);
         let why = ClosedSurface::polygon(bowtie).check().unwrap_err();
         assert!(why.contains("crosses itself"), "{why}");
+    }
+
+    /// Two cubes of one surface: run into each other, refused (the fill
+    /// left their overlap empty); apart, face to face, or one wholly inside
+    /// the other (a cavity), accepted.
+    #[test]
+    fn overlapping_parts_of_a_surface_are_refused() {
+        let two = |shift: [f64; 3], l2: f64| {
+            let (a, b) = (cube(1.0), cube(l2));
+            let mut vertices = a.vertices.clone();
+            vertices.extend(
+                b.vertices
+                    .iter()
+                    .map(|p| Point::<3>::new(p[0] + shift[0], p[1] + shift[1], p[2] + shift[2])),
+            );
+            let mut facets = a.facets.clone();
+            facets.extend(b.facets.iter().map(|f| f + 8));
+            ClosedSurface { vertices, facets }
+        };
+        let why = two([0.5, 0.5, 0.5], 1.0).check().unwrap_err();
+        assert!(why.contains("crosses itself"), "{why}");
+        let why = two([0.3, 0.2, -0.4], 1.0).check().unwrap_err();
+        assert!(why.contains("crosses itself"), "{why}");
+        for ok in [
+            two([2.0, 0.0, 0.0], 1.0),
+            two([1.0, 0.0, 0.0], 1.0),
+            two([0.25, 0.25, 0.25], 0.5),
+        ] {
+            ok.check().unwrap();
+        }
     }
 }

@@ -338,6 +338,25 @@ impl Args {
     where
         pfem_core::Const<D>: pfem_core::Dim,
     {
+        // An option of the other dimension would do nothing, yet be
+        // recorded in a checkpoint's settings and refuse a restart with
+        // another value (session 43's review): refused.
+        let other: &[&str] = if D == 2 {
+            &[
+                "min-quality-3d",
+                "sliver-quality-3d",
+                "sliver-stabilised-3d",
+                "far-walls",
+            ]
+        } else {
+            &["sliver-quality-2d"]
+        };
+        if let Some(k) = other.iter().find(|k| self.options.contains_key(**k)) {
+            let (its, this) = if D == 2 { ("3D", "2D") } else { ("2D", "3D") };
+            return Err(Box::new(ArgsError(format!(
+                "--{k} is for {its} scenes; this scene is {this}"
+            ))));
+        }
         let mut options = crate::Options::default();
         if let Some(b) = self.volume_correction()? {
             options.volume_correction = b;
@@ -704,7 +723,8 @@ mod tests {
         assert_eq!(pf.step_params().unwrap().picard_forcing, 0.0);
         assert!(args(&["--picard-forcing", "1"]).step_params().is_err());
         assert!(args(&["--picard-forcing", "-1e-3"]).step_params().is_err());
-        let sim = a
+        // (The 2D scene refuses `a`'s 3D options; its largest step alone.)
+        let sim = args(&["--max-dt", "0.0004"])
             .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
             .unwrap();
         // Before the first step the clock holds the largest step.
@@ -726,6 +746,21 @@ mod tests {
             assert!(a
                 .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
                 .is_err());
+        }
+        // Good values of the other dimension's options: refused by name.
+        for other in [
+            &["--min-quality-3d", "0.01"][..],
+            &["--sliver-quality-3d", "0.1"],
+            &["--sliver-stabilised-3d", "0.1"],
+            &["--far-walls", "tessellate"],
+        ] {
+            let a = args(other);
+            assert!(a.validate_options().is_ok(), "{other:?}");
+            let why = a
+                .simulation(scene(), Box::new(pfem_geometry::Delaunay2::default()))
+                .expect_err("refused in 2D")
+                .to_string();
+            assert!(why.contains("3D scenes"), "{why}");
         }
     }
 }

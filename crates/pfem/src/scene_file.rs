@@ -454,11 +454,12 @@ pub enum ProbeSpec {
     Volume,
     /// `max_speed`: largest fluid particle speed (m/s).
     MaxSpeed,
-    /// `front_x` (2D): largest `x` of the main fluid body (m), as
-    /// [`crate::cases::front_x`].
+    /// `front_x`: largest `x` of the main fluid body (m), as
+    /// [`crate::cases::front_x`] (3D: [`crate::cases3d::front_x`]).
     FrontX,
-    /// `height_at_wall` (2D): height of the main fluid body within 1.5
-    /// spacings of `x = 0` (m), as [`crate::cases::height_at_wall`].
+    /// `height_at_wall`: height (`y`) of the main fluid body within 1.5
+    /// spacings of `x = 0` (m), as [`crate::cases::height_at_wall`] (3D:
+    /// [`crate::cases3d::height_at_wall`]).
     HeightAtWall,
     /// `bottom_pressure` (2D): mean pressure of the wetted floor particles
     /// at `y = 0` (Pa), as [`crate::cases::bottom_pressure`].
@@ -1035,13 +1036,24 @@ impl SceneFile {
     ///
     /// # Errors
     ///
-    /// As [`SceneFile::probes_2d`], and [`SceneError::File`] for a 2D-only
-    /// probe (`front_x`, `height_at_wall`, `bottom_pressure`).
+    /// As [`SceneFile::probes_2d`], and [`SceneError::File`] for the 2D-only
+    /// probe `bottom_pressure`. `front_x` and `height_at_wall` are the 3D
+    /// dam break's (`pfem::cases3d`; they were refused before session 43):
+    /// the main body's largest `x`, and its largest `y` within 1.5 spacings
+    /// of `x = 0`, as in 2D.
     pub fn probes_3d(&self) -> Result<Vec<Probe<3>>, SceneError> {
+        let band = 1.5 * self.fluid_spacing();
         let mut out = Vec::new();
         for p in &self.probes {
             match p.get_ref() {
-                ProbeSpec::FrontX | ProbeSpec::HeightAtWall | ProbeSpec::BottomPressure => {
+                ProbeSpec::FrontX => out.push(Probe::new("front_x", |s: &Simulation<3>| {
+                    crate::cases3d::front_x(s)
+                })),
+                ProbeSpec::HeightAtWall => out
+                    .push(Probe::new("height_at_wall", move |s: &Simulation<3>| {
+                        crate::cases3d::height_at_wall(s, band)
+                    })),
+                ProbeSpec::BottomPressure => {
                     return Err(self.error(
                         p.span(),
                         format!("probe `{}` is for 2D scenes only", p.get_ref().label()),

@@ -218,10 +218,14 @@ fn a_flap_hinged_on_the_floor_follows_its_rotation_law() {
             top = (i, sim.initial_position(i)[1]);
         }
     }
-    // At t = 0.3 s the flap has leaned into the water (θ < 0 turns +y to +x).
+    // At t = 0.3 s the flap has leaned into the water (θ < 0 turns +y to
+    // +x): θ = −0.05 r sin(2π t / 0.8) with the ramp's r(0.375) = 0.275
+    // (session 43's smooth ramp; the linear one gave 0.375 and the top
+    // moved 5.3 mm), so the top, about 0.43 m above the hinge, moves
+    // 4.1 mm.
     let dx = sim.particles().x()[top.0][0] - sim.initial_position(top.0)[0];
     println!("t = {t} s: flap top moved {dx:.4} m");
-    assert!(dx > 0.005, "{dx}");
+    assert!(dx > 0.0035, "{dx}");
     assert!(sim
         .particles()
         .x()
@@ -301,4 +305,70 @@ fn meaningless_friction_pairs_are_refused() {
             .to_string();
         assert!(err.contains(expect), "{err}");
     }
+}
+
+/// A body drawn inside another off its lattice (session 43's review): an
+/// oil ball inside water, a solid ball inside water, water inside a
+/// polygon wall. Their particles interleaved 0.7 spacing apart and nothing
+/// was said (a drop of oil weighed the midrange of the two fluids, a ball
+/// of solid was full of water); now `Overlap`. Oil resting on the water,
+/// its lattice off the water's, is no overlap.
+#[test]
+fn a_body_drawn_inside_another_off_its_lattice_is_refused() {
+    let h = 0.01;
+    let b = |x0: f64, y0: f64, x1: f64, y1: f64| Geometry::Box {
+        min: Point::<2>::new(x0, y0),
+        max: Point::<2>::new(x1, y1),
+    };
+    let tank = || {
+        Scene::<2>::new("inside")
+            .gravity(Vector::<2>::new(0.0, -9.81))
+            .settings(RunSettings {
+                end_time: 0.01,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall("floor", b(-0.02, -0.02, 0.52, 0.0), h, WallMotion::Fixed)
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                b(0.0, 0.0, 0.5, 0.4),
+                h,
+            )
+    };
+    let ball = || Geometry::Ball {
+        center: Point::<2>::new(0.255, 0.155),
+        radius: 0.05,
+    };
+    let oil = || Box::new(Newtonian::new(800.0, 1e-2, 1.5e9).unwrap());
+    let refused = |scene: Scene<2>| {
+        let err = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
+            .expect_err("refused")
+            .to_string();
+        assert!(err.contains("overlap"), "{err}");
+    };
+    refused(tank().fluid("oil", oil(), ball(), h));
+    refused(tank().solid(
+        "ball",
+        Box::new(Hypoelastic::new(2000.0, 1e7, 0.3).unwrap()),
+        ball(),
+        h,
+        None,
+    ));
+    let square = |c: (f64, f64), r: f64| {
+        Geometry::<2>::polygon(vec![
+            Point::<2>::new(c.0 - r, c.1 - r),
+            Point::<2>::new(c.0 + r, c.1 - r),
+            Point::<2>::new(c.0 + r, c.1 + r),
+            Point::<2>::new(c.0 - r, c.1 + r),
+        ])
+    };
+    refused(tank().wall("post", square((0.255, 0.155), 0.05), h, WallMotion::Fixed));
+    // Oil resting on the water, its lattice 0.33 spacing off: accepted.
+    Simulation::new(
+        tank().fluid("oil", oil(), b(0.0, 0.4033, 0.5, 0.45), h),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
 }

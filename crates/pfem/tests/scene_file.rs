@@ -370,8 +370,16 @@ geometry.box = { min = [0.0, 0.0, 0.0], max = [0.2, 0.2, 0.2] }
     assert_eq!(scene.bodies.len(), 2);
     let names: Vec<&str> = probes.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(names, ["volume", "ux_water", "uy_water", "uz_water"]);
-    let why = file_error(&text.replace("\"volume\"", "\"front_x\""));
+    let why = file_error(&text.replace("\"volume\"", "\"bottom_pressure\""));
     assert!(why.contains("2D"), "{why}");
+    // The 3D dam break's probes (refused before session 43).
+    let LoadedScene::Three(_, probes) =
+        build(&text.replace("\"volume\"", "\"front_x\", \"height_at_wall\"")).unwrap()
+    else {
+        panic!("3D")
+    };
+    let names: Vec<&str> = probes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names[..2], ["front_x", "height_at_wall"]);
 }
 
 fn pfem(args: &[&str]) -> std::process::Output {
