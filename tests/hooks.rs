@@ -1051,7 +1051,8 @@ fn a_moving_wall_carries_its_law_s_acceleration() {
             ..StepParams::default()
         },
     );
-    // Ramped: its acceleration at rest is `2 A ω / ramp`, not zero.
+    // Ramped: its acceleration follows the ramp's (`r'' sin + 2 r' ω cos
+    // − r ω² sin`).
     let ramp = 0.05;
     let law = Sinusoidal {
         amplitude: Vector::<2>::new(0.01, 0.0),
@@ -1067,12 +1068,20 @@ fn a_moving_wall_carries_its_law_s_acceleration() {
     for _ in 0..6 {
         sim.step().unwrap();
         let t = sim.time();
-        let (r, dr) = if t < ramp {
-            (t / ramp, 1.0 / ramp)
+        // The half-cosine ramp `r = (1 − cos(π t/ramp))/2` (session 43).
+        let pi = std::f64::consts::PI;
+        let (r, dr, ddr) = if t < ramp {
+            let s = t / ramp;
+            (
+                0.5 * (1.0 - (pi * s).cos()),
+                0.5 * pi * (pi * s).sin() / ramp,
+                0.5 * pi * pi * (pi * s).cos() / (ramp * ramp),
+            )
         } else {
-            (1.0, 0.0)
+            (1.0, 0.0, 0.0)
         };
-        let want = 0.01 * (2.0 * dr * w * (w * t).cos() - r * w * w * (w * t).sin());
+        let want =
+            0.01 * (ddr * (w * t).sin() + 2.0 * dr * w * (w * t).cos() - r * w * w * (w * t).sin());
         for &i in &paddle {
             let a = sim.particles().a()[i];
             assert!(

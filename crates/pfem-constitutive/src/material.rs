@@ -492,8 +492,9 @@ where
 /// diagonals on. At the midrange every element of the band weighs
 /// `(ρ₁ + ρ₂)/2`: the fluid is three layers, each of one density, and
 /// the hydrostatic pressure with its kinks on the rows (the scene's
-/// start) is a discrete equilibrium on any tessellation. The element's
-/// viscosity and bulk modulus stay its majority material's
+/// start) is a discrete equilibrium on any tessellation of the fluids
+/// alone (an element of the band with a wall node and one fluid node
+/// weighs that fluid's density). The element's viscosity and bulk modulus stay its majority material's
 /// (session 43).
 pub fn fluid_element_density<const D: usize>(
     materials: &[Box<dyn Material<D>>],

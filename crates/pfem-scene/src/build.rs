@@ -528,14 +528,15 @@ where
             }
         }
         // A fluid particle inside another body, whatever its shape: another
-        // body's particles on both sides of it along every axis (within
-        // 1.5 spacings, 0.75 across). A fluid drawn into another fluid, a
-        // solid or a polygon or STL wall off their lattice kept its
-        // particles between theirs (0.7 spacing apart, none merged): a
-        // drop of oil in water weighed the midrange of the two, a ball of
-        // solid was full of water (session 43's review). Bodies side by
-        // side, a fluid in a gap between two bodies or along a plate are
-        // on one side only.
+        // body's particles on both sides of it along every axis and face
+        // diagonal (`lattice::fluid_inside_another_body`). A fluid drawn
+        // into another fluid, a solid or a polygon or STL wall off their
+        // lattice kept its particles between theirs (0.7 spacing apart,
+        // none merged): a drop of oil in water weighed the midrange of the
+        // two, a ball of solid was full of water (session 43's review).
+        // Bodies side by side or along a sloping face, a fluid in a gap
+        // between two bodies, along a plate or in a concave corner are on
+        // one side of some direction.
         if let Some(i) = crate::lattice::fluid_inside_another_body(
             particles.x(),
             particles.kind(),

@@ -21,16 +21,16 @@
 //! shared by two reservoirs carries each side's own pressure; walls never
 //! negative, solids linear up to a spacing above the water line (issue 19,
 //! `AlphaShapeParams::cut_dry_bridges`: a solid node there is a vertex of
-//! an element cut at the water line). Walls and solids farther from any
-//! fluid particle, within a spacing of a connected fluid's box, take that
-//! fluid's level.
+//! an element cut at the water line). Solids farther from any fluid
+//! particle, within a spacing of a connected fluid's box, take that
+//! fluid's level (a submerged solid's inside starts loaded).
 //!
 //! For one fluid body with a flat surface every column's top is the
 //! body's highest row, and the field is `ρ g (x − x_top)·ĝ` bit for bit.
 
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 
-use crate::lattice::HashGrid;
+use crate::lattice::SpacingGrids;
 
 /// How a column's top particle is loaded.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,16 +66,10 @@ where
     let dir = g / gn;
     // Depth along gravity (grows downward).
     let depth: Vec<f64> = x.iter().map(|p| p.dot(&dir)).collect();
-    let s_max = fluid.iter().map(|&i| spacing[i]).fold(0.0, f64::max);
-    let reach = 1.5 * s_max;
-    let mut all = HashGrid::<D>::new(reach);
-    for (i, p) in x.iter().enumerate() {
-        all.insert(p, i);
-    }
-    let mut fluid_grid = HashGrid::<D>::new(reach);
-    for &i in &fluid {
-        fluid_grid.insert(&x[i], i);
-    }
+    // Grids by spacing class: a fine fluid beside a coarse wall costs its
+    // own neighbourhood, and a coarse cover is found from a fine fluid.
+    let all = SpacingGrids::new(x, spacing, |_| true);
+    let fluid_grid = SpacingGrids::new(x, spacing, |i| kind[i] == ParticleKind::Fluid);
     // Highest first: a particle's neighbour above comes before it.
     let mut order = fluid.clone();
     order.sort_by(|&a, &b| depth[a].total_cmp(&depth[b]).then(a.cmp(&b)));
@@ -83,7 +77,7 @@ where
     let mut top = vec![Top::Free; n];
     for &i in &order {
         let mut above: Option<(f64, f64, usize)> = None;
-        all.visit(&x[i], reach, x, |j| {
+        all.visit(&x[i], spacing[i], 1.5, x, |j| {
             let s = spacing[i].max(spacing[j]);
             let dh = depth[i] - depth[j];
             if !(dh > 0.1 * s && dh <= 1.5 * s) {
@@ -123,7 +117,7 @@ where
         a
     }
     for &i in &fluid {
-        fluid_grid.visit(&x[i], reach, x, |j| {
+        fluid_grid.visit(&x[i], spacing[i], 1.5, x, |j| {
             if density[j] == density[i] && (x[i] - x[j]).norm() <= 1.5 * spacing[i].max(spacing[j])
             {
                 let (a, b) = (find(&mut parent, i), find(&mut parent, j));
@@ -138,6 +132,13 @@ where
     // then tops under another fluid once that fluid's column is, then the
     // covered tops of a fluid once all its free and loaded tops are.
     let roots: Vec<usize> = fluid.iter().copied().filter(|&i| root[i] == i).collect();
+    // Each connected fluid's highest particle (the level of one with no
+    // free or loaded top: a closed, full tank).
+    let mut highest: std::collections::HashMap<usize, f64> = Default::default();
+    for &i in &fluid {
+        let e = highest.entry(component[i]).or_insert(depth[i]);
+        *e = e.min(depth[i]);
+    }
     let mut value: Vec<Option<(f64, f64)>> = vec![None; n];
     for &r in &roots {
         if top[r] == Top::Free {
@@ -184,14 +185,10 @@ where
         for &r in &roots {
             let c = component[r];
             if top[r] == Top::Covered && value[r].is_none() && !pending.contains(&c) {
-                let v = level.get(&c).copied().unwrap_or_else(|| {
-                    let t = fluid
-                        .iter()
-                        .filter(|&&i| component[i] == c)
-                        .map(|&i| depth[i])
-                        .fold(f64::INFINITY, f64::min);
-                    (t, 0.0)
-                });
+                let v = level
+                    .get(&c)
+                    .copied()
+                    .unwrap_or_else(|| (highest.get(&c).copied().unwrap_or(depth[r]), 0.0));
                 value[r] = Some(v);
                 progress = true;
             }
@@ -252,7 +249,7 @@ where
             continue;
         }
         let mut near: Option<(f64, usize)> = None;
-        fluid_grid.visit(&x[i], diagonal * s_max, x, |j| {
+        fluid_grid.visit(&x[i], 0.0, diagonal, x, |j| {
             let d = (x[i] - x[j]).norm();
             if d <= diagonal * spacing[j] && near.is_none_or(|(b, bj)| (d, j) < (b, bj)) {
                 near = Some((d, j));
@@ -261,6 +258,11 @@ where
         if let Some((_, f)) = near {
             let v = value[root[f]].expect("every column resolved");
             pressure[i] = field(i, v, density[f], spacing[f] * 1.01);
+            continue;
+        }
+        // (Solids only: a wall's particle this far from the fluid is in
+        // no fluid element; a submerged solid's inside starts loaded.)
+        if kind[i] != ParticleKind::Solid {
             continue;
         }
         for (c, (lo, hi, s, t, p0)) in boxes.iter().rev() {
@@ -433,7 +435,17 @@ mod tests {
             ParticleKind::Fluid,
             1000.0,
         );
-        fill(&mut c, (0.3, 0.7), (0.2, 0.3), s, ParticleKind::Wall, 0.0);
+        // The lid twice as coarse as the water (a coarse cover was missed
+        // by a search sized by the water's spacing: the review of the
+        // first version).
+        fill(
+            &mut c,
+            (0.3, 0.7),
+            (0.2, 0.3),
+            2.0 * s,
+            ParticleKind::Wall,
+            0.0,
+        );
         fill(
             &mut c,
             (0.3, 0.7),

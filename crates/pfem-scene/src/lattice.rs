@@ -1,7 +1,7 @@
 //! Lattices of particles filling simple shapes, and the structured simplex
 //! mesh of a box lattice (the own mesh of a solid body).
 
-use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point};
+use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, Vector};
 
 fn counts<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> [usize; 3]
 where
@@ -333,10 +333,74 @@ where
     }
 }
 
+/// Hash grids of points by spacing class (spacings within a factor of 2
+/// share one, its cell 1.5 times the class's largest): a query within a
+/// multiple of the larger spacing of a pair visits each class's grid at
+/// that class's own radius, so fine particles beside coarse ones cost
+/// their own neighbourhood, not the coarse one's (a grid sized by the
+/// largest spacing scanned `(s_max/s_min)^D` fine particles a cell).
+#[derive(Debug, Clone)]
+pub struct SpacingGrids<const D: usize> {
+    classes: Vec<(f64, HashGrid<D>)>,
+}
+
+impl<const D: usize> SpacingGrids<D>
+where
+    Const<D>: Dim,
+{
+    /// The points `i` with `keep(i)`, by the class of `spacing[i]` (finite
+    /// and positive spacings only).
+    pub fn new(points: &[Point<D>], spacing: &[f64], keep: impl Fn(usize) -> bool) -> Self {
+        let mut classes: Vec<(i32, f64, HashGrid<D>)> = Vec::new();
+        for (i, p) in points.iter().enumerate() {
+            let s = spacing[i];
+            if !(keep(i) && s > 0.0 && s.is_finite()) {
+                continue;
+            }
+            let k = s.log2().floor() as i32;
+            let c = match classes.iter().position(|c| c.0 == k) {
+                Some(c) => c,
+                None => {
+                    let top = 2f64.powi(k + 1);
+                    classes.push((k, top, HashGrid::new(1.5 * top)));
+                    classes.len() - 1
+                }
+            };
+            classes[c].2.insert(p, i);
+        }
+        Self {
+            classes: classes.into_iter().map(|(_, top, g)| (top, g)).collect(),
+        }
+    }
+
+    /// Calls `f` with every recorded point within `factor` times the
+    /// larger of `s` and its class's largest spacing from `p` (a superset
+    /// of the points within `factor · max(s, sⱼ)`; the caller checks its
+    /// own pair radius).
+    pub fn visit(
+        &self,
+        p: &Point<D>,
+        s: f64,
+        factor: f64,
+        points: &[Point<D>],
+        mut f: impl FnMut(usize),
+    ) {
+        for (top, grid) in &self.classes {
+            grid.visit(p, factor * s.max(*top), points, &mut f);
+        }
+    }
+}
+
 /// The first fluid particle with particles of one other body on both
-/// sides of it along every axis (within 1.5 spacings along, 0.75 across,
-/// the larger spacing of the pair), and that body: a fluid drawn inside
-/// another body off its lattice. `None` when there is none.
+/// sides of it along every axis and every face diagonal (within 1.5
+/// spacings along the direction, 0.75 across it, the larger spacing of the
+/// pair), and that body: a fluid drawn inside another body off its
+/// lattice. `None` when there is none. Particles beside a body, along a
+/// sloping face of it, or in a concave corner of it are on one side of
+/// some direction: a face diagonal leaves the corner and the slope (the
+/// axes alone refused a water particle in the corner of a U-shaped wall
+/// and on a 45° boundary whose lattices were off each other's; session
+/// 43's review).
 pub fn fluid_inside_another_body<const D: usize>(
     x: &[Point<D>],
     kind: &[ParticleKind],
@@ -346,22 +410,30 @@ pub fn fluid_inside_another_body<const D: usize>(
 where
     Const<D>: Dim,
 {
-    let s_max = spacing.iter().copied().fold(0.0, f64::max);
-    if !(s_max > 0.0 && s_max.is_finite()) {
-        return None;
+    let grids = SpacingGrids::new(x, spacing, |_| true);
+    // The axes and the face diagonals.
+    let mut dirs: Vec<Vector<D>> = Vec::new();
+    for a in 0..D {
+        let mut u = Vector::<D>::zeros();
+        u[a] = 1.0;
+        dirs.push(u);
+        for b in a + 1..D {
+            for sign in [1.0, -1.0] {
+                let mut u = Vector::<D>::zeros();
+                u[a] = std::f64::consts::FRAC_1_SQRT_2;
+                u[b] = sign * std::f64::consts::FRAC_1_SQRT_2;
+                dirs.push(u);
+            }
+        }
     }
-    let mut grid = HashGrid::<D>::new(1.5 * s_max);
-    for (i, p) in x.iter().enumerate() {
-        grid.insert(p, i);
-    }
-    // Per other body near a particle: (below, above) along each axis.
-    let mut sides: Vec<(u32, [[bool; 2]; 3])> = Vec::new();
+    // Per other body near a particle: (below, above) along each direction.
+    let mut sides: Vec<(u32, Vec<[bool; 2]>)> = Vec::new();
     for i in 0..x.len() {
-        if kind[i] != ParticleKind::Fluid {
+        if kind[i] != ParticleKind::Fluid || !(spacing[i] > 0.0 && spacing[i].is_finite()) {
             continue;
         }
         sides.clear();
-        grid.visit(&x[i], 1.5 * s_max, x, |j| {
+        grids.visit(&x[i], spacing[i], 1.5, x, |j| {
             if body[j] == body[i] {
                 return;
             }
@@ -373,23 +445,24 @@ where
             let k = match sides.iter().position(|(b, _)| *b == body[j]) {
                 Some(k) => k,
                 None => {
-                    sides.push((body[j], [[false; 2]; 3]));
+                    sides.push((body[j], vec![[false; 2]; dirs.len()]));
                     sides.len() - 1
                 }
             };
-            for a in 0..D {
-                if (0..D).all(|c| c == a || d[c].abs() <= 0.75 * s) {
-                    if d[a] < -0.25 * s {
-                        sides[k].1[a][0] = true;
-                    } else if d[a] > 0.25 * s {
-                        sides[k].1[a][1] = true;
+            for (u, side) in dirs.iter().zip(sides[k].1.iter_mut()) {
+                let along = d.dot(u);
+                if (d - u * along).norm() <= 0.75 * s {
+                    if along < -0.25 * s {
+                        side[0] = true;
+                    } else if along > 0.25 * s {
+                        side[1] = true;
                     }
                 }
             }
         });
         if let Some((b, _)) = sides
             .iter()
-            .find(|(_, f)| (0..D).all(|a| f[a][0] && f[a][1]))
+            .find(|(_, f)| f.iter().all(|side| side[0] && side[1]))
         {
             return Some((i, *b));
         }

@@ -35,10 +35,14 @@ where
 }
 
 /// An upper bound of `|r(t) ω cos(ωt) + r'(t) sin(ωt)|` for the ramp `r`
-/// over `ramp` seconds and `ω = 2π / period` (`r' ≤ 15/8 / ramp`).
+/// over `ramp` seconds and `ω = 2π / period` (`r' ≤ π/2 / ramp`).
 fn oscillation_rate(period: f64, ramp: f64) -> f64 {
     let w = 2.0 * std::f64::consts::PI / period;
-    w + if ramp > 0.0 { 1.875 / ramp } else { 0.0 }
+    w + if ramp > 0.0 {
+        0.5 * std::f64::consts::PI / ramp
+    } else {
+        0.0
+    }
 }
 
 /// A sinusoidal translation `d(t) = A sin(2π t / T)`: a piston or flap
@@ -54,11 +58,12 @@ where
     pub period: f64,
     /// Duration of a ramp of the amplitude from 0 (s); 0 for none. A ramp
     /// over a period or two spares the fluid the start-up jerk. The ramp
-    /// is `6s⁵ − 15s⁴ + 10s³` of `s = t / ramp`: the wall's velocity and
-    /// acceleration are continuous at both of its ends, whatever its length
-    /// (a linear ramp, before session 43, ended with a jump of
-    /// `A sin(2π ramp / T) / ramp` in velocity unless the ramp was a
-    /// multiple of half the period).
+    /// is the half cosine `(1 − cos(π t / ramp)) / 2`: the wall's velocity
+    /// is continuous at both of its ends whatever its length, and its
+    /// acceleration too when the ramp is a multiple of half the period (a
+    /// linear ramp, before session 43, ended with a jump of
+    /// `A sin(2π ramp / T) / ramp` in velocity unless the ramp was such a
+    /// multiple, and with a jump in acceleration always).
     pub ramp: f64,
 }
 
@@ -71,9 +76,12 @@ where
     }
 }
 
-/// A smooth ramp from 0 to 1 over `ramp` seconds (none when 0), `r(s) =
-/// 6s⁵ − 15s⁴ + 10s³` of `s = t / ramp`, whose first and second
-/// derivatives vanish at both ends, and its rate: `(r(t), r'(t))`.
+/// A half-cosine ramp from 0 to 1 over `ramp` seconds (none when 0),
+/// `r = (1 − cos(π t / ramp)) / 2`, whose rate vanishes at both ends, and
+/// that rate: `(r(t), r'(t))`. (A quintic `6s⁵ − 15s⁴ + 10s³`, whose
+/// second derivative vanishes too, was tried: steeper in its middle, it
+/// set the paddle test's tank sloshing at 0.893 s against the paddle's
+/// 0.8 s; 0.803 s with this one.)
 fn ramp_factor(ramp: f64, t: f64) -> (f64, f64) {
     let (r, dr, _) = ramp_derivatives(ramp, t);
     (r, dr)
@@ -81,12 +89,13 @@ fn ramp_factor(ramp: f64, t: f64) -> (f64, f64) {
 
 /// `(r, r', r'')` of [`ramp_factor`]'s ramp at `t`.
 fn ramp_derivatives(ramp: f64, t: f64) -> (f64, f64, f64) {
-    if ramp > 0.0 && t < ramp {
-        let s = (t / ramp).max(0.0);
+    // (A ramp so short that its square underflows is none.)
+    if ramp * ramp > 0.0 && t < ramp {
+        let (pi, s) = (std::f64::consts::PI, (t / ramp).max(0.0));
         (
-            s * s * s * (10.0 + s * (6.0 * s - 15.0)),
-            30.0 * s * s * (1.0 - s) * (1.0 - s) / ramp,
-            60.0 * s * (1.0 - s) * (1.0 - 2.0 * s) / (ramp * ramp),
+            0.5 * (1.0 - (pi * s).cos()),
+            0.5 * pi * (pi * s).sin() / ramp,
+            0.5 * pi * pi * (pi * s).cos() / (ramp * ramp),
         )
     } else {
         (1.0, 0.0, 0.0)
@@ -438,33 +447,44 @@ mod tests {
         }
     }
 
-    /// A ramp of any length ends without a jump in velocity or in
-    /// acceleration (the linear ramp, before session 43, jumped by
-    /// `A sin(2π ramp / T) / ramp`: 0.059 m/s here), and the speed stays
-    /// within `max_speed`.
+    /// A ramp of any length ends without a jump in velocity (the linear
+    /// ramp, before session 43, jumped by `A sin(2π ramp / T) / ramp`:
+    /// 0.059 m/s here), one of half a period without a jump in
+    /// acceleration either, and the speed stays within `max_speed`.
     #[test]
     fn a_ramp_of_any_length_ends_smoothly() {
-        let piston = Sinusoidal::<2> {
-            amplitude: Vector::<2>::new(0.05, 0.0),
-            period: 0.8,
-            ramp: 0.3,
-        };
         let x0 = Point::<2>::new(0.0, 0.0);
         let e = 1e-9;
-        let (v0, v1) = (piston.velocity(&x0, 0.3 - e), piston.velocity(&x0, 0.3 + e));
-        assert!((v1 - v0).norm() < 1e-6, "{v0} then {v1}");
-        let a0 = piston.acceleration(&x0, 0.3 - e).unwrap();
-        let a1 = piston.acceleration(&x0, 0.3 + e).unwrap();
-        assert!((a1 - a0).norm() < 1e-5, "{a0} then {a1}");
-        let bound = piston.max_speed(&x0, &x0).unwrap();
-        for k in 0..=1000 {
-            let t = k as f64 * 1e-3;
-            let v = piston.velocity(&x0, t).norm();
-            assert!(v <= bound, "t = {t}: {v} above {bound}");
-            // The velocity is the position's derivative through the ramp.
-            let fd = (piston.position(&x0, t + 1e-7) - piston.position(&x0, t)) / 1e-7;
-            assert!((fd - piston.velocity(&x0, t)).norm() < 1e-5, "t = {t}");
-            check_acceleration(&piston, x0, t.max(2e-6));
+        for (ramp, smooth_acceleration) in [(0.3, false), (0.4, true)] {
+            let piston = Sinusoidal::<2> {
+                amplitude: Vector::<2>::new(0.05, 0.0),
+                period: 0.8,
+                ramp,
+            };
+            let (v0, v1) = (
+                piston.velocity(&x0, ramp - e),
+                piston.velocity(&x0, ramp + e),
+            );
+            assert!((v1 - v0).norm() < 1e-6, "{v0} then {v1}");
+            let a0 = piston.acceleration(&x0, ramp - e).unwrap();
+            let a1 = piston.acceleration(&x0, ramp + e).unwrap();
+            assert_eq!(
+                (a1 - a0).norm() < 1e-5,
+                smooth_acceleration,
+                "{a0} then {a1}"
+            );
+            let bound = piston.max_speed(&x0, &x0).unwrap();
+            for k in 0..=1000 {
+                let t = k as f64 * 1e-3;
+                let v = piston.velocity(&x0, t).norm();
+                assert!(v <= bound, "t = {t}: {v} above {bound}");
+                // The velocity is the position's derivative through the ramp.
+                let fd = (piston.position(&x0, t + 1e-7) - piston.position(&x0, t)) / 1e-7;
+                assert!((fd - piston.velocity(&x0, t)).norm() < 1e-5, "t = {t}");
+                if (t - ramp).abs() > 1e-5 {
+                    check_acceleration(&piston, x0, t.max(2e-6));
+                }
+            }
         }
     }
 

@@ -395,8 +395,9 @@ where
     /// a hidden cavity (session 43's review). A part wholly inside another
     /// (a cavity) crosses nothing and stays a cavity. A grid of the
     /// triangles' boxes, about one triangle a cell, as the polygon's
-    /// crossing check; an edge touching a triangle's plane (two parts face
-    /// to face) is no crossing.
+    /// crossing check; an edge touching a triangle's plane within 10⁻⁶ of
+    /// the surface's size (two parts face to face, as an f32 file rounds
+    /// them) is no crossing.
     fn check_surface_crossings(&self) -> Result<(), String> {
         let tris: Vec<&[u32]> = self.facets.chunks_exact(3).collect();
         let v = |i: u32| {
@@ -459,6 +460,10 @@ where
             u[0] * (w[1] * x[2] - w[2] * x[1]) - u[1] * (w[0] * x[2] - w[2] * x[0])
                 + u[2] * (w[0] * x[1] - w[1] * x[0])
         };
+        let far = (0..3)
+            .map(|k| lo[k].abs().max(hi[k].abs()).max(hi[k] - lo[k]))
+            .fold(0.0, f64::max);
+        let tol = 1e-6 * far;
         let mut seen: std::collections::HashSet<(u32, u32)> = Default::default();
         let mut near: Vec<u32> = Vec::new();
         for t in &tris {
@@ -487,16 +492,40 @@ where
                         continue;
                     }
                     let (a, b, c) = (v(f[0]), v(f[1]), v(f[2]));
-                    let (o1, o2) = (orient(a, b, c, p), orient(a, b, c, q));
-                    if o1 * o2 >= 0.0 || (o1 * o2).is_nan() {
+                    // Each end's distance from the triangle's plane, beyond
+                    // the file's own rounding on either side (parts face
+                    // to face on a tilted plane, their vertices apart, lie
+                    // 10⁻⁷ of their size off each other's planes in f32).
+                    let n = {
+                        let (u, w) = (
+                            [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                            [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+                        );
+                        let cr = [
+                            u[1] * w[2] - u[2] * w[1],
+                            u[2] * w[0] - u[0] * w[2],
+                            u[0] * w[1] - u[1] * w[0],
+                        ];
+                        (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt()
+                    };
+                    let (o1, o2) = (orient(a, b, c, p) / n, orient(a, b, c, q) / n);
+                    if !((o1 < -tol && o2 > tol) || (o1 > tol && o2 < -tol)) {
                         continue;
                     }
                     let (s1, s2, s3) = (orient(p, q, a, b), orient(p, q, b, c), orient(p, q, c, a));
-                    // Through the closed triangle (its edges too: two
-                    // cubes run corner into corner cross on diagonals).
-                    if (s1 >= 0.0 && s2 >= 0.0 && s3 >= 0.0)
-                        || (s1 <= 0.0 && s2 <= 0.0 && s3 <= 0.0)
-                    {
+                    // Through the triangle, farther than `tol` from each
+                    // of its edges (a crossing within it of an edge is a
+                    // touch as the file rounds it: parts face to face
+                    // overlap by 10⁻⁷). `s₁ / Σs` is the crossing point's
+                    // barycentric weight off edge ab, whose height is
+                    // `n / |b − a|`.
+                    let sum = s1 + s2 + s3;
+                    let len = |u: [f64; 3], w: [f64; 3]| {
+                        ((w[0] - u[0]).powi(2) + (w[1] - u[1]).powi(2) + (w[2] - u[2]).powi(2))
+                            .sqrt()
+                    };
+                    let inside = |si: f64, u: [f64; 3], w: [f64; 3]| si / sum * n / len(u, w) > tol;
+                    if sum != 0.0 && inside(s1, a, b) && inside(s2, b, c) && inside(s3, c, a) {
                         return Err(format!(
                             "the surface crosses itself: edge ({e0}, {e1}) pierces triangle ({}, {}, {}) (two overlapping parts? they must be one closed surface, or apart)",
                             f[0], f[1], f[2]
@@ -1185,7 +1214,7 @@ mod tests {
             facets.extend(b.facets.iter().map(|f| f + 8));
             ClosedSurface { vertices, facets }
         };
-        let why = two([0.5, 0.5, 0.5], 1.0).check().unwrap_err();
+        let why = two([0.5, 0.4, 0.3], 1.0).check().unwrap_err();
         assert!(why.contains("crosses itself"), "{why}");
         let why = two([0.3, 0.2, -0.4], 1.0).check().unwrap_err();
         assert!(why.contains("crosses itself"), "{why}");
@@ -1193,6 +1222,8 @@ mod tests {
             two([2.0, 0.0, 0.0], 1.0),
             two([1.0, 0.0, 0.0], 1.0),
             two([0.25, 0.25, 0.25], 0.5),
+            // Face to face as an f32 file rounds them: 10⁻⁷ into each other.
+            two([1.0 - 1e-7, 0.3, 0.2], 1.0),
         ] {
             ok.check().unwrap();
         }
