@@ -341,7 +341,8 @@ where
 /// largest spacing scanned `(s_max/s_min)^D` fine particles a cell).
 #[derive(Debug, Clone)]
 pub struct SpacingGrids<const D: usize> {
-    classes: Vec<(f64, HashGrid<D>)>,
+    /// (largest spacing of the class, its grid, its points).
+    classes: Vec<(f64, HashGrid<D>, Vec<usize>)>,
 }
 
 impl<const D: usize> SpacingGrids<D>
@@ -351,7 +352,7 @@ where
     /// The points `i` with `keep(i)`, by the class of `spacing[i]` (finite
     /// and positive spacings only).
     pub fn new(points: &[Point<D>], spacing: &[f64], keep: impl Fn(usize) -> bool) -> Self {
-        let mut classes: Vec<(i32, f64, HashGrid<D>)> = Vec::new();
+        let mut classes: Vec<(i32, f64, HashGrid<D>, Vec<usize>)> = Vec::new();
         for (i, p) in points.iter().enumerate() {
             let s = spacing[i];
             if !(keep(i) && s > 0.0 && s.is_finite()) {
@@ -362,14 +363,18 @@ where
                 Some(c) => c,
                 None => {
                     let top = 2f64.powi(k + 1);
-                    classes.push((k, top, HashGrid::new(1.5 * top)));
+                    classes.push((k, top, HashGrid::new(1.5 * top), Vec::new()));
                     classes.len() - 1
                 }
             };
             classes[c].2.insert(p, i);
+            classes[c].3.push(i);
         }
         Self {
-            classes: classes.into_iter().map(|(_, top, g)| (top, g)).collect(),
+            classes: classes
+                .into_iter()
+                .map(|(_, top, g, members)| (top, g, members))
+                .collect(),
         }
     }
 
@@ -385,8 +390,21 @@ where
         points: &[Point<D>],
         mut f: impl FnMut(usize),
     ) {
-        for (top, grid) in &self.classes {
-            grid.visit(p, factor * s.max(*top), points, &mut f);
+        for (top, grid, members) in &self.classes {
+            let r = factor * s.max(*top);
+            // A query far coarser than the class (a wall at 0.1 m beside
+            // a body at 10⁻⁹ m) would visit more cells than the class has
+            // points: its points one by one instead.
+            let side = 2.0 * (r / (1.5 * top)).ceil() + 1.0;
+            if side.powi(D as i32) > members.len() as f64 {
+                for &j in members {
+                    if (points[j] - p).norm() <= r {
+                        f(j);
+                    }
+                }
+            } else {
+                grid.visit(p, r, points, &mut f);
+            }
         }
     }
 }
