@@ -4,7 +4,10 @@
 //! - [`scene`]: [`Scene`] (bodies, gravity, run settings) and its builder;
 //!   [`Body`], [`Geometry`], [`Clamp`], [`WallMotion`], initial fields;
 //! - [`lattice`]: particles filling boxes, balls and cylinders, the
-//!   structured mesh of a box, a hash grid for near-coincident particles;
+//!   structured mesh of a box, a hash grid for near-coincident particles,
+//!   grids by spacing class, the check for a fluid drawn inside another
+//!   body;
+//! - `hydrostatic` (private): the hydrostatic start, column by column;
 //! - [`solid_mesh`]: the own mesh of a non-box solid (Delaunay of its
 //!   particles trimmed by the alpha shape);
 //! - [`surface`]: bodies bounded by a polygon (2D) or a closed triangle
