@@ -148,6 +148,12 @@ where
     let at = |value: &[Option<(f64, f64)>], i: usize| -> Option<f64> {
         value[root[i]].map(|(t, p0)| p0 + density[i] * gn * (depth[i] - t))
     };
+    // Whether the level `(t, p0)` of a fluid of density `rho` is more
+    // loaded than `(te, pe)`: the larger pressure at any one depth (one
+    // density, one slope).
+    let more_loaded = |rho: f64, (t, p0): (f64, f64), (te, pe): (f64, f64)| {
+        p0 - rho * gn * t > pe - rho * gn * te
+    };
     let mut forced = false;
     loop {
         let mut progress = false;
@@ -173,12 +179,11 @@ where
             if top[r] == Top::Covered || pending.contains(&c) {
                 continue;
             }
-            if let Some((t, p0)) = value[r] {
-                // The most loaded of the fluid's tops: the largest pressure
-                // at any one depth (one density, one slope).
-                let e = level.entry(c).or_insert((t, p0));
-                if p0 - density[r] * gn * t > e.1 - density[r] * gn * e.0 {
-                    *e = (t, p0);
+            if let Some(v) = value[r] {
+                // The most loaded of the fluid's tops.
+                let e = level.entry(c).or_insert(v);
+                if more_loaded(density[r], v, *e) {
+                    *e = v;
                 }
             }
         }
@@ -209,8 +214,7 @@ where
         }
     }
     for &i in &fluid {
-        let (t, p0) = value[root[i]].expect("every column resolved");
-        pressure[i] = p0 + density[i] * gn * (depth[i] - t);
+        pressure[i] = at(&value, i).expect("every column resolved");
     }
     // Walls and solids: the nearest fluid particle's field, or farther
     // (within a spacing of a connected fluid's box) that fluid's level.
@@ -226,7 +230,7 @@ where
         e.0 = e.0.inf(&x[i]);
         e.1 = e.1.sup(&x[i]);
         e.2 = e.2.max(spacing[i]);
-        if p0 - density[i] * gn * t > e.4 - density[i] * gn * e.3 {
+        if more_loaded(density[i], (t, p0), (e.3, e.4)) {
             (e.3, e.4) = (t, p0);
         }
     }

@@ -444,8 +444,9 @@ where
             }
         }
     }
-    // Per other body near a particle: (below, above) along each direction.
-    let mut sides: Vec<(u32, Vec<[bool; 2]>)> = Vec::new();
+    // Per other body near a particle: (below, above) along each direction
+    // (at most 3 axes and 6 face diagonals: no allocation a particle).
+    let mut sides: Vec<(u32, [[bool; 2]; 9])> = Vec::new();
     for i in 0..x.len() {
         if kind[i] != ParticleKind::Fluid || !(spacing[i] > 0.0 && spacing[i].is_finite()) {
             continue;
@@ -463,7 +464,7 @@ where
             let k = match sides.iter().position(|(b, _)| *b == body[j]) {
                 Some(k) => k,
                 None => {
-                    sides.push((body[j], vec![[false; 2]; dirs.len()]));
+                    sides.push((body[j], [[false; 2]; 9]));
                     sides.len() - 1
                 }
             };
@@ -480,7 +481,7 @@ where
         });
         if let Some((b, _)) = sides
             .iter()
-            .find(|(_, f)| f.iter().all(|side| side[0] && side[1]))
+            .find(|(_, f)| f[..dirs.len()].iter().all(|side| side[0] && side[1]))
         {
             return Some((i, *b));
         }

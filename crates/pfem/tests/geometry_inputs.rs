@@ -316,11 +316,12 @@ fn meaningless_friction_pairs_are_refused() {
 #[test]
 fn a_body_drawn_inside_another_off_its_lattice_is_refused() {
     let h = 0.01;
+    let p = |x: f64, y: f64| Point::<2>::new(x, y);
     let b = |x0: f64, y0: f64, x1: f64, y1: f64| Geometry::Box {
-        min: Point::<2>::new(x0, y0),
-        max: Point::<2>::new(x1, y1),
+        min: p(x0, y0),
+        max: p(x1, y1),
     };
-    let tank = || {
+    let base = || {
         Scene::<2>::new("inside")
             .gravity(Vector::<2>::new(0.0, -9.81))
             .settings(RunSettings {
@@ -328,6 +329,9 @@ fn a_body_drawn_inside_another_off_its_lattice_is_refused() {
                 output_interval: None,
                 ..Default::default()
             })
+    };
+    let tank = || {
+        base()
             .wall("floor", b(-0.02, -0.02, 0.52, 0.0), h, WallMotion::Fixed)
             .fluid(
                 "water",
@@ -337,16 +341,18 @@ fn a_body_drawn_inside_another_off_its_lattice_is_refused() {
             )
     };
     let ball = || Geometry::Ball {
-        center: Point::<2>::new(0.255, 0.155),
+        center: p(0.255, 0.155),
         radius: 0.05,
     };
     let oil = || Box::new(Newtonian::new(800.0, 1e-2, 1.5e9).unwrap());
+    let built = |scene: Scene<2>| {
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).map(|_| ())
+    };
     let refused = |scene: Scene<2>| {
-        let err = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
-            .expect_err("refused")
-            .to_string();
+        let err = built(scene).expect_err("refused").to_string();
         assert!(err.contains("overlap"), "{err}");
     };
+    let accepted = |scene: Scene<2>| built(scene).unwrap_or_else(|e| panic!("{e}"));
     refused(tank().fluid("oil", oil(), ball(), h));
     refused(tank().solid(
         "ball",
@@ -355,34 +361,18 @@ fn a_body_drawn_inside_another_off_its_lattice_is_refused() {
         h,
         None,
     ));
-    let square = |c: (f64, f64), r: f64| {
-        Geometry::<2>::polygon(vec![
-            Point::<2>::new(c.0 - r, c.1 - r),
-            Point::<2>::new(c.0 + r, c.1 - r),
-            Point::<2>::new(c.0 + r, c.1 + r),
-            Point::<2>::new(c.0 - r, c.1 + r),
-        ])
-    };
-    refused(tank().wall("post", square((0.255, 0.155), 0.05), h, WallMotion::Fixed));
+    let (c, r) = ((0.255, 0.155), 0.05);
+    let square = Geometry::<2>::polygon(vec![
+        p(c.0 - r, c.1 - r),
+        p(c.0 + r, c.1 - r),
+        p(c.0 + r, c.1 + r),
+        p(c.0 - r, c.1 + r),
+    ]);
+    refused(tank().wall("post", square, h, WallMotion::Fixed));
     // Touching, not inside (the review of the first version, which looked
     // along the axes only): water in a U-shaped polygon wall twice as
     // coarse, flush with its inside; water on a 45° wall face, the two
     // lattices off each other's.
-    let accepted = |scene: Scene<2>| {
-        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
-            .map(|_| ())
-            .unwrap_or_else(|e| panic!("{e}"))
-    };
-    let base = || {
-        Scene::<2>::new("touching")
-            .gravity(Vector::<2>::new(0.0, -9.81))
-            .settings(RunSettings {
-                end_time: 0.01,
-                output_interval: None,
-                ..Default::default()
-            })
-    };
-    let p = |x: f64, y: f64| Point::<2>::new(x, y);
     let u_wall = Geometry::<2>::polygon(vec![
         p(-0.04, -0.04),
         p(0.24, -0.04),
@@ -408,10 +398,5 @@ fn a_body_drawn_inside_another_off_its_lattice_is_refused() {
         h,
     ));
     // Oil resting on the water, its lattice 0.33 spacing off: accepted.
-    Simulation::new(
-        tank().fluid("oil", oil(), b(0.0, 0.4033, 0.5, 0.45), h),
-        Box::new(Delaunay2::default()),
-        StepParams::default(),
-    )
-    .unwrap();
+    accepted(tank().fluid("oil", oil(), b(0.0, 0.4033, 0.5, 0.45), h));
 }
