@@ -1408,9 +1408,18 @@ where
             // 6.2·10⁻² √(gH) by 0.1 s (1.5·10⁻⁴ kept; session 43). The
             // paper's update is left as it was (the same tank stays at
             // rest to round-off either way; the 2D dam break's front moved
-            // 1.60 → 1.84 % with walls kept, not a measured gain).
+            // 1.60 → 1.84 % with walls kept, not a measured gain). A fluid
+            // particle with every component prescribed (an inflow's layer
+            // at its face, a held drop) flies like any other: it carries
+            // no pressure (its material is a fluid's; a wall has none, or
+            // the mesh gives no particle materials).
+            let wall = input
+                .mesh
+                .node_material
+                .get(p)
+                .is_none_or(|&m| input.materials.get(m as usize).is_none());
             let kept_wall =
-                stabilised_increments && (0..D).all(|k| input.constraints.is_fixed(p, k));
+                stabilised_increments && wall && (0..D).all(|k| input.constraints.is_fixed(p, k));
             if !touched[p] && self.assembler.system_node(p).is_none() && !kept_wall {
                 state.pressure[p] = 0.0;
             }
