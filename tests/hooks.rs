@@ -1360,3 +1360,87 @@ fn an_inserted_particle_takes_its_parents_majority_fluid() {
     assert_eq!(p.material()[n], oil_material, "the oil's material");
     assert_eq!(p.body()[n], oil_body, "the oil's body");
 }
+
+/// Session 44's review of panics and silent non-numbers:
+/// - a hook that leaves a non-number in the state (an `after_step`
+///   rescale by a zero energy) is named: the last step's NaN velocity
+///   reached the frames and the final checkpoint with the run `Ok`;
+/// - a fluid particle removed by hand before `run` with an output: the
+///   first frame read the old set's elements and panicked out of bounds;
+/// - a linear solver of one's own that reports success with a NaN is
+///   named at once (it read as a diverged Picard loop, retried down to
+///   `min_dt`).
+#[test]
+fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
+    // After the last step.
+    for what in ["velocity", "pressure", "acceleration"] {
+        let mut sim = sim2(small_tank("nan after step"), StepParams::default());
+        let hook = FnHook::new("rescale").after_step(move |ctx: &mut HookContext<'_, 2>| {
+            let p = ctx.particles_mut();
+            let last = p.len() - 1;
+            match what {
+                "velocity" => p.v_mut()[last].x = f64::NAN,
+                "pressure" => p.pressure_mut()[last] = f64::INFINITY,
+                _ => p.a_mut()[last].y = f64::NAN,
+            }
+            Ok(())
+        });
+        sim.add_hook(Box::new(hook));
+        let err = sim.run(&mut []).unwrap_err().to_string();
+        assert!(
+            err.contains("rescale") && err.contains(what) && err.contains("not finite"),
+            "{what}: {err}"
+        );
+    }
+
+    // A set changed by hand, then a run with frames and probes.
+    use pfem::geometry::{Origin, ParticleMap, REMOVED};
+    let dir = std::env::temp_dir().join(format!("pfem-by-hand-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut sim = sim2(small_tank("by hand with output"), StepParams::default());
+    let n = sim.particles().len();
+    let map = ParticleMap {
+        old_to_new: (0..n as u32)
+            .map(|i| if i + 1 == n as u32 { REMOVED } else { i })
+            .collect(),
+        origin: (0..n as u32 - 1).map(Origin::Kept).collect(),
+    };
+    sim.particles_mut().remap(&map).unwrap();
+    let volume = Probe::<2>::new("volume", |s: &Simulation<2>| s.fluid_volume());
+    let mut out = StandardOutput::new(&dir, true, vec![volume], true);
+    sim.run(&mut [&mut out]).unwrap();
+    assert_eq!(sim.particles().len(), n - 1);
+    let _ = std::fs::remove_dir_all(&dir);
+    // And the accelerations' start on such a set.
+    let mut sim = sim2(small_tank("by hand, accelerations"), StepParams::default());
+    sim.particles_mut().remap(&map).unwrap();
+    sim.initialize_acceleration().unwrap();
+
+    // A solver returning a non-number.
+    #[derive(Debug, Default)]
+    struct Broken(pfem::assembly::DirectSolver);
+    impl pfem::assembly::LinearSolver for Broken {
+        fn name(&self) -> &str {
+            "broken solver"
+        }
+        fn solve(
+            &mut self,
+            a: pfem::assembly::faer::sparse::SparseColMatRef<'_, usize, f64>,
+            generation: u64,
+            b: &[f64],
+            x: &mut [f64],
+        ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
+            let r = self.0.solve(a, generation, b, x)?;
+            x[0] = f64::NAN;
+            Ok(r)
+        }
+    }
+    let mut sim = sim2(small_tank("broken solver"), StepParams::default());
+    sim.set_solver(Box::new(Broken::default()));
+    let err = sim.step().unwrap_err().to_string();
+    assert!(
+        err.contains("broken solver") && err.contains("not finite"),
+        "{err}"
+    );
+    assert_eq!(sim.rejected(), 0, "retried: {err}");
+}

@@ -53,6 +53,16 @@ pub enum SolveError {
         /// The offending entry.
         index: usize,
     },
+    /// The solver reported success with a solution that holds a NaN or an
+    /// infinity (a solver of one's own whose preconditioner broke down):
+    /// refused at once, not retried with a smaller step.
+    #[error("{solver} returned a solution that is not finite at index {index}")]
+    NonFiniteSolution {
+        /// Solver name.
+        solver: String,
+        /// The first offending entry.
+        index: usize,
+    },
     /// The factorisation failed (singular or not positive definite).
     #[error("{solver} factorisation failed: {detail}")]
     Factorization {

@@ -280,6 +280,33 @@ where
         &self.state
     }
 
+    /// The first particle with a non-finite position, velocity,
+    /// acceleration, pressure or prescribed velocity, and which.
+    pub(crate) fn non_finite(&self) -> Option<(usize, &'static str)> {
+        let vector = |v: &Vector<D>| v.iter().all(|c| c.is_finite());
+        let (s, c) = (&self.state, &self.constraints);
+        // (Constraints of another length are the step's to refuse.)
+        (0..self.len()).find_map(|i| {
+            let what = if !s.x[i].iter().all(|c| c.is_finite()) {
+                "position"
+            } else if !vector(&s.v[i]) {
+                "velocity"
+            } else if !vector(&s.a[i]) {
+                "acceleration"
+            } else if !s.pressure[i].is_finite() {
+                "pressure"
+            } else if (0..D).any(|k| {
+                let fixed = c.mask.get(i).is_some_and(|m| m & (1 << k) != 0);
+                fixed && !c.velocity.get(i).is_none_or(|v| v[k].is_finite())
+            }) {
+                "prescribed velocity"
+            } else {
+                return None;
+            };
+            Some((i, what))
+        })
+    }
+
     /// How many times particles were added or removed.
     pub fn generation(&self) -> u64 {
         self.generation

@@ -688,6 +688,7 @@ where
     /// a program set by hand are then replaced); call it again after changing
     /// velocities, pressures or constraints by hand before the first step.
     pub fn initialize_acceleration(&mut self) -> Result<(), RunError> {
+        rayon::scope(|_| self.mesh_a_set_changed_by_hand())?;
         let (mut mesh, history) = self.elements.step_mesh();
         mesh.node_material = self.particles.material();
         // (Forces may cover a prefix of the particles after a hook's
@@ -959,6 +960,17 @@ where
             let moved = ctx.moved;
             let remesh = self.particles.generation() != generation;
             let moved = moved || remesh;
+            // A non-number a hook left in the state is named with the
+            // hook: after the last step it would reach the outputs (and the
+            // final checkpoint, which a restore then refuses) with the run
+            // `Ok`; before the solve the step would refuse it naming no one.
+            let r = r.and_then(|()| match self.particles.non_finite() {
+                Some((i, what)) => Err(RunError::Hook {
+                    hook: hook.name().to_string(),
+                    why: format!("left particle {i}'s {what} not finite"),
+                }),
+                None => Ok(()),
+            });
             if let Err(e) = r {
                 // A set changed before the hook failed keeps no mesh of
                 // the old set's indices (outputs written after the error
@@ -1104,9 +1116,11 @@ where
         Ok(())
     }
 
-    fn step_in_pool(&mut self) -> Result<(), RunError> {
-        // A set changed by hand since the last mesh (`particles_mut`) is
-        // meshed before any hook reads the elements.
+    /// A set changed by hand since the last mesh (`particles_mut`) is
+    /// meshed before anything reads the elements (a hook, an observer's
+    /// first frame, the accelerations' start), whose indices are the old
+    /// set's.
+    fn mesh_a_set_changed_by_hand(&mut self) -> Result<(), RunError> {
         if self.particles.generation() != self.meshed {
             self.elements.clear_fluid();
             self.remesh()?;
@@ -1115,6 +1129,11 @@ where
             self.volume.remeshing += after - self.volume_now;
             self.volume_now = after;
         }
+        Ok(())
+    }
+
+    fn step_in_pool(&mut self) -> Result<(), RunError> {
+        self.mesh_a_set_changed_by_hand()?;
         self.start_hooks()?;
         // The fluid volume at the end of the last step is `volume_now`; it is
         // measured once after remeshing and once after the solution.
@@ -1289,6 +1308,7 @@ where
     /// where the last call ended. A run a hook stopped stays stopped
     /// (`run` returns at once) until [`Simulation::clear_stop`].
     pub fn run(&mut self, observers: &mut [&mut dyn Observer<D>]) -> Result<(), RunError> {
+        rayon::scope(|_| self.mesh_a_set_changed_by_hand())?;
         for o in observers.iter_mut() {
             o.start(self)?;
         }

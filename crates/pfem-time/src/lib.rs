@@ -616,7 +616,7 @@ impl StepError {
             StepError::Assembly { source, .. } => !matches!(source, A::MeshMismatch { .. }),
             StepError::Solve { source, .. } => !matches!(
                 source,
-                S::DimensionMismatch { .. } | S::InvalidSystem { .. }
+                S::DimensionMismatch { .. } | S::InvalidSystem { .. } | S::NonFiniteSolution { .. }
             ),
             _ => true,
         }
@@ -1205,6 +1205,19 @@ where
                 loose = asked.is_some_and(|a| a > tol) && sr.residual > tol;
             }
             rep.solve_seconds += ts.elapsed().as_secs_f64();
+            // A solver that reports success with a non-number (one of the
+            // user's) is named here: the loop would read it as a change of
+            // NaN, a divergence, and halve the step down to `min_dt`.
+            if let Some(index) = self.sol.iter().position(|v| !v.is_finite()) {
+                return Err(StepError::Solve {
+                    time,
+                    dt,
+                    source: pfem_assembly::SolveError::NonFiniteSolution {
+                        solver: self.solver.name().to_string(),
+                        index,
+                    },
+                });
+            }
             // Relative change of the velocity (system nodes).
             let (mut dv2, mut v2) = (0.0, 0.0);
             for (s, &p) in self.assembler.particles().iter().enumerate() {
