@@ -1443,4 +1443,65 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
         "{err}"
     );
     assert_eq!(sim.rejected(), 0, "retried: {err}");
+
+    // The cases' body measures name an unknown body (they gave zero).
+    use pfem::cases3d::{fluid_force, top_displacement};
+    let sim = sim2(small_tank("measures"), StepParams::default());
+    assert!(matches!(
+        fluid_force(&sim, "cylnder"),
+        Err(RunError::UnknownBody { .. })
+    ));
+    assert!(matches!(
+        top_displacement(&sim, "cylnder", 0.0),
+        Err(RunError::UnknownBody { .. })
+    ));
+    assert!(matches!(
+        top_displacement(&sim, "floor", 0.123),
+        Err(RunError::InvalidSetting { .. })
+    ));
+    assert!(top_displacement(&sim, "floor", 0.0).is_ok());
+}
+
+/// Session 44's review: settings that turned a guard off without a word
+/// are refused. A checkpoint interval of zero (or NaN) wrote no checkpoint
+/// at all, not even the last; a memory budget that is not a number let
+/// any scene through; `Scene::build` had no budget at all, so a spacing
+/// mistyped as 10⁻⁶ m filled 10¹² lattice points and the allocator
+/// aborted the process.
+#[test]
+fn settings_that_turned_a_guard_off_are_refused() {
+    for every in [0.0, -1.0, f64::NAN] {
+        let dir = std::env::temp_dir().join(format!("pfem-ck-every-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut sim = sim2(small_tank("checkpoint every"), StepParams::default());
+        let mut out =
+            StandardOutput::new(&dir, false, Vec::new(), true).checkpoint_every(Some(every));
+        let err = sim.run(&mut [&mut out]).unwrap_err().to_string();
+        assert!(err.contains("checkpoint_every"), "{every}: {err}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let options = pfem::simulation::Options {
+        memory_budget: f64::NAN,
+        ..Default::default()
+    };
+    let err = Simulation::with_options(
+        small_tank("nan budget"),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+        options,
+    )
+    .map(|_| ())
+    .unwrap_err();
+    assert!(err.to_string().contains("memory_budget"), "{err}");
+    let huge = Scene::<2>::new("mistyped spacing").wall(
+        "floor",
+        boxed(0.0, 0.0, 1.0, 1.0),
+        1e-6,
+        WallMotion::Fixed,
+    );
+    let err = huge
+        .build(&mut Delaunay2::default())
+        .map(|_| ())
+        .unwrap_err();
+    assert!(matches!(err, SceneError::TooLarge { .. }), "{err}");
 }

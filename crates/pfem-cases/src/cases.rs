@@ -214,6 +214,9 @@ pub fn rms_relative(sim: &[(f64, f64)], measured: &[(f64, f64)], shift: f64, t_m
 
 /// The single time shift in `[-max_shift, max_shift]` minimising
 /// [`rms_relative`], found by a scan at `step`; returns `(shift, rms)`.
+/// The scan takes at most `2·10⁶ + 1` shifts (`step` is widened to fit;
+/// a `step` of zero scanned for ever); a `step` or `max_shift` that is not
+/// a number scans none (the shift is then 0).
 pub fn best_shift(
     sim: &[(f64, f64)],
     measured: &[(f64, f64)],
@@ -221,8 +224,17 @@ pub fn best_shift(
     max_shift: f64,
     step: f64,
 ) -> (f64, f64) {
+    const MOST: f64 = 1e6;
     let mut best = (0.0, rms_relative(sim, measured, 0.0, t_max));
-    let n = (max_shift / step).round() as i64;
+    let steps = (max_shift / step.abs()).round();
+    if !(steps >= 1.0) {
+        return best;
+    }
+    let (n, step) = if steps > MOST {
+        (MOST as i64, max_shift / MOST)
+    } else {
+        (steps as i64, step.abs())
+    };
     for i in -n..=n {
         let sh = i as f64 * step;
         let e = rms_relative(sim, measured, sh, t_max);
@@ -745,5 +757,36 @@ mod tests {
             Err(SceneError::InvalidMaterial { .. })
         ));
         assert!(ElasticGate::default().scene().is_ok());
+        // Session 44's review: a Couette with no cell or no gap (rings of
+        // `usize::MAX` particles), a shift scan at a step of zero (for
+        // ever).
+        use crate::exact::CircularCouette;
+        for c in [
+            CircularCouette {
+                cells: 0,
+                ..Default::default()
+            },
+            CircularCouette {
+                outer: 0.5,
+                ..Default::default()
+            },
+            CircularCouette {
+                inner: f64::NAN,
+                ..Default::default()
+            },
+        ] {
+            assert!(
+                matches!(c.scene(), Err(SceneError::InvalidSetting { .. })),
+                "{c:?}"
+            );
+        }
+        assert!(CircularCouette::default().scene().is_ok());
+        let curve: Vec<(f64, f64)> = (0..50).map(|i| (i as f64 * 0.1, 1.0 + i as f64)).collect();
+        let shifted: Vec<(f64, f64)> = curve.iter().map(|&(t, z)| (t + 0.3, z)).collect();
+        let (shift, rms) = best_shift(&curve, &shifted, 4.0, 0.5, 0.0);
+        assert!((shift - 0.3).abs() < 1e-6 && rms < 1e-9, "{shift} {rms}");
+        assert_eq!(best_shift(&curve, &shifted, 4.0, 0.5, f64::NAN).0, 0.0);
+        let (shift, _) = best_shift(&curve, &shifted, 4.0, 0.5, 0.05);
+        assert!((shift - 0.3).abs() < 1e-9, "{shift}");
     }
 }

@@ -20,6 +20,7 @@ use crate::error::SceneError;
 use crate::observe::Probe;
 use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
 use crate::simulation::Simulation;
+use pfem_driver::RunError;
 
 /// Fluid particles of the main body: the connected component of fluid
 /// elements with the largest measure (2D or 3D).
@@ -340,23 +341,32 @@ impl ColumnOnCylinder3d {
         let top = self.base().y + self.cylinder_height;
         vec![
             Probe::new("ux_top", move |s: &Simulation<3>| {
-                top_displacement(s, "cylinder", top).x
+                // (The scene's own cylinder: neither error can arise.)
+                top_displacement(s, "cylinder", top).map_or(f64::NAN, |u| u.x)
             }),
-            Probe::new("force_x", |s: &Simulation<3>| fluid_force(s, "cylinder").x),
+            Probe::new("force_x", |s: &Simulation<3>| {
+                fluid_force(s, "cylinder").map_or(f64::NAN, |f| f.x)
+            }),
             Probe::new("volume", |s: &Simulation<3>| s.fluid_volume()),
         ]
     }
 }
 
 /// Mean displacement of the particles of solid `body` that started at
-/// height `y_top` (its top).
-pub fn top_displacement<const D: usize>(s: &Simulation<D>, body: &str, y_top: f64) -> Vector<D>
+/// height `y_top` (its top). An unknown body is
+/// [`RunError::UnknownBody`], a height no particle of it started at
+/// [`RunError::InvalidSetting`] (both gave a displacement of zero).
+pub fn top_displacement<const D: usize>(
+    s: &Simulation<D>,
+    body: &str,
+    y_top: f64,
+) -> Result<Vector<D>, RunError>
 where
     Const<D>: Dim,
 {
     let mut sum = Vector::<D>::zeros();
     let mut n = 0;
-    for i in s.body_particles(body).unwrap_or_default() {
+    for i in s.body_particles(body)? {
         let x0 = s.initial_position(i);
         if (x0[1] - y_top).abs() < 1e-9 {
             sum += s.particles().x()[i] - x0;
@@ -364,13 +374,17 @@ where
         }
     }
     if n == 0 {
-        sum
-    } else {
-        sum / n as f64
+        return Err(RunError::InvalidSetting {
+            name: "top_displacement's y_top",
+            value: y_top,
+            reason: "no particle of the body started at this height",
+        });
     }
+    Ok(sum / n as f64)
 }
 
-/// Force of the surrounding fluid on solid `body` (N; N/m in 2D).
+/// Force of the surrounding fluid on solid `body` (N; N/m in 2D); an
+/// unknown body is [`RunError::UnknownBody`] (it gave a force of zero).
 ///
 /// For a free (not clamped) particle `i` of the solid, its share of the
 /// discrete momentum balance is `mˢᵢ aᵢ = fˢᵢ + fᶠᵢ + mˢᵢ g`, with `mˢ` the
@@ -390,15 +404,19 @@ where
 /// by `α_B Σ mˢ (Aⁿ⁺¹ − Aⁿ)`. Measured on `column_on_cylinder_3d` at a/10
 /// (`docs/benchmarks.md`, session 14): peak 13.67 N against 13.89 N with
 /// the Bossak inertia, and 4.45 % against 5.71 % step-to-step chatter.
-pub fn fluid_force<const D: usize>(s: &Simulation<D>, body: &str) -> Vector<D>
+pub fn fluid_force<const D: usize>(s: &Simulation<D>, body: &str) -> Result<Vector<D>, RunError>
 where
     Const<D>: Dim,
 {
     let nv = D + 1;
     let n = s.particles().len();
-    let Some(id) = s.body_names().iter().position(|b| b == body) else {
-        return Vector::<D>::zeros();
-    };
+    let id = s
+        .body_names()
+        .iter()
+        .position(|b| b == body)
+        .ok_or_else(|| RunError::UnknownBody {
+            name: body.to_string(),
+        })?;
     let mut mass = vec![0.0; n];
     let mut f_int = vec![Vector::<D>::zeros(); n];
     let mut grads = [Vector::<D>::zeros(); MAX_NV];
@@ -435,7 +453,7 @@ where
         }
         total += (s.particles().a()[i] - g) * mass[i] - f_int[i];
     }
-    total
+    Ok(total)
 }
 
 /// The 2D dam break `case` as a 3D slab one spacing deep (two particle

@@ -288,8 +288,24 @@ impl CircularCouette {
         pts
     }
 
-    /// The scene (water's bulk modulus).
+    /// The scene (water's bulk modulus). At least two cells across the gap
+    /// and `0 < inner < outer`, finite (a zero gap or no cell made rings
+    /// of `usize::MAX` particles).
     pub fn scene(&self) -> Result<Scene<2>, SceneError> {
+        if self.cells < 2 {
+            return Err(SceneError::InvalidSetting {
+                setting: "cells",
+                value: self.cells as f64,
+            });
+        }
+        for (setting, value, ok) in [
+            ("inner", self.inner, self.inner > 0.0),
+            ("outer", self.outer, self.outer > self.inner),
+        ] {
+            if !(ok && value.is_finite()) {
+                return Err(SceneError::InvalidSetting { setting, value });
+            }
+        }
         let h = self.spacing();
         let fluid = fluid(
             self.density,

@@ -493,7 +493,7 @@ where
         params.min_dt = params
             .min_dt
             .max(scene.settings.end_time * MIN_DT_OF_END_TIME);
-        scene.validate_within(options.memory_budget)?;
+        scene.validate()?;
         // The controller keeps every step within [min_dt, max_dt]: a
         // floor above the ceiling would run every step at `min_dt`,
         // above the scene's `max_dt`, without a word. The default floor
@@ -516,7 +516,7 @@ where
         if params.pressure_stabilisation == 0.0 {
             params.pressure_stabilisation = scene.pressure_stabilisation;
         }
-        let built = scene.build(tessellator.as_mut())?;
+        let built = scene.build_within(options.memory_budget, tessellator.as_mut())?;
         let pfem_scene::Built {
             name,
             particles: cloud,

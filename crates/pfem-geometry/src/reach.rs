@@ -197,6 +197,13 @@ where
         },
         other => other,
     })?;
+    // A tessellator of one's own that names a point it was not given is
+    // refused as the whole set's check would (`check_tessellation`).
+    if out.simplices.iter().any(|&v| v as usize >= subset.len()) {
+        return Err(GeometryError::InvalidConnectivity {
+            reason: "a simplex names a vertex index out of range",
+        });
+    }
     for v in out.simplices.iter_mut() {
         *v = subset[*v as usize];
     }
@@ -447,5 +454,33 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(e, GeometryError::InvalidConnectivity { .. }));
+        // A tessellator of one's own naming a vertex past the subset
+        // (session 44's review: an index out of bounds panic).
+        #[derive(Debug, Default)]
+        struct OffByOne(Delaunay3);
+        impl Tessellator<3> for OffByOne {
+            fn tessellate(
+                &mut self,
+                points: &[Point<3>],
+                out: &mut Tessellation,
+            ) -> Result<(), GeometryError> {
+                self.0.tessellate(points, out)?;
+                out.simplices[0] = points.len() as u32;
+                Ok(())
+            }
+        }
+        let subset: Vec<u32> = (0..x.len() as u32).step_by(3).collect();
+        let e = tessellate_subset(
+            &mut OffByOne::default(),
+            &x,
+            &subset,
+            &mut scratch,
+            &mut out,
+        )
+        .unwrap_err();
+        assert!(
+            matches!(e, GeometryError::InvalidConnectivity { .. }),
+            "{e:?}"
+        );
     }
 }

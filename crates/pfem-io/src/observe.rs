@@ -163,7 +163,9 @@ where
     /// Whatever this is set to, a run that stops before its end time (a
     /// hook's stop, Ctrl-C, a wall-clock limit) writes one when it stops.
     pub fn checkpoint_every(mut self, interval: Option<f64>) -> Self {
-        self.checkpoint_every = interval.filter(|t| *t > 0.0 && t.is_finite());
+        // Checked when the run starts (a value that is not positive and
+        // finite wrote no checkpoint at all, not even the last one).
+        self.checkpoint_every = interval;
         self
     }
 
@@ -710,6 +712,15 @@ where
             return Ok(());
         }
         self.started = Some(Instant::now());
+        if let Some(t) = self.checkpoint_every {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(RunError::InvalidSetting {
+                    name: "checkpoint_every",
+                    value: t,
+                    reason: "must be positive and finite (None writes one at the end only)",
+                });
+            }
+        }
         if let Some(t) = self.probe_interval {
             if !(t > 0.0 && t.is_finite()) {
                 return Err(RunError::InvalidSetting {

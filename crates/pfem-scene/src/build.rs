@@ -201,9 +201,23 @@ where
     /// with the wall); a solid particle on another solid's is an error); solid meshes (boxes
     /// structured, other shapes by `tessellator` and the alpha shape);
     /// clamps; initial velocity fields; hydrostatic pressure in fluids
-    /// under gravity, or the bodies' pressure fields.
+    /// under gravity, or the bodies' pressure fields. Refused as
+    /// [`SceneError::TooLarge`] when its estimate exceeds
+    /// [`crate::default_memory_budget`] (80 % of the machine's memory):
+    /// a mistyped spacing would otherwise abort the process on allocation
+    /// ([`Scene::build_within`] takes another budget).
     pub fn build(self, tessellator: &mut dyn Tessellator<D>) -> Result<Built<D>, SceneError> {
-        self.validate()?;
+        self.build_within(crate::default_memory_budget(), tessellator)
+    }
+
+    /// [`Scene::build`] within a memory budget of `budget` bytes
+    /// ([`Scene::validate_within`]; `f64::INFINITY`: no limit).
+    pub fn build_within(
+        self,
+        budget: f64,
+        tessellator: &mut dyn Tessellator<D>,
+    ) -> Result<Built<D>, SceneError> {
+        self.validate_within(budget)?;
         let scene = self;
         let Scene {
             name,

@@ -737,6 +737,15 @@ where
     /// [`estimate`](Scene::estimate) exceeds `budget` bytes: before a
     /// particle is placed.
     pub fn validate_within(&self, budget: f64) -> Result<Estimate, SceneError> {
+        // A budget that is not a number would compare false with every
+        // estimate: the guard off, unseen. Infinity is "no limit".
+        if !(budget > 0.0) {
+            return Err(SceneError::OutOfRange {
+                setting: "memory_budget",
+                value: budget,
+                range: "(0, ∞] bytes",
+            });
+        }
         self.validate()?;
         let e = self.estimate_up_to(budget);
         if e.bytes.is_nan() || e.bytes > budget {

@@ -59,8 +59,13 @@ impl PvdWriter {
         path: impl Into<PathBuf>,
         entries: Vec<(f64, String)>,
     ) -> Result<Self, OutputError> {
+        let path = path.into();
+        // As `push` refuses (a `timestep="NaN"` that ParaView cannot read).
+        if let Some(&(time, _)) = entries.iter().find(|(t, _)| !t.is_finite()) {
+            return Err(OutputError::NonFiniteTime { path, time });
+        }
         let mut writer = Self {
-            path: path.into(),
+            path,
             entries,
             tail: 0,
         };
@@ -199,6 +204,13 @@ impl VtuSeries {
     ) -> Result<Self, OutputError> {
         let dir = dir.into();
         check_series_name(&dir, name)?;
+        // Before any frame is removed.
+        if let Some(&(time, _)) = entries.iter().find(|(t, _)| !t.is_finite()) {
+            return Err(OutputError::NonFiniteTime {
+                path: dir.join(format!("{name}.pvd")),
+                time,
+            });
+        }
         std::fs::create_dir_all(&dir).map_err(|e| OutputError::io(&dir, e))?;
         let kept = entries.len();
         // The folder must be the run's own: every frame the checkpoint
@@ -324,6 +336,24 @@ mod tests {
         }
         assert!(pvd.entries().is_empty());
         pvd.push(0.0, "c_000000.vtu").unwrap();
+        // Nor taken from a restart's entries (session 44's review), and a
+        // series keeps its frames.
+        let entries = vec![
+            (0.0, "c_000000.vtu".to_string()),
+            (f64::NAN, "c_000001.vtu".into()),
+        ];
+        let err = PvdWriter::resume(dir.join("d.pvd"), entries.clone()).map(|_| ());
+        assert!(
+            matches!(err, Err(OutputError::NonFiniteTime { .. })),
+            "{err:?}"
+        );
+        std::fs::write(dir.join("c_000001.vtu"), "frame").unwrap();
+        let err = VtuSeries::resume(&dir, "c", Encoding::Base64, entries).map(|_| ());
+        assert!(
+            matches!(err, Err(OutputError::NonFiniteTime { .. })),
+            "{err:?}"
+        );
+        assert!(dir.join("c_000001.vtu").is_file());
         let _ = std::fs::remove_dir_all(&dir);
     }
 
