@@ -444,6 +444,121 @@ fn a_restart_under_other_settings_is_refused() {
     assert_eq!(same.time(), sim.time());
 }
 
+/// Session 44's review of what a restore compares: the alpha shape's
+/// `alpha`, the linear solver's own settings (`--solver block` and
+/// `block-amg` passed for each other: one name), a wall's motion law
+/// (edited, removed — the wall then kept the checkpoint's last velocity
+/// for ever — or added), and a hook with a state the checkpoint's run did
+/// not have (an inflow added since) are refused.
+#[test]
+fn a_restart_under_another_alpha_solver_motion_law_or_hook_is_refused() {
+    use pfem::assembly::{BlockSolver, PressureSolve};
+    use pfem::hooks::Sinusoidal;
+    let refused = |other: &mut Simulation<2>, ck: &Checkpoint, what: &str| {
+        let err = other.restore(ck).unwrap_err();
+        assert!(
+            matches!(err, RunError::Checkpoint(CheckpointError::Mismatch { .. })),
+            "{what}: {err}"
+        );
+        println!("{what}: {err}");
+    };
+    let mut sim = dam_break();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let case = || DamBreak {
+        spacing: 0.05715 / 8.0,
+        end_time: 0.06,
+        ..Default::default()
+    };
+    let mut scene = case().scene();
+    scene.settings.alpha = 1.5;
+    refused(&mut sim2(scene), &ck, "another alpha");
+    let mut other = dam_break();
+    let mut amg = BlockSolver::default();
+    amg.pressure = PressureSolve::Multigrid;
+    other.set_solver(Box::new(amg));
+    refused(&mut other, &ck, "another block solver");
+    let mut other = dam_break();
+    other.add_hook(Box::new(
+        Inflow::new(
+            "water",
+            Point::<2>::new(0.001, 0.01),
+            Point::<2>::new(0.001, 0.03),
+            Vector::<2>::new(0.1, 0.0),
+            0.05715 / 8.0,
+            0.01,
+        )
+        .unwrap(),
+    ));
+    refused(&mut other, &ck, "an inflow added");
+    dam_break().restore(&ck).unwrap();
+
+    // A paddle: the dam break's left wall moved by a law.
+    let h = 0.05715 / 8.0;
+    let paddle = |amplitude: Option<f64>| {
+        let motion = match amplitude {
+            Some(a) => WallMotion::Law(std::sync::Arc::new(Sinusoidal {
+                amplitude: Vector::<2>::new(a, 0.0),
+                period: 0.5,
+                ramp: 0.0,
+            })),
+            None => WallMotion::Fixed,
+        };
+        sim2(
+            Scene::<2>::new("paddle")
+                .gravity(Vector::<2>::new(0.0, -9.81))
+                .settings(RunSettings {
+                    end_time: 0.02,
+                    max_dt: 2e-3,
+                    output_interval: None,
+                    ..Default::default()
+                })
+                .wall(
+                    "floor",
+                    Geometry::Box {
+                        min: Point::<2>::new(-0.2, -2.0 * h),
+                        max: Point::<2>::new(0.4, -h),
+                    },
+                    h,
+                    WallMotion::Fixed,
+                )
+                .wall(
+                    "paddle",
+                    Geometry::Box {
+                        min: Point::<2>::new(-2.0 * h, 0.0),
+                        max: Point::<2>::new(-h, 0.1),
+                    },
+                    h,
+                    motion,
+                )
+                .fluid(
+                    "water",
+                    Box::new(Newtonian::water()),
+                    Geometry::Box {
+                        min: Point::<2>::new(0.0, 0.0),
+                        max: Point::<2>::new(0.1, 0.05),
+                    },
+                    h,
+                ),
+        )
+    };
+    let mut sim = paddle(Some(0.01));
+    for _ in 0..3 {
+        sim.step().unwrap();
+    }
+    let ck = sim.checkpoint();
+    refused(&mut paddle(Some(0.02)), &ck, "another amplitude");
+    refused(&mut paddle(None), &ck, "the law removed");
+    let mut fixed = paddle(None);
+    fixed.step().unwrap();
+    refused(&mut paddle(Some(0.01)), &fixed.checkpoint(), "a law added");
+    let mut same = paddle(Some(0.01));
+    same.restore(&ck).unwrap();
+    same.step().unwrap();
+    sim.step().unwrap();
+    assert_eq!(same.particles().x(), sim.particles().x());
+}
+
 /// A scene whose material changed since the checkpoint (the gate's Young's
 /// modulus doubled) is refused with the material named; before, only the
 /// number of materials was compared, and the run went on as another

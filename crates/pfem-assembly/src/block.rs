@@ -1578,6 +1578,39 @@ impl LinearSolver for BlockSolver {
         NAME
     }
 
+    fn settings(&self) -> String {
+        // Every public field (the kept state is not a setting).
+        let Self {
+            pressure,
+            target,
+            tolerance,
+            residual_limit,
+            max_iterations,
+            multigrid_from,
+            split_from,
+            velocity,
+            dominance_limit,
+            amg,
+            reuse_setup,
+            keep_factor_below,
+            kept_factor_iterations,
+            stabilised_reuse,
+            carry_steps,
+            krylov,
+            restart,
+            ..
+        } = self;
+        format!(
+            "{NAME}: pressure {pressure:?}, target {target:e}, tolerance {tolerance:e}, \
+             residual_limit {residual_limit:e}, max_iterations {max_iterations}, \
+             multigrid_from {multigrid_from:?}, split_from {split_from}, velocity {velocity:?}, \
+             dominance_limit {dominance_limit:e}, amg {amg:?}, reuse_setup {reuse_setup}, \
+             keep_factor_below {keep_factor_below:e}, kept_factor_iterations {kept_factor_iterations}, \
+             stabilised_reuse {stabilised_reuse}, carry_steps {carry_steps}, krylov {krylov:?}, \
+             restart {restart}"
+        )
+    }
+
     /// Without a split (a caller that assembled the whole matrix): the
     /// direct solver.
     fn solve(

@@ -104,6 +104,10 @@ impl LinearSolver for MatrixExport {
         self.inner.name()
     }
 
+    fn settings(&self) -> String {
+        self.inner.settings()
+    }
+
     fn solve(
         &mut self,
         a: SparseColMatRef<'_, usize, f64>,

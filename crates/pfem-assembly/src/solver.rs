@@ -83,6 +83,14 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
     /// A short name for reports.
     fn name(&self) -> &str;
 
+    /// The settings that change its answers (tolerances, methods), as
+    /// text: a checkpoint records them, and a restart under other
+    /// settings is refused. The default is [`LinearSolver::name`]; a
+    /// solver with settings of its own should add them.
+    fn settings(&self) -> String {
+        self.name().to_string()
+    }
+
     /// Solves `a x = b`. `a` is the whole system (constraints eliminated),
     /// symmetric positive definite for the paper's system and stored with
     /// both triangles, in compressed columns (`faer`'s, re-exported as
@@ -1143,6 +1151,15 @@ impl Ic0 {
 impl LinearSolver for ConjugateGradient {
     fn name(&self) -> &str {
         "PCG (IC(0))"
+    }
+
+    fn settings(&self) -> String {
+        format!(
+            "{}: tolerance {:e}, max_iterations {}",
+            self.name(),
+            self.tolerance,
+            self.max_iterations
+        )
     }
 
     fn solve(

@@ -58,7 +58,14 @@ pub const MAGIC: &[u8; 8] = b"PFEMCKPT";
 /// Version 3 (session 29): and a fingerprint of each material's response
 /// to two fixed probes, so that a changed viscosity, shear modulus or
 /// contact stiffness is refused too.
-pub const FORMAT_VERSION: u32 = 3;
+///
+/// Version 4 (session 44): the settings section records the linear
+/// solver's settings ([`pfem_assembly::LinearSolver::settings`]) and the
+/// alpha shape's, and a wall's motion law is kept with its hook; and
+/// what a continued run computes changed since version 3 (a solid's mass
+/// `ρ₀ V₀`, the interface's density, the stabilised walls' kept
+/// pressures, the motion ramp).
+pub const FORMAT_VERSION: u32 = 4;
 
 /// The driver's section: the simulation state.
 pub const SIMULATION: &str = "simulation";

@@ -1583,12 +1583,19 @@ where
             memory_budget: 0.0,
             ..self.options
         };
+        // The alpha shape's parameters less `up`, which follows the body
+        // force (restored with the state).
+        let alpha = pfem_geometry::AlphaShapeParams {
+            up: None,
+            ..self.alpha
+        };
         format!(
-            "{:?}; {:?}; solver {}; {:?}",
+            "{:?}; {:?}; solver {}; {:?}; {:?}",
             self.stepper.integrator.params,
             self.controller,
-            self.stepper.integrator.solver_name(),
-            options
+            self.stepper.integrator.solver_settings(),
+            options,
+            alpha
         )
     }
 
@@ -1947,6 +1954,23 @@ where
                         format!("no hook `{name}`"),
                     ))
                 }
+            }
+        }
+        // A hook with a state that the checkpoint's run did not have (a
+        // motion law, an inflow or particle management added since) would
+        // start fresh mid-run: another run, not this one continued.
+        for (i, hook) in self.hooks.iter().enumerate() {
+            if used[i] {
+                continue;
+            }
+            let mut e = Encoder::new();
+            hook.save_state(&mut e);
+            if !e.finish().is_empty() {
+                return Err(mismatch(
+                    "the hooks",
+                    format!("no state for hook `{}`", hook.name()),
+                    format!("a hook `{}` with a state", hook.name()),
+                ));
             }
         }
         let stats = match checkpoint.section(TIMINGS) {

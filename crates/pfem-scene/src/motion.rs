@@ -6,7 +6,9 @@ use crate::SceneError;
 
 /// A prescribed rigid motion: where a point that was at `x0` at `t = 0` is
 /// at time `t`, and its velocity. Laws must be continuous in time and give
-/// the velocity that is the derivative of the position.
+/// the velocity that is the derivative of the position. A law's `Debug`
+/// text is its fingerprint in a checkpoint (a restart under a law that
+/// prints otherwise is refused): print its parameters, not addresses.
 pub trait MotionLaw<const D: usize>: Send + Sync + std::fmt::Debug
 where
     Const<D>: Dim,

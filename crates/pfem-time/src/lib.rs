@@ -794,6 +794,11 @@ where
         self.solver.name()
     }
 
+    /// The linear solver's settings ([`LinearSolver::settings`]).
+    pub fn solver_settings(&self) -> String {
+        self.solver.settings()
+    }
+
     /// Sets the accelerations consistent with the state at `t₀`:
     /// `M A⁰ = F + f_int(σ⁰, V⁰)` with the lumped mass, so that Newmark's
     /// first step (eq. 48) starts from the right acceleration instead of

@@ -4,6 +4,7 @@ use pfem_core::{Const, Dim, ParticleKind, Vector};
 use pfem_scene::motion::MotionLaw;
 
 use super::{body_particles, Hook, HookContext};
+use crate::checkpoint::{CheckpointError, Decoder, Encoder};
 use crate::RunError;
 
 /// Moves the particles of a wall along a [`MotionLaw`]: before each solve
@@ -42,6 +43,26 @@ where
 {
     fn name(&self) -> &str {
         "prescribed motion"
+    }
+
+    /// The body and its law as text: a restart under another law (or with
+    /// the law removed, which left the wall moving at the checkpoint's last
+    /// velocity) is refused.
+    fn save_state(&self, out: &mut Encoder) {
+        out.str(&self.fingerprint());
+    }
+
+    fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
+        let saved = from.str()?;
+        let now = self.fingerprint();
+        if saved != now {
+            return Err(CheckpointError::Mismatch {
+                what: "a wall's motion law",
+                checkpoint: saved.to_string(),
+                simulation: now,
+            });
+        }
+        Ok(())
     }
 
     fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
@@ -106,6 +127,10 @@ impl<const D: usize> PrescribedMotion<D>
 where
     Const<D>: Dim,
 {
+    fn fingerprint(&self) -> String {
+        format!("body `{}`: {:?}", self.body, self.law)
+    }
+
     /// `v` if every component is finite; otherwise an error naming the body
     /// and the time. A law is user code (a `Sinusoidal` built by hand with
     /// a zero period, a law of one's own): a NaN wall would otherwise show
