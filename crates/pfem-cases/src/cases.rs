@@ -227,7 +227,7 @@ pub fn best_shift(
     const MOST: f64 = 1e6;
     let mut best = (0.0, rms_relative(sim, measured, 0.0, t_max));
     let steps = (max_shift / step.abs()).round();
-    if !(steps >= 1.0) {
+    if steps.is_nan() || steps < 1.0 {
         return best;
     }
     let (n, step) = if steps > MOST {

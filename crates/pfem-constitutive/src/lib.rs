@@ -16,7 +16,8 @@
 //! ([`Unified::layer`]). That triple is a [`Unified`]; the trait is
 //! [`Material`], object safe, held by the solver as `Box<dyn Material<D>>`.
 //! After the step converges the solver calls [`Material::update_history`]
-//! once (eqs. 62–63).
+//! once per solid element (eq. 63) and [`Material::update_pressure`] once
+//! per fluid node (eq. 62).
 //!
 //! | law | `μ` | `𝒦` | `σ̂⁽ⁿ⁾` |
 //! |---|---|---|---|
@@ -25,7 +26,8 @@
 //! | [`ContactPenalty`] layer (not in the paper) | `G_c w` sticking, its secant across the slip slipping | `K_c s_δ' r w` + dashpot | `σ` of the layer − `(𝒦 ε_v I + 2 μ P(D))` |
 //!
 //! For the solid, `w = ∂Δu/∂V` ([`Kinematics::displacement_weight`]: `Δt`
-//! for backward Euler, `Δt/2` for the trapezoidal rule), `Δε` the
+//! for backward Euler, `(β/γ) Δt` for the Newmark family: about 0.53 `Δt`
+//! for Bossak at α_B = −0.3, the default, `Δt/2` for the trapezoidal rule), `Δε` the
 //! objective strain increment of the step's displacement
 //! ([`Kinematics::strain_increment`]) and `P` its half-step convection: the stress at the iterate follows the
 //! displacement the time scheme made, and `σ̂` is that stress less its part

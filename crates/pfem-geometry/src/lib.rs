@@ -30,7 +30,8 @@
 //! # Ok::<(), pfem_geometry::GeometryError>(())
 //! ```
 //!
-//! Everything but [`Delaunay2`] is generic over the dimension `D` (2 or 3),
+//! Everything but the tessellators ([`Delaunay2`] in 2D, [`Delaunay3`] in
+//! 3D) is generic over the dimension `D` (2 or 3),
 //! so the 3D tessellator plugs into the same alpha shape, classification,
 //! particle management and quality code.
 pub mod alpha;

@@ -4,7 +4,9 @@
 //!   PNG plots with the `plots` feature), embedded reference data, the
 //!   progress display (a bar with the `progress` feature);
 //! - [`observe`]: [`StandardOutput`], the observer that writes them during
-//!   a run, and [`Probe`], a named measurement.
+//!   a run, and [`Probe`], a named measurement;
+//! - [`loads`]: [`Loads`], the water's pressure at each particle and the
+//!   forces on bodies, and contact forces, read from a `Simulation`.
 
 pub mod loads;
 pub mod observe;

@@ -12,6 +12,11 @@
 //!   particles trimmed by the alpha shape);
 //! - [`surface`]: bodies bounded by a polygon (2D) or a closed triangle
 //!   surface read from STL (3D), filled with particles;
+//! - [`motion`]: wall motion laws ([`motion::MotionLaw`],
+//!   [`motion::Sinusoidal`], [`motion::PiecewiseLinear`],
+//!   [`motion::Rotation`]);
+//! - [`build`]: [`Scene::build`] → [`build::Built`], the particles and
+//!   meshes a simulation starts from;
 //! - [`SceneError`]: what an impossible scene is.
 //!
 //! The driver (`pfem-driver`) turns a scene into a running simulation.

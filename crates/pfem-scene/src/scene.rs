@@ -739,7 +739,7 @@ where
     pub fn validate_within(&self, budget: f64) -> Result<Estimate, SceneError> {
         // A budget that is not a number would compare false with every
         // estimate: the guard off, unseen. Infinity is "no limit".
-        if !(budget > 0.0) {
+        if budget.is_nan() || budget <= 0.0 {
             return Err(SceneError::OutOfRange {
                 setting: "memory_budget",
                 value: budget,

@@ -289,10 +289,12 @@ impl Args {
         Ok(p)
     }
 
-    /// The linear solver chosen by `--solver block|direct|lu|cholesky|cg`
-    /// (default `block`: [`pfem_assembly::BlockSolver`], the split system by
-    /// conjugate gradient; `direct`: Cholesky of the whole system with LU
-    /// fallback).
+    /// The linear solver chosen by
+    /// `--solver block|block-amg|direct|lu|cholesky|cg|petsc` (default
+    /// `block`: [`pfem_assembly::BlockSolver`], the split system by
+    /// conjugate gradient; `block-amg`: the same with multigrid on the
+    /// pressure; `direct`: Cholesky of the whole system with LU fallback;
+    /// `petsc` with the `petsc` feature).
     pub fn solver(&self) -> Result<Box<dyn pfem_assembly::LinearSolver>, ArgsError> {
         use pfem_assembly::{
             BlockSolver, ConjugateGradient, DirectSolver, SparseCholesky, SparseLu,
@@ -338,25 +340,7 @@ impl Args {
     where
         pfem_core::Const<D>: pfem_core::Dim,
     {
-        // An option of the other dimension would do nothing, yet be
-        // recorded in a checkpoint's settings and refuse a restart with
-        // another value (session 43's review): refused.
-        let other: &[&str] = if D == 2 {
-            &[
-                "min-quality-3d",
-                "sliver-quality-3d",
-                "sliver-stabilised-3d",
-                "far-walls",
-            ]
-        } else {
-            &["sliver-quality-2d"]
-        };
-        if let Some(k) = other.iter().find(|k| self.options.contains_key(**k)) {
-            let (its, this) = if D == 2 { ("3D", "2D") } else { ("2D", "3D") };
-            return Err(Box::new(ArgsError(format!(
-                "--{k} is for {its} scenes; this scene is {this}"
-            ))));
-        }
+        self.check_dimension(D)?;
         let mut options = crate::Options::default();
         if let Some(b) = self.volume_correction()? {
             options.volume_correction = b;
@@ -368,14 +352,43 @@ impl Args {
         options.tessellate_far_walls = self.tessellate_far_walls()?;
         let mut scene = scene;
         scene.settings.max_dt = self.number("max-dt", scene.settings.max_dt)?;
-        let mut sim =
-            crate::Simulation::with_options(scene, tessellator, self.step_params()?, options)?;
+        // Given, it is the scene's too: `StepParams`' 0 means "the
+        // scene's", so `--pressure-stabilisation 0` left a scene's
+        // stabilisation on (`[run] pressure_stabilisation`).
+        let params = self.step_params()?;
+        if self.options.contains_key("pressure-stabilisation") {
+            scene = scene.pressure_stabilisation(params.pressure_stabilisation);
+        }
+        let mut sim = crate::Simulation::with_options(scene, tessellator, params, options)?;
         sim.set_solver(self.solver()?);
         if let Some(v) = self.options.get("max-wall-time") {
             let limit = parse_positive("max-wall-time", v)?;
             sim.add_hook(Box::new(crate::hooks::WallClockLimit::new(limit)));
         }
         Ok(sim)
+    }
+
+    /// Refuses an option of the other dimension than `d` (2 or 3): it
+    /// would do nothing, yet be recorded in a checkpoint's settings and
+    /// refuse a restart with another value (session 43's review).
+    pub fn check_dimension(&self, d: usize) -> Result<(), ArgsError> {
+        let other: &[&str] = if d == 2 {
+            &[
+                "min-quality-3d",
+                "sliver-quality-3d",
+                "sliver-stabilised-3d",
+                "far-walls",
+            ]
+        } else {
+            &["sliver-quality-2d"]
+        };
+        if let Some(k) = other.iter().find(|k| self.options.contains_key(**k)) {
+            let (its, this) = if d == 2 { ("3D", "2D") } else { ("2D", "3D") };
+            return Err(ArgsError(format!(
+                "--{k} is for {its} scenes; this scene is {this}"
+            )));
+        }
+        Ok(())
     }
 
     /// `--far-walls skip|tessellate` (`Options::tessellate_far_walls`;
@@ -516,7 +529,9 @@ Options common to the bundled examples and `pfem run`:
                         or petsc (built with the `petsc` feature; PETSc options in
                         PFEM_PETSC_OPTIONS, prefix -pfem_)
   --pressure-stabilisation A
-                        pressure stabilisation factor of τ (default 0: off)
+                        pressure stabilisation factor of τ (default: the scene's,
+                        0 = off unless a scene file sets `[run] pressure_stabilisation`;
+                        given, it overrides the scene's, 0 switching it off)
   --volume-correction B fraction of the volume error restored per step, in [0, 1] (default 1)
   --memory-budget GB    refuse scenes estimated above this (default: 80 % of the machine's memory)
   --max-wall-time S     stop the run after S seconds of wall time (outputs are kept)

@@ -39,8 +39,9 @@ pub use pfem_cases::{cases, cases3d, exact, fidelity};
 pub use pfem_driver::{checkpoint, elements, error, particles, simulation};
 
 /// Hooks: the seam ([`Hook`], [`HookContext`]) and the driver's own
-/// (`pfem_driver::hooks`), and the scene hooks of `pfem-hooks` (wall motion
-/// laws, load ramps, inflows, particle management).
+/// (`pfem_driver::hooks`: the volume correction, wall motion laws through
+/// `PrescribedMotion`, applied forces, stops), and those of `pfem-hooks`
+/// (load ramps, slip planes, inflows, particle management).
 pub mod hooks {
     pub use pfem_driver::hooks::*;
     pub use pfem_hooks::*;

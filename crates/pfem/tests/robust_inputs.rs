@@ -330,6 +330,14 @@ geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
         .unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--volume-correction"));
+    // A 3D option on this 2D scene, refused as `run` refuses it (session
+    // 44's review: `check` passed it).
+    let other = Command::new(bin)
+        .args(["check", file.to_str().unwrap(), "--far-walls", "tessellate"])
+        .output()
+        .unwrap();
+    assert!(!other.status.success());
+    assert!(String::from_utf8_lossy(&other.stderr).contains("3D scenes"));
     let huge = Command::new(bin)
         .args(["check", file.to_str().unwrap(), "--spacing", "1e-6"])
         .output()

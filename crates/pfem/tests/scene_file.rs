@@ -305,6 +305,21 @@ fn a_scene_asks_for_the_pressure_stabilisation() {
     };
     let sim = Simulation::new(scene, Box::new(Delaunay2::default()), own).unwrap();
     assert_eq!(sim.step_params().pressure_stabilisation, 2.0);
+    // `--pressure-stabilisation 0` switches a scene's off (it was read as
+    // "the scene's": session 44's review of the docs); not given, the
+    // scene's stands.
+    for (args, want) in [(vec!["--pressure-stabilisation", "0"], 0.0), (vec![], 0.5)] {
+        let LoadedScene::Two(scene, _) =
+            build(&puddle("", "pressure_stabilisation = 0.5", WATER)).unwrap()
+        else {
+            panic!("a 2D scene")
+        };
+        let args = pfem::cli::Args::parse(args.into_iter().map(String::from)).unwrap();
+        let sim = args
+            .simulation(scene, Box::new(Delaunay2::default()))
+            .unwrap();
+        assert_eq!(sim.step_params().pressure_stabilisation, want);
+    }
     let err = build(&puddle("", "pressure_stabilisation = -1.0", WATER)).unwrap_err();
     assert!(
         matches!(

@@ -17,9 +17,11 @@
 //! options ([`crate::Options`]) add theirs first.
 //!
 //! Here: the driver's own [`VolumeCorrection`] and
-//! [`FreeSurfacePressureZero`], and [`StopWhen`] and [`FnHook`] (a hook from
-//! closures). Wall motion laws, load ramps, inflows and particle management
-//! are in the `pfem-hooks` crate (`pfem::hooks` re-exports both).
+//! [`FreeSurfacePressureZero`], [`PrescribedMotion`] (a wall along a motion
+//! law of `pfem_scene::motion`), [`AppliedForce`], [`StopWhen`],
+//! [`WallClockLimit`], [`Interrupt`] and [`FnHook`] (a hook from closures).
+//! Load ramps, slip planes, inflows and particle management are in the
+//! `pfem-hooks` crate (`pfem::hooks` re-exports both).
 //!
 //! ```
 //! use pfem_constitutive::Newtonian;

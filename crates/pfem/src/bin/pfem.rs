@@ -56,8 +56,9 @@ Options of `pfem run`:
   --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE and
                         options, other ones refused; DIR its output folder, by
                         default the checkpoint's): the result is the uninterrupted
-                        run's, bit for bit. With a later --end-time, a finished
-                        run goes on
+                        run's, bit for bit (to the solver's tolerance with the
+                        pressure stabilised on large systems: docs/robustness.md).
+                        With a later --end-time, a finished run goes on
 ";
 
 /// The end of the help, after the options shared with the examples.
@@ -227,6 +228,7 @@ fn check<const D: usize>(
 where
     Const<D>: Dim,
 {
+    args.check_dimension(D).map_err(|e| e.to_string())?;
     let budget = args.memory_budget().map_err(|e| e.to_string())?;
     let estimate = scene.validate_within(budget).map_err(|e| e.to_string())?;
     let (name, bodies, t, dt) = (
