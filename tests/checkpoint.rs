@@ -341,6 +341,47 @@ fn a_checkpoint_whose_time_or_state_is_not_finite_is_refused() {
     assert_eq!(fresh.time(), sim.time());
 }
 
+/// An edited checkpoint whose first fluid particle's record is swapped
+/// with the last wall's (checksum made to match) is refused: the walls and
+/// solids must come first, and the comparison of their (kind, body)
+/// sequence, which skips fluid, did not see it (session 44's review).
+#[test]
+fn a_checkpoint_with_a_fluid_particle_before_the_walls_is_refused() {
+    let mut sim = dam_break();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let p = sim.particles();
+    let first_fluid = p.fixed_prefix();
+    let record = |i: usize| {
+        let mut b = Vec::new();
+        for k in 0..2 {
+            b.extend_from_slice(&p.x()[i][k].to_bits().to_le_bytes());
+        }
+        b
+    };
+    let mut section = ck.section(SIMULATION).unwrap().to_vec();
+    let find = |s: &[u8], i: usize| {
+        let r = record(i);
+        s.windows(r.len()).position(|w| w == r.as_slice()).unwrap()
+    };
+    let (a, b) = (find(&section, first_fluid - 1), find(&section, first_fluid));
+    let len = b - a; // one record
+    let wall: Vec<u8> = section[a..b].to_vec();
+    let fluid: Vec<u8> = section[b..b + len].to_vec();
+    section[a..b].copy_from_slice(&fluid);
+    section[b..b + len].copy_from_slice(&wall);
+    let mut c = ck.clone();
+    c.set(SIMULATION, section);
+    let c = Checkpoint::decode(&c.encode()).unwrap();
+    let err = dam_break().restore(&c).unwrap_err();
+    assert!(
+        matches!(err, RunError::Checkpoint(CheckpointError::Corrupt(_)))
+            && err.to_string().contains("come first"),
+        "{err}"
+    );
+    dam_break().restore(&ck).unwrap();
+}
+
 /// The rest of the state an edited checkpoint could make a non-number of
 /// is refused too (session 39's review: a NaN gravity ran on and failed as
 /// a "step too small", a NaN volume ledger turned the volume correction

@@ -1841,11 +1841,20 @@ where
             ))
             .into());
         }
+        // (Only the prescribed components' velocities: the step reads
+        // those alone, so a run could write a checkpoint its own restore
+        // refused.)
+        let c = particles.constraints();
+        let prescribed_not_finite = || {
+            (0..c.velocity.len().min(c.mask.len())).find(|&i| {
+                (0..D).any(|k| c.mask[i] & (1 << k) != 0 && !c.velocity[i][k].is_finite())
+            })
+        };
         if let Some(i) = particles
             .spacing()
             .iter()
             .position(|h| !(h.is_finite() && *h > 0.0))
-            .or_else(|| finite(&particles.constraints().velocity))
+            .or_else(prescribed_not_finite)
         {
             return Err(CheckpointError::Corrupt(format!(
                 "particle {i}'s spacing or prescribed velocity is not a finite (positive) number"
@@ -1861,6 +1870,19 @@ where
                 .map(|(k, b)| (*k, *b))
                 .collect::<Vec<_>>()
         };
+        // ... and come first: a fluid particle moved before them would
+        // shift every solid element's and the contact stash's indices.
+        let prefix = particles.fixed_prefix();
+        if let Some(i) = particles.kind()[prefix..]
+            .iter()
+            .position(|k| *k != ParticleKind::Fluid)
+        {
+            return Err(CheckpointError::Corrupt(format!(
+                "particle {} is a wall's or a solid's after fluid particle {prefix}: walls and solids come first",
+                prefix + i
+            ))
+            .into());
+        }
         if fixed(&particles) != fixed(&self.particles) {
             return Err(mismatch(
                 "the wall and solid particles (count)",
