@@ -222,6 +222,34 @@ fn a_restarted_block_in_frictional_contact_ends_bit_for_bit() {
     assert_same("sliding block", &a, &b);
 }
 
+/// A checkpoint written right after a restore, with no step between (a
+/// batch script restarting a finished run with `--checkpoint-every`), is
+/// the checkpoint it was restored from, and a run continued from it ends
+/// where the whole run ends. It wrote the contact range re-formed from
+/// the stash for the outputs, its stick tractions averaged a second time
+/// (session 44's review of restarts).
+#[test]
+fn a_checkpoint_right_after_a_restore_is_the_one_restored() {
+    let mut whole = sliding_block();
+    whole.run(&mut []).unwrap();
+    let mut first = sliding_block();
+    while first.steps() < 11 {
+        first.step().unwrap();
+    }
+    let ck1 = first.checkpoint();
+    let mut second = sliding_block();
+    second.restore(&ck1).unwrap();
+    let ck2 = second.checkpoint();
+    assert!(
+        ck1.section(SIMULATION) == ck2.section(SIMULATION),
+        "the simulation sections differ"
+    );
+    let mut third = sliding_block();
+    third.restore(&ck2).unwrap();
+    third.run(&mut []).unwrap();
+    assert_same("sliding block, restored twice", &whole, &third);
+}
+
 /// The sliding block pushed down the slope by a force on its right face
 /// (`Scene::force`, session 41); by the checkpoint (step 15) its next
 /// column has moved 2 cm, into the force's box, where the loaded

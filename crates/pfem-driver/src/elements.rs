@@ -496,11 +496,20 @@ where
     }
 
     /// Writes the contact range (connectivity and histories): the
-    /// tangential tractions that stick carries from step to step.
+    /// tangential tractions that stick carries from step to step. When the
+    /// next range carries from the stash (right after a restore, whose
+    /// range was re-formed from it for the outputs only), the stash: a
+    /// checkpoint written then, with no step between, wrote that re-formed
+    /// range, its tractions averaged a second time (session 44's review).
     pub(crate) fn encode_contact(&self, e: &mut Encoder) {
         let nv = D + 1;
-        e.u64(self.n_contact() as u64);
-        for (el, h) in self.contact().chunks_exact(nv).zip(self.contact_history()) {
+        let (conn, history) = if self.contact_set {
+            (self.contact(), self.contact_history())
+        } else {
+            (&self.stash.0[..], &self.stash.1[..])
+        };
+        e.u64((conn.len() / nv) as u64);
+        for (el, h) in conn.chunks_exact(nv).zip(history) {
             for &p in el {
                 e.u64(p as u64);
             }
