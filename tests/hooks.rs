@@ -1505,3 +1505,119 @@ fn settings_that_turned_a_guard_off_are_refused() {
         .unwrap_err();
     assert!(matches!(err, SceneError::TooLarge { .. }), "{err}");
 }
+
+/// A wall moved by a table (`PiecewiseLinear`) ends a step on each row
+/// (session 44's review of the time-dependent boundary conditions): a
+/// step across a row prescribed the next segment's velocity for the whole
+/// step, and the wall was put back on its path by up to `Δt |Δv| / 2`
+/// after it. Each row is now a step's end (as the end time is); the step
+/// ending there prescribes the velocity arriving (the segment it ends),
+/// and the wall leaves with the next segment's.
+#[test]
+fn a_wall_moved_by_a_table_ends_a_step_on_each_row() {
+    use pfem::hooks::{MotionLaw, PiecewiseLinear};
+    let h = 0.02;
+    let law = PiecewiseLinear::new(vec![
+        (0.0, Vector::<2>::zeros()),
+        (0.0137, Vector::<2>::new(0.00137, 0.0)),
+        (0.0301, Vector::<2>::new(0.00137, 0.0)),
+    ])
+    .unwrap();
+    let x0 = Point::<2>::zeros();
+    assert_eq!(law.next_kink(0.0), Some(0.0137));
+    assert_eq!(law.next_kink(0.0137 * (1.0 + 1e-16)), Some(0.0301));
+    assert_eq!(law.next_kink(0.0301), None);
+    assert!((law.velocity_arriving(&x0, 0.0137).x - 0.1).abs() < 1e-12);
+    assert_eq!(law.velocity(&x0, 0.0137).x, 0.0);
+    let scene = Scene::<2>::new("table paddle")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.04,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
+        .wall(
+            "paddle",
+            boxed(-0.04, h, -0.02, 0.2),
+            h,
+            WallMotion::Law(std::sync::Arc::new(law.clone())),
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, h, 0.2, 0.1),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    let paddle = sim.body_particles("paddle").unwrap()[0];
+    let mut ends = Vec::new();
+    while sim.time() < sim.end_time() - 1e-12 {
+        sim.step().unwrap();
+        let t = sim.time();
+        ends.push(t);
+        let v = sim.particles().v()[paddle].x;
+        assert_eq!(v, law.velocity(&x0, t).x, "the velocity leaving t = {t}");
+    }
+    for row in [0.0137, 0.0301] {
+        assert!(
+            ends.iter().any(|&t| (t - row).abs() < 1e-15),
+            "no step ends on {row}: {ends:?}"
+        );
+    }
+
+    // A motion added mid-run puts its wall on the law's path at its start
+    // (it stood at its initial place through the first step, and jumped
+    // to the law's position after it).
+    let piston = Sinusoidal {
+        amplitude: Vector::<2>::new(0.01, 0.0),
+        period: 0.1,
+        ramp: 0.0,
+    };
+    let scene = || {
+        Scene::<2>::new("late piston")
+            .settings(RunSettings {
+                end_time: 0.04,
+                max_dt: 2e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
+            .wall("piston", boxed(-0.04, h, -0.02, 0.2), h, WallMotion::Fixed)
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(0.0, h, 0.2, 0.1),
+                h,
+            )
+    };
+    let mut sim = sim2(scene(), StepParams::default());
+    for _ in 0..3 {
+        sim.step().unwrap();
+    }
+    let t = sim.time();
+    let piston_at = sim.body_particles("piston").unwrap()[0];
+    let x0 = sim.initial_position(piston_at);
+    sim.add_hook(Box::new(PrescribedMotion::new(
+        "piston",
+        std::sync::Arc::new(piston),
+    )));
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(None));
+    let into = seen.clone();
+    sim.add_hook(Box::new(FnHook::new("look").after_remesh(
+        move |ctx: &mut HookContext<'_, 2>| {
+            into.lock()
+                .unwrap()
+                .get_or_insert(ctx.particles().x()[piston_at]);
+            Ok(())
+        },
+    )));
+    sim.step().unwrap();
+    let x = seen.lock().unwrap().unwrap();
+    let want = piston.position(&x0, t);
+    assert!(
+        (x - want).norm() < 1e-12,
+        "{x} against the law's {want} at t = {t}"
+    );
+}

@@ -1046,19 +1046,21 @@ where
     }
 
     /// Shortest time a particle needs to cross its own spacing,
-    /// `min_i h_i / |v_i|` (s); infinite when nothing moves. Wall particles
-    /// are skipped.
+    /// `min_i h_i / |v_i|` (s); infinite when nothing moves. Moving walls
+    /// count (a fixed wall's velocity is zero): skipped until session 44,
+    /// a wall moved by a law or at a constant velocity into resting water
+    /// took the scene's `max_dt` and could cross more than a spacing in
+    /// one step (inverted elements, or a contact layer formed a step
+    /// late).
     pub fn crossing_time(&self) -> f64 {
         self.crossing().1
     }
 
-    /// The particle (not a wall) of the smallest `hᵢ/|vᵢ|` and that time
-    /// (`(0, ∞)` when none is finite; a NaN is passed over, as `f64::min`
-    /// passes it over).
+    /// The particle of the smallest `hᵢ/|vᵢ|` and that time (`(0, ∞)` when
+    /// none is finite; a NaN is passed over, as `f64::min` passes it over).
     fn crossing(&self) -> (usize, f64) {
         let p = &self.particles;
         (0..p.len())
-            .filter(|&i| p.kind()[i] != ParticleKind::Wall)
             .map(|i| (i, p.spacing()[i] / p.v()[i].norm()))
             .fold(
                 (0, f64::INFINITY),
@@ -1185,7 +1187,19 @@ where
         // so that the clock's round-off (about 10⁻¹⁰ s after 10⁵ steps)
         // leaves no sliver to take. Past the end time (`step` called by
         // hand) the step is the controller's.
-        let remaining = self.end_time - self.clock.time;
+        // So does a step that would cross a kink of a hook's prescribed
+        // motion (a table's row, `Hook::next_kink`).
+        let kink = self
+            .hooks
+            .iter()
+            .filter_map(|h| h.next_kink(self.clock.time))
+            .fold(f64::INFINITY, f64::min);
+        let landing = if kink < self.end_time || self.end_time <= self.clock.time {
+            kink
+        } else {
+            self.end_time
+        };
+        let remaining = landing - self.clock.time;
         if remaining > 0.0 && remaining <= dt * (1.0 + END_SNAP) {
             dt = remaining.max(self.controller.dt_min);
         } else if remaining > 0.0 && remaining - dt < self.controller.dt_min {
@@ -1256,7 +1270,7 @@ where
         // The forces were the step's.
         self.external_force.clear();
         self.clock.time = if rep.dt == remaining {
-            self.end_time
+            landing
         } else {
             self.clock.time + rep.dt
         };

@@ -99,6 +99,14 @@ where
         false
     }
 
+    /// The first time after `t` at which what the hook prescribes jumps
+    /// (a motion law's kink, [`MotionLaw::next_kink`]): the driver ends a
+    /// step there, as at the end time. Default `None`.
+    fn next_kink(&self, t: f64) -> Option<f64> {
+        let _ = t;
+        None
+    }
+
     /// Once, before the first step (the initial mesh and state are there).
     fn start(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         Ok(())

@@ -82,6 +82,14 @@ where
         let p = ctx.particles_mut();
         for &i in &self.particles {
             let x0 = p.initial_positions()[i];
+            // On the law's path from the start: a hook added mid-run, or a
+            // law that displaces at `t = 0`, jumped there after its first
+            // step. (Within round-off of it, the particle is left as it is.)
+            let x = self.law.position(&x0, t);
+            self.finite(x, "position", t)?;
+            if (x - p.x()[i]).norm() > 1e-12 * p.spacing()[i] {
+                p.x_mut()[i] = x;
+            }
             let v = self.finite(self.law.velocity(&x0, t), "velocity", t)?;
             p.v_mut()[i] = v;
             p.constraints_mut().fix(i, v);
@@ -92,13 +100,19 @@ where
         Ok(())
     }
 
+    fn next_kink(&self, t: f64) -> Option<f64> {
+        self.law.next_kink(t)
+    }
+
     fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let t1 = ctx.time() + ctx.dt();
         // Constraints only: no particle moves, so the driver does not
-        // measure the fluid volume again at each attempt.
+        // measure the fluid volume again at each attempt. The velocity
+        // arriving at `t1` (a step that ends on a kink prescribes the
+        // segment it ends, not the next).
         for &i in &self.particles {
             let x0 = ctx.particles().initial_positions()[i];
-            let v = self.finite(self.law.velocity(&x0, t1), "velocity", t1)?;
+            let v = self.finite(self.law.velocity_arriving(&x0, t1), "velocity", t1)?;
             ctx.constraints_mut().fix(i, v);
         }
         Ok(())
@@ -106,6 +120,7 @@ where
 
     fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let t = ctx.time();
+        let kinks = self.law.next_kink(f64::MIN).is_some();
         let p = ctx.particles_mut();
         for &i in &self.particles {
             let x0 = p.initial_positions()[i];
@@ -117,6 +132,11 @@ where
             // start: session 40's review).
             if let Some(a) = self.law.acceleration(&x0, t) {
                 p.a_mut()[i] = self.finite(a, "acceleration", t)?;
+            }
+            // A law with kinks: the velocity leaving `t` (at a kink, the
+            // next segment's), so that the next step starts from it.
+            if kinks {
+                p.v_mut()[i] = self.finite(self.law.velocity(&x0, t), "velocity", t)?;
             }
         }
         Ok(())
