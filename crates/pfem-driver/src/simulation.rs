@@ -1007,6 +1007,13 @@ where
                     result = Err(e);
                     break;
                 }
+                // After the step the solved range went to the stash
+                // (`clear_fluid`), and the range just formed from it is for
+                // the outputs: the next step's carries from the stash too
+                // (session 44's review: it carried from this one).
+                if point == HookPoint::AfterStep {
+                    self.elements.keep_stash();
+                }
             }
             if moved || remesh {
                 let after = self.fluid_volume();
