@@ -589,6 +589,68 @@ fn a_fine_block_rests_on_a_coarse_floor() {
     assert!(v < 0.02, "still moving at {v} m/s");
 }
 
+/// Bodies in contact that start closer than their contact distance are
+/// refused with the pair named (session 44's review): the block one of
+/// its own spacings over the floor twice as coarse started at 67 % of the
+/// contact distance, under a third of the penalty's modulus, and a block
+/// standing on the floor's row with its lattice offset by a quarter of
+/// the floor's spacing at 33 %. Both were built and kicked at the first step. At the contact
+/// distance the same block is built (`a_fine_block_rests_on_a_coarse_floor`).
+#[test]
+fn bodies_in_contact_closer_than_their_contact_distance_are_refused() {
+    let (h, hf) = (0.01, 0.02);
+    let block = |lo: Point<2>, hi: Point<2>| {
+        Scene::<2>::new("too close")
+            .gravity(Vector::<2>::new(0.0, -G))
+            .settings(RunSettings {
+                end_time: 0.01,
+                max_dt: 2e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall(
+                "floor",
+                Geometry::Box {
+                    min: Point::<2>::new(-0.2, -hf),
+                    max: Point::<2>::new(0.4, 0.0),
+                },
+                hf,
+                WallMotion::Fixed,
+            )
+            .solid(
+                "block",
+                Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+                Geometry::Box { min: lo, max: hi },
+                h,
+                None,
+            )
+    };
+    for (lo, hi) in [
+        (Point::<2>::new(0.0, h), Point::<2>::new(0.2, h + 0.05)),
+        (Point::<2>::new(0.005, 0.0), Point::<2>::new(0.205, 0.05)),
+    ] {
+        let err = Simulation::new(
+            block(lo, hi),
+            Box::new(Delaunay2::default()),
+            StepParams::default(),
+        )
+        .map(|_| ())
+        .unwrap_err();
+        assert!(
+            err.to_string().contains("contact distance") && err.to_string().contains("floor"),
+            "{lo}: {err}"
+        );
+        println!("{err}");
+    }
+    let y = 0.5 * (h + hf);
+    assert!(Simulation::new(
+        block(Point::<2>::new(0.0, y), Point::<2>::new(0.2, y + 0.05)),
+        Box::new(Delaunay2::default()),
+        StepParams::default()
+    )
+    .is_ok());
+}
+
 /// 3D: a free elastic block resting on a floor (contact elements of three
 /// nodes against one, and two against two) sinks no deeper than a small
 /// fraction of the spacing, and the floor carries its weight.

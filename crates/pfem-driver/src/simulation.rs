@@ -673,6 +673,35 @@ where
         };
         sim.remesh()
             .map_err(|e| SceneError::Mesh { why: e.to_string() })?;
+        // Two bodies in contact that start closer than their contact
+        // distance (beyond the penalty's rounded onset) would start under a
+        // pressure of a third to a half of the penalty's modulus and be
+        // kicked apart at the first step (session 44's review: a fine
+        // block one of its spacings over a floor twice as coarse, a block
+        // on a floor with its lattice offset). Refused, naming the pair.
+        {
+            use pfem_constitutive::contact::GAP_RATIO;
+            let closest = sim
+                .elements
+                .contact_history()
+                .iter()
+                .zip(sim.elements.contact_bodies())
+                .map(|(h, b)| (h.internal[GAP_RATIO], *b))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((ratio, (a, b))) = closest {
+                if ratio < 1.0 - contact_onset.max(0.0) - 1e-9 {
+                    let name = |i: u32| sim.body_names[i as usize].clone();
+                    return Err(SceneError::InvalidGeometry {
+                        body: name(a),
+                        why: format!(
+                            "it starts at {:.0} % of its contact distance from body `{}` (half the sum of the two spacings): place them that far apart, or a solid on a wall's lattice, where it is welded",
+                            100.0 * ratio,
+                            name(b)
+                        ),
+                    });
+                }
+            }
+        }
         sim.volume.initial = sim.fluid_volume();
         sim.volume_now = sim.volume.initial;
         sim.initialize_acceleration()
