@@ -524,6 +524,19 @@ fn a_hook_stops_the_run_and_a_ramp_loads_gradually() {
     sim.add_hook(Box::new(StopWhen::new("half way", |t, _| t >= 0.3)));
     sim.run(&mut []).unwrap();
     assert_eq!(sim.stopped(), Some("half way"));
+    // A ramp on a scene with a gravity of its own is refused (session
+    // 44's review: the fluid started hydrostatic under the whole gravity,
+    // and the ramp's first steps replaced it by a fraction of it).
+    let mut with_gravity = sim2(
+        small_tank("ramp on gravity").gravity(Vector::<2>::new(0.0, -G)),
+        StepParams::default(),
+    );
+    with_gravity.add_hook(Box::new(BodyForceRamp {
+        target: Vector::<2>::new(0.0, -G),
+        duration: 0.2,
+    }));
+    let err = with_gravity.run(&mut []).unwrap_err().to_string();
+    assert!(err.contains("gravity of its own"), "{err}");
     assert!(
         sim.time() >= 0.3 && sim.time() < 0.3 + 1e-2 + 1e-12,
         "stopped at {}",

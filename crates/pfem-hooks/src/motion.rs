@@ -6,7 +6,10 @@ use pfem_driver::hooks::{Hook, HookContext};
 use pfem_driver::RunError;
 
 /// Ramps the body force linearly from zero to `target` over `duration`
-/// seconds (a load ramp: a structure loaded gently instead of suddenly).
+/// seconds from `t = 0` (a load ramp: a structure loaded gently instead of
+/// suddenly), in a scene with no gravity of its own: one with gravity is
+/// refused when the run starts (its fluid starts hydrostatic under the
+/// whole of it, which the ramp's first steps would not hold up).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyForceRamp<const D: usize>
 where
@@ -26,7 +29,13 @@ where
         "body-force ramp"
     }
 
-    fn start(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+    fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        if ctx.gravity().is_some_and(|g| g.norm() > 0.0) {
+            return Err(RunError::Hook {
+                hook: "body-force ramp".into(),
+                why: "the scene has a gravity of its own, under which its fluid starts hydrostatic: ramp from a scene without gravity".into(),
+            });
+        }
         if !(self.duration > 0.0 && self.duration.is_finite())
             || self.target.iter().any(|c| !c.is_finite())
         {
