@@ -1517,6 +1517,30 @@ fn settings_that_turned_a_guard_off_are_refused() {
         .map(|_| ())
         .unwrap_err();
     assert!(matches!(err, SceneError::TooLarge { .. }), "{err}");
+    // A `Sinusoidal` built by hand with a period of zero (NaN at t = 0,
+    // found at the first step as a non-finite wall velocity), a negative
+    // one (a negative speed bound) or a negative ramp is refused with the
+    // scene, naming the wall.
+    for (period, ramp) in [(0.0, 0.0), (-0.8, 0.0), (0.8, -1.0), (f64::NAN, 0.0)] {
+        let law = Sinusoidal {
+            amplitude: Vector::<2>::new(0.01, 0.0),
+            period,
+            ramp,
+        };
+        let scene = small_tank("bad law").wall(
+            "paddle",
+            boxed(-0.1, 0.05, -0.05, 0.2),
+            0.05,
+            WallMotion::Law(std::sync::Arc::new(law)),
+        );
+        let err = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
+            .map(|_| ())
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("paddle") && err.to_string().contains("motion law"),
+            "{period} {ramp}: {err}"
+        );
+    }
 }
 
 /// A wall moved by a table (`PiecewiseLinear`) ends a step on each row

@@ -26,6 +26,12 @@ where
         let _ = (x0, t);
         None
     }
+    /// Why the law cannot be followed (a parameter out of its range), or
+    /// `Ok`: [`crate::Scene::validate`] refuses a wall with a law that
+    /// fails it, naming the body. Default `Ok`.
+    fn check(&self) -> Result<(), String> {
+        Ok(())
+    }
     /// The first time after `t` (beyond round-off) at which the velocity
     /// jumps (a table's row), if any; `None` (the default) for a law whose
     /// velocity is continuous. The driver ends a step there, so that no
@@ -137,6 +143,28 @@ impl<const D: usize> MotionLaw<D> for Sinusoidal<D>
 where
     Const<D>: Dim,
 {
+    /// Its fields are public: a period that is not positive and finite,
+    /// a ramp that is negative or not finite, or an amplitude that is not
+    /// finite is refused here (a zero period gave NaN at `t = 0`, a
+    /// negative one a negative speed bound).
+    fn check(&self) -> Result<(), String> {
+        if !(self.period > 0.0 && self.period.is_finite()) {
+            return Err(format!(
+                "the period {} s must be positive and finite",
+                self.period
+            ));
+        }
+        if !(self.ramp >= 0.0 && self.ramp.is_finite()) {
+            return Err(format!(
+                "the ramp {} s must be non-negative and finite",
+                self.ramp
+            ));
+        }
+        if self.amplitude.iter().any(|c| !c.is_finite()) {
+            return Err("the amplitude must be finite".into());
+        }
+        Ok(())
+    }
     fn position(&self, x0: &Point<D>, t: f64) -> Point<D> {
         let w = 2.0 * std::f64::consts::PI / self.period;
         let (r, _) = self.factor(t);

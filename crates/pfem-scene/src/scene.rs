@@ -1157,6 +1157,14 @@ where
                 });
             }
         }
+        for b in &self.bodies {
+            if let WallMotion::Law(law) = &b.motion {
+                law.check().map_err(|why| SceneError::InvalidGeometry {
+                    body: b.name.clone(),
+                    why: format!("its motion law: {why}"),
+                })?;
+            }
+        }
         // The Courant bound on the initial velocities: Δt ≤ C h / |v|.
         let h_min = self
             .bodies
