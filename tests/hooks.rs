@@ -1554,15 +1554,21 @@ fn settings_that_turned_a_guard_off_are_refused() {
 fn a_wall_moved_by_a_table_ends_a_step_on_each_row() {
     use pfem::hooks::{MotionLaw, PiecewiseLinear};
     let h = 0.02;
+    // 0.1 m/s to 0.0137 s, at rest to 0.02 s, 0.099 m/s to 0.0301 s
+    // through a row on that line at 0.025 s (no kink), then at rest.
+    let slope = 0.001 / 0.0101;
     let law = PiecewiseLinear::new(vec![
         (0.0, Vector::<2>::zeros()),
         (0.0137, Vector::<2>::new(0.00137, 0.0)),
-        (0.0301, Vector::<2>::new(0.00137, 0.0)),
+        (0.02, Vector::<2>::new(0.00137, 0.0)),
+        (0.025, Vector::<2>::new(0.00137 + 0.005 * slope, 0.0)),
+        (0.0301, Vector::<2>::new(0.00237, 0.0)),
     ])
     .unwrap();
     let x0 = Point::<2>::zeros();
     assert_eq!(law.next_kink(0.0), Some(0.0137));
-    assert_eq!(law.next_kink(0.0137 * (1.0 + 1e-16)), Some(0.0301));
+    assert_eq!(law.next_kink(0.0137 * (1.0 + 1e-16)), Some(0.02));
+    assert_eq!(law.next_kink(0.021), Some(0.0301));
     assert_eq!(law.next_kink(0.0301), None);
     assert!((law.velocity_arriving(&x0, 0.0137).x - 0.1).abs() < 1e-12);
     assert_eq!(law.velocity(&x0, 0.0137).x, 0.0);
@@ -1597,7 +1603,7 @@ fn a_wall_moved_by_a_table_ends_a_step_on_each_row() {
         let v = sim.particles().v()[paddle].x;
         assert_eq!(v, law.velocity(&x0, t).x, "the velocity leaving t = {t}");
     }
-    for row in [0.0137, 0.0301] {
+    for row in [0.0137, 0.02, 0.0301] {
         assert!(
             ends.iter().any(|&t| (t - row).abs() < 1e-15),
             "no step ends on {row}: {ends:?}"

@@ -1083,7 +1083,8 @@ where
 
     /// Shortest time a particle needs to cross its own spacing,
     /// `min_i h_i / |v_i|` (s); infinite when nothing moves. Moving walls
-    /// count (a fixed wall's velocity is zero): skipped until session 44,
+    /// count, at a spacing no coarser than the finest fluid or solid one
+    /// (a fixed wall's velocity is zero): skipped until session 44,
     /// a wall moved by a law or at a constant velocity into resting water
     /// took the scene's `max_dt` and could cross more than a spacing in
     /// one step (inverted elements, or a contact layer formed a step
@@ -1096,8 +1097,21 @@ where
     /// none is finite; a NaN is passed over, as `f64::min` passes it over).
     fn crossing(&self) -> (usize, f64) {
         let p = &self.particles;
+        // A wall's own spacing may be coarser than the matter it moves
+        // into: it counts at most the finest fluid or solid spacing.
+        let h_matter = (0..p.len())
+            .filter(|&i| p.kind()[i] != ParticleKind::Wall)
+            .map(|i| p.spacing()[i])
+            .fold(f64::INFINITY, f64::min);
+        let h = |i: usize| {
+            if p.kind()[i] == ParticleKind::Wall {
+                p.spacing()[i].min(h_matter)
+            } else {
+                p.spacing()[i]
+            }
+        };
         (0..p.len())
-            .map(|i| (i, p.spacing()[i] / p.v()[i].norm()))
+            .map(|i| (i, h(i) / p.v()[i].norm()))
             .fold(
                 (0, f64::INFINITY),
                 |best, c| if c.1 < best.1 { c } else { best },
@@ -1119,8 +1133,10 @@ where
     /// step.
     ///
     /// `Δt` is the Courant controller's, within `[min_dt, max_dt]`; the step
-    /// that reaches the end time ends on it exactly. Called past the end
-    /// time (a program's own loop), the step is the controller's, not cut.
+    /// that reaches the end time ends on it exactly, and so does one that
+    /// reaches a kink of a prescribed motion (a table's row,
+    /// [`Hook::next_kink`]). Called past the end time (a program's own
+    /// loop), the step is the controller's, cut only at kinks.
     ///
     /// The step runs on a worker of rayon's global pool (the calling thread
     /// waits), so that the parallel loops inside it (meshing, element
@@ -1224,23 +1240,34 @@ where
         // leaves no sliver to take. Past the end time (`step` called by
         // hand) the step is the controller's.
         // So does a step that would cross a kink of a hook's prescribed
-        // motion (a table's row, `Hook::next_kink`).
+        // motion (a table's row, `Hook::next_kink`): kinks closer than
+        // `min_dt` to the clock, or to the end time, are passed over (a
+        // step there could not be halved; a row just before the end time
+        // would have the last step of `min_dt` overshoot it), and so is a
+        // kink a faulty hook gives at or before the clock.
+        let (t, dt_min) = (self.clock.time, self.controller.dt_min);
         let kink = self
             .hooks
             .iter()
-            .filter_map(|h| h.next_kink(self.clock.time))
+            .filter_map(|h| h.next_kink(t))
+            .filter(|&k| k - t >= dt_min && (self.end_time <= t || self.end_time - k >= dt_min))
             .fold(f64::INFINITY, f64::min);
-        let landing = if kink < self.end_time || self.end_time <= self.clock.time {
+        let landing = if kink < self.end_time || self.end_time <= t {
             kink
         } else {
             self.end_time
         };
-        let remaining = landing - self.clock.time;
+        let remaining = landing - t;
         if remaining > 0.0 && remaining <= dt * (1.0 + END_SNAP) {
-            dt = remaining.max(self.controller.dt_min);
-        } else if remaining > 0.0 && remaining - dt < self.controller.dt_min {
+            dt = remaining.max(dt_min);
+        } else if remaining > 0.0 && remaining - dt < dt_min {
             // Two steps of half the rest, not one past `max_dt`.
-            dt = (0.5 * remaining).max(self.controller.dt_min);
+            dt = (0.5 * remaining).max(dt_min);
+        } else if landing == kink && remaining < 2.0 * dt {
+            // Two equal steps to a kink, not a full one and a sliver (the
+            // controller grows the step back by 1.25 a step: a sliver of
+            // 10⁻³ of it cost some 30 steps more).
+            dt = 0.5 * remaining;
         }
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();

@@ -46,7 +46,10 @@ where
     /// The velocity arriving at `t`: where the velocity jumps at `t` (a
     /// kink), its left limit, the one a step ending at `t` prescribes
     /// ([`MotionLaw::velocity`] is the right one, the velocity leaving
-    /// `t`). Default [`MotionLaw::velocity`].
+    /// `t`). Default [`MotionLaw::velocity`]. A law that gives kinks
+    /// ([`MotionLaw::next_kink`]) gives this too: the default would
+    /// prescribe the velocity leaving the kink for the step that ends on
+    /// it.
     fn velocity_arriving(&self, x0: &Point<D>, t: f64) -> Vector<D> {
         self.velocity(x0, t)
     }
@@ -192,6 +195,9 @@ where
     Const<D>: Dim,
 {
     rows: Vec<(f64, Vector<D>)>,
+    /// The rows' times where the velocity changes (beyond round-off), the
+    /// last row's too unless the table ends at rest: [`MotionLaw::next_kink`].
+    kinks: Vec<f64>,
 }
 
 impl<const D: usize> PiecewiseLinear<D>
@@ -220,7 +226,20 @@ where
         if rows.windows(2).any(|w| w[1].0 <= w[0].0) {
             return Err(bad("times must increase strictly"));
         }
-        Ok(Self { rows })
+        // The velocity of each segment, and zero after the last row.
+        let slopes: Vec<Vector<D>> = rows
+            .windows(2)
+            .map(|w| (w[1].1 - w[0].1) / (w[1].0 - w[0].0))
+            .chain(std::iter::once(Vector::<D>::zeros()))
+            .collect();
+        let kinks = (1..rows.len())
+            .filter(|&j| {
+                let (before, after) = (slopes[j - 1], slopes[j]);
+                (after - before).norm() > 1e-9 * before.norm().max(after.norm())
+            })
+            .map(|j| rows[j].0)
+            .collect();
+        Ok(Self { rows, kinks })
     }
 
     /// Times within this of a row are at it (a step that lands on a row
@@ -265,11 +284,12 @@ where
     fn velocity_arriving(&self, _x0: &Point<D>, t: f64) -> Vector<D> {
         self.at(t, true).1
     }
-    /// Every row after the first: the velocity jumps there (to zero after
-    /// the last).
+    /// The rows where the velocity changes (to zero after the last, unless
+    /// the table ends at rest); a row on a straight line is none.
     fn next_kink(&self, t: f64) -> Option<f64> {
         let tol = Self::tolerance(t);
-        self.rows[1..].iter().map(|r| r.0).find(|&k| k > t + tol)
+        let k = self.kinks.partition_point(|&k| k <= t + tol);
+        self.kinks.get(k).copied()
     }
     /// Zero: the velocity is constant between rows (the jumps at the rows
     /// are not accelerations a step can carry).

@@ -120,7 +120,6 @@ where
 
     fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let t = ctx.time();
-        let kinks = self.law.next_kink(f64::MIN).is_some();
         let p = ctx.particles_mut();
         for &i in &self.particles {
             let x0 = p.initial_positions()[i];
@@ -133,11 +132,10 @@ where
             if let Some(a) = self.law.acceleration(&x0, t) {
                 p.a_mut()[i] = self.finite(a, "acceleration", t)?;
             }
-            // A law with kinks: the velocity leaving `t` (at a kink, the
-            // next segment's), so that the next step starts from it.
-            if kinks {
-                p.v_mut()[i] = self.finite(self.law.velocity(&x0, t), "velocity", t)?;
-            }
+            // The velocity leaving `t` (at a kink, the next segment's), so
+            // that the next step starts from it; elsewhere the one the step
+            // prescribed, to round-off.
+            p.v_mut()[i] = self.finite(self.law.velocity(&x0, t), "velocity", t)?;
         }
         Ok(())
     }
