@@ -640,7 +640,17 @@ fn bad_hook_settings_and_a_set_changed_by_hand_are_handled() {
     sim.add_hook(Box::new(pfem::hooks::WallClockLimit::new(f64::NAN)));
     let err = sim.run(&mut []).unwrap_err().to_string();
     assert!(err.contains("NaN"), "{err}");
-    let mut sim = sim2(small_tank("nan target"), StepParams::default());
+    // (The driver's own correction off: one correction at most.)
+    let mut sim = Simulation::with_options(
+        small_tank("nan target"),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+        pfem::simulation::Options {
+            volume_correction: 0.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     sim.add_hook(Box::new(
         pfem::hooks::VolumeCorrection::new(1.0)
             .unwrap()

@@ -205,3 +205,75 @@ fn command_line_sets_the_correction() {
             .is_err());
     }
 }
+
+/// Session 44's review of the volume bookkeeping:
+/// - a checkpoint written before the correction started (right after
+///   `new`) and restored left the correction off for good (its saved
+///   "none" overwrote what `start` had just computed): the restored run
+///   corrects as the uninterrupted one, bit for bit;
+/// - a second correction (one added with a target beside the driver's
+///   own) is refused: the two pulled the surface out and back every step;
+/// - a hook that moves the water and then fails has its change booked
+///   under its name: the failed run's ledger closes;
+/// - a non-number set by hand between steps is named as such, not blamed
+///   on the first hook to run (the volume correction).
+#[test]
+fn the_ledger_and_the_correction_survive_restarts_failures_and_hands() {
+    let mut whole = dam_break(1.0);
+    let ck = whole.checkpoint();
+    let mut restored = dam_break(1.0);
+    restored.restore(&ck).unwrap();
+    for _ in 0..10 {
+        whole.step().unwrap();
+        restored.step().unwrap();
+    }
+    assert!(whole.volume().correction() != 0.0);
+    assert_eq!(restored.volume().correction(), whole.volume().correction());
+    assert_eq!(restored.particles().x(), whole.particles().x());
+
+    let mut two = dam_break(1.0);
+    let v0 = two.fluid_volume();
+    two.add_hook(Box::new(
+        VolumeCorrection::new(1.0)
+            .unwrap()
+            .with_target_volume(1.003 * v0),
+    ));
+    let err = two.step().unwrap_err().to_string();
+    assert!(err.contains("volume corrections"), "{err}");
+
+    let mut failing = dam_break(1.0);
+    failing.add_hook(Box::new(
+        pfem::hooks::FnHook::new("lift and fail").after_remesh(|ctx: &mut HookContext<'_, 2>| {
+            let top = (0..ctx.particles().len())
+                .filter(|&i| ctx.particles().kind()[i] == pfem::core::ParticleKind::Fluid)
+                .max_by(|&a, &b| {
+                    ctx.particles().x()[a]
+                        .y
+                        .total_cmp(&ctx.particles().x()[b].y)
+                })
+                .unwrap();
+            ctx.particles_mut().x_mut()[top].y += 1e-3;
+            Err(RunError::Hook {
+                hook: "lift and fail".into(),
+                why: "on purpose".into(),
+            })
+        }),
+    ));
+    assert!(failing.step().is_err());
+    let ledger = failing.volume();
+    assert!(ledger.by("lift and fail") != 0.0, "{ledger:?}");
+    assert!(
+        (ledger.accounted() - failing.fluid_volume()).abs() < 1e-12 * ledger.initial,
+        "{ledger:?} against {}",
+        failing.fluid_volume()
+    );
+
+    let mut by_hand = dam_break(1.0);
+    by_hand.step().unwrap();
+    by_hand.particles_mut().pressure_mut()[0] = f64::NAN;
+    let err = by_hand.step().unwrap_err().to_string();
+    assert!(
+        err.contains("set by hand") && !err.contains("volume correction"),
+        "{err}"
+    );
+}

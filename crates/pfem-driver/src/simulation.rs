@@ -928,6 +928,20 @@ where
 
     /// `Hook::start` of the hooks that have not had it yet.
     fn start_hooks(&mut self) -> Result<(), RunError> {
+        // Two volume corrections (the driver's own and one added, e.g.
+        // `with_target_volume`) would pull the free surface to two
+        // targets, out and back every step.
+        let corrections = self
+            .hooks
+            .iter()
+            .filter(|h| h.name() == VolumeCorrection::NAME)
+            .count();
+        if corrections > 1 {
+            return Err(RunError::Hook {
+                hook: VolumeCorrection::NAME.into(),
+                why: format!("{corrections} volume corrections: one at most (set Options::volume_correction to 0 to add one of your own)"),
+            });
+        }
         let first = self.started;
         if first < self.hooks.len() {
             self.started = self.hooks.len();
@@ -1004,6 +1018,7 @@ where
                 // A set changed before the hook failed keeps no mesh of
                 // the old set's indices (outputs written after the error
                 // read it).
+                let mut meshed = true;
                 if remesh {
                     if matches!(point, HookPoint::AfterRemesh | HookPoint::BeforeSolve) {
                         self.elements.keep_stash();
@@ -1011,7 +1026,14 @@ where
                     self.elements.clear_fluid();
                     // Its own failure leaves the fluid range empty; the
                     // hook's error is the one to report.
-                    let _ = self.remesh();
+                    meshed = self.remesh().is_ok();
+                }
+                // What it changed before it failed is booked under its
+                // name, so that the failed run's ledger closes (and a
+                // program that steps on does not have the correction undo
+                // a partial inflow layer as remeshing).
+                if moved && meshed {
+                    self.book_hook_change(hook.name(), hook.sources_fluid());
                 }
                 result = Err(e);
                 break;
@@ -1045,13 +1067,7 @@ where
                 }
             }
             if moved || remesh {
-                let after = self.fluid_volume();
-                let dv = after - self.volume_now;
-                self.volume.book(hook.name(), dv);
-                if hook.sources_fluid() {
-                    self.volume.sources += dv;
-                }
-                self.volume_now = after;
+                self.book_hook_change(hook.name(), hook.sources_fluid());
             }
         }
         self.hooks = hooks;
@@ -1059,6 +1075,22 @@ where
         self.stats.hooks.0 += 1;
         self.stats.hooks.1 += t0.elapsed().as_secs_f64();
         result
+    }
+
+    /// Books the change of the fluid volume since the last measure under
+    /// a hook's `name` (and in `sources` when it is a source); a volume
+    /// that is not a number (a hook's NaN position, refused) is not booked.
+    fn book_hook_change(&mut self, name: &str, sources: bool) {
+        let after = self.fluid_volume();
+        if !after.is_finite() {
+            return;
+        }
+        let dv = after - self.volume_now;
+        self.volume.book(name, dv);
+        if sources {
+            self.volume.sources += dv;
+        }
+        self.volume_now = after;
     }
 
     /// What follows from the body force when a hook or a restore has set
@@ -1187,6 +1219,14 @@ where
     }
 
     fn step_in_pool(&mut self) -> Result<(), RunError> {
+        // A non-number set by hand between steps is named as such, before a
+        // hook could be blamed for it.
+        if let Some((particle, what)) = self.particles.non_finite() {
+            return Err(RunError::InvalidParticle {
+                particle,
+                why: format!("its {what} is not finite (set by hand since the last step?)"),
+            });
+        }
         self.mesh_a_set_changed_by_hand()?;
         self.start_hooks()?;
         // The fluid volume at the end of the last step is `volume_now`; it is

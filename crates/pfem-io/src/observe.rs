@@ -526,7 +526,16 @@ where
         write_summary(self.dir.join("summary.json"), &summary)?;
         let change = summary.relative_volume_change();
         let unit = if D == 2 { "m²/m" } else { "m³" };
-        let volume = if change.is_finite() {
+        let inflow = summary.fluid_volume_intended - summary.fluid_volume_initial;
+        let volume = if change.is_finite() && inflow != 0.0 {
+            format!(
+                "fluid volume {:.6e} -> {:.6e} {unit}, {:+.6e} of it by inflows ({:+.3}% off)",
+                summary.fluid_volume_initial,
+                summary.fluid_volume_final,
+                inflow,
+                100.0 * change
+            )
+        } else if change.is_finite() {
             format!(
                 "fluid volume {:.6e} -> {:.6e} {unit} ({:+.3}%)",
                 summary.fluid_volume_initial,
@@ -594,6 +603,7 @@ where
             wall_time_s: wall,
             fluid_volume_initial: sim.volume().initial,
             fluid_volume_final: sim.fluid_volume(),
+            fluid_volume_intended: sim.volume().initial + sim.volume().sources,
             volume_change_by_cause: causes,
             extra: {
                 let mut e = self.extra.clone();

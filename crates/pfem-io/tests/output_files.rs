@@ -157,6 +157,18 @@ fn summary_json_round_trips() {
     let back: RunSummary = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
     assert_eq!(back, s);
     assert!((s.relative_volume_change() - (-0.0002 / 0.0322)).abs() < 1e-12);
+    // With an inflow's water, against the volume intended (session 44's
+    // review: an inflow of more than 5 % read as an unresolved run); a
+    // summary written before the field was recorded reads as none.
+    let mut inflow = s.clone();
+    inflow.fluid_volume_final = 0.0420;
+    inflow.fluid_volume_intended = 0.0422;
+    assert!((inflow.relative_volume_change() - (-0.0002 / 0.0422)).abs() < 1e-12);
+    let mut old: serde_json::Value = serde_json::to_value(&s).unwrap();
+    old.as_object_mut().unwrap().remove("fluid_volume_intended");
+    let old: RunSummary = serde_json::from_value(old).unwrap();
+    assert_eq!(old.fluid_volume_intended, 0.0);
+    assert!((old.relative_volume_change() - (-0.0002 / 0.0322)).abs() < 1e-12);
     // A non-finite figure of the summary's own fields is written as null
     // and read back as NaN (session 39's review: reading failed).
     s.fluid_volume_final = f64::NAN;

@@ -143,7 +143,13 @@ where
                 "the volume correction's initial compression {c} is not finite"
             )));
         }
-        self.compression0 = some.then_some(c);
+        // A checkpoint written before the correction started (right after
+        // `new`) holds none: the one `start` has just computed on the same
+        // initial state stands (it was overwritten with none, and the
+        // restored run never corrected).
+        if some {
+            self.compression0 = Some(c);
+        }
         Ok(())
     }
 

@@ -48,6 +48,12 @@ pub struct RunSummary {
     /// Fluid volume at the end (same unit).
     #[serde(deserialize_with = "nan_from_null")]
     pub fluid_volume_final: f64,
+    /// The volume the run should end with (same unit): the initial one
+    /// plus what sources (inflows) added, [`crate::observe`]'s
+    /// `Simulation::volume().sources`. 0 in a summary written before it
+    /// was recorded.
+    #[serde(default, deserialize_with = "nan_from_null")]
+    pub fluid_volume_intended: f64,
     /// Volume gained (+) or lost (−) by cause (cause → the unit of
     /// [`RunSummary::fluid_volume_initial`]: m³; m² per metre of depth in
     /// 2D): `"remeshing"`, `"solution"` and each hook's name (e.g.
@@ -60,13 +66,21 @@ pub struct RunSummary {
 }
 
 impl RunSummary {
-    /// Relative change of the fluid volume, `(final − initial) / initial`;
-    /// NaN when the initial volume is zero.
+    /// Relative error of the fluid volume, `(final − intended) /
+    /// intended`: against the initial volume plus what inflows added
+    /// ([`RunSummary::fluid_volume_intended`]; the initial volume where
+    /// that is not recorded), so that an inflow's water is not counted as
+    /// an error. NaN when it is zero.
     pub fn relative_volume_change(&self) -> f64 {
-        if self.fluid_volume_initial == 0.0 {
+        let reference = if self.fluid_volume_intended > 0.0 {
+            self.fluid_volume_intended
+        } else {
+            self.fluid_volume_initial
+        };
+        if reference == 0.0 {
             f64::NAN
         } else {
-            (self.fluid_volume_final - self.fluid_volume_initial) / self.fluid_volume_initial
+            (self.fluid_volume_final - reference) / reference
         }
     }
 }
