@@ -536,7 +536,7 @@ fn a_hook_stops_the_run_and_a_ramp_loads_gradually() {
         duration: 0.2,
     }));
     let err = with_gravity.run(&mut []).unwrap_err().to_string();
-    assert!(err.contains("gravity of its own"), "{err}");
+    assert!(err.contains("gravity is set already"), "{err}");
     assert!(
         sim.time() >= 0.3 && sim.time() < 0.3 + 1e-2 + 1e-12,
         "stopped at {}",
@@ -1672,5 +1672,49 @@ fn a_wall_moved_by_a_table_ends_a_step_on_each_row() {
     assert!(
         (x - want).norm() < 1e-12,
         "{x} against the law's {want} at t = {t}"
+    );
+}
+
+/// Moving walls in the Courant bound (session 44): a piston pushed into
+/// water at rest sets the step to its crossing of a spacing (it took the
+/// scene's `max_dt`, and could cross more than a spacing in a step); a lid
+/// moving fast far above the water sets it only to its crossing of the
+/// walls' reach, `3 α h` (the review of the session's diff: every wall
+/// counted, so a part clear of the water set every step).
+#[test]
+fn moving_walls_near_the_water_bound_the_step_and_far_ones_less() {
+    let h = 0.05;
+    let speed = 2.0;
+    let tank = |piston: bool| {
+        let moving = WallMotion::Velocity(Vector::<2>::new(speed, 0.0));
+        let s = small_tank("walls in the Courant bound").settings(RunSettings {
+            end_time: 1.0,
+            max_dt: 0.1,
+            output_interval: None,
+            ..Default::default()
+        });
+        if piston {
+            s.wall("piston", boxed(-0.1, 0.05, -0.05, 0.1), h, moving)
+        } else {
+            s.wall("lid", boxed(0.0, 2.0, 0.1, 2.05), h, moving)
+        }
+    };
+    let courant = RunSettings::default().courant;
+    let mut piston = sim2(tank(true), StepParams::default());
+    piston.step().unwrap();
+    let mut lid = sim2(tank(false), StepParams::default());
+    lid.step().unwrap();
+    let near = courant * h / speed;
+    let far = courant * 3.0 * 1.3 * h / speed;
+    println!(
+        "first step: piston {:.4} s (C h/v = {near:.4}), lid {:.4} s (C 3αh/v = {far:.4})",
+        piston.dt(),
+        lid.dt()
+    );
+    assert!(piston.dt() <= near * (1.0 + 1e-9), "piston {}", piston.dt());
+    assert!(
+        lid.dt() > 2.0 * near && lid.dt() <= far * (1.0 + 1e-9),
+        "lid {}",
+        lid.dt()
     );
 }

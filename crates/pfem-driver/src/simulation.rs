@@ -681,22 +681,33 @@ where
         // on a floor with its lattice offset). Refused, naming the pair.
         {
             use pfem_constitutive::contact::GAP_RATIO;
+            // (An element whose every particle is held, a clamped or welded
+            // solid beside a wall, carries no load: it is left alone.)
+            let nv = D + 1;
+            let held = |el: &[u32]| {
+                el.iter()
+                    .all(|&i| sim.particles.constraints().is_fully_fixed(i as usize))
+            };
             let closest = sim
                 .elements
-                .contact_history()
-                .iter()
+                .contact()
+                .chunks_exact(nv)
+                .zip(sim.elements.contact_history())
                 .zip(sim.elements.contact_bodies())
-                .map(|(h, b)| (h.internal[GAP_RATIO], *b))
+                .filter(|((el, _), _)| !held(el))
+                .map(|((_, h), b)| (h.internal[GAP_RATIO], *b))
                 .min_by(|a, b| a.0.total_cmp(&b.0));
+            let least = 1.0 - contact_onset.max(0.0);
             if let Some((ratio, (a, b))) = closest {
-                if ratio < 1.0 - contact_onset.max(0.0) - 1e-9 {
+                if ratio < least - 1e-9 {
                     let name = |i: u32| sim.body_names[i as usize].clone();
                     return Err(SceneError::InvalidGeometry {
                         body: name(a),
                         why: format!(
-                            "it starts at {:.0} % of its contact distance from body `{}` (half the sum of the two spacings): place them that far apart, or a solid on a wall's lattice, where it is welded",
+                            "it starts at {:.1} % of its contact distance from body `{}` (half the sum of the two spacings; at least {:.1} % is accepted, the contact's onset): place them that far apart, or a solid on a wall's lattice, where it is welded",
                             100.0 * ratio,
-                            name(b)
+                            name(b),
+                            100.0 * least
                         ),
                     });
                 }
@@ -971,6 +982,8 @@ where
         let mut result = Ok(());
         for hook in hooks.iter_mut().skip(first) {
             let generation = self.particles.generation();
+            // (At the start, whether the hook moved a particle.)
+            let x_before = (point == HookPoint::Start).then(|| self.particles.x().to_vec());
             let mut ctx = HookContext {
                 time: self.clock.time,
                 dt: self.clock.dt,
@@ -989,6 +1002,7 @@ where
                 initial_volume: self.volume.initial,
                 sources: self.volume.sources,
                 moved: false,
+                touched: false,
             };
             let r = match point {
                 HookPoint::Start => hook.start(&mut ctx),
@@ -1000,20 +1014,23 @@ where
             // `manage_particles`, or `Particles::remap` / `push` through
             // `particles_mut`) has its mesh remade: the elements' indices
             // are the old set's.
-            let moved = ctx.moved;
+            let (moved, touched) = (ctx.moved, ctx.touched);
             let remesh = self.particles.generation() != generation;
             let moved = moved || remesh;
             // A non-number a hook left in the state is named with the
             // hook: after the last step it would reach the outputs (and the
             // final checkpoint, which a restore then refuses) with the run
             // `Ok`; before the solve the step would refuse it naming no one.
-            let r = r.and_then(|()| match self.particles.non_finite() {
-                Some((i, what)) => Err(RunError::Hook {
-                    hook: hook.name().to_string(),
-                    why: format!("left particle {i}'s {what} not finite"),
-                }),
-                None => Ok(()),
-            });
+            // (Scanned only after a hook that took mutable access.)
+            let r = r.and_then(
+                |()| match touched.then(|| self.particles.non_finite()).flatten() {
+                    Some((i, what)) => Err(RunError::Hook {
+                        hook: hook.name().to_string(),
+                        why: format!("left particle {i}'s {what} not finite"),
+                    }),
+                    None => Ok(()),
+                },
+            );
             if let Err(e) = r {
                 // A set changed before the hook failed keeps no mesh of
                 // the old set's indices (outputs written after the error
@@ -1027,6 +1044,9 @@ where
                     // Its own failure leaves the fluid range empty; the
                     // hook's error is the one to report.
                     meshed = self.remesh().is_ok();
+                    if meshed && point == HookPoint::AfterStep {
+                        self.elements.keep_stash();
+                    }
                 }
                 // What it changed before it failed is booked under its
                 // name, so that the failed run's ledger closes (and a
@@ -1038,6 +1058,12 @@ where
                 result = Err(e);
                 break;
             }
+            // A hook that moves particles at its start (a wall put on its
+            // law's path) has the mesh remade like a changed set: the
+            // first step meshes nothing before its solve.
+            let remesh = remesh
+                || (point == HookPoint::Start
+                    && x_before.is_some_and(|x| x.as_slice() != self.particles.x()));
             if remesh {
                 // Forces added on the old numbering: walls and solids come
                 // first and keep their indices through any change of the
@@ -1115,8 +1141,9 @@ where
 
     /// Shortest time a particle needs to cross its own spacing,
     /// `min_i h_i / |v_i|` (s); infinite when nothing moves. Moving walls
-    /// count, at a spacing no coarser than the finest fluid or solid one
-    /// (a fixed wall's velocity is zero): skipped until session 44,
+    /// count: within the walls' reach of a fluid or solid particle at a
+    /// spacing no coarser than the finest fluid or solid one, beyond it at
+    /// the reach (a fixed wall's velocity is zero): skipped until session 44,
     /// a wall moved by a law or at a constant velocity into resting water
     /// took the scene's `max_dt` and could cross more than a spacing in
     /// one step (inverted elements, or a contact layer formed a step
@@ -1135,12 +1162,32 @@ where
             .filter(|&i| p.kind()[i] != ParticleKind::Wall)
             .map(|i| p.spacing()[i])
             .fold(f64::INFINITY, f64::min);
-        let h = |i: usize| {
-            if p.kind()[i] == ParticleKind::Wall {
-                p.spacing()[i].min(h_matter)
-            } else {
-                p.spacing()[i]
+        // A moving wall within the walls' reach of matter (the remeshing's,
+        // `pfem_geometry::near_matter`) at that spacing; one beyond it (a
+        // gate lifted clear of the water, a flap's dry top, far 3D walls)
+        // at the reach itself: it may not set the step to a fluid
+        // spacing, yet may not jump into the water within one step.
+        let moving = p
+            .kind()
+            .iter()
+            .zip(p.v())
+            .any(|(k, v)| *k == ParticleKind::Wall && v.norm() > 0.0);
+        let h_max = p.spacing().iter().fold(0.0, |a: f64, &h| a.max(h));
+        let reach = WALL_REACH * self.alpha.alpha * h_max;
+        let mut near = vec![true; p.len()];
+        if moving {
+            let mut kept = Vec::new();
+            if near_matter(p.x(), p.kind(), reach, &mut kept) {
+                near.fill(false);
+                for &i in &kept {
+                    near[i as usize] = true;
+                }
             }
+        }
+        let h = |i: usize| match p.kind()[i] {
+            ParticleKind::Wall if near[i] => p.spacing()[i].min(h_matter),
+            ParticleKind::Wall => reach,
+            _ => p.spacing()[i],
         };
         (0..p.len())
             .map(|i| (i, h(i) / p.v()[i].norm()))
@@ -1210,6 +1257,11 @@ where
         if self.particles.generation() != self.meshed {
             self.elements.clear_fluid();
             self.remesh()?;
+            // The step remeshes again (after its first): it carries from
+            // the solved range, not from this one formed from it.
+            if self.clock.steps > 0 {
+                self.elements.keep_stash();
+            }
             // Booked as remeshing: the ledger still closes.
             let after = self.fluid_volume();
             self.volume.remeshing += after - self.volume_now;
@@ -1401,9 +1453,9 @@ where
         let end = self.fluid_volume();
         self.volume.solution += end - self.volume_now;
         self.volume_now = end;
-        book += tb.elapsed().as_secs_f64();
-        self.run_hooks(HookPoint::AfterStep)?;
-        let tb = Instant::now();
+        // The step's own positions are checked before the hooks after it,
+        // which are checked each (a NaN of the step's was blamed on the
+        // first of them).
         if let Some(i) = self
             .particles
             .x()
@@ -1415,7 +1467,9 @@ where
                 particle: i,
             });
         }
-        self.stats.update.1 += book + tb.elapsed().as_secs_f64();
+        book += tb.elapsed().as_secs_f64();
+        self.stats.update.1 += book;
+        self.run_hooks(HookPoint::AfterStep)?;
         Ok(())
     }
 
@@ -1818,7 +1872,8 @@ where
     /// are checked; [`crate::checkpoint::CheckpointError::Mismatch`]
     /// otherwise). The hooks' [`Hook::start`] runs first on the initial
     /// state, then each hook's saved state is read back by name (a hook
-    /// added since, with no saved state, starts fresh). The fluid mesh is
+    /// added since starts fresh if it keeps no state, and is refused if it
+    /// does). The fluid mesh is
     /// remade from the restored positions; a stop asked for before the
     /// checkpoint is not carried over. The end time stays this
     /// simulation's, so a finished run may be continued further.

@@ -33,7 +33,7 @@ where
         if ctx.gravity().is_some_and(|g| g.norm() > 0.0) {
             return Err(RunError::Hook {
                 hook: "body-force ramp".into(),
-                why: "the scene has a gravity of its own, under which its fluid starts hydrostatic: ramp from a scene without gravity".into(),
+                why: "a gravity is set already (by the scene, under which its fluid starts hydrostatic, or by a hook): ramp from a scene without gravity".into(),
             });
         }
         if !(self.duration > 0.0 && self.duration.is_finite())

@@ -526,10 +526,12 @@ where
         write_summary(self.dir.join("summary.json"), &summary)?;
         let change = summary.relative_volume_change();
         let unit = if D == 2 { "m²/m" } else { "m³" };
-        let inflow = summary.fluid_volume_intended - summary.fluid_volume_initial;
+        let inflow = summary
+            .fluid_volume_intended
+            .map_or(0.0, |v| v - summary.fluid_volume_initial);
         let volume = if change.is_finite() && inflow != 0.0 {
             format!(
-                "fluid volume {:.6e} -> {:.6e} {unit}, {:+.6e} of it by inflows ({:+.3}% off)",
+                "fluid volume {:.6e} -> {:.6e} {unit}, {:+.6e} of it by sources ({:+.3}% off)",
                 summary.fluid_volume_initial,
                 summary.fluid_volume_final,
                 inflow,
@@ -603,7 +605,7 @@ where
             wall_time_s: wall,
             fluid_volume_initial: sim.volume().initial,
             fluid_volume_final: sim.fluid_volume(),
-            fluid_volume_intended: sim.volume().initial + sim.volume().sources,
+            fluid_volume_intended: Some(sim.volume().initial + sim.volume().sources),
             volume_change_by_cause: causes,
             extra: {
                 let mut e = self.extra.clone();
@@ -727,7 +729,7 @@ where
                 return Err(RunError::InvalidSetting {
                     name: "checkpoint_every",
                     value: t,
-                    reason: "must be positive and finite (None writes one at the end only)",
+                    reason: "must be a positive, finite time in s",
                 });
             }
         }

@@ -162,12 +162,17 @@ fn summary_json_round_trips() {
     // summary written before the field was recorded reads as none.
     let mut inflow = s.clone();
     inflow.fluid_volume_final = 0.0420;
-    inflow.fluid_volume_intended = 0.0422;
+    inflow.fluid_volume_intended = Some(0.0422);
     assert!((inflow.relative_volume_change() - (-0.0002 / 0.0422)).abs() < 1e-12);
+    // An outflow that drained it all: no error (it read −100 %).
+    let mut drained = s.clone();
+    drained.fluid_volume_final = 0.0;
+    drained.fluid_volume_intended = Some(0.0);
+    assert_eq!(drained.relative_volume_change(), 0.0);
     let mut old: serde_json::Value = serde_json::to_value(&s).unwrap();
     old.as_object_mut().unwrap().remove("fluid_volume_intended");
     let old: RunSummary = serde_json::from_value(old).unwrap();
-    assert_eq!(old.fluid_volume_intended, 0.0);
+    assert_eq!(old.fluid_volume_intended, None);
     assert!((old.relative_volume_change() - (-0.0002 / 0.0322)).abs() < 1e-12);
     // A non-finite figure of the summary's own fields is written as null
     // and read back as NaN (session 39's review: reading failed).

@@ -176,6 +176,9 @@ where
     pub(crate) initial_volume: f64,
     pub(crate) sources: f64,
     pub(crate) moved: bool,
+    /// Whether the hook took any mutable access to the particles (the
+    /// driver then checks they are all finite).
+    pub(crate) touched: bool,
 }
 
 impl<const D: usize> std::fmt::Debug for HookContext<'_, D>
@@ -259,6 +262,7 @@ where
     /// constraints). The driver measures the fluid volume after the call.
     pub fn particles_mut(&mut self) -> &mut Particles<D> {
         self.moved = true;
+        self.touched = true;
         self.particles
     }
 
@@ -267,12 +271,14 @@ where
     /// does not measure the fluid volume again after the call, since no
     /// particle moved.
     pub fn constraints_mut(&mut self) -> &mut Constraints<D> {
+        self.touched = true;
         self.particles.constraints_mut()
     }
 
     /// The velocities, to change (m/s); as [`HookContext::constraints_mut`],
     /// no particle moves, so the fluid volume is not measured again.
     pub fn v_mut(&mut self) -> &mut [Vector<D>] {
+        self.touched = true;
         self.particles.v_mut()
     }
 
@@ -365,6 +371,7 @@ where
             });
         }
         self.moved = true;
+        self.touched = true;
         self.particles.push(p).map_err(|e| RunError::Hook {
             hook: "insert_fluid".into(),
             why: e.to_string(),
@@ -398,6 +405,7 @@ where
             why: e.to_string(),
         })?;
         self.moved = true;
+        self.touched = true;
         Ok((upd.removed, upd.inserted))
     }
 }

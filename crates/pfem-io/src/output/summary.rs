@@ -49,11 +49,11 @@ pub struct RunSummary {
     #[serde(deserialize_with = "nan_from_null")]
     pub fluid_volume_final: f64,
     /// The volume the run should end with (same unit): the initial one
-    /// plus what sources (inflows) added, [`crate::observe`]'s
-    /// `Simulation::volume().sources`. 0 in a summary written before it
-    /// was recorded.
-    #[serde(default, deserialize_with = "nan_from_null")]
-    pub fluid_volume_intended: f64,
+    /// plus what sources (inflows, outflows) added or removed,
+    /// `Simulation::volume().sources`. `None` in a summary written before
+    /// it was recorded.
+    #[serde(default)]
+    pub fluid_volume_intended: Option<f64>,
     /// Volume gained (+) or lost (−) by cause (cause → the unit of
     /// [`RunSummary::fluid_volume_initial`]: m³; m² per metre of depth in
     /// 2D): `"remeshing"`, `"solution"` and each hook's name (e.g.
@@ -67,20 +67,21 @@ pub struct RunSummary {
 
 impl RunSummary {
     /// Relative error of the fluid volume, `(final − intended) /
-    /// intended`: against the initial volume plus what inflows added
-    /// ([`RunSummary::fluid_volume_intended`]; the initial volume where
-    /// that is not recorded), so that an inflow's water is not counted as
-    /// an error. NaN when it is zero.
+    /// max(initial, intended)`: against the initial volume plus what
+    /// sources added or removed ([`RunSummary::fluid_volume_intended`];
+    /// the initial volume where that is not recorded), so that an
+    /// inflow's water, or an outflow's loss, is not counted as an error.
+    /// NaN when both volumes are zero.
     pub fn relative_volume_change(&self) -> f64 {
-        let reference = if self.fluid_volume_intended > 0.0 {
-            self.fluid_volume_intended
-        } else {
-            self.fluid_volume_initial
-        };
-        if reference == 0.0 {
+        let intended = self
+            .fluid_volume_intended
+            .filter(|v| v.is_finite())
+            .unwrap_or(self.fluid_volume_initial);
+        let scale = self.fluid_volume_initial.max(intended);
+        if scale == 0.0 {
             f64::NAN
         } else {
-            (self.fluid_volume_final - reference) / reference
+            (self.fluid_volume_final - intended) / scale
         }
     }
 }
