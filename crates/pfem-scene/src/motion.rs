@@ -370,11 +370,15 @@ where
         }
         let axis = if D == 3 {
             let a = axis.ok_or_else(|| bad("a 3D rotation needs an axis".into()))?;
-            let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-            if !(n.is_finite() && n > 0.0) {
+            // Scaled by its largest component first: an axis of 10²⁰⁰
+            // (or 10⁻²⁰⁰) overflowed (underflowed) when squared.
+            let m = a.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+            if !(m.is_finite() && m > 0.0) {
                 return Err(bad("the axis must be a non-zero finite vector".into()));
             }
-            [a[0] / n, a[1] / n, a[2] / n]
+            let b = [a[0] / m, a[1] / m, a[2] / m];
+            let n = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt();
+            [b[0] / n, b[1] / n, b[2] / n]
         } else {
             [0.0, 0.0, 1.0]
         };
@@ -621,6 +625,22 @@ mod tests {
         assert!((spin.position(&on, 0.7) - on).norm() < 1e-12);
         // A 3D rotation needs an axis; an oscillation needs a period.
         assert!(Rotation::<3>::new(Point::<3>::zeros(), None, 1.0, 0.0, 0.0, 0.0).is_err());
+        // An axis of any finite, non-zero size is the same axis.
+        for scale in [1e-200, 1.0, 1e200] {
+            let r = Rotation::<3>::new(
+                Point::<3>::new(0.0, 1.0, 0.0),
+                Some([scale, scale, 0.0]),
+                2.0,
+                0.1,
+                1.0,
+                0.0,
+            )
+            .unwrap();
+            assert_eq!(r, spin, "axis scaled by {scale}");
+        }
+        assert!(
+            Rotation::<3>::new(Point::<3>::zeros(), Some([0.0; 3]), 1.0, 0.0, 0.0, 0.0).is_err()
+        );
         assert!(Rotation::<2>::new(Point::<2>::zeros(), None, 0.0, 0.1, 0.0, 0.0).is_err());
     }
 }
