@@ -522,20 +522,14 @@ fn a_block_dropped_onto_a_floor_lands_on_it() {
     );
 }
 
-/// A fine block (spacing h) on a coarse floor (2h), its bottom row the
-/// pair's contact distance 1.5h above the floor's top row: it rests. Until
-/// session 41 each contact element took the mean spacing of its own
-/// particles as its contact distance (1.67h with two floor particles,
-/// 1.33h with two block particles), so the block started under pressure
-/// in one kind and open in the other.
-#[test]
-fn a_fine_block_rests_on_a_coarse_floor() {
-    let (h, hf) = (0.01, 0.02);
-    let (w, t) = (0.2, 0.05);
-    let scene = Scene::<2>::new("fine on coarse")
+/// A block of spacing 0.01 m (the box `lo`–`hi`) over a floor of spacing
+/// 0.02 m whose top row is at `y = 0`, under gravity, to `end_time`.
+fn fine_block_on_coarse_floor(lo: Point<2>, hi: Point<2>, end_time: f64) -> Scene<2> {
+    let hf = 0.02;
+    Scene::<2>::new("fine on coarse")
         .gravity(Vector::<2>::new(0.0, -G))
         .settings(RunSettings {
-            end_time: 0.3,
+            end_time,
             max_dt: 2e-3,
             output_interval: None,
             ..Default::default()
@@ -552,13 +546,24 @@ fn a_fine_block_rests_on_a_coarse_floor() {
         .solid(
             "block",
             Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
-            Geometry::Box {
-                min: Point::<2>::new(0.0, 0.5 * (h + hf)),
-                max: Point::<2>::new(w, 0.5 * (h + hf) + t),
-            },
-            h,
+            Geometry::Box { min: lo, max: hi },
+            0.01,
             None,
-        );
+        )
+}
+
+/// A fine block (spacing h) on a coarse floor (2h), its bottom row the
+/// pair's contact distance 1.5h above the floor's top row: it rests. Until
+/// session 41 each contact element took the mean spacing of its own
+/// particles as its contact distance (1.67h with two floor particles,
+/// 1.33h with two block particles), so the block started under pressure
+/// in one kind and open in the other.
+#[test]
+fn a_fine_block_rests_on_a_coarse_floor() {
+    let (h, hf) = (0.01, 0.02);
+    let (w, t) = (0.2, 0.05);
+    let y = 0.5 * (h + hf);
+    let scene = fine_block_on_coarse_floor(Point::<2>::new(0.0, y), Point::<2>::new(w, y + t), 0.3);
     let mut s = sim(scene);
     let y0 = lowest(&s, "block");
     let weight = 1000.0 * w * t * G;
@@ -599,32 +604,7 @@ fn a_fine_block_rests_on_a_coarse_floor() {
 #[test]
 fn bodies_in_contact_closer_than_their_contact_distance_are_refused() {
     let (h, hf) = (0.01, 0.02);
-    let block = |lo: Point<2>, hi: Point<2>| {
-        Scene::<2>::new("too close")
-            .gravity(Vector::<2>::new(0.0, -G))
-            .settings(RunSettings {
-                end_time: 0.01,
-                max_dt: 2e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall(
-                "floor",
-                Geometry::Box {
-                    min: Point::<2>::new(-0.2, -hf),
-                    max: Point::<2>::new(0.4, 0.0),
-                },
-                hf,
-                WallMotion::Fixed,
-            )
-            .solid(
-                "block",
-                Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
-                Geometry::Box { min: lo, max: hi },
-                h,
-                None,
-            )
-    };
+    let block = |lo, hi| fine_block_on_coarse_floor(lo, hi, 0.01);
     for (lo, hi) in [
         (Point::<2>::new(0.0, h), Point::<2>::new(0.2, h + 0.05)),
         (Point::<2>::new(0.005, 0.0), Point::<2>::new(0.205, 0.05)),
