@@ -984,6 +984,33 @@ fn a_remesh_by_a_hook_leaves_stick_s_memory_alone() {
     }
     assert_eq!(s.steps(), n);
     assert_eq!(s.particles().x(), plain.as_slice(), "renumbered by hand");
+    // And by a hook added mid-run that renumbers at its start (remeshed
+    // before the step's own remeshing).
+    let mut scene = block_on_floor(0.02, 0.2, 0.1, 20f64.to_radians(), 0.5, 1e7);
+    scene.settings.end_time = 0.3;
+    let mut s = sim(scene);
+    while s.time() < s.end_time() - 1e-12 {
+        s.step().unwrap();
+        if s.steps() == 20 {
+            s.add_hook(Box::new(pfem::hooks::FnHook::new("late renumber").start(
+                |ctx: &mut HookContext<'_, 2>| {
+                    let n = ctx.particles().len();
+                    let map = pfem::geometry::ParticleMap {
+                        old_to_new: (0..n as u32).collect(),
+                        origin: (0..n as u32).map(pfem::geometry::Origin::Kept).collect(),
+                    };
+                    ctx.particles_mut().remap(&map).unwrap();
+                    Ok(())
+                },
+            )));
+        }
+    }
+    assert_eq!(s.steps(), n);
+    assert_eq!(
+        s.particles().x(),
+        plain.as_slice(),
+        "renumbered at a late start"
+    );
     for after_step in [false, true] {
         let (renumbered, m, more) = run(Some(after_step));
         assert_eq!(n, m);

@@ -1087,8 +1087,11 @@ where
                 // After the step the solved range went to the stash
                 // (`clear_fluid`), and the range just formed from it is for
                 // the outputs: the next step's carries from the stash too
-                // (session 44's review: it carried from this one).
-                if point == HookPoint::AfterStep {
+                // (session 44's review: it carried from this one). So
+                // does a hook started mid-run, before the step's remeshing.
+                if point == HookPoint::AfterStep
+                    || (point == HookPoint::Start && self.clock.steps > 0)
+                {
                     self.elements.keep_stash();
                 }
             }
