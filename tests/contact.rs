@@ -931,6 +931,24 @@ fn a_solid_whose_penalty_is_not_finite_is_refused() {
     );
 }
 
+/// A block sticking on a 20° slope (μ = 0.5), to 0.3 s.
+fn sticking_block() -> Simulation<2> {
+    let mut scene = block_on_floor(0.02, 0.2, 0.1, 20f64.to_radians(), 0.5, 1e7);
+    scene.settings.end_time = 0.3;
+    sim(scene)
+}
+
+/// Renumbers nothing, yet changes the set's generation (the mesh is
+/// remade).
+fn identity_remap(p: &mut pfem::particles::Particles<2>) {
+    let n = p.len() as u32;
+    let map = pfem::geometry::ParticleMap {
+        old_to_new: (0..n).collect(),
+        origin: (0..n).map(pfem::geometry::Origin::Kept).collect(),
+    };
+    p.remap(&map).unwrap();
+}
+
 /// Session 41 (a review of contact across the remeshing): a hook that
 /// changes the particle set after the remeshing has the mesh remade, and
 /// the contact range just formed, never solved, went to the stash: the
@@ -938,25 +956,19 @@ fn a_solid_whose_penalty_is_not_finite_is_refused() {
 /// memory faded at every such step. A hook that renumbers nothing (an
 /// identity remap, which still remakes the mesh) now leaves the run as it
 /// was, bit for bit: a block sticking on a 20° slope (μ = 0.5).
-#[test]
 ///
 /// Session 44's review: the same after the step (an `after_step` hook
-/// that renumbers): the range formed for the outputs went to the stash at
-/// the next remeshing, averaged a second time.
+/// that renumbers), by hand between steps, and by a hook started mid-run
+/// (each remeshing came before the step's own, which stashed the range
+/// formed for it: averaged a second time).
+#[test]
 fn a_remesh_by_a_hook_leaves_stick_s_memory_alone() {
+    let renumber = |ctx: &mut HookContext<'_, 2>| {
+        identity_remap(ctx.particles_mut());
+        Ok(())
+    };
     let run = |remap: Option<bool>| {
-        let mut scene = block_on_floor(0.02, 0.2, 0.1, 20f64.to_radians(), 0.5, 1e7);
-        scene.settings.end_time = 0.3;
-        let mut s = sim(scene);
-        let renumber = |ctx: &mut HookContext<'_, 2>| {
-            let n = ctx.particles().len();
-            let map = pfem::geometry::ParticleMap {
-                old_to_new: (0..n as u32).collect(),
-                origin: (0..n as u32).map(pfem::geometry::Origin::Kept).collect(),
-            };
-            ctx.particles_mut().remap(&map).unwrap();
-            Ok(())
-        };
+        let mut s = sticking_block();
         let hook = pfem::hooks::FnHook::new("renumber");
         match remap {
             Some(false) => s.add_hook(Box::new(hook.after_remesh(renumber))),
@@ -967,50 +979,25 @@ fn a_remesh_by_a_hook_leaves_stick_s_memory_alone() {
         (s.particles().x().to_vec(), s.steps(), s.work().remeshes)
     };
     let (plain, n, remeshes) = run(None);
-    // And the set renumbered by hand between steps (the by-hand remesh
-    // before the step's own stashed its range again: the review of the
-    // session's diff).
-    let mut scene = block_on_floor(0.02, 0.2, 0.1, 20f64.to_radians(), 0.5, 1e7);
-    scene.settings.end_time = 0.3;
-    let mut s = sim(scene);
-    while s.time() < s.end_time() - 1e-12 {
-        s.step().unwrap();
-        let n = s.particles().len();
-        let map = pfem::geometry::ParticleMap {
-            old_to_new: (0..n as u32).collect(),
-            origin: (0..n as u32).map(pfem::geometry::Origin::Kept).collect(),
-        };
-        s.particles_mut().remap(&map).unwrap();
-    }
-    assert_eq!(s.steps(), n);
-    assert_eq!(s.particles().x(), plain.as_slice(), "renumbered by hand");
-    // And by a hook added mid-run that renumbers at its start (remeshed
-    // before the step's own remeshing).
-    let mut scene = block_on_floor(0.02, 0.2, 0.1, 20f64.to_radians(), 0.5, 1e7);
-    scene.settings.end_time = 0.3;
-    let mut s = sim(scene);
-    while s.time() < s.end_time() - 1e-12 {
-        s.step().unwrap();
-        if s.steps() == 20 {
-            s.add_hook(Box::new(pfem::hooks::FnHook::new("late renumber").start(
-                |ctx: &mut HookContext<'_, 2>| {
-                    let n = ctx.particles().len();
-                    let map = pfem::geometry::ParticleMap {
-                        old_to_new: (0..n as u32).collect(),
-                        origin: (0..n as u32).map(pfem::geometry::Origin::Kept).collect(),
-                    };
-                    ctx.particles_mut().remap(&map).unwrap();
-                    Ok(())
-                },
-            )));
+    for late_start in [false, true] {
+        let mut s = sticking_block();
+        while s.time() < s.end_time() - 1e-12 {
+            s.step().unwrap();
+            if !late_start {
+                identity_remap(s.particles_mut());
+            } else if s.steps() == 20 {
+                let hook = pfem::hooks::FnHook::new("late renumber").start(renumber);
+                s.add_hook(Box::new(hook));
+            }
         }
+        assert_eq!(s.steps(), n);
+        assert_eq!(
+            s.particles().x(),
+            plain.as_slice(),
+            "renumbered by hand ({}) or at a late start ({late_start})",
+            !late_start
+        );
     }
-    assert_eq!(s.steps(), n);
-    assert_eq!(
-        s.particles().x(),
-        plain.as_slice(),
-        "renumbered at a late start"
-    );
     for after_step in [false, true] {
         let (renumbered, m, more) = run(Some(after_step));
         assert_eq!(n, m);

@@ -1177,18 +1177,20 @@ where
             .any(|(k, v)| *k == ParticleKind::Wall && v.norm() > 0.0);
         let h_max = p.spacing().iter().fold(0.0, |a: f64, &h| a.max(h));
         let reach = WALL_REACH * self.alpha.alpha * h_max;
-        let mut near = vec![true; p.len()];
-        if moving {
-            let mut kept = Vec::new();
-            if near_matter(p.x(), p.kind(), reach, &mut kept) {
-                near.fill(false);
-                for &i in &kept {
-                    near[i as usize] = true;
-                }
-            }
-        }
+        // The particles within reach, increasing (`None`: every one, or
+        // no wall moves).
+        let kept = moving
+            .then(|| {
+                let mut kept = Vec::new();
+                near_matter(p.x(), p.kind(), reach, &mut kept).then_some(kept)
+            })
+            .flatten();
+        let near = |i: usize| {
+            kept.as_ref()
+                .is_none_or(|k| k.binary_search(&(i as u32)).is_ok())
+        };
         let h = |i: usize| match p.kind()[i] {
-            ParticleKind::Wall if near[i] => p.spacing()[i].min(h_matter),
+            ParticleKind::Wall if near(i) => p.spacing()[i].min(h_matter),
             ParticleKind::Wall => reach,
             _ => p.spacing()[i],
         };
