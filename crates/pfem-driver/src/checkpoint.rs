@@ -65,7 +65,11 @@ pub const MAGIC: &[u8; 8] = b"PFEMCKPT";
 /// what a continued run computes changed since version 3 (a solid's mass
 /// `ρ₀ V₀`, the interface's density, the stabilised walls' kept
 /// pressures, the motion ramp).
-pub const FORMAT_VERSION: u32 = 4;
+///
+/// Version 5 (session 45): the volume ledger records the drops' share of
+/// the initial volume, and every fluid volume it holds counts the drops
+/// in flight ([`crate::Simulation::drop_volume`]).
+pub const FORMAT_VERSION: u32 = 5;
 
 /// The driver's section: the simulation state.
 pub const SIMULATION: &str = "simulation";

@@ -4,7 +4,7 @@
 
 use pfem_assembly::StepMesh;
 use pfem_constitutive::History;
-use pfem_core::{simplex_measure, Const, Dim, Point};
+use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point};
 use pfem_geometry::{AlphaShape, Tessellation};
 
 use crate::checkpoint::{fingerprint, CheckpointError, Decoder, Encoder};
@@ -412,6 +412,31 @@ where
             .map(|(el, w)| w * measure(el))
             .sum();
         elements + pockets
+    }
+
+    /// Volume of the fluid flying as drops (m³; m² per metre in 2D): each
+    /// fluid particle in no fluid element (§8's isolated particles) counts
+    /// its lattice cell `hᵢ^D`, `hᵢ` its spacing, the volume it stands for
+    /// in the lattice it was filled in (a square or cubic lattice of
+    /// spacing `h` holds one particle per `h^D`). Without it, a drop's
+    /// volume leaves the fluid's measure while it flies, and the volume
+    /// correction puts it back into the remaining water (for good if the
+    /// drop never lands).
+    pub fn drop_volume(&self, kind: &[ParticleKind], spacing: &[f64]) -> f64 {
+        let mut meshed = vec![false; kind.len()];
+        for &i in self.fluid() {
+            // A mesh of an older set (removed particles, not yet remeshed)
+            // names indices past the end: they are not this set's.
+            if let Some(m) = meshed.get_mut(i as usize) {
+                *m = true;
+            }
+        }
+        kind.iter()
+            .zip(spacing)
+            .zip(&meshed)
+            .filter(|((&k, _), &m)| k == ParticleKind::Fluid && !m)
+            .map(|((_, &h), _)| h.powi(D as i32))
+            .sum()
     }
 
     /// Drops the fluid range after particles were removed or inserted (it

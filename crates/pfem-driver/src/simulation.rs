@@ -159,6 +159,9 @@ pub struct VolumeLedger {
     /// ([`crate::hooks::Hook::sources_fluid`]): the intended volume is
     /// `initial + sources`.
     pub sources: f64,
+    /// Of `initial`, the fluid that started flying as drops
+    /// ([`Simulation::drop_volume`]).
+    pub initial_drops: f64,
 }
 
 impl VolumeLedger {
@@ -714,6 +717,7 @@ where
             }
         }
         sim.volume.initial = sim.fluid_volume();
+        sim.volume.initial_drops = sim.drop_volume();
         sim.volume_now = sim.volume.initial;
         sim.initialize_acceleration()
             .map_err(|e| SceneError::Mesh { why: e.to_string() })?;
@@ -804,10 +808,19 @@ where
     }
 
     /// Fluid volume: the measure of the current fluid elements and of the
-    /// wall pockets ([`Elements::wall_pockets`]) (m³; m² per metre of depth
-    /// in 2D).
+    /// wall pockets ([`Elements::wall_pockets`]), and the drops' lattice
+    /// cells ([`Simulation::drop_volume`]) (m³; m² per metre of depth in
+    /// 2D).
     pub fn fluid_volume(&self) -> f64 {
-        self.elements.fluid_volume(self.particles.x())
+        self.elements.fluid_volume(self.particles.x()) + self.drop_volume()
+    }
+
+    /// Of [`Simulation::fluid_volume`], the fluid flying as drops: each
+    /// fluid particle in no fluid element counts its lattice cell `hᵢ^D`
+    /// ([`Elements::drop_volume`]).
+    pub fn drop_volume(&self) -> f64 {
+        self.elements
+            .drop_volume(self.particles.kind(), self.particles.spacing())
     }
 
     /// Regenerates the fluid mesh: Delaunay of all particles, alpha shape
@@ -1000,6 +1013,7 @@ where
                 delaunay: &self.stepper.tess,
                 alpha: &self.alpha,
                 initial_volume: self.volume.initial,
+                initial_drops: self.volume.initial_drops,
                 sources: self.volume.sources,
                 moved: false,
                 touched: false,
@@ -1814,6 +1828,7 @@ where
         e.f64(v.remeshing);
         e.f64(v.solution);
         e.f64(v.sources);
+        e.f64(v.initial_drops);
         e.u64(v.hooks.len() as u64);
         for (n, dv) in &v.hooks {
             e.str(n);
@@ -2085,6 +2100,7 @@ where
             remeshing: d.f64()?,
             solution: d.f64()?,
             sources: d.f64()?,
+            initial_drops: d.f64()?,
             hooks: Vec::new(),
         };
         for _ in 0..d.len(16)? {
@@ -2112,6 +2128,7 @@ where
             volume.remeshing,
             volume.solution,
             volume.sources,
+            volume.initial_drops,
             volume_now,
         ]
         .iter()

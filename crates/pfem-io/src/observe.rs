@@ -618,6 +618,9 @@ where
                     sim.rejected_by_cause().1.into(),
                 );
                 e.insert("picard_iterations".into(), sim.stats().assemble.0.into());
+                // Of `fluid_volume_final`, the drops in flight (a lattice
+                // cell each).
+                e.insert("fluid_volume_final_drops".into(), sim.drop_volume().into());
                 let status = match sim.stopped() {
                     _ if self.failure.is_some() => "failed",
                     None if sim.time() >= sim.end_time() - 1e-12 => "finished",

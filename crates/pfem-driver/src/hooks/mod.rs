@@ -174,6 +174,7 @@ where
     pub(crate) delaunay: &'a Tessellation,
     pub(crate) alpha: &'a AlphaShapeParams,
     pub(crate) initial_volume: f64,
+    pub(crate) initial_drops: f64,
     pub(crate) sources: f64,
     pub(crate) moved: bool,
     /// Whether the hook took any mutable access to the particles (the
@@ -340,14 +341,28 @@ where
     }
 
     /// Fluid volume of the current mesh at the current positions (m³; m²
-    /// per metre in 2D), wall pockets included.
+    /// per metre in 2D), wall pockets and drops included
+    /// ([`crate::Simulation::fluid_volume`]).
     pub fn fluid_volume(&self) -> f64 {
-        self.elements.fluid_volume(self.particles.x())
+        self.elements.fluid_volume(self.particles.x()) + self.drop_volume()
+    }
+
+    /// Of [`HookContext::fluid_volume`], the fluid flying as drops
+    /// ([`crate::Elements::drop_volume`]).
+    pub fn drop_volume(&self) -> f64 {
+        self.elements
+            .drop_volume(self.particles.kind(), self.particles.spacing())
     }
 
     /// Fluid volume at the start of the run.
     pub fn initial_fluid_volume(&self) -> f64 {
         self.initial_volume
+    }
+
+    /// Of [`HookContext::initial_fluid_volume`], the fluid that started
+    /// flying as drops.
+    pub fn initial_drop_volume(&self) -> f64 {
+        self.initial_drops
     }
 
     /// The fluid volume the run should have now: the initial volume plus

@@ -20,7 +20,9 @@ use crate::RunError;
 /// minimum-norm displacement `uᵢ = −β e mᵢ / Σ|m|²` that restores `β e` to
 /// first order, `e` the volume error against the start (net of the elastic
 /// compression `Σ V p / K`, so a soft fluid keeps its physical
-/// compression) and `mᵢ` the particle's share of the free surface's
+/// compression; drops in flight count their lattice cells,
+/// [`crate::Elements::drop_volume`], so the water they took is not put
+/// back into the bulk) and `mᵢ` the particle's share of the free surface's
 /// area-weighted outward normals; each move is capped at 20 % of the
 /// smallest spacing and undone where it would halve an element.
 /// Velocities, pressures and accelerations are untouched: the correction
@@ -161,13 +163,23 @@ where
             .target_volume
             .unwrap_or_else(|| ctx.intended_fluid_volume());
         let target = intended + c0;
+        let drops = ctx.drop_volume();
         let volume_now = ctx.fluid_volume();
         // No volume to hold: a scene whose fluid starts with no mesh (drops
         // flying) and no source. Its drops meeting later would otherwise
-        // be squeezed towards a volume of zero (session 40's review).
-        if self.beta == 0.0 || volume_now <= 0.0 || intended <= 0.0 {
+        // be pulled towards their lattice cells' volume, a mesh of a few
+        // particles spread by the surface moves (session 40's review: they
+        // were squeezed towards zero before drops counted). Nor is there a
+        // surface to move while every fluid particle flies.
+        if self.beta == 0.0
+            || volume_now - drops <= 0.0
+            || intended - ctx.initial_drop_volume() <= 0.0
+        {
             return Ok(());
         }
+        // Drops count their lattice cells (`Elements::drop_volume`): the
+        // water a drop took away is not put back into the bulk while it
+        // flies.
         let e = (volume_now + fluid_compression(ctx)) - target;
         if !e.is_finite() || e == 0.0 {
             return Ok(());
