@@ -1014,3 +1014,45 @@ fn a_remesh_by_a_hook_leaves_stick_s_memory_alone() {
         );
     }
 }
+
+/// A contact penalty far too soft for its load is an error naming the
+/// bodies, not a solid passing through a wall. The 0.4 × 0.2 m block
+/// presses on the floor with 1 962 Pa; a penalty of 500 Pa cannot hold
+/// it at any closure. Before session 45 the layer closed below 5 % of its
+/// gap, the next remeshing left it out (a sliver) and the block fell
+/// through the floor with the run `Ok`. Now every step that closes it
+/// through is retried smaller, and the run fails with
+/// `RunError::ContactClosed`; with the default penalty the same block
+/// rests (`a_free_block_rests_on_the_floor_without_sinking_through_it`).
+#[test]
+fn a_contact_far_too_soft_for_its_load_is_an_error_not_a_pass_through() {
+    let h = 0.02;
+    let scene = block_on_floor(h, 0.4, 0.2, 0.0, 0.0, 1e7).contact_stiffness(500.0);
+    let mut s = sim(scene);
+    s.set_end_time(0.5).unwrap();
+    let e = loop {
+        match s.step() {
+            Ok(_) if s.time() < s.end_time() - 1e-12 => {
+                assert!(
+                    lowest(&s, "block") > -h,
+                    "the block passed through the floor at t = {} s",
+                    s.time()
+                );
+            }
+            Ok(_) => panic!("the run ended with the block at {} m", lowest(&s, "block")),
+            Err(e) => break e,
+        }
+    };
+    eprintln!("{e}");
+    match &e {
+        RunError::ContactClosed {
+            master, other, why, ..
+        } => {
+            let mut pair = [master.as_str(), other.as_str()];
+            pair.sort();
+            assert_eq!(pair, ["block", "floor"]);
+            assert!(why.contains("raise the contact stiffness"), "{why}");
+        }
+        other => panic!("expected ContactClosed, got {other}"),
+    }
+}

@@ -47,6 +47,16 @@ pub const TRACTION: usize = 5;
 /// creeping 1.8 mm in 1 s against 0.03 mm.
 pub const DASHPOT_RAMP: f64 = 0.1;
 
+/// A contact layer whose gap an attempted step closes to this fraction of
+/// its contact distance or less (`J rⁿ ≤ CLOSED_GAP`) has been pushed
+/// through: its penalty is far too soft for the load, and the next
+/// remeshing could not form it again (the driver leaves out contact
+/// simplices flatter than the same fraction of a spacing), so the solid
+/// would pass through the wall unseen. [`ContactPenalty`] refuses such a
+/// state ([`Material::refuses`]): the step is retried smaller, and the run
+/// fails with the bodies named when no step cures it.
+pub const CLOSED_GAP: f64 = 0.05;
+
 /// The penalty material of contact elements (module docs). Massless.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactPenalty {
@@ -270,6 +280,23 @@ where
         } else {
             Unified::returning(s.tangent.0, s.tangent.1, s.sigma, zz, kin)
         }
+    }
+
+    /// A layer closed to [`CLOSED_GAP`] of its contact distance or less.
+    fn refuses(&self, kin: &Kinematics<D>, history: &History<D>) -> Option<String> {
+        let ratio = history.internal[GAP_RATIO];
+        if ratio <= 0.0 {
+            return None;
+        }
+        let r = kin.j * ratio;
+        (r <= CLOSED_GAP).then(|| {
+            format!(
+                "the contact layer closed to {:.2} % of its contact distance in one step (from {:.2} %): its penalty K_c = {:e} Pa is too soft for the load; raise the contact stiffness",
+                100.0 * r,
+                100.0 * ratio,
+                self.normal_stiffness
+            )
+        })
     }
 
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>) {

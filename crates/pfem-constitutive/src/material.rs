@@ -424,6 +424,19 @@ where
     /// [`Material::update_pressure`].
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>);
 
+    /// Whether the state a converged attempt ends in is one this material
+    /// cannot hold, checked for a solid's element (and a contact layer's)
+    /// before [`Material::update_history`]: `Some(why)` rejects the
+    /// attempt, which is retried with half the step like an inverted
+    /// element and named, with `why`, as the last failure when no step
+    /// down to the smallest cures it. The bundled [`crate::ContactPenalty`]
+    /// refuses a layer closed through its gap; `None` (accepted) by
+    /// default.
+    fn refuses(&self, kin: &Kinematics<D>, history: &History<D>) -> Option<String> {
+        let _ = (kin, history);
+        None
+    }
+
     /// Names of the internal variables a solid keeps in
     /// [`History::internal`] (at most [`MAX_INTERNAL`]; a scene with more is
     /// refused), written to the output by name and kept by checkpoints;

@@ -64,6 +64,24 @@ pub enum RunError {
         /// The smallest step (s), `StepParams::min_dt`.
         min_dt: f64,
     },
+    /// A contact layer closed through its gap at every step down to the
+    /// smallest (`pfem_constitutive::contact::CLOSED_GAP`): the contact's
+    /// penalty is far too soft for the load, and the solid would pass
+    /// through the other body. Raise the contact stiffness
+    /// (`Scene::contact_stiffness`, the scene file's `contact.stiffness`).
+    #[error("at t = {time} s the contact between `{master}` and `{other}` closed through its gap at every step down to the smallest ({min_dt:e} s): {why}")]
+    ContactClosed {
+        /// Time (s).
+        time: f64,
+        /// The body whose facet gives the layer's normal.
+        master: String,
+        /// The other body.
+        other: String,
+        /// The smallest step (s).
+        min_dt: f64,
+        /// The contact material's reason (the closure and the penalty).
+        why: String,
+    },
     /// A particle added or changed by hand (`Simulation::particles_mut`)
     /// does not fit the simulation: a material that does not exist or is
     /// not a fluid's, a body past the scene's, a non-positive spacing or a

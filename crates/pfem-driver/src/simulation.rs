@@ -35,7 +35,11 @@ use crate::{RunError, SceneError};
 const CONTACT_REACH: f64 = 1.6;
 
 /// Contact elements flatter than this fraction of a spacing are slivers of
-/// the tessellation, not gaps: left out.
+/// the tessellation, not gaps: left out. A layer that a step closes that
+/// far is refused within the step instead
+/// (`pfem_constitutive::contact::CLOSED_GAP`, the same fraction of its
+/// contact distance): left out at the next remeshing, its solid would pass
+/// through unseen.
 const CONTACT_MIN_GAP: f64 = 0.05;
 
 /// The remeshing tessellates the wall particles within this many
@@ -1268,6 +1272,39 @@ where
         Ok(())
     }
 
+    /// A step that could not be taken because a contact layer closed
+    /// through its gap at every size ([`RunError::ContactClosed`], with the
+    /// bodies named); any other failure as it is.
+    fn name_a_closed_contact(&self, e: pfem_time::StepError) -> RunError {
+        if let pfem_time::StepError::StepTooSmall {
+            time, min_dt, last, ..
+        } = &e
+        {
+            if let pfem_time::StepError::Refused { element, why, .. } = last.as_ref() {
+                let first = self.elements.n_solid() + self.elements.n_fluid();
+                let pair = element
+                    .checked_sub(first)
+                    .and_then(|c| self.elements.contact_bodies().get(c));
+                if let Some(&(a, b)) = pair {
+                    let name = |i: u32| {
+                        self.body_names
+                            .get(i as usize)
+                            .cloned()
+                            .unwrap_or_else(|| format!("body {i}"))
+                    };
+                    return RunError::ContactClosed {
+                        time: *time,
+                        master: name(a),
+                        other: name(b),
+                        min_dt: *min_dt,
+                        why: why.clone(),
+                    };
+                }
+            }
+        }
+        RunError::Step(e)
+    }
+
     /// A set changed by hand since the last mesh (`particles_mut`) is
     /// meshed before anything reads the elements (a hook, an observer's
     /// first frame, the accelerations' start), whose indices are the old
@@ -1435,7 +1472,9 @@ where
                 }
                 Err(e) => {
                     let min_dt = self.stepper.integrator.params.min_dt;
-                    dt = rejected.reject(e, self.clock.time, dt, min_dt, t0.elapsed())?;
+                    dt = rejected
+                        .reject(e, self.clock.time, dt, min_dt, t0.elapsed())
+                        .map_err(|e| self.name_a_closed_contact(e))?;
                     self.clock.dt = dt;
                     self.run_hooks(HookPoint::BeforeSolve)?;
                 }

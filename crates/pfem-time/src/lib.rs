@@ -567,6 +567,23 @@ pub enum StepError {
         /// The solver error.
         source: SolveError,
     },
+    /// A material refused the state the attempt ends in
+    /// (`Material::refuses`: a contact layer closed through its gap). Nothing
+    /// is written; the step is retried smaller, and counted with the
+    /// inverted elements ([`Rejections::inverted`]).
+    #[error("element {element} (particles {nodes:?}) at t = {time} s, dt = {dt:e} s: {why}")]
+    Refused {
+        /// Time at the start of the step (s).
+        time: f64,
+        /// Time step tried (s).
+        dt: f64,
+        /// The element, in the step mesh's numbering.
+        element: usize,
+        /// Its particles.
+        nodes: Vec<u32>,
+        /// The material's reason.
+        why: String,
+    },
     /// Halving the time step did not help before it fell below the minimum.
     #[error("time step fell below the minimum {min_dt:e} s at t = {time} s after {rejections} rejections; last failure: {last}")]
     StepTooSmall {
@@ -631,7 +648,8 @@ impl StepError {
 pub struct Rejections {
     /// Failed attempts.
     pub count: usize,
-    /// Of them, by an inverted element.
+    /// Of them, by an inverted element, or one whose material refused its
+    /// state ([`StepError::Refused`]: a contact layer closed through).
     pub inverted: usize,
     /// Of them, by a Picard loop that diverged or stalled.
     pub picard: usize,
@@ -660,7 +678,8 @@ impl Rejections {
             StepError::Assembly {
                 source: pfem_assembly::AssemblyError::InvertedElement { .. },
                 ..
-            } => self.inverted += 1,
+            }
+            | StepError::Refused { .. } => self.inverted += 1,
             StepError::PicardDiverged { .. } => self.picard += 1,
             _ => {}
         }
@@ -695,7 +714,8 @@ pub struct StepReport {
     pub iterations: usize,
     /// Rejected attempts before it.
     pub rejections: usize,
-    /// Of those, rejected because an element degenerated or inverted.
+    /// Of those, rejected because an element degenerated or inverted (or
+    /// its material refused its state, [`StepError::Refused`]).
     pub rejected_inverted: usize,
     /// Of those, rejected because the Picard loop did not converge.
     pub rejected_picard: usize,
@@ -1337,6 +1357,15 @@ where
             })?;
             let mat = &input.materials[input.mesh.element_material[e] as usize];
             if mat.kind() == MaterialKind::Solid {
+                if let Some(why) = mat.refuses(&st.kin, &history[e]) {
+                    return Err(StepError::Refused {
+                        time,
+                        dt,
+                        element: e,
+                        nodes: el.to_vec(),
+                        why,
+                    });
+                }
                 let mut h = history[e];
                 mat.update_history(&st.kin, &mut h); // eq. 63
                 new_history.push((e, h));
