@@ -349,6 +349,76 @@ geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `pfem check` builds the simulation as `run` does, so it refuses what
+/// `run` refuses before its first step: here a fine block (h = 0.01 m)
+/// one of its spacings over a floor twice as coarse, at 67 % of their
+/// contact distance (session 44's refusal, which `check` passed until
+/// session 45). Placed at the contact distance, it passes and reports its
+/// first mesh.
+#[test]
+fn check_refuses_bodies_inside_their_contact_distance_as_run_does() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-check-contact-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bin = env!("CARGO_BIN_EXE_pfem");
+    let scene = |y0: f64| {
+        format!(
+            r#"name = "fine_block"
+dimension = 2
+gravity = [0.0, -9.81]
+
+[run]
+end_time = 0.01
+max_dt = 1e-3
+
+[[body]]
+name = "floor"
+kind = "wall"
+spacing = 0.02
+geometry.box = {{ min = [-0.2, -0.02], max = [0.4, 0.0] }}
+
+[[body]]
+name = "block"
+kind = "solid"
+spacing = 0.01
+material.hypoelastic = {{ density = 1000.0, young = 1e7, poisson = 0.3 }}
+geometry.box = {{ min = [0.0, {y0}], max = [0.2, {y1}] }}
+"#,
+            y1 = y0 + 0.05
+        )
+    };
+    let file = dir.join("block.toml");
+    std::fs::write(&file, scene(0.01)).unwrap();
+    let out = Command::new(bin)
+        .args(["check", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "check passed a block at 67 % of its contact distance"
+    );
+    assert!(
+        text.contains("contact distance") && text.contains("floor"),
+        "{text}"
+    );
+    std::fs::write(&file, scene(0.015)).unwrap();
+    let out = Command::new(bin)
+        .args(["check", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("simulation built") && text.contains("contact)"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Found by session 35's review: an empty `--out` wrote into the working
 /// directory, past the check that refuses a used folder, and replaced the
 /// `probes.csv` there; a device given as a checkpoint was read until

@@ -47,7 +47,9 @@ Commands:
           stopped by --max-wall-time does the same and exits with status 2;
           a run that fails writes summary.json marked failed and exits
           with status 1
-  check   read FILE and validate its scene; runs no step, writes nothing
+  check   read FILE, validate its scene and build the simulation as run
+          does (its first mesh, initial accelerations); runs no step,
+          writes nothing
 
 Options of `pfem run`:
   --checkpoint-every T
@@ -176,15 +178,34 @@ fn run(args: Vec<String>) -> Result<(), String> {
             }
             // The run options are checked as `run` would.
             parsed.validate_options().map_err(|e| e.to_string())?;
-            let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
-                .map_err(|e| located(&file, e, &parsed))?;
-            match loaded {
-                LoadedScene::Two(s, p) => {
-                    check(&file, s, p.len(), &mut Delaunay2::default(), &parsed)
-                }
-                LoadedScene::Three(s, p) => {
-                    check(&file, s, p.len(), &mut Delaunay3::default(), &parsed)
-                }
+            let load = || {
+                SceneFile::load(&file, parsed.spacing, parsed.end_time)
+                    .map_err(|e| located(&file, e, &parsed))
+            };
+            // The scene twice: one to report on, one to build the
+            // simulation from as `run` does (a scene is not `Clone`: its
+            // materials are trait objects).
+            match (load()?, load()?) {
+                (LoadedScene::Two(s, p), LoadedScene::Two(again, _)) => check(
+                    &file,
+                    s,
+                    again,
+                    p.len(),
+                    Box::new(Delaunay2::default()),
+                    &parsed,
+                ),
+                (LoadedScene::Three(s, p), LoadedScene::Three(again, _)) => check(
+                    &file,
+                    s,
+                    again,
+                    p.len(),
+                    Box::new(Delaunay3::default()),
+                    &parsed,
+                ),
+                _ => Err(format!(
+                    "{}: the scene file changed while it was read",
+                    file.display()
+                )),
             }
         }
         "run" => {
@@ -218,11 +239,17 @@ fn run(args: Vec<String>) -> Result<(), String> {
 /// Validates `scene` within the memory budget, builds its particles and
 /// reports what a run would hold: particle counts (estimated and placed),
 /// memory, steps, and every particle merged or welded.
+/// Validates `scene`, reports what it places, and builds the simulation
+/// from `again` (the same scene) as `run` would, so that whatever `run`
+/// refuses before its first step (bodies inside their contact distance, a
+/// first mesh that fails, initial accelerations that cannot be solved) is
+/// refused here too. Runs no step and writes nothing.
 fn check<const D: usize>(
     file: &Path,
     scene: Scene<D>,
+    again: Scene<D>,
     probes: usize,
-    tessellator: &mut dyn Tessellator<D>,
+    mut tessellator: Box<dyn Tessellator<D>>,
     args: &Args,
 ) -> Result<(), String>
 where
@@ -238,7 +265,9 @@ where
         scene.settings.max_dt,
     );
     let courant = scene.settings.courant;
-    let built = scene.build(tessellator).map_err(|e| e.to_string())?;
+    let built = scene
+        .build(tessellator.as_mut())
+        .map_err(|e| e.to_string())?;
     // The step count's lower bound: the largest step, or the Courant
     // limit of the initial speeds when that is tighter.
     let rate = built.particles.crossing_rate();
@@ -276,6 +305,16 @@ where
             );
         }
     }
+    // The simulation as `run` builds it: its first mesh, the contact
+    // distances, the initial accelerations.
+    let sim = args
+        .simulation(again, tessellator)
+        .map_err(|e| e.to_string())?;
+    println!(
+        "  simulation built: {} elements in the first mesh ({} contact)",
+        sim.elements().len(),
+        sim.elements().n_contact()
+    );
     Ok(())
 }
 
