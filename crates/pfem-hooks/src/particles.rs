@@ -188,7 +188,8 @@ where
         let mut hi = face_max;
         lo[axis] = 0.0;
         hi[axis] = 0.0;
-        let layer = pfem_scene::lattice::box_points::<D>(&lo, &hi, spacing);
+        let layer = pfem_scene::lattice::box_points::<D>(&lo, &hi, spacing)
+            .map_err(|e| bad(e.to_string()))?;
         Ok(Self {
             body: body.into(),
             face_min,

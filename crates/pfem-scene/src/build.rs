@@ -286,21 +286,21 @@ where
             let id = bi as u32;
             body_names[bi] = b.name.clone();
             let pts = match &b.geometry {
-                Geometry::Box { min, max } => lattice::box_points::<D>(min, max, b.spacing),
+                Geometry::Box { min, max } => lattice::box_points::<D>(min, max, b.spacing)?,
                 // Solids and walls round at the particle scale (contact);
                 // fluids on the lattice.
                 Geometry::Ball { center, radius } if b.kind != ParticleKind::Fluid => {
-                    lattice::shell_points::<D>(center, *radius, b.spacing)
+                    lattice::shell_points::<D>(center, *radius, b.spacing)?
                 }
                 Geometry::Ball { center, radius } => {
-                    lattice::ball_points::<D>(center, *radius, b.spacing)
+                    lattice::ball_points::<D>(center, *radius, b.spacing)?
                 }
                 Geometry::Cylinder {
                     base,
                     axis,
                     radius,
                     height,
-                } => lattice::cylinder_points::<D>(base, *axis, *radius, *height, b.spacing),
+                } => lattice::cylinder_points::<D>(base, *axis, *radius, *height, b.spacing)?,
                 Geometry::Particles(p) => p.clone(),
                 Geometry::Surface(surface) => surface.fill(b.spacing),
             };
@@ -440,7 +440,7 @@ where
                 // Boxes: structured mesh; any other geometry: Delaunay of
                 // its own particles trimmed by the alpha shape.
                 let conn = match &b.geometry {
-                    Geometry::Box { min, max } => lattice::box_simplices::<D>(min, max, b.spacing),
+                    Geometry::Box { min, max } => lattice::box_simplices::<D>(min, max, b.spacing)?,
                     _ => {
                         let params = crate::solid_mesh::SolidMeshParams {
                             alpha: settings.alpha,

@@ -3,6 +3,60 @@
 
 use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, Vector};
 
+use crate::SceneError;
+
+/// Refuses a lattice that cannot be filled: a spacing that is not a
+/// positive finite number, a bound, radius or height that is not finite
+/// (or a radius or height below zero), or about `count` points that would
+/// not fit [`crate::default_memory_budget`] (a spacing mistyped as 10⁻⁹ m
+/// would fill until the allocator aborted the process).
+fn check_lattice<const D: usize>(
+    h: f64,
+    lengths: &[(&'static str, f64)],
+    count: f64,
+) -> Result<(), SceneError>
+where
+    Const<D>: Dim,
+{
+    if !(h.is_finite() && h > 0.0) {
+        return Err(SceneError::InvalidSetting {
+            setting: "lattice spacing",
+            value: h,
+        });
+    }
+    for &(setting, value) in lengths {
+        if !value.is_finite() {
+            return Err(SceneError::NonFinite { setting });
+        }
+        if value < 0.0 {
+            return Err(SceneError::InvalidSetting { setting, value });
+        }
+    }
+    let bytes = count * std::mem::size_of::<Point<D>>() as f64;
+    let budget = crate::default_memory_budget();
+    if bytes.is_nan() || bytes > budget {
+        return Err(SceneError::TooLarge {
+            particles: count,
+            bytes,
+            budget,
+        });
+    }
+    Ok(())
+}
+
+/// The extents of the box `[min, max]` along each axis, checked.
+fn box_extents<const D: usize>(min: &Point<D>, max: &Point<D>) -> Result<(), SceneError>
+where
+    Const<D>: Dim,
+{
+    if (0..D).any(|k| !(min[k].is_finite() && max[k].is_finite())) {
+        return Err(SceneError::NonFinite {
+            setting: "lattice box bounds",
+        });
+    }
+    Ok(())
+}
+
 fn counts<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> [usize; 3]
 where
     Const<D>: Dim,
@@ -23,11 +77,32 @@ where
 
 /// Lattice nodes of the box `[min, max]` at spacing close to `h` (the
 /// spacing along each axis is adjusted so the corners are nodes), ordered
-/// x fastest.
-pub fn box_points<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> Vec<Point<D>>
+/// x fastest. Refused ([`SceneError`]): a spacing that is not a positive
+/// finite number, a bound that is not finite, or more points than the
+/// memory budget holds.
+///
+/// ```
+/// use pfem_core::Point;
+/// use pfem_scene::lattice::box_points;
+///
+/// let p = box_points::<2>(&Point::<2>::new(0.0, 0.0), &Point::<2>::new(1.0, 0.5), 0.25)?;
+/// assert_eq!(p.len(), 5 * 3);
+/// assert!(box_points::<2>(&Point::<2>::new(0.0, 0.0), &Point::<2>::new(1.0, 0.5), 0.0).is_err());
+/// # Ok::<(), pfem_scene::SceneError>(())
+/// ```
+pub fn box_points<const D: usize>(
+    min: &Point<D>,
+    max: &Point<D>,
+    h: f64,
+) -> Result<Vec<Point<D>>, SceneError>
 where
     Const<D>: Dim,
 {
+    box_extents::<D>(min, max)?;
+    let count: f64 = (0..D)
+        .map(|k| ((max[k] - min[k]).max(0.0) / h).round() + 1.0)
+        .product();
+    check_lattice::<D>(h, &[], count)?;
     let n = counts::<D>(min, max, h);
     let mut out = Vec::new();
     let nz = if D == 3 { n[2] + 1 } else { 1 };
@@ -47,17 +122,30 @@ where
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// Simplices (triangles, or six Kuhn tetrahedra per cell) of the lattice
 /// of [`box_points`], positively oriented, indices into its output.
-pub fn box_simplices<const D: usize>(min: &Point<D>, max: &Point<D>, h: f64) -> Vec<u32>
+/// Refused as [`box_points`] refuses its lattice, and when the node
+/// indices would not fit `u32`.
+pub fn box_simplices<const D: usize>(
+    min: &Point<D>,
+    max: &Point<D>,
+    h: f64,
+) -> Result<Vec<u32>, SceneError>
 where
     Const<D>: Dim,
 {
+    let pts = box_points::<D>(min, max, h)?;
+    if pts.len() > u32::MAX as usize {
+        return Err(SceneError::TooLarge {
+            particles: pts.len() as f64,
+            bytes: (pts.len() * std::mem::size_of::<Point<D>>()) as f64,
+            budget: (u32::MAX as usize * std::mem::size_of::<Point<D>>()) as f64,
+        });
+    }
     let n = counts::<D>(min, max, h);
-    let pts = box_points::<D>(min, max, h);
     let id = |i: usize, j: usize, k: usize| ((k * (n[1] + 1) + j) * (n[0] + 1) + i) as u32;
     let mut out = Vec::new();
     if D == 2 {
@@ -103,14 +191,40 @@ where
             }
         }
     }
-    out
+    Ok(out)
 }
 
-/// Lattice nodes (spacing `h`, centred on `center`) inside the ball.
-pub fn ball_points<const D: usize>(center: &Point<D>, radius: f64, h: f64) -> Vec<Point<D>>
+/// The centre's coordinates, checked finite.
+fn finite_center<const D: usize>(center: &Point<D>) -> Result<(), SceneError>
 where
     Const<D>: Dim,
 {
+    if !center.iter().all(|c| c.is_finite()) {
+        return Err(SceneError::NonFinite {
+            setting: "lattice centre",
+        });
+    }
+    Ok(())
+}
+
+/// Lattice nodes (spacing `h`, centred on `center`) inside the ball.
+/// Refused ([`SceneError`]): a spacing that is not a positive finite
+/// number, a centre or radius that is not finite, a negative radius, or
+/// more points than the memory budget holds.
+pub fn ball_points<const D: usize>(
+    center: &Point<D>,
+    radius: f64,
+    h: f64,
+) -> Result<Vec<Point<D>>, SceneError>
+where
+    Const<D>: Dim,
+{
+    finite_center::<D>(center)?;
+    check_lattice::<D>(
+        h,
+        &[("lattice radius", radius)],
+        (2.0 * (radius / h).floor() + 1.0).powi(D as i32),
+    )?;
     let m = (radius / h).floor() as i64;
     let mut out = Vec::new();
     let range = -m..=m;
@@ -129,7 +243,7 @@ where
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// A disk (2D) or ball (3D) sampled on concentric rings or shells, from
@@ -141,13 +255,28 @@ where
 /// layer: a solid ball from a lattice met a floor with that one particle
 /// and its elements round it were crushed (issue 19). [`crate::Scene::build`]
 /// uses it for the balls of solids and walls; fluids take the lattice
-/// ([`ball_points`]), which the remeshing forgets anyway.
-pub fn shell_points<const D: usize>(center: &Point<D>, radius: f64, h: f64) -> Vec<Point<D>>
+/// ([`ball_points`]), which the remeshing forgets anyway. Refused as
+/// [`ball_points`] refuses its ball.
+pub fn shell_points<const D: usize>(
+    center: &Point<D>,
+    radius: f64,
+    h: f64,
+) -> Result<Vec<Point<D>>, SceneError>
 where
     Const<D>: Dim,
 {
     use std::f64::consts::PI;
-    let shells = (radius / h).round().max(1.0) as usize;
+    finite_center::<D>(center)?;
+    // About the ball's volume over `h^D`, each ring or shell at least 3
+    // or 4 points.
+    let shells_f = (radius / h).round().max(1.0);
+    let per_shell = if D == 2 {
+        (2.0 * PI * radius / h).round().max(3.0)
+    } else {
+        (4.0 * PI * radius * radius / (h * h)).round().max(4.0)
+    };
+    check_lattice::<D>(h, &[("lattice radius", radius)], 1.0 + shells_f * per_shell)?;
+    let shells = shells_f as usize;
     let dr = radius / shells as f64;
     let golden = PI * (3.0 - 5f64.sqrt());
     let mut out = vec![*center];
@@ -177,24 +306,34 @@ where
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// Lattice nodes of a cylinder along coordinate `axis` (3D): disks of
 /// lattice nodes (spacing `h`, centred on the axis) within `radius`, at
 /// `base + k · height / n` along the axis, `k = 0..=n`, `n = round(height / h)`
 /// (the ends are nodes). In 2D the "disk" is the segment across the axis,
-/// so the cylinder is a rectangle.
+/// so the cylinder is a rectangle. Refused ([`SceneError`]): a spacing
+/// that is not a positive finite number, a base, radius or height that is
+/// not finite, a negative radius or height, or more points than the
+/// memory budget holds.
 pub fn cylinder_points<const D: usize>(
     base: &Point<D>,
     axis: usize,
     radius: f64,
     height: f64,
     h: f64,
-) -> Vec<Point<D>>
+) -> Result<Vec<Point<D>>, SceneError>
 where
     Const<D>: Dim,
 {
+    finite_center::<D>(base)?;
+    check_lattice::<D>(
+        h,
+        &[("lattice radius", radius), ("lattice height", height)],
+        ((height / h).round().max(1.0) + 1.0)
+            * (2.0 * (radius / h).floor() + 1.0).powi(D as i32 - 1),
+    )?;
     let axis = axis.min(D - 1);
     let n = (height / h).round().max(1.0) as usize;
     let m = (radius / h).floor() as i64;
@@ -217,7 +356,7 @@ where
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// A hash grid over particle positions, for coincidence queries: one or
@@ -524,12 +663,67 @@ mod tests {
         );
     }
 
+    /// Session 44's review: the public helpers filled whatever a spacing
+    /// of zero or 10⁻⁹ gave (no end, or the allocator's abort). Each is
+    /// refused with a typed error before anything is allocated.
+    #[test]
+    fn lattices_refuse_spacings_and_sizes_they_cannot_fill() {
+        let (lo, hi) = (
+            Point::<3>::new(0.0, 0.0, 0.0),
+            Point::<3>::new(1.0, 1.0, 1.0),
+        );
+        let c = Point::<3>::new(0.0, 0.0, 0.0);
+        for h in [0.0, -0.1, f64::NAN, f64::INFINITY] {
+            assert!(matches!(
+                box_points::<3>(&lo, &hi, h),
+                Err(SceneError::InvalidSetting { .. })
+            ));
+            assert!(box_simplices::<3>(&lo, &hi, h).is_err());
+            assert!(ball_points::<3>(&c, 1.0, h).is_err());
+            assert!(shell_points::<3>(&c, 1.0, h).is_err());
+            assert!(cylinder_points::<3>(&c, 1, 1.0, 1.0, h).is_err());
+        }
+        // 10²⁷ points.
+        assert!(matches!(
+            box_points::<3>(&lo, &hi, 1e-9),
+            Err(SceneError::TooLarge { .. })
+        ));
+        assert!(matches!(
+            ball_points::<3>(&c, 1.0, 1e-9),
+            Err(SceneError::TooLarge { .. })
+        ));
+        assert!(matches!(
+            shell_points::<3>(&c, 1.0, 1e-9),
+            Err(SceneError::TooLarge { .. })
+        ));
+        assert!(matches!(
+            cylinder_points::<3>(&c, 1, 1.0, 1.0, 1e-9),
+            Err(SceneError::TooLarge { .. })
+        ));
+        // Bounds, radii and heights that are not numbers, or negative.
+        let nan = Point::<3>::new(f64::NAN, 0.0, 0.0);
+        assert!(matches!(
+            box_points::<3>(&nan, &hi, 0.1),
+            Err(SceneError::NonFinite { .. })
+        ));
+        assert!(ball_points::<3>(&nan, 1.0, 0.1).is_err());
+        assert!(ball_points::<3>(&c, f64::INFINITY, 0.1).is_err());
+        assert!(shell_points::<3>(&c, -1.0, 0.1).is_err());
+        assert!(cylinder_points::<3>(&c, 1, 1.0, f64::NAN, 0.1).is_err());
+        assert!(cylinder_points::<3>(&c, 1, 1.0, -1.0, 0.1).is_err());
+        // A fine lattice still fills.
+        assert_eq!(box_points::<3>(&lo, &hi, 0.1).unwrap().len(), 11 * 11 * 11);
+        assert!(!shell_points::<2>(&Point::<2>::zeros(), 0.1, 0.01)
+            .unwrap()
+            .is_empty());
+    }
+
     #[test]
     fn box_mesh_covers_the_box() {
         let min = Point::<2>::new(0.0, 0.0);
         let max = Point::<2>::new(0.35, 0.02);
-        let p = box_points::<2>(&min, &max, 0.005);
-        let t = box_simplices::<2>(&min, &max, 0.005);
+        let p = box_points::<2>(&min, &max, 0.005).unwrap();
+        let t = box_simplices::<2>(&min, &max, 0.005).unwrap();
         let area: f64 = t
             .chunks(3)
             .map(|c| simplex_measure::<2>(&[p[c[0] as usize], p[c[1] as usize], p[c[2] as usize]]))
@@ -537,8 +731,8 @@ mod tests {
         assert!((area - 0.35 * 0.02).abs() < 1e-12);
         let min3 = Point::<3>::new(0.0, 0.0, 0.0);
         let max3 = Point::<3>::new(1.0, 0.5, 0.25);
-        let p = box_points::<3>(&min3, &max3, 0.25);
-        let t = box_simplices::<3>(&min3, &max3, 0.25);
+        let p = box_points::<3>(&min3, &max3, 0.25).unwrap();
+        let t = box_simplices::<3>(&min3, &max3, 0.25).unwrap();
         let vol: f64 = t
             .chunks(4)
             .map(|c| {
@@ -561,7 +755,7 @@ mod tests {
             Const<D>: Dim,
         {
             let c = Point::<D>::from_element(0.3);
-            let p = shell_points::<D>(&c, r, h);
+            let p = shell_points::<D>(&c, r, h).unwrap();
             for (i, a) in p.iter().enumerate() {
                 assert!((a - c).norm() <= r * (1.0 + 1e-12));
                 let nearest = p
@@ -599,7 +793,7 @@ mod tests {
     #[test]
     fn cylinder_lattice_is_inside_and_has_its_ends() {
         let base = Point::<3>::new(0.3, 0.0, 0.07);
-        let p = cylinder_points::<3>(&base, 1, 0.015, 0.15, 0.0075);
+        let p = cylinder_points::<3>(&base, 1, 0.015, 0.15, 0.0075).unwrap();
         // 13 nodes per disk (r = 2 h), 21 disks.
         assert_eq!(p.len(), 13 * 21);
         for q in &p {

@@ -15,7 +15,7 @@
 //! use pfem_core::Point;
 //!
 //! let h = 0.0075;
-//! let pts = cylinder_points::<3>(&Point::<3>::zeros(), 1, 0.015, 0.15, h);
+//! let pts = cylinder_points::<3>(&Point::<3>::zeros(), 1, 0.015, 0.15, h)?;
 //! let m = solid_mesh::<3>(&pts, h, &mut Delaunay3::default(), &SolidMeshParams::default())?;
 //! assert_eq!(m.simplices.len() % 4, 0);
 //! assert!(m.volume > 0.0);
@@ -181,7 +181,7 @@ mod tests {
             Point::<3>::new(0.1, 0.05, 0.02),
         );
         let h = 0.01;
-        let pts = box_points::<3>(&min, &max, h);
+        let pts = box_points::<3>(&min, &max, h).unwrap();
         let m = solid_mesh::<3>(&pts, h, &mut Delaunay3::default(), &Default::default()).unwrap();
         assert!((m.volume - 1e-4).abs() < 1e-12, "{}", m.volume);
         assert!(m.min_radius_ratio > 0.0);
@@ -191,7 +191,7 @@ mod tests {
     fn a_cylinder_mesh_is_valid_and_close_to_its_lattice_volume() {
         let h = 0.0075;
         let (r, l) = (0.015, 0.15);
-        let pts = cylinder_points::<3>(&Point::<3>::zeros(), 1, r, l, h);
+        let pts = cylinder_points::<3>(&Point::<3>::zeros(), 1, r, l, h).unwrap();
         let m = solid_mesh::<3>(&pts, h, &mut Delaunay3::default(), &Default::default()).unwrap();
         let mut used = vec![false; pts.len()];
         for &v in &m.simplices {
@@ -215,7 +215,7 @@ mod tests {
     #[test]
     fn a_disk_in_2d() {
         let h = 0.01;
-        let pts = ball_points::<2>(&Point::<2>::zeros(), 0.05, h);
+        let pts = ball_points::<2>(&Point::<2>::zeros(), 0.05, h).unwrap();
         let m = solid_mesh::<2>(&pts, h, &mut Delaunay2::default(), &Default::default()).unwrap();
         let area = std::f64::consts::PI * 0.05 * 0.05;
         assert!(m.volume > 0.8 * area && m.volume <= area, "{}", m.volume);

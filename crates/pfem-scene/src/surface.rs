@@ -855,7 +855,7 @@ mod tests {
         ]);
         poly.check().unwrap();
         let a = poly.fill(h);
-        let b = box_points::<2>(&Point::<2>::new(0.0, 0.0), &Point::<2>::new(1.0, 0.5), h);
+        let b = box_points::<2>(&Point::<2>::new(0.0, 0.0), &Point::<2>::new(1.0, 0.5), h).unwrap();
         assert_eq!(a.len(), b.len());
         for (p, q) in a.iter().zip(&b) {
             assert!((p - q).norm() < 1e-12);
