@@ -1718,3 +1718,55 @@ fn moving_walls_near_the_water_bound_the_step_and_far_ones_less() {
         lid.dt()
     );
 }
+
+/// The first frame shows what the hooks set at the start: a wall moved by
+/// a table from rest at 0.1 m/s is recorded at 0.1 m/s at t = 0, as its
+/// law says (session 44's review: the hooks started at the first step,
+/// after the observers' first frame, which showed the wall at rest).
+#[test]
+fn the_first_frame_shows_a_moving_wall_s_velocity() {
+    use pfem::hooks::PiecewiseLinear;
+    struct FirstFrame {
+        paddle: usize,
+        seen: Option<Vector<2>>,
+    }
+    impl Observer<2> for FirstFrame {
+        fn start(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+            self.seen = Some(sim.particles().v()[self.paddle]);
+            Ok(())
+        }
+    }
+    let h = 0.02;
+    let law = PiecewiseLinear::new(vec![
+        (0.0, Vector::<2>::zeros()),
+        (0.1, Vector::<2>::new(0.01, 0.0)),
+    ])
+    .unwrap();
+    let scene = Scene::<2>::new("paddle from the start")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.004,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
+        .wall(
+            "paddle",
+            boxed(-0.04, h, -0.02, 0.2),
+            h,
+            WallMotion::Law(std::sync::Arc::new(law)),
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, h, 0.2, 0.1),
+            h,
+        );
+    let mut sim = sim2(scene, StepParams::default());
+    let paddle = sim.body_particles("paddle").unwrap()[0];
+    let mut first = FirstFrame { paddle, seen: None };
+    sim.run(&mut [&mut first]).unwrap();
+    let v = first.seen.expect("the observer started");
+    assert!((v.x - 0.1).abs() < 1e-12 && v.y == 0.0, "{v:?}");
+}

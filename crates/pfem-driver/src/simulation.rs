@@ -1538,8 +1538,20 @@ where
     /// (`run` returns at once) until [`Simulation::clear_stop`].
     pub fn run(&mut self, observers: &mut [&mut dyn Observer<D>]) -> Result<(), RunError> {
         rayon::scope(|_| self.mesh_a_set_changed_by_hand())?;
+        // The hooks start before the observers, so that the first frame
+        // shows what they set at the start: a moving wall's velocity (it
+        // showed at rest at t = 0, session 44's review), a wall a law
+        // displaces at t = 0 on its path. A hook that fails to start still
+        // has the observers start and record the failure.
+        let started = rayon::scope(|_| self.start_hooks());
         for o in observers.iter_mut() {
             o.start(self)?;
+        }
+        if let Err(e) = started {
+            for o in observers.iter_mut() {
+                o.failed(self, &e);
+            }
+            return Err(e);
         }
         let steps = (|| -> Result<(), RunError> {
             while self.clock.time < self.end_time - 1e-12 && self.stop.is_none() {
