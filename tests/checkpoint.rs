@@ -435,6 +435,26 @@ fn a_checkpoint_whose_gravity_stress_ledger_or_spacing_is_not_finite_is_refused(
     refused(&mut fresh, &edit(&ck, g, f64::NAN), "gravity");
     let v0 = sim.volume().initial;
     refused(&mut fresh, &edit(&ck, v0, f64::NAN), "volume ledger");
+    // The drops' share of the initial volume (session 45), four numbers
+    // after it (remeshing, solution, sources between): above the initial
+    // volume or below zero it would switch the correction off or on.
+    for drops in [2.0 * v0, -1e-3 * v0] {
+        let mut section = ck.section(SIMULATION).unwrap().to_vec();
+        let at = section
+            .windows(8)
+            .rposition(|w| w == v0.to_bits().to_le_bytes())
+            .unwrap()
+            + 32;
+        assert_eq!(
+            section[at..at + 8],
+            sim.volume().initial_drops.to_bits().to_le_bytes()
+        );
+        section[at..at + 8].copy_from_slice(&drops.to_bits().to_le_bytes());
+        let mut c = ck.clone();
+        c.set(SIMULATION, section);
+        let c = Checkpoint::decode(&c.encode()).unwrap();
+        refused(&mut fresh, &c, "drops' share");
+    }
     let h = *sim.particles().spacing().last().unwrap();
     refused(&mut fresh, &edit(&ck, h, f64::NAN), "spacing");
     refused(&mut fresh, &edit(&ck, h, -h), "spacing");

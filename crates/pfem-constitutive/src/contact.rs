@@ -282,10 +282,14 @@ where
         }
     }
 
-    /// A layer closed to [`CLOSED_GAP`] of its contact distance or less.
+    /// A layer the step closes (`J < 1`) to [`CLOSED_GAP`] of its contact
+    /// distance or less. One formed that close (a fine body on a coarse
+    /// one: the driver forms down to 5 % of the element's mean spacing,
+    /// which is below 5 % of the pair's contact distance) is refused only
+    /// when a step closes it further.
     fn refuses(&self, kin: &Kinematics<D>, history: &History<D>) -> Option<String> {
         let ratio = history.internal[GAP_RATIO];
-        if ratio <= 0.0 {
+        if ratio <= 0.0 || kin.j >= 1.0 {
             return None;
         }
         let r = kin.j * ratio;
@@ -398,6 +402,31 @@ mod tests {
         h.internal[FRICTION] = mu;
         h.internal[NORMAL + 1] = 1.0; // n = +y
         h
+    }
+
+    /// Session 45: a layer a step closes to 5 % of its contact distance
+    /// is refused (the next remeshing would drop it, and its solid would
+    /// pass through); one formed that close is refused only when a step
+    /// closes it further, and an opening or unchanged layer never.
+    #[test]
+    fn a_layer_closed_through_its_gap_is_refused() {
+        let m = penalty();
+        let squeeze = |j: f64| kin(Tensor::<2>::new(1.0, 0.0, 0.0, j));
+        let refuses = |ratio: f64, j: f64| {
+            <ContactPenalty as Material<2>>::refuses(&m, &squeeze(j), &layer(ratio, 0.0))
+        };
+        // From the contact distance to 4 % of it in one step.
+        let why = refuses(1.0, 0.04).expect("closed through");
+        assert!(why.contains("raise the contact stiffness"), "{why}");
+        // To 6 %: held.
+        assert!(refuses(1.0, 0.06).is_none());
+        // Formed at 4.5 % (a fine body on a coarse one): held as it is or
+        // opening, refused closing further.
+        assert!(refuses(0.045, 1.0).is_none());
+        assert!(refuses(0.045, 1.1).is_none());
+        assert!(refuses(0.045, 0.9).is_some());
+        // No layer (ratio 0): nothing to refuse.
+        assert!(refuses(0.0, 0.01).is_none());
     }
 
     #[test]

@@ -2169,11 +2169,13 @@ where
         // volume ledger that is not would run on as one (or turn the
         // volume correction off without a word).
         let what = if !g.iter().all(|c| c.is_finite()) {
-            Some("its gravity".to_string())
+            Some("its gravity is not finite".to_string())
         } else if let Some(e) = solid_history.iter().position(|h| !h.is_finite()) {
-            Some(format!("solid element {e}'s stress or internal variables"))
+            Some(format!(
+                "solid element {e}'s stress or internal variables are not finite"
+            ))
         } else if let Some(e) = stash.1.iter().position(|h| !h.is_finite()) {
-            Some(format!("contact element {e}'s history"))
+            Some(format!("contact element {e}'s history is not finite"))
         } else if ![
             volume.initial,
             volume.remeshing,
@@ -2186,12 +2188,19 @@ where
         .chain(volume.hooks.iter().map(|(_, v)| v))
         .all(|v| v.is_finite())
         {
-            Some("its fluid volume ledger".to_string())
+            Some("its fluid volume ledger is not finite".to_string())
+        } else if !(0.0..=volume.initial.max(0.0) * (1.0 + 1e-9)).contains(&volume.initial_drops) {
+            // A share of drops outside [0, initial] would switch the
+            // volume correction off (or on) without a word.
+            Some(format!(
+                "its drops' share {} of the initial volume {} is outside [0, the initial volume]",
+                volume.initial_drops, volume.initial
+            ))
         } else {
             None
         };
         if let Some(what) = what {
-            return Err(CheckpointError::Corrupt(format!("{what} is not finite")).into());
+            return Err(CheckpointError::Corrupt(what).into());
         }
         let nh = d.len(16)?;
         let mut saved = Vec::with_capacity(nh);

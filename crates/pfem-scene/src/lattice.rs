@@ -54,6 +54,14 @@ where
             setting: "lattice box bounds",
         });
     }
+    // A corner past the other (one point at `min` came out).
+    if let Some(k) = (0..D).find(|&k| min[k] > max[k]) {
+        return Err(SceneError::OutOfRange {
+            setting: "lattice box extent (max − min)",
+            value: max[k] - min[k],
+            range: "[0, ∞): the box's max below its min",
+        });
+    }
     Ok(())
 }
 
@@ -138,6 +146,17 @@ where
     Const<D>: Dim,
 {
     let pts = box_points::<D>(min, max, h)?;
+    // The connectivity: D! simplices of D + 1 indices per cell, about
+    // (D + 1)! indices per point.
+    let indices = pts.len() as f64 * if D == 3 { 24.0 } else { 6.0 };
+    let budget = crate::default_memory_budget();
+    if indices * 4.0 > budget {
+        return Err(SceneError::TooLarge {
+            particles: pts.len() as f64,
+            bytes: indices * 4.0,
+            budget,
+        });
+    }
     if pts.len() > u32::MAX as usize {
         return Err(SceneError::TooLarge {
             particles: pts.len() as f64,
@@ -267,6 +286,14 @@ where
 {
     use std::f64::consts::PI;
     finite_center::<D>(center)?;
+    // A ball of no radius has no shell: its rings would all sit on the
+    // centre.
+    if radius == 0.0 {
+        return Err(SceneError::InvalidSetting {
+            setting: "lattice radius",
+            value: radius,
+        });
+    }
     // About the ball's volume over `h^D`, each ring or shell at least 3
     // or 4 points.
     let shells_f = (radius / h).round().max(1.0);
@@ -328,13 +355,26 @@ where
     Const<D>: Dim,
 {
     finite_center::<D>(base)?;
+    if axis >= D {
+        return Err(SceneError::OutOfRange {
+            setting: "lattice cylinder axis",
+            value: axis as f64,
+            range: "the coordinates: 0, 1 (2D), 2 (3D)",
+        });
+    }
+    // A cylinder of no height would stack two identical disks.
+    if height == 0.0 {
+        return Err(SceneError::InvalidSetting {
+            setting: "lattice height",
+            value: height,
+        });
+    }
     check_lattice::<D>(
         h,
         &[("lattice radius", radius), ("lattice height", height)],
         ((height / h).round().max(1.0) + 1.0)
             * (2.0 * (radius / h).floor() + 1.0).powi(D as i32 - 1),
     )?;
-    let axis = axis.min(D - 1);
     let n = (height / h).round().max(1.0) as usize;
     let m = (radius / h).floor() as i64;
     let across: Vec<usize> = (0..D).filter(|&k| k != axis).collect();
@@ -711,6 +751,16 @@ mod tests {
         assert!(shell_points::<3>(&c, -1.0, 0.1).is_err());
         assert!(cylinder_points::<3>(&c, 1, 1.0, f64::NAN, 0.1).is_err());
         assert!(cylinder_points::<3>(&c, 1, 1.0, -1.0, 0.1).is_err());
+        // A box turned inside out, a shell of no radius, a cylinder of no
+        // height or along an axis the dimension has not (the review of
+        // the change: one point, rings on the centre, two identical
+        // disks, an axis silently clamped).
+        assert!(box_points::<3>(&hi, &lo, 0.1).is_err());
+        assert!(box_simplices::<3>(&hi, &lo, 0.1).is_err());
+        assert!(shell_points::<3>(&c, 0.0, 0.1).is_err());
+        assert!(cylinder_points::<3>(&c, 1, 1.0, 0.0, 0.1).is_err());
+        assert!(cylinder_points::<3>(&c, 3, 1.0, 1.0, 0.1).is_err());
+        assert!(cylinder_points::<2>(&Point::<2>::zeros(), 2, 1.0, 1.0, 0.1).is_err());
         // A fine lattice still fills.
         assert_eq!(box_points::<3>(&lo, &hi, 0.1).unwrap().len(), 11 * 11 * 11);
         assert!(!shell_points::<2>(&Point::<2>::zeros(), 0.1, 0.01)
