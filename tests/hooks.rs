@@ -1770,3 +1770,60 @@ fn the_first_frame_shows_a_moving_wall_s_velocity() {
     let v = first.seen.expect("the observer started");
     assert!((v.x - 0.1).abs() < 1e-12 && v.y == 0.0, "{v:?}");
 }
+
+/// Each kink of a wall's motion law ends a step, so a law with a kink
+/// every nanosecond cannot finish: `Scene::validate` counts the kinks with
+/// the steps (the review of session 45: a table with rows 10⁻⁸ s apart
+/// took 2·10⁷ steps that neither the step limit nor `pfem check`
+/// counted).
+#[test]
+fn a_motion_law_with_a_kink_every_nanosecond_cannot_finish() {
+    #[derive(Debug)]
+    struct Zigzag;
+    impl pfem::hooks::MotionLaw<2> for Zigzag {
+        fn position(&self, x0: &Point<2>, _t: f64) -> Point<2> {
+            *x0
+        }
+        fn velocity(&self, _x0: &Point<2>, _t: f64) -> Vector<2> {
+            Vector::<2>::zeros()
+        }
+        fn next_kink(&self, t: f64) -> Option<f64> {
+            Some(t + 1e-9)
+        }
+    }
+    let h = 0.02;
+    let scene = |law: WallMotion<2>| {
+        Scene::<2>::new("zigzag")
+            .settings(RunSettings {
+                end_time: 1.0,
+                max_dt: 1e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
+            .wall("paddle", boxed(-0.04, h, -0.02, 0.2), h, law)
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(0.0, h, 0.2, 0.1),
+                h,
+            )
+    };
+    let zigzag = scene(WallMotion::Law(std::sync::Arc::new(Zigzag)));
+    assert!(zigzag.motion_kinks(1e8) > 1e8);
+    match zigzag.validate() {
+        Err(SceneError::CannotFinish { what, .. }) => assert!(what.contains("kinks"), "{what}"),
+        other => panic!("expected CannotFinish, got {other:?}"),
+    }
+    // A table of a few rows counts them and passes.
+    let table = pfem::hooks::PiecewiseLinear::new(vec![
+        (0.0, Vector::<2>::zeros()),
+        (0.1, Vector::<2>::new(0.01, 0.0)),
+        (0.2, Vector::<2>::new(0.01, 0.0)),
+    ])
+    .unwrap();
+    let few = scene(WallMotion::Law(std::sync::Arc::new(table)));
+    // One kink: at 0.1 s the wall stops (it ends at rest, so 0.2 s is none).
+    assert_eq!(few.motion_kinks(1e8), 1.0);
+    few.validate().unwrap();
+}

@@ -491,6 +491,29 @@ where
         self
     }
 
+    /// How many kinks the walls' motion laws have before the end time
+    /// ([`crate::motion::MotionLaw::next_kink`]: a table's rows where the
+    /// velocity changes), each a step's end; counted up to a little past
+    /// `most` (the count stops there).
+    pub fn motion_kinks(&self, most: f64) -> f64 {
+        let end = self.settings.end_time;
+        let mut count = 0.0;
+        for b in &self.bodies {
+            let WallMotion::Law(law) = &b.motion else {
+                continue;
+            };
+            let mut t = 0.0;
+            while let Some(k) = law.next_kink(t) {
+                if !(k > t && k < end) || count > most {
+                    break;
+                }
+                count += 1.0;
+                t = k;
+            }
+        }
+        count
+    }
+
     /// The normal penalty stiffness of contact (Pa), instead of the
     /// default ([`ContactSettings::stiffness`]).
     pub fn contact_stiffness(mut self, k: f64) -> Self {
@@ -1165,6 +1188,20 @@ where
                 })?;
             }
         }
+        // Each kink of a motion law ends a step (a table's rows 10⁻⁸ s
+        // apart took a step each, past the count above: the review of
+        // session 45).
+        let kinks = self.motion_kinks(MAX_STEPS - steps);
+        if steps + kinks > MAX_STEPS {
+            return Err(SceneError::CannotFinish {
+                what: format!(
+                    "steps at max_dt = {:e} s to end_time = {:e} s, and one more at each of the motion laws' kinks (a table's rows where the velocity changes)",
+                    s.max_dt, s.end_time
+                ),
+                count: steps + kinks,
+                limit: MAX_STEPS,
+            });
+        }
         // The Courant bound on the initial velocities: Δt ≤ C h / |v|.
         let h_min = self
             .bodies
@@ -1202,9 +1239,15 @@ where
                 limit: MAX_STEPS,
             });
         }
-        for (k, (a, b, mu)) in self.contact.friction.iter().enumerate() {
+        // (Maps: a million pairs among a thousand bodies, each looked up
+        // in the bodies and compared with every earlier pair, took hours:
+        // the review of session 45.)
+        let by_name: std::collections::HashMap<&str, &Body<D>> =
+            self.bodies.iter().map(|b| (b.name.as_str(), b)).collect();
+        let mut pairs = std::collections::HashSet::with_capacity(self.contact.friction.len());
+        for (a, b, mu) in &self.contact.friction {
             for n in [a, b] {
-                match self.bodies.iter().find(|x| &x.name == n) {
+                match by_name.get(n.as_str()).copied() {
                     None => {
                         return Err(SceneError::InvalidGeometry {
                             body: n.clone(),
@@ -1226,10 +1269,7 @@ where
             // ambiguous.
             let why = if a == b {
                 Some("a body has no contact with itself")
-            } else if self.contact.friction[..k]
-                .iter()
-                .any(|(c, d, _)| (c == a && d == b) || (c == b && d == a))
-            {
+            } else if !pairs.insert(if a < b { (a, b) } else { (b, a) }) {
                 Some("this pair's friction is given twice")
             } else {
                 None

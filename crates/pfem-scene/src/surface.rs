@@ -48,6 +48,11 @@ where
     }
 }
 
+/// What reading an STL file holds per byte of the file, an upper bound
+/// ([`ClosedSurface::read_stl`] refuses a file that would not fit
+/// [`crate::default_memory_budget`]).
+pub const STL_BYTES_PER_BYTE: f64 = 10.0;
+
 impl ClosedSurface<3> {
     /// Reads an STL file (ASCII or binary), scaling every coordinate by
     /// `scale` (0.001 for a file in millimetres) and then adding `offset`
@@ -58,6 +63,20 @@ impl ClosedSurface<3> {
             .map_err(|e| format!("cannot open STL file {}: {e}", path.display()))?;
         if !meta.is_file() {
             return Err(format!("STL file {}: not a regular file", path.display()));
+        }
+        // Read whole, then held as triangles, vertices, facets and the
+        // surface's checks (edge maps, a crossing grid): about ten bytes
+        // per byte of a binary file, 50 a triangle. A sparse file of 10 GB
+        // (no disk, a header counting 2·10⁸ triangles) was read into
+        // memory before any budget was asked (the review of session 45).
+        let need = STL_BYTES_PER_BYTE * meta.len() as f64;
+        let budget = crate::default_memory_budget();
+        if need > budget {
+            return Err(format!(
+                "STL file {}: {} bytes would take about {need:.2e} bytes to read and check, over the memory budget of {budget:.2e}",
+                path.display(),
+                meta.len()
+            ));
         }
         let mut file = std::fs::File::open(path)
             .map_err(|e| format!("cannot open STL file {}: {e}", path.display()))?;
@@ -1173,6 +1192,17 @@ mod tests {
         assert!(why.contains("counts 11 triangles"), "{why}");
         // Cut short of its 84-byte header: refused, not a panic.
         assert!(read(binary(b"binary", 12, false)[..40].to_vec()).is_err());
+        // A sparse file (no disk) larger than the memory budget allows:
+        // refused before anything is read (session 45's review: a 10 GB
+        // one was read whole).
+        let path = std::env::temp_dir().join(format!("pfem-sparse-{}.stl", std::process::id()));
+        let size = (crate::default_memory_budget() / STL_BYTES_PER_BYTE) as u64 + 84;
+        let f = std::fs::File::create(&path).unwrap();
+        f.set_len(size).unwrap();
+        let r = ClosedSurface::read_stl(&path, 1.0, [0.0; 3]);
+        std::fs::remove_file(&path).ok();
+        let why = r.unwrap_err();
+        assert!(why.contains("memory budget"), "{why}");
     }
 
     /// Session 41 (a review of hostile inputs): the crossing check took

@@ -543,7 +543,26 @@ impl std::fmt::Debug for LoadedScene {
     }
 }
 
-/// Largest scene file [`SceneFile::read`] reads (bytes): 256 MiB.
+/// What parsing a scene file holds per byte of its text, an upper bound
+/// (measured 75: a 20 MB file of numbers took 1.5 GB): [`SceneFile::parse`]
+/// refuses a text whose parse would not fit
+/// [`pfem_scene::default_memory_budget`].
+pub const PARSE_BYTES_PER_BYTE: f64 = 100.0;
+
+/// Why a text of `len` bytes cannot be parsed within `budget` bytes, if so.
+fn parse_fits(len: usize, budget: f64) -> Result<(), String> {
+    let need = PARSE_BYTES_PER_BYTE * len as f64;
+    if need > budget {
+        return Err(format!(
+            "{len} bytes would take about {need:.2e} bytes to parse, over the memory budget of {budget:.2e} (particles and fields this large belong in files of their own)"
+        ));
+    }
+    Ok(())
+}
+
+/// Largest scene file [`SceneFile::read`] reads (bytes): 256 MiB (and
+/// less where parsing it would not fit the memory budget,
+/// [`PARSE_BYTES_PER_BYTE`]).
 pub const MAX_SCENE_FILE_BYTES: u64 = 256 << 20;
 
 impl SceneFile {
@@ -587,6 +606,15 @@ impl SceneFile {
     /// unknown or missing key, a value of the wrong type, a dimension other
     /// than 2 or 3. The message names the line and column.
     pub fn parse(text: &str, path: &str) -> Result<Self, SceneError> {
+        // The TOML parser holds about 75 bytes per byte of text (a 20 MB
+        // file of numbers took 1.5 GB, session 45): a file whose parse
+        // would not fit the memory budget is refused before it starts.
+        parse_fits(text.len(), pfem_scene::default_memory_budget()).map_err(|why| {
+            SceneError::File {
+                path: path.to_string(),
+                why,
+            }
+        })?;
         let mut file: SceneFile = toml::from_str(text).map_err(|e| {
             let why = match e.span() {
                 Some(span) => {
@@ -1193,7 +1221,10 @@ impl SceneFile {
     where
         Const<D>: Dim,
     {
-        for (i, p) in probes.iter().enumerate() {
+        // (A set: a million probes compared each against every earlier one
+        // took hours, the review of session 45.)
+        let mut seen = std::collections::HashSet::with_capacity(probes.len());
+        for p in probes {
             // The names head `probes.csv`'s columns.
             if !pfem_scene::is_column_name(&p.name) {
                 return Err(SceneError::File {
@@ -1204,7 +1235,7 @@ impl SceneFile {
                     ),
                 });
             }
-            if probes[..i].iter().any(|q| q.name == p.name) {
+            if !seen.insert(p.name.as_str()) {
                 return Err(SceneError::File {
                     path: self.path.clone(),
                     why: format!("probe column `{}` appears twice", p.name),
@@ -1589,9 +1620,25 @@ impl Nearest {
         }
         let extent = (0..d).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
         let side = (points.len() as f64).powf(1.0 / d as f64).ceil().max(1.0);
-        let width = if extent > 0.0 { extent / side } else { 1.0 };
+        // A width that underflows (samples a few subnormals apart) or
+        // overflows would make a cell count of `usize::MAX + 1`, wrapped to
+        // no cell at all (an index out of bounds, the review of session
+        // 45): one cell instead, and never more than `side + 1` per axis.
+        let width = extent / side;
+        let width = if width.is_normal() && width.is_finite() {
+            width
+        } else {
+            1.0
+        };
         let cells: Vec<usize> = (0..d)
-            .map(|k| ((hi[k] - lo[k]) / width).floor() as usize + 1)
+            .map(|k| {
+                let c = ((hi[k] - lo[k]) / width).floor();
+                if c.is_finite() && c >= 0.0 {
+                    (c.min(side) as usize).saturating_add(1)
+                } else {
+                    1
+                }
+            })
             .collect();
         let mut grid = Self {
             points: Vec::new(),
@@ -1744,5 +1791,23 @@ mod tests {
         }
         let one = Nearest::new(vec![vec![1.0, 2.0]]);
         assert_eq!(one.nearest(&[-5.0, 9.0]), 0);
+
+        // Samples a subnormal apart (their cell width underflowed: no
+        // cell, an index out of bounds) or spanning the whole range of
+        // f64 (the width overflows).
+        let tiny = Nearest::new(vec![vec![0.0, 0.0], vec![5e-324, 0.0]]);
+        assert!(tiny.nearest(&[1.0, 0.0]) < 2);
+        let huge = Nearest::new(vec![vec![-1e308, 0.0], vec![1e308, 0.0], vec![0.0, 1.0]]);
+        assert_eq!(huge.nearest(&[0.0, 0.9]), 2);
+    }
+
+    /// The parse's memory (session 45's review: a 250 MB file would have
+    /// taken about 25 GB while the TOML parser held it): refused over the
+    /// budget, named.
+    #[test]
+    fn a_text_too_large_to_parse_within_the_budget_is_refused() {
+        assert!(super::parse_fits(20_000_000, 19e9).is_ok());
+        let why = super::parse_fits(250 << 20, 19e9).unwrap_err();
+        assert!(why.contains("memory budget"), "{why}");
     }
 }

@@ -251,7 +251,7 @@ fn a_restart_keeps_to_its_own_folder_and_a_wall_clock_stop_says_so() {
     assert!(run(&dam, &b, &[]).status.success());
     let files_a = outputs(&a);
     let ck_b = b.join("checkpoint.bin").display().to_string();
-    let restart = |out: Option<&Path>| {
+    let restart_with = |out: Option<&Path>, extra: &[&str]| {
         let mut args = vec![
             "run".to_string(),
             dam.display().to_string(),
@@ -264,14 +264,24 @@ fn a_restart_keeps_to_its_own_folder_and_a_wall_clock_stop_says_so() {
         if let Some(o) = out {
             args.extend(["--out".to_string(), o.display().to_string()]);
         }
+        args.extend(extra.iter().map(|s| s.to_string()));
         Command::new(PFEM).args(&args).output().unwrap()
     };
-    // B's checkpoint into A's folder: refused, A untouched.
-    let o = restart(Some(&a));
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("cannot continue the run's outputs"), "{err}");
-    assert_eq!(outputs(&a), files_a, "A's files changed");
+    let restart = |out: Option<&Path>| restart_with(out, &[]);
+    // B's checkpoint into A's folder: refused, A untouched. With
+    // `--no-vtu` too (the review of session 45: the checkpoint then lists
+    // no frame to miss, and A's probes, summary and checkpoint were
+    // replaced by the restart's).
+    for extra in [&[][..], &["--no-vtu"][..]] {
+        let o = restart_with(Some(&a), extra);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {err}");
+        assert!(
+            err.contains("not the checkpoint's and is not empty"),
+            "{extra:?}: {err}"
+        );
+        assert_eq!(outputs(&a), files_a, "{extra:?}: A's files changed");
+    }
     // Without --out, B's checkpoint continues in B's folder.
     let o = restart(None);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

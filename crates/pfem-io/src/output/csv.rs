@@ -51,10 +51,11 @@ impl CsvProbe {
                 name: (*bad).to_owned(),
             });
         }
-        if let Some(k) = (1..columns.len()).find(|&k| columns[..k].contains(&columns[k])) {
+        let mut seen = std::collections::HashSet::with_capacity(columns.len());
+        if let Some(name) = columns.iter().find(|c| !seen.insert(**c)) {
             return Err(OutputError::DuplicateColumn {
                 path,
-                name: columns[k].to_owned(),
+                name: (*name).to_owned(),
             });
         }
         let mut file = std::fs::File::create(&path).map_err(|e| OutputError::io(&path, e))?;

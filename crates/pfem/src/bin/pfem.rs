@@ -176,8 +176,11 @@ fn run(args: Vec<String>) -> Result<(), String> {
             {
                 return Err("`pfem check` writes nothing: --out, --no-vtu, --overwrite, --checkpoint-every and --restart do not apply".into());
             }
-            // The run options are checked as `run` would.
+            // The run options are checked as `run` would, and the threads
+            // set: the simulation is built (its first mesh, its initial
+            // accelerations) on as many as `run` would use.
             parsed.validate_options().map_err(|e| e.to_string())?;
+            parsed.apply_threads().map_err(|e| e.to_string())?;
             let load = || {
                 SceneFile::load(&file, parsed.spacing, parsed.end_time)
                     .map_err(|e| located(&file, e, &parsed))
@@ -238,8 +241,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
 
 /// Validates `scene` within the memory budget, builds its particles and
 /// reports what a run would hold: particle counts (estimated and placed),
-/// memory, steps, and every particle merged or welded.
-/// Validates `scene`, reports what it places, and builds the simulation
+/// memory, steps, and every particle merged or welded. Then builds the simulation
 /// from `again` (the same scene) as `run` would, so that whatever `run`
 /// refuses before its first step (bodies inside their contact distance, a
 /// first mesh that fails, initial accelerations that cannot be solved) is
@@ -265,6 +267,7 @@ where
         scene.settings.max_dt,
     );
     let courant = scene.settings.courant;
+    let kinks = scene.motion_kinks(pfem::scene::MAX_STEPS);
     let built = scene
         .build(tessellator.as_mut())
         .map_err(|e| e.to_string())?;
@@ -278,6 +281,19 @@ where
         )
     } else {
         (t / dt, "end time / max_dt")
+    };
+    // Each kink of a wall's motion law ends a step.
+    let (steps, why) = if kinks > 0.0 {
+        (
+            steps + kinks,
+            if why.starts_with("end") {
+                "end time / max_dt, and the motion laws' kinks"
+            } else {
+                "the Courant limit of the initial speeds, and the motion laws' kinks"
+            },
+        )
+    } else {
+        (steps, why)
     };
     println!(
         "{}: valid {D}D scene `{name}`: {bodies} bodies, {probes} probe columns, end time {t} s",
@@ -306,7 +322,9 @@ where
         }
     }
     // The simulation as `run` builds it: its first mesh, the contact
-    // distances, the initial accelerations.
+    // distances, the initial accelerations (the report's particles freed
+    // first: the simulation places its own).
+    drop(built);
     let sim = args
         .simulation(again, tessellator)
         .map_err(|e| e.to_string())?;
@@ -343,6 +361,27 @@ where
             None => Path::new("out").join(&scene.name),
         }
     });
+    // A restart written into a folder other than its checkpoint's continues
+    // that folder's files (its probes, its summary, its checkpoint): a
+    // folder that holds anything is refused unless `--overwrite` (the
+    // review of session 45: another run's files there were replaced).
+    if let (Some(f), Some(given)) = (args.options.get("restart"), &args.out) {
+        let own = match Path::new(f).parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let same = match (std::fs::canonicalize(&own), std::fs::canonicalize(given)) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => false,
+        };
+        let used = std::fs::read_dir(given).is_ok_and(|mut d| d.next().is_some());
+        if !same && used && !args.overwrite {
+            return Err(format!(
+                "--restart {f} --out {}: that folder is not the checkpoint's and is not empty (its files would be replaced by this run's): choose an empty folder, the checkpoint's own, or --overwrite",
+                given.display()
+            ));
+        }
+    }
     let name = scene.name.clone();
     let restart = match args.options.get("restart") {
         Some(f) => {
