@@ -1827,3 +1827,43 @@ fn a_motion_law_with_a_kink_every_nanosecond_cannot_finish() {
     assert_eq!(few.motion_kinks(1e8), 1.0);
     few.validate().unwrap();
 }
+
+/// The dam break's probes read NaN where the scene has nothing they
+/// measure, not 0 (the review of session 45): a tank raised to y = 1 and
+/// placed at negative x has no floor row at y = 0 (`bottom_pressure`
+/// read 0, as if dry) and its water's front is at x < 0 (`front_x` read
+/// 0, the fold's start).
+#[test]
+fn the_dam_break_probes_do_not_read_zero_where_nothing_is_measured() {
+    let h = 0.05;
+    let scene = Scene::<2>::new("raised tank")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.01,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            boxed(-1.2, 1.0 - h, -0.4, 1.0),
+            h,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(-1.0, 1.0 + h, -0.6, 1.3),
+            h,
+        );
+    let sim = sim2(scene, StepParams::default());
+    assert!(pfem::cases::bottom_pressure(&sim).is_nan());
+    let front = pfem::cases::front_x(&sim);
+    assert!((front + 0.6).abs() < 1e-9, "front {front}");
+    // On the dam break itself: a floor at y = 0, a front at x > 0.
+    let mut case = pfem::cases::DamBreak::default();
+    case.spacing = case.width / 6.0;
+    let sim = sim2(case.scene(), StepParams::default());
+    assert!(pfem::cases::bottom_pressure(&sim) > 0.0);
+    assert!(pfem::cases::front_x(&sim) > 0.0);
+}

@@ -154,13 +154,9 @@ pub fn main_body(s: &Simulation<2>) -> Vec<bool> {
 }
 
 /// Leading edge of the fluid: the largest `x` of a fluid particle of the
-/// main body ([`main_body`]).
+/// main body ([`main_body`]); NaN when there is none.
 pub fn front_x(s: &Simulation<2>) -> f64 {
-    let body = main_body(s);
-    (0..s.particles().len())
-        .filter(|&i| body[i])
-        .map(|i| s.particles().x()[i].x)
-        .fold(0.0, f64::max)
+    crate::cases3d::front_x(s)
 }
 
 /// Height of the fluid at the back wall: the largest `y` of a meshed fluid
@@ -582,7 +578,9 @@ impl Hydrostatic {
 }
 
 /// Mean pressure of the wall particles on the floor's top row (y = 0) that
-/// touch the fluid, excluding the corners.
+/// touch the fluid, excluding the corners: 0 where that row is dry, NaN
+/// where the scene has no wall particle at y = 0 (a tank raised off the
+/// origin read 0, as if dry: the review of session 45).
 pub fn bottom_pressure(s: &Simulation<2>) -> f64 {
     let mut in_fluid = vec![false; s.particles().len()];
     for &p in s.elements().fluid() {
@@ -610,10 +608,14 @@ pub fn bottom_pressure(s: &Simulation<2>) -> f64 {
             n += 1;
         }
     }
-    if n == 0 {
+    if n > 0 {
+        sum / n as f64
+    } else if (0..s.particles().len()).any(|i| {
+        s.particles().kind()[i] == ParticleKind::Wall && s.particles().x()[i].y.abs() < 1e-9
+    }) {
         0.0
     } else {
-        sum / n as f64
+        f64::NAN
     }
 }
 

@@ -69,10 +69,17 @@ where
     Const<D>: Dim,
 {
     let body = main_body(s);
-    (0..s.particles().len())
+    // From −∞, not 0: water wholly at negative x read 0 (the review of
+    // session 45); no main body at all reads NaN, not a front.
+    let front = (0..s.particles().len())
         .filter(|&i| body[i])
         .map(|i| s.particles().x()[i][0])
-        .fold(0.0, f64::max)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if front.is_finite() {
+        front
+    } else {
+        f64::NAN
+    }
 }
 
 /// Height of the fluid at the back wall (`x = 0`): the largest `y` of a

@@ -427,7 +427,7 @@ where
     /// Whether the state a converged attempt ends in is one this material
     /// cannot hold, checked for a solid's element (and a contact layer's)
     /// before [`Material::update_history`], unless every particle of the
-    /// element is prescribed (no step changes its state): `Some(why)` rejects the
+    /// element is prescribed (no step size cures it): `Some(why)` rejects the
     /// attempt, which is retried with half the step like an inverted
     /// element and named, with `why`, as the last failure when no step
     /// down to the smallest cures it. The bundled [`crate::ContactPenalty`]

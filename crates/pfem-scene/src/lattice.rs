@@ -86,8 +86,8 @@ where
 /// Lattice nodes of the box `[min, max]` at spacing close to `h` (the
 /// spacing along each axis is adjusted so the corners are nodes), ordered
 /// x fastest. Refused ([`SceneError`]): a spacing that is not a positive
-/// finite number, a bound that is not finite, or more points than the
-/// memory budget holds.
+/// finite number, a bound that is not finite, a max below its min, or more
+/// points than the memory budget holds.
 ///
 /// ```
 /// use pfem_core::Point;
@@ -275,7 +275,8 @@ where
 /// and its elements round it were crushed (issue 19). [`crate::Scene::build`]
 /// uses it for the balls of solids and walls; fluids take the lattice
 /// ([`ball_points`]), which the remeshing forgets anyway. Refused as
-/// [`ball_points`] refuses its ball.
+/// [`ball_points`] refuses its ball, and for a radius of zero (its rings
+/// would all sit on the centre).
 pub fn shell_points<const D: usize>(
     center: &Point<D>,
     radius: f64,
@@ -342,8 +343,9 @@ where
 /// (the ends are nodes). In 2D the "disk" is the segment across the axis,
 /// so the cylinder is a rectangle. Refused ([`SceneError`]): a spacing
 /// that is not a positive finite number, a base, radius or height that is
-/// not finite, a negative radius or height, or more points than the
-/// memory budget holds.
+/// not finite, a negative radius, a height that is not positive, an axis
+/// the dimension has not (`axis ≥ D`), or more points than the memory
+/// budget holds.
 pub fn cylinder_points<const D: usize>(
     base: &Point<D>,
     axis: usize,

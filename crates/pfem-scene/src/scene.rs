@@ -491,18 +491,19 @@ where
         self
     }
 
-    /// How many kinks the walls' motion laws have before the end time
+    /// How many kinks a wall's motion law has before the end time
     /// ([`crate::motion::MotionLaw::next_kink`]: a table's rows where the
-    /// velocity changes), each a step's end; counted up to a little past
+    /// velocity changes), each a step's end: the most of any one wall's
+    /// (walls on one table share their kinks), counted up to a little past
     /// `most` (the count stops there).
     pub fn motion_kinks(&self, most: f64) -> f64 {
         let end = self.settings.end_time;
-        let mut count = 0.0;
+        let mut largest: f64 = 0.0;
         for b in &self.bodies {
             let WallMotion::Law(law) = &b.motion else {
                 continue;
             };
-            let mut t = 0.0;
+            let (mut t, mut count) = (0.0, 0.0);
             while let Some(k) = law.next_kink(t) {
                 if !(k > t && k < end) || count > most {
                     break;
@@ -510,8 +511,9 @@ where
                 count += 1.0;
                 t = k;
             }
+            largest = largest.max(count);
         }
-        count
+        largest
     }
 
     /// The normal penalty stiffness of contact (Pa), instead of the
@@ -1242,8 +1244,12 @@ where
         // (Maps: a million pairs among a thousand bodies, each looked up
         // in the bodies and compared with every earlier pair, took hours:
         // the review of session 45.)
-        let by_name: std::collections::HashMap<&str, &Body<D>> =
-            self.bodies.iter().map(|b| (b.name.as_str(), b)).collect();
+        let mut by_name: std::collections::HashMap<&str, &Body<D>> =
+            std::collections::HashMap::with_capacity(self.bodies.len());
+        for b in &self.bodies {
+            // The first body of a name, as a search would find.
+            by_name.entry(b.name.as_str()).or_insert(b);
+        }
         let mut pairs = std::collections::HashSet::with_capacity(self.contact.friction.len());
         for (a, b, mu) in &self.contact.friction {
             for n in [a, b] {

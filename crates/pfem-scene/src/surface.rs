@@ -48,9 +48,9 @@ where
     }
 }
 
-/// What reading an STL file holds per byte of the file, an upper bound
-/// ([`ClosedSurface::read_stl`] refuses a file that would not fit
-/// [`crate::default_memory_budget`]).
+/// What reading a binary STL file holds per byte of the file, an upper
+/// bound (half of it for a text file; [`ClosedSurface::read_stl`] refuses
+/// a file that would not fit [`crate::default_memory_budget`]).
 pub const STL_BYTES_PER_BYTE: f64 = 10.0;
 
 impl ClosedSurface<3> {
@@ -63,20 +63,6 @@ impl ClosedSurface<3> {
             .map_err(|e| format!("cannot open STL file {}: {e}", path.display()))?;
         if !meta.is_file() {
             return Err(format!("STL file {}: not a regular file", path.display()));
-        }
-        // Read whole, then held as triangles, vertices, facets and the
-        // surface's checks (edge maps, a crossing grid): about ten bytes
-        // per byte of a binary file, 50 a triangle. A sparse file of 10 GB
-        // (no disk, a header counting 2·10⁸ triangles) was read into
-        // memory before any budget was asked (the review of session 45).
-        let need = STL_BYTES_PER_BYTE * meta.len() as f64;
-        let budget = crate::default_memory_budget();
-        if need > budget {
-            return Err(format!(
-                "STL file {}: {} bytes would take about {need:.2e} bytes to read and check, over the memory budget of {budget:.2e}",
-                path.display(),
-                meta.len()
-            ));
         }
         let mut file = std::fs::File::open(path)
             .map_err(|e| format!("cannot open STL file {}: {e}", path.display()))?;
@@ -114,6 +100,26 @@ impl ClosedSurface<3> {
                 false
             }
         };
+        // Read whole, then held as triangles, vertices, facets and the
+        // surface's checks (edge maps, a crossing grid): about ten bytes
+        // per byte of a binary file (50 a triangle), fewer of a text one
+        // (about 250 a triangle). A sparse file of 10 GB (no disk, a header
+        // counting 2·10⁸ triangles) was read into memory before any budget
+        // was asked (the review of session 45).
+        let need = meta.len() as f64
+            * if binary {
+                STL_BYTES_PER_BYTE
+            } else {
+                STL_BYTES_PER_BYTE / 2.0
+            };
+        let budget = crate::default_memory_budget();
+        if need > budget {
+            return Err(format!(
+                "STL file {}: {} bytes would take about {need:.2e} bytes to read and check, over the memory budget of {budget:.2e}",
+                path.display(),
+                meta.len()
+            ));
+        }
         let triangles: Vec<[[f32; 3]; 3]> = if binary {
             use std::io::Read;
             let mut bytes = Vec::new();
@@ -1196,9 +1202,12 @@ mod tests {
         // refused before anything is read (session 45's review: a 10 GB
         // one was read whole).
         let path = std::env::temp_dir().join(format!("pfem-sparse-{}.stl", std::process::id()));
-        let size = (crate::default_memory_budget() / STL_BYTES_PER_BYTE) as u64 + 84;
-        let f = std::fs::File::create(&path).unwrap();
-        f.set_len(size).unwrap();
+        let count = (crate::default_memory_budget() / STL_BYTES_PER_BYTE / 50.0) as u64 + 1;
+        let mut f = std::fs::File::create(&path).unwrap();
+        let mut head = vec![0u8; 80];
+        head.extend_from_slice(&(count as u32).to_le_bytes());
+        std::io::Write::write_all(&mut f, &head).unwrap();
+        f.set_len(84 + 50 * count).unwrap();
         let r = ClosedSurface::read_stl(&path, 1.0, [0.0; 3]);
         std::fs::remove_file(&path).ok();
         let why = r.unwrap_err();

@@ -513,7 +513,8 @@ const COMMON: [&str; 19] = [
 pub const USAGE: &str = "\
 Options common to the bundled examples and `pfem run`:
   --out DIR             output directory
-  --overwrite           clear the previous run's files from DIR (a non-empty DIR is refused without it)
+  --overwrite           clear the previous run's files from DIR (a non-empty DIR is refused without it;
+                        a restart clears nothing: it continues its checkpoint's folder)
   --spacing H           particle spacing (m)
   --end-time T          simulated time (s)
   --quiet, -q           no progress bar

@@ -71,7 +71,7 @@
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`]; `pressure_stabilisation` (factor α ≥ 0, default 0: [`Scene::pressure_stabilisation`]) |
-//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` (m, s, s), `table = [[t, dx, dy], …]` (s, m) or `rotation = { center, axis (3D), rate, amplitude, period, ramp }` (m, –, rad/s, rad, s, s)), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }` (points m; values m/s or Pa), the nearest sample's value) |
+//! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` (m, s, s), `table = [[t, dx, dy], …]` (s, m) or `rotation = { center, axis (3D), rate, amplitude, period, ramp }` (m, –, rad/s, rad, s, s)), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }` (points m; values m/s or Pa), the nearest sample's value; points whose box misses the body's by more than two spacings are refused) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
 //! | `[contact]` | `stiffness` (Pa), `damping` (dimensionless: the dashpot's time constant in steps, default 0.1), `onset` (the penalty's rounded onset, a fraction of the contact distance, half the sum of the two bodies' spacings, in `[0, 0.5]`, default 0.01), `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
@@ -384,7 +384,8 @@ fn one() -> f64 {
 }
 
 /// Sampled values of an initial field: each particle takes the value of the
-/// nearest sample point.
+/// nearest sample point. Two or more points whose box misses the body's by
+/// more than two spacings (given in millimetres) are refused.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FieldSpec {
@@ -455,14 +456,17 @@ pub enum ProbeSpec {
     /// `max_speed`: largest fluid particle speed (m/s).
     MaxSpeed,
     /// `front_x`: largest `x` of the main fluid body (m), as
-    /// [`crate::cases::front_x`] (3D: [`crate::cases3d::front_x`]).
+    /// [`crate::cases::front_x`] (3D: [`crate::cases3d::front_x`]); NaN
+    /// with no main body.
     FrontX,
     /// `height_at_wall`: height (`y`) of the main fluid body within 1.5
     /// spacings of `x = 0` (m), as [`crate::cases::height_at_wall`] (3D:
     /// [`crate::cases3d::height_at_wall`]).
     HeightAtWall,
     /// `bottom_pressure` (2D): mean pressure of the wetted floor particles
-    /// at `y = 0` (Pa), as [`crate::cases::bottom_pressure`].
+    /// at `y = 0` (Pa), as [`crate::cases::bottom_pressure`]: the dam
+    /// break's layout, a floor whose top row is at `y = 0` (NaN without
+    /// one, 0 where it is dry).
     BottomPressure,
     /// `body_displacement`: displacement (m) of the particles of `body`
     /// that started within `radius` of `point` (the nearest one when
@@ -590,6 +594,8 @@ impl SceneFile {
                 meta.len()
             )));
         }
+        // Its parse's memory, before the text is read.
+        parse_fits(meta.len() as usize, pfem_scene::default_memory_budget()).map_err(fail)?;
         let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
         let mut file = Self::parse(&text, &path.display().to_string())?;
         if file.name.is_none() {
@@ -752,6 +758,12 @@ impl SceneFile {
                 )
             })?;
             let geometry = self.geometry::<D>(&b.geometry, &b.name)?;
+            // Where a field's samples must reach (a field given in
+            // millimetres lies far outside the body it is for).
+            let reach = {
+                let (lo, hi) = geometry.bounds();
+                (lo, hi, spacing)
+            };
             let material = match (&b.material, b.kind) {
                 (Some(m), BodyKind::Wall) => {
                     return Err(self.error(
@@ -862,7 +874,7 @@ impl SceneFile {
                         format!("{} is for fluids and solids", what("velocity_field")),
                     ));
                 }
-                let (pts, vals) = self.samples::<D>(f, D, &what("velocity_field"))?;
+                let (pts, vals) = self.samples::<D>(f, D, &what("velocity_field"), reach)?;
                 let pts = Nearest::new(pts);
                 scene = scene.with_velocity_field(move |x| {
                     let v = &vals[pts.nearest(x)];
@@ -876,7 +888,7 @@ impl SceneFile {
                         format!("{} is for fluids", what("pressure_field")),
                     ));
                 }
-                let (pts, vals) = self.samples::<D>(f, 1, &what("pressure_field"))?;
+                let (pts, vals) = self.samples::<D>(f, 1, &what("pressure_field"), reach)?;
                 let pts = Nearest::new(pts);
                 scene = scene.with_pressure_field(move |x| vals[pts.nearest(x)][0]);
             }
@@ -1376,14 +1388,17 @@ impl SceneFile {
         made.map_err(|e| self.error(m.span(), format!("body `{body}`: material: {e}")))
     }
 
-    /// The sample points and values of a field, each value of `width`
-    /// numbers, checked finite and matched in count.
+    /// A field's sample points and values, checked: one value of `width`
+    /// numbers per point of `D` coordinates, all finite, and (two points or
+    /// more) a box of points that reaches within two spacings of the
+    /// body's box (`reach`: its corners and spacing).
     #[allow(clippy::type_complexity)]
     fn samples<const D: usize>(
         &self,
         f: &Spanned<FieldSpec>,
         width: usize,
         what: &str,
+        reach: (Point<D>, Point<D>, f64),
     ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), SceneError> {
         let spec = f.get_ref();
         let bad = |why: String| self.error(f.span(), format!("{what}: {why}"));
@@ -1411,6 +1426,36 @@ impl SceneFile {
                 return Err(bad("non-finite number".into()));
             }
             vals.push(v);
+        }
+        // Every particle takes its nearest sample however far: samples
+        // whose box misses the body's (given in millimetres, or for another
+        // body) would set it from a far point without a word (the review
+        // of session 45). A coarse grid around the body, or one sample
+        // anywhere (a constant field), passes. (A spacing or a box that is
+        // not a number is left to the scene's own check.)
+        let (lo, hi, h) = reach;
+        let sane = h.is_finite()
+            && h > 0.0
+            && (0..D).all(|k| lo[k] <= hi[k] && (hi[k] - lo[k]).is_finite());
+        if sane && spec.points.len() > 1 {
+            let (mut plo, mut phi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for p in &spec.points {
+                for k in 0..D {
+                    plo[k] = plo[k].min(p[k]);
+                    phi[k] = phi[k].max(p[k]);
+                }
+            }
+            let misses = (0..D).any(|k| phi[k] < lo[k] - 2.0 * h || plo[k] > hi[k] + 2.0 * h);
+            if misses {
+                return Err(bad(format!(
+                    "its {} points span {:?} to {:?}, which misses the body's box {:?} to {:?} by more than two spacings; the points are in metres",
+                    spec.points.len(),
+                    &plo[..D],
+                    &phi[..D],
+                    lo.as_slice(),
+                    hi.as_slice()
+                )));
+            }
         }
         Ok((spec.points.clone(), vals))
     }

@@ -530,6 +530,23 @@ fn initial_fields_from_sample_points() {
     let bad = format!("{WATER}\npressure_field = {{ points = [[0.0, 0.0]], values = [1.0, 2.0] }}");
     let why = file_error(&puddle("", "end_time = 0.01", &bad));
     assert!(why.contains("pressure_field"), "{why}");
+    // Samples that all miss the body (given in millimetres, the body at
+    // 50–150 mm): refused, where every particle took the nearest far
+    // sample (the review of session 45).
+    let mm = format!(
+        "{WATER}\npressure_field = {{ points = [[50.0, 50.0], [150.0, 50.0], [50.0, 150.0], [150.0, 150.0]], values = [1.0, 2.0, 3.0, 4.0] }}"
+    );
+    let why = file_error(&puddle("", "end_time = 0.01", &mm));
+    // A coarse grid around the body with no sample within two spacings
+    // of it, and a single far sample (a constant field), are accepted.
+    for ok in [
+        "points = [[-1.0, -1.0], [1.0, -1.0], [-1.0, 1.0], [1.0, 1.0]], values = [1.0, 1.0, 1.0, 1.0]",
+        "points = [[50.0, 50.0]], values = [1.0]",
+    ] {
+        let text = puddle("", "end_time = 0.01", &format!("{WATER}\npressure_field = {{ {ok} }}"));
+        assert!(build(&text).is_ok(), "{ok}");
+    }
+    assert!(why.contains("misses the body"), "{why}");
 }
 
 /// The error a 2D file gives, from reading it or from building its

@@ -57,7 +57,8 @@ Options of `pfem run`:
                         and at the end (atomically; the last one is kept)
   --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE and
                         options, other ones refused; DIR its output folder, by
-                        default the checkpoint's): the result is the uninterrupted
+                        default the checkpoint's; another folder that is not
+                        empty is refused): the result is the uninterrupted
                         run's, bit for bit (to the solver's tolerance with the
                         pressure stabilised on large systems: docs/robustness.md).
                         With a later --end-time, a finished run goes on
@@ -300,7 +301,7 @@ where
         file.display()
     );
     println!(
-        "  {} particles placed (estimated {:.0}), memory about {:.1} MB of a {:.1} GB budget, at least {:.0} steps ({why})",
+        "  {} particles placed (estimated {:.0}), memory about {:.1} MB of a {:.1} GB budget, about {:.0} steps or more ({why})",
         built.particles.len(),
         estimate.particles,
         estimate.bytes / 1e6,
@@ -362,22 +363,23 @@ where
         }
     });
     // A restart written into a folder other than its checkpoint's continues
-    // that folder's files (its probes, its summary, its checkpoint): a
-    // folder that holds anything is refused unless `--overwrite` (the
-    // review of session 45: another run's files there were replaced).
+    // that folder's files (its probes, its summary, its checkpoint; a
+    // restart clears nothing, `--overwrite` or not): a folder that holds
+    // anything is refused (the review of session 45: another run's files
+    // there were replaced). The checkpoint's own folder is its real file's
+    // (a link to it names another).
     if let (Some(f), Some(given)) = (args.options.get("restart"), &args.out) {
-        let own = match Path::new(f).parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => dir.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let same = match (std::fs::canonicalize(&own), std::fs::canonicalize(given)) {
-            (Ok(a), Ok(b)) => a == b,
+        let own = std::fs::canonicalize(f)
+            .ok()
+            .and_then(|real| real.parent().map(Path::to_path_buf));
+        let same = match (own, std::fs::canonicalize(given)) {
+            (Some(a), Ok(b)) => a == b,
             _ => false,
         };
         let used = std::fs::read_dir(given).is_ok_and(|mut d| d.next().is_some());
-        if !same && used && !args.overwrite {
+        if !same && used {
             return Err(format!(
-                "--restart {f} --out {}: that folder is not the checkpoint's and is not empty (its files would be replaced by this run's): choose an empty folder, the checkpoint's own, or --overwrite",
+                "--restart {f} --out {}: that folder is not the checkpoint's and is not empty (its files would be replaced by this run's): continue in the checkpoint's own folder (or a copy of it)",
                 given.display()
             ));
         }
