@@ -1867,3 +1867,87 @@ fn the_dam_break_probes_do_not_read_zero_where_nothing_is_measured() {
     assert!(pfem::cases::bottom_pressure(&sim) > 0.0);
     assert!(pfem::cases::front_x(&sim) > 0.0);
 }
+
+/// The review of session 45, of the hooks starting before the observers:
+/// a NaN set by hand before `run` is named as such, not blamed on the
+/// first hook that starts (here the moving wall's, which takes mutable
+/// access); a hook that fails to start, and the hooks after it, start at
+/// the next try (they were marked started and never started), and the
+/// hook's error is the one `run` returns.
+#[test]
+fn a_start_that_fails_is_retried_and_a_nan_by_hand_is_named() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let h = 0.02;
+    let law = pfem::hooks::PiecewiseLinear::new(vec![
+        (0.0, Vector::<2>::zeros()),
+        (0.1, Vector::<2>::new(0.01, 0.0)),
+    ])
+    .unwrap();
+    let scene = || {
+        Scene::<2>::new("paddle")
+            .gravity(Vector::<2>::new(0.0, -G))
+            .settings(RunSettings {
+                end_time: 0.004,
+                max_dt: 2e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
+            .wall(
+                "paddle",
+                boxed(-0.04, h, -0.02, 0.2),
+                h,
+                WallMotion::Law(Arc::new(law.clone())),
+            )
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(0.0, h, 0.2, 0.1),
+                h,
+            )
+    };
+    let mut sim = sim2(scene(), StepParams::default());
+    let i = sim.body_particles("water").unwrap()[0];
+    sim.particles_mut().v_mut()[i].x = f64::NAN;
+    match sim.run(&mut []) {
+        Err(RunError::InvalidParticle { particle, why }) => {
+            assert_eq!(particle, i);
+            assert!(why.contains("by hand"), "{why}");
+        }
+        other => panic!("expected InvalidParticle, got {other:?}"),
+    }
+
+    let mut sim = sim2(scene(), StepParams::default());
+    let tries = Arc::new(AtomicUsize::new(0));
+    let after = Arc::new(AtomicUsize::new(0));
+    let (t, a) = (tries.clone(), after.clone());
+    sim.add_hook(Box::new(FnHook::new("fails once").start(move |_| {
+        if t.fetch_add(1, Ordering::SeqCst) == 0 {
+            Err(RunError::Hook {
+                hook: "fails once".into(),
+                why: "not yet".into(),
+            })
+        } else {
+            Ok(())
+        }
+    })));
+    sim.add_hook(Box::new(FnHook::new("after it").start(move |_| {
+        a.fetch_add(1, Ordering::SeqCst);
+        Ok(())
+    })));
+    let e = sim.run(&mut []).unwrap_err();
+    assert!(e.to_string().contains("not yet"), "{e}");
+    assert_eq!(
+        after.load(Ordering::SeqCst),
+        0,
+        "the hook after it has not started"
+    );
+    sim.run(&mut []).unwrap();
+    assert_eq!(tries.load(Ordering::SeqCst), 2, "retried once");
+    assert_eq!(
+        after.load(Ordering::SeqCst),
+        1,
+        "the hook after it started once"
+    );
+}
