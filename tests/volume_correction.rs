@@ -330,3 +330,87 @@ fn a_drop_in_flight_keeps_its_volume_out_of_the_bulk() {
     let off = (sim.fluid_volume() - v0) / (h * h);
     assert!(off.abs() < 0.05, "landed: V₀ {off:+.3} h²");
 }
+
+/// An outflow written as a closure (`FnHook`) can declare the water it
+/// removes as leaving the domain (`FnHook::sources_fluid`, session 45):
+/// the volume correction then keeps the water that is left instead of
+/// growing it back to the start's volume. Water at rest; the hook removes
+/// the top row of the water after the first step. Declared,
+/// the ledger books the removal in `sources` and the fluid holds
+/// `V₀ + sources`; undeclared (the default), it is a loss the correction
+/// puts back (`V₀`).
+#[test]
+fn an_outflow_written_as_a_closure_can_declare_its_water_gone() {
+    use pfem::hooks::FnHook;
+    let case = pfem::cases::Hydrostatic {
+        spacing: 0.025,
+        end_time: 0.05,
+        ..Default::default()
+    };
+    let h = case.spacing;
+    for declared in [true, false] {
+        let mut sim = build(case.scene(), 1.0);
+        let v0 = sim.volume().initial;
+        let mut done = false;
+        let drain = FnHook::new("drain").sources_fluid(declared).after_step(
+            move |ctx: &mut pfem::hooks::HookContext<'_, 2>| {
+                if done {
+                    return Ok(());
+                }
+                done = true;
+                // The top row of the water: a lattice's surface particle
+                // alone leaves the mesh's measure as it was (its
+                // neighbours close the surface straight across).
+                let p = ctx.particles();
+                let height = (0..p.len())
+                    .filter(|&i| p.kind()[i] == ParticleKind::Fluid)
+                    .map(|i| p.x()[i].y)
+                    .fold(f64::NEG_INFINITY, f64::max);
+                let top: Vec<bool> = (0..p.len())
+                    .map(|i| p.kind()[i] == ParticleKind::Fluid && p.x()[i].y > height - 0.5 * h)
+                    .collect();
+                let n = p.len() as u32;
+                let mut old_to_new = Vec::with_capacity(n as usize);
+                let mut origin = Vec::new();
+                for i in 0..n {
+                    if top[i as usize] {
+                        old_to_new.push(pfem::geometry::REMOVED);
+                    } else {
+                        old_to_new.push(origin.len() as u32);
+                        origin.push(pfem::geometry::Origin::Kept(i));
+                    }
+                }
+                let map = pfem::geometry::ParticleMap { old_to_new, origin };
+                ctx.particles_mut().remap(&map).map_err(|e| RunError::Hook {
+                    hook: "drain".into(),
+                    why: e.to_string(),
+                })
+            },
+        );
+        sim.add_hook(Box::new(drain));
+        sim.run(&mut []).unwrap();
+        let v = sim.volume();
+        let now = sim.fluid_volume();
+        eprintln!(
+            "declared {declared}: sources {:+.3} h², volume {:+.3} h² against V₀",
+            v.sources / (h * h),
+            (now - v0) / (h * h)
+        );
+        if declared {
+            // The row's strip, about the tank's width times h.
+            assert!(v.sources < -0.5 * case.width * h, "sources {}", v.sources);
+            assert!(
+                (now - (v0 + v.sources)).abs() < 0.05 * h * h,
+                "the water left: {} against {}",
+                now,
+                v0 + v.sources
+            );
+        } else {
+            assert_eq!(v.sources, 0.0);
+            assert!(
+                (now - v0).abs() < 0.05 * h * h,
+                "grown back: {now} against {v0}"
+            );
+        }
+    }
+}

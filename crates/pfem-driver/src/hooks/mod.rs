@@ -567,6 +567,7 @@ where
     after_remesh: Option<StepFn<D>>,
     before_solve: Option<StepFn<D>>,
     after_step: Option<StepFn<D>>,
+    sources_fluid: bool,
 }
 
 impl<const D: usize> FnHook<D>
@@ -581,7 +582,17 @@ where
             after_remesh: None,
             before_solve: None,
             after_step: None,
+            sources_fluid: false,
         }
+    }
+    /// Declares the fluid this hook adds or removes as entering or leaving
+    /// the domain ([`Hook::sources_fluid`]: an inflow or an outflow written
+    /// as a closure), which the volume correction keeps instead of undoing.
+    /// Off by default: what a hook removes is then a loss the correction
+    /// puts back into the remaining water.
+    pub fn sources_fluid(mut self, yes: bool) -> Self {
+        self.sources_fluid = yes;
+        self
     }
     /// Runs `f` once, before the first step it sees ([`Hook::start`]).
     pub fn start(
@@ -623,6 +634,9 @@ where
 {
     fn name(&self) -> &str {
         &self.name
+    }
+    fn sources_fluid(&self) -> bool {
+        self.sources_fluid
     }
     fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         self.start.as_mut().map_or(Ok(()), |f| f(ctx))
