@@ -1721,30 +1721,17 @@ fn moving_walls_near_the_water_bound_the_step_and_far_ones_less() {
     );
 }
 
-/// The first frame shows what the hooks set at the start: a wall moved by
-/// a table from rest at 0.1 m/s is recorded at 0.1 m/s at t = 0, as its
-/// law says (session 44's review: the hooks started at the first step,
-/// after the observers' first frame, which showed the wall at rest).
-#[test]
-fn the_first_frame_shows_a_moving_wall_s_velocity() {
-    use pfem::hooks::PiecewiseLinear;
-    struct FirstFrame {
-        paddle: usize,
-        seen: Option<Vector<2>>,
-    }
-    impl Observer<2> for FirstFrame {
-        fn start(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
-            self.seen = Some(sim.particles().v()[self.paddle]);
-            Ok(())
-        }
-    }
+/// A paddle moved by a table from rest at 0.1 m/s (to 0.01 m at 0.1 s)
+/// beside 0.2 × 0.1 m of water (h = 0.02 m), run to 4 ms: the scene of the
+/// tests of the hooks' start.
+fn paddle_from_rest(name: &str) -> Scene<2> {
     let h = 0.02;
-    let law = PiecewiseLinear::new(vec![
+    let law = pfem::hooks::PiecewiseLinear::new(vec![
         (0.0, Vector::<2>::zeros()),
         (0.1, Vector::<2>::new(0.01, 0.0)),
     ])
     .unwrap();
-    let scene = Scene::<2>::new("paddle from the start")
+    Scene::<2>::new(name)
         .gravity(Vector::<2>::new(0.0, -G))
         .settings(RunSettings {
             end_time: 0.004,
@@ -1764,7 +1751,26 @@ fn the_first_frame_shows_a_moving_wall_s_velocity() {
             Box::new(Newtonian::water()),
             boxed(0.0, h, 0.2, 0.1),
             h,
-        );
+        )
+}
+
+/// The first frame shows what the hooks set at the start: a wall moved by
+/// a table from rest at 0.1 m/s is recorded at 0.1 m/s at t = 0, as its
+/// law says (session 44's review: the hooks started at the first step,
+/// after the observers' first frame, which showed the wall at rest).
+#[test]
+fn the_first_frame_shows_a_moving_wall_s_velocity() {
+    struct FirstFrame {
+        paddle: usize,
+        seen: Option<Vector<2>>,
+    }
+    impl Observer<2> for FirstFrame {
+        fn start(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+            self.seen = Some(sim.particles().v()[self.paddle]);
+            Ok(())
+        }
+    }
+    let scene = paddle_from_rest("paddle from the start");
     let mut sim = sim2(scene, StepParams::default());
     let paddle = sim.body_particles("paddle").unwrap()[0];
     let mut first = FirstFrame { paddle, seen: None };
@@ -1880,35 +1886,7 @@ fn the_dam_break_probes_do_not_read_zero_where_nothing_is_measured() {
 fn a_start_that_fails_is_retried_and_a_nan_by_hand_is_named() {
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Arc;
-    let h = 0.02;
-    let law = pfem::hooks::PiecewiseLinear::new(vec![
-        (0.0, Vector::<2>::zeros()),
-        (0.1, Vector::<2>::new(0.01, 0.0)),
-    ])
-    .unwrap();
-    let scene = || {
-        Scene::<2>::new("paddle")
-            .gravity(Vector::<2>::new(0.0, -G))
-            .settings(RunSettings {
-                end_time: 0.004,
-                max_dt: 2e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
-            .wall(
-                "paddle",
-                boxed(-0.04, h, -0.02, 0.2),
-                h,
-                WallMotion::Law(Arc::new(law.clone())),
-            )
-            .fluid(
-                "water",
-                Box::new(Newtonian::water()),
-                boxed(0.0, h, 0.2, 0.1),
-                h,
-            )
-    };
+    let scene = || paddle_from_rest("paddle");
     let mut sim = sim2(scene(), StepParams::default());
     let i = sim.body_particles("water").unwrap()[0];
     sim.particles_mut().v_mut()[i].x = f64::NAN;
