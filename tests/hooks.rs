@@ -1565,7 +1565,6 @@ fn settings_that_turned_a_guard_off_are_refused() {
 #[test]
 fn a_wall_moved_by_a_table_ends_a_step_on_each_row() {
     use pfem::hooks::{MotionLaw, PiecewiseLinear};
-    let h = 0.02;
     // 0.1 m/s to 0.0137 s, at rest to 0.02 s, 0.099 m/s to 0.0301 s
     // through a row on that line at 0.025 s (no kink), then at rest.
     let slope = 0.001 / 0.0101;
@@ -1584,27 +1583,13 @@ fn a_wall_moved_by_a_table_ends_a_step_on_each_row() {
     assert_eq!(law.next_kink(0.0301), None);
     assert!((law.velocity_arriving(&x0, 0.0137).x - 0.1).abs() < 1e-12);
     assert_eq!(law.velocity(&x0, 0.0137).x, 0.0);
-    let scene = Scene::<2>::new("table paddle")
-        .gravity(Vector::<2>::new(0.0, -G))
-        .settings(RunSettings {
-            end_time: 0.04,
-            max_dt: 5e-3,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
-        .wall(
-            "paddle",
-            boxed(-0.04, h, -0.02, 0.2),
-            h,
-            WallMotion::Law(std::sync::Arc::new(law.clone())),
-        )
-        .fluid(
-            "water",
-            Box::new(Newtonian::water()),
-            boxed(0.0, h, 0.2, 0.1),
-            h,
-        );
+    let scene = paddle_tank(
+        "table paddle",
+        "paddle",
+        WallMotion::Law(std::sync::Arc::new(law.clone())),
+        (0.04, 5e-3),
+        true,
+    );
     let mut sim = sim2(scene, StepParams::default());
     let paddle = sim.body_particles("paddle").unwrap()[0];
     let mut ends = Vec::new();
@@ -1631,21 +1616,13 @@ fn a_wall_moved_by_a_table_ends_a_step_on_each_row() {
         ramp: 0.0,
     };
     let scene = || {
-        Scene::<2>::new("late piston")
-            .settings(RunSettings {
-                end_time: 0.04,
-                max_dt: 2e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
-            .wall("piston", boxed(-0.04, h, -0.02, 0.2), h, WallMotion::Fixed)
-            .fluid(
-                "water",
-                Box::new(Newtonian::water()),
-                boxed(0.0, h, 0.2, 0.1),
-                h,
-            )
+        paddle_tank(
+            "late piston",
+            "piston",
+            WallMotion::Fixed,
+            (0.04, 2e-3),
+            false,
+        )
     };
     let mut sim = sim2(scene(), StepParams::default());
     for _ in 0..3 {
@@ -1721,37 +1698,56 @@ fn moving_walls_near_the_water_bound_the_step_and_far_ones_less() {
     );
 }
 
-/// A paddle moved by a table from rest at 0.1 m/s (to 0.01 m at 0.1 s)
-/// beside 0.2 × 0.1 m of water (h = 0.02 m), run to 4 ms: the scene of the
-/// tests of the hooks' start.
-fn paddle_from_rest(name: &str) -> Scene<2> {
+/// 0.2 × 0.1 m of water (h = 0.02 m) on a floor, with a wall `wall`
+/// beside it moved by `motion`, run to `(end_time, max_dt)`, under gravity
+/// or not: the scene of the tests of moving walls and the hooks' start.
+fn paddle_tank(
+    name: &str,
+    wall: &str,
+    motion: WallMotion<2>,
+    (end_time, max_dt): (f64, f64),
+    gravity: bool,
+) -> Scene<2> {
     let h = 0.02;
-    let law = pfem::hooks::PiecewiseLinear::new(vec![
-        (0.0, Vector::<2>::zeros()),
-        (0.1, Vector::<2>::new(0.01, 0.0)),
-    ])
-    .unwrap();
-    Scene::<2>::new(name)
-        .gravity(Vector::<2>::new(0.0, -G))
+    let scene = Scene::<2>::new(name);
+    let scene = if gravity {
+        scene.gravity(Vector::<2>::new(0.0, -G))
+    } else {
+        scene
+    };
+    scene
         .settings(RunSettings {
-            end_time: 0.004,
-            max_dt: 2e-3,
+            end_time,
+            max_dt,
             output_interval: None,
             ..Default::default()
         })
         .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
-        .wall(
-            "paddle",
-            boxed(-0.04, h, -0.02, 0.2),
-            h,
-            WallMotion::Law(std::sync::Arc::new(law)),
-        )
+        .wall(wall, boxed(-0.04, h, -0.02, 0.2), h, motion)
         .fluid(
             "water",
             Box::new(Newtonian::water()),
             boxed(0.0, h, 0.2, 0.1),
             h,
         )
+}
+
+/// A paddle moved by a table from rest at 0.1 m/s (to 0.01 m at 0.1 s)
+/// beside 0.2 × 0.1 m of water (h = 0.02 m), run to 4 ms: the scene of the
+/// tests of the hooks' start.
+fn paddle_from_rest(name: &str) -> Scene<2> {
+    let law = pfem::hooks::PiecewiseLinear::new(vec![
+        (0.0, Vector::<2>::zeros()),
+        (0.1, Vector::<2>::new(0.01, 0.0)),
+    ])
+    .unwrap();
+    paddle_tank(
+        name,
+        "paddle",
+        WallMotion::Law(std::sync::Arc::new(law)),
+        (0.004, 2e-3),
+        true,
+    )
 }
 
 /// The first frame shows what the hooks set at the start: a wall moved by
@@ -1799,24 +1795,7 @@ fn a_motion_law_with_a_kink_every_nanosecond_cannot_finish() {
             Some(t + 1e-9)
         }
     }
-    let h = 0.02;
-    let scene = |law: WallMotion<2>| {
-        Scene::<2>::new("zigzag")
-            .settings(RunSettings {
-                end_time: 1.0,
-                max_dt: 1e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall("floor", boxed(-0.1, -h, 0.5, 0.0), h, WallMotion::Fixed)
-            .wall("paddle", boxed(-0.04, h, -0.02, 0.2), h, law)
-            .fluid(
-                "water",
-                Box::new(Newtonian::water()),
-                boxed(0.0, h, 0.2, 0.1),
-                h,
-            )
-    };
+    let scene = |law: WallMotion<2>| paddle_tank("zigzag", "paddle", law, (1.0, 1e-3), false);
     let zigzag = scene(WallMotion::Law(std::sync::Arc::new(Zigzag)));
     assert!(zigzag.motion_kinks(1e8) > 1e8);
     match zigzag.validate() {
