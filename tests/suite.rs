@@ -20,6 +20,7 @@ mod particle_management;
 mod petsc;
 mod picard_stop;
 mod presets;
+mod probes;
 mod stability_3d;
 mod stability_degenerate;
 mod stability_fluid;

@@ -97,6 +97,7 @@ use crate::scene::{Geometry, RunSettings, Scene, WallMotion};
 use crate::simulation::Simulation;
 use crate::SceneError;
 use pfem_io::Loads;
+use std::sync::{Arc, Mutex};
 
 /// A list of coordinates (`[x, y]` or `[x, y, z]`) with its place in the
 /// file, so that a wrong length can name its line.
@@ -1052,6 +1053,7 @@ impl SceneFile {
     pub fn probes_2d(&self) -> Result<Vec<Probe<2>>, SceneError> {
         let band = 1.5 * self.fluid_spacing();
         let mut out = Vec::new();
+        let points = SharedPoints::default();
         for p in &self.probes {
             match p.get_ref() {
                 ProbeSpec::FrontX => out.push(Probe::new("front_x", |s: &Simulation<2>| {
@@ -1065,7 +1067,7 @@ impl SceneFile {
                     .push(Probe::new("bottom_pressure", |s: &Simulation<2>| {
                         crate::cases::bottom_pressure(s)
                     })),
-                _ => out.extend(self.any_dimension_probe::<2>(p)?),
+                _ => out.extend(self.any_dimension_probe::<2>(p, &points)?),
             }
         }
         self.unique(&out)?;
@@ -1084,6 +1086,7 @@ impl SceneFile {
     pub fn probes_3d(&self) -> Result<Vec<Probe<3>>, SceneError> {
         let band = 1.5 * self.fluid_spacing();
         let mut out = Vec::new();
+        let points = SharedPoints::default();
         for p in &self.probes {
             match p.get_ref() {
                 ProbeSpec::FrontX => out.push(Probe::new("front_x", |s: &Simulation<3>| {
@@ -1099,7 +1102,7 @@ impl SceneFile {
                         format!("probe `{}` is for 2D scenes only", p.get_ref().label()),
                     ))
                 }
-                _ => out.extend(self.any_dimension_probe::<3>(p)?),
+                _ => out.extend(self.any_dimension_probe::<3>(p, &points)?),
             }
         }
         self.unique(&out)?;
@@ -1129,6 +1132,7 @@ impl SceneFile {
     fn any_dimension_probe<const D: usize>(
         &self,
         p: &Spanned<ProbeSpec>,
+        points: &SharedPoints<D>,
     ) -> Result<Vec<Probe<D>>, SceneError>
     where
         Const<D>: Dim,
@@ -1198,13 +1202,24 @@ impl SceneFile {
                     return Err(self.error(p.span(), format!("probe `force`: no body `{body}`")));
                 }
                 let suffix = name.clone().unwrap_or_else(|| body.clone());
+                // The force, measured once a row for its D columns.
+                let force: Arc<Mutex<Option<(RowKey, Vector<D>)>>> = Arc::default();
                 (0..D)
                     .map(|k| {
                         let body = body.clone();
+                        let force = force.clone();
                         Probe::new(
                             &format!("f{}_{suffix}", ["x", "y", "z"][k]),
                             move |s: &Simulation<D>| {
-                                s.pressure_force_on(&body).map_or(f64::NAN, |f| f[k])
+                                let key = row_key(s);
+                                let mut f = force.lock().unwrap_or_else(|e| e.into_inner());
+                                if f.as_ref().is_none_or(|f| f.0 != key) {
+                                    let v = s
+                                        .pressure_force_on(&body)
+                                        .unwrap_or_else(|_| Vector::<D>::repeat(f64::NAN));
+                                    *f = Some((key, v));
+                                }
+                                f.as_ref().map_or(f64::NAN, |f| f.1[k])
                             },
                         )
                     })
@@ -1212,15 +1227,29 @@ impl SceneFile {
             }
             ProbeSpec::Point { at, name } => {
                 let at = Point::from(self.vector::<D>(at, "point.at")?);
-                let mut v = vec![Probe::new(
-                    &format!("p_{name}"),
-                    move |s: &Simulation<D>| s.fluid_at(&at).map_or(f64::NAN, |(p, _)| p),
-                )];
+                // Every point probe of the scene is measured in one pass
+                // over the fluid elements, once a row.
+                let index = {
+                    let mut c = points.lock().unwrap_or_else(|e| e.into_inner());
+                    c.points.push(at);
+                    c.points.len() - 1
+                };
+                let column = move |k: usize| {
+                    let points = points.clone();
+                    move |s: &Simulation<D>| {
+                        let key = row_key(s);
+                        let mut c = points.lock().unwrap_or_else(|e| e.into_inner());
+                        if c.key != Some(key) {
+                            c.values = s.fluid_at_points(&c.points);
+                            c.key = Some(key);
+                        }
+                        // Column 0 the pressure, 1..=D the velocity.
+                        c.values[index].map_or(f64::NAN, |(p, u)| if k == 0 { p } else { u[k - 1] })
+                    }
+                };
+                let mut v = vec![Probe::new(&format!("p_{name}"), column(0))];
                 v.extend((0..D).map(|k| {
-                    Probe::new(
-                        &format!("v{}_{name}", ["x", "y", "z"][k]),
-                        move |s: &Simulation<D>| s.fluid_at(&at).map_or(f64::NAN, |(_, u)| u[k]),
-                    )
+                    Probe::new(&format!("v{}_{name}", ["x", "y", "z"][k]), column(k + 1))
                 }));
                 v
             }
@@ -1582,6 +1611,43 @@ fn key_line(source: &str, key: &str) -> Option<usize> {
         })
         .map(|i| i + 1)
 }
+
+/// What identifies one row of probes: the step count, the time and the
+/// particle set's generation (the columns of one row share a measurement).
+type RowKey = (u64, u64, u64);
+
+fn row_key<const D: usize>(s: &Simulation<D>) -> RowKey
+where
+    Const<D>: Dim,
+{
+    (s.steps(), s.time().to_bits(), s.particles().generation())
+}
+
+/// A scene's point probes, measured together
+/// ([`crate::Loads::fluid_at_points`]) once a row.
+struct PointCache<const D: usize>
+where
+    Const<D>: Dim,
+{
+    points: Vec<Point<D>>,
+    key: Option<RowKey>,
+    values: Vec<Option<(f64, Vector<D>)>>,
+}
+
+impl<const D: usize> Default for PointCache<D>
+where
+    Const<D>: Dim,
+{
+    fn default() -> Self {
+        Self {
+            points: Vec::new(),
+            key: None,
+            values: Vec::new(),
+        }
+    }
+}
+
+type SharedPoints<const D: usize> = Arc<Mutex<PointCache<D>>>;
 
 /// The particles of `body` that started within `radius` of `point`, or the
 /// nearest one.

@@ -344,6 +344,25 @@ geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
         .unwrap();
     assert!(!huge.status.success());
     assert!(String::from_utf8_lossy(&huge.stderr).contains("memory budget"));
+    // Nothing is written: a probe interval does not apply; a run refuses
+    // one that is not a positive time.
+    let writes = Command::new(bin)
+        .args(["check", file.to_str().unwrap(), "--probe-interval", "0.1"])
+        .output()
+        .unwrap();
+    assert!(!writes.status.success());
+    assert!(String::from_utf8_lossy(&writes.stderr).contains("--probe-interval"));
+    let zero = Command::new(bin)
+        .args(["run", file.to_str().unwrap(), "--probe-interval", "0"])
+        .output()
+        .unwrap();
+    assert!(!zero.status.success());
+    assert!(
+        String::from_utf8_lossy(&zero.stderr)
+            .contains("--probe-interval must be a positive number"),
+        "{}",
+        String::from_utf8_lossy(&zero.stderr)
+    );
     let version = Command::new(bin).arg("--version").output().unwrap();
     assert!(String::from_utf8_lossy(&version.stdout).starts_with("pfem "));
     std::fs::remove_dir_all(&dir).ok();
@@ -539,7 +558,8 @@ fn a_courant_step_below_the_smallest_step_stops_the_run() {
 
 /// The bundled wave-paddle scene runs end to end through `pfem run`: the
 /// paddle follows its sinusoidal law, and the force and point probes
-/// appear in `probes.csv` with finite values.
+/// appear in `probes.csv` with finite values, a row every
+/// `--probe-interval`.
 #[test]
 fn a_paddle_with_a_motion_law_runs_from_a_scene_file() {
     let dir = std::env::temp_dir().join(format!("pfem-test-paddle-{}", std::process::id()));
@@ -556,6 +576,8 @@ fn a_paddle_with_a_motion_law_runs_from_a_scene_file() {
             "0.2",
             "--quiet",
             "--no-vtu",
+            "--probe-interval",
+            "0.05",
         ])
         .output()
         .unwrap();
@@ -565,6 +587,20 @@ fn a_paddle_with_a_motion_law_runs_from_a_scene_file() {
         String::from_utf8_lossy(&run.stderr)
     );
     let csv = std::fs::read_to_string(dir.join("probes.csv")).unwrap();
+    let times: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    // Rows at 0, 0.05, …, 0.2: the first step after each multiple (a step
+    // of at most 5 ms ends on or after it).
+    assert_eq!(times.len(), 5, "{times:?}");
+    for (k, t) in times.iter().enumerate() {
+        assert!(
+            *t >= 0.05 * k as f64 - 1e-9 && *t < 0.05 * k as f64 + 5e-3 + 1e-9,
+            "{times:?}"
+        );
+    }
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     for col in [

@@ -952,3 +952,70 @@ geometry.polygon = [[0.0, {bottom}], [0.2, {bottom}], [0.2, 0.2], [0.0, 0.2]]
     // Resting on the floor's top row: accepted.
     assert!(build(&scene(0.025)).is_ok());
 }
+
+/// A scene's point probes are measured together, once a row, and its force
+/// probe once for its columns: each column still reads what
+/// `Loads::fluid_at` and `Loads::pressure_force_on` give alone, row after
+/// row (a probe that kept a stale row, or the wrong point's, fails).
+#[test]
+fn point_and_force_probes_read_the_direct_measurements_every_row() {
+    let text = puddle(
+        r#"probes = [
+    { point = { at = [0.05, 0.05], name = "a" } },
+    { force = { body = "floor" } },
+    { point = { at = [0.15, 0.1], name = "b" } },
+    { point = { at = [0.5, 0.1], name = "dry" } },
+]"#,
+        "end_time = 0.05\nmax_dt = 5e-3",
+        WATER,
+    );
+    let LoadedScene::Two(scene, probes) = build(&text).unwrap() else {
+        panic!("2D")
+    };
+    let names: Vec<&str> = probes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "p_a", "vx_a", "vy_a", "fx_floor", "fy_floor", "p_b", "vx_b", "vy_b", "p_dry",
+            "vx_dry", "vy_dry"
+        ]
+    );
+    let mut sim = simulation(scene);
+    let direct = |sim: &Simulation<2>| -> Vec<f64> {
+        let mut v = Vec::new();
+        for (k, at) in [(0.05, 0.05), (0.15, 0.1), (0.5, 0.1)]
+            .into_iter()
+            .enumerate()
+        {
+            let (p, u) = sim
+                .fluid_at(&Point::<2>::new(at.0, at.1))
+                .unwrap_or((f64::NAN, Vector::<2>::repeat(f64::NAN)));
+            v.extend([p, u.x, u.y]);
+            if k == 0 {
+                let f = sim.pressure_force_on("floor").unwrap();
+                v.extend([f.x, f.y]);
+            }
+        }
+        v
+    };
+    let mut rows = 0;
+    while sim.time() < 0.05 - 1e-12 {
+        sim.step().unwrap();
+        let got: Vec<f64> = probes.iter().map(|p| (p.measure)(&sim)).collect();
+        let want = direct(&sim);
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert!(
+                g.to_bits() == w.to_bits() || (g.is_nan() && w.is_nan()),
+                "step {}: column {} reads {g}, measured alone {w}",
+                sim.steps(),
+                names[k]
+            );
+        }
+        assert!(
+            got[0].is_finite() && got[5].is_finite() && got[8].is_nan(),
+            "{got:?}"
+        );
+        rows += 1;
+    }
+    assert!(rows >= 10, "{rows} rows");
+}
