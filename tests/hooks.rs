@@ -1910,3 +1910,42 @@ fn a_start_that_fails_is_retried_and_a_nan_by_hand_is_named() {
         "the hook after it started once"
     );
 }
+
+/// Each `run` has the whole of a `WallClockLimit`: a run continued after
+/// the limit stopped it (`clear_stop`, then `run`) gets its own clock. It
+/// stopped after one step, the clock still the first run's (the review of
+/// session 45). Each step is made to take 20 ms of wall time.
+#[test]
+fn a_run_continued_after_a_wall_clock_stop_has_the_whole_limit() {
+    let mut sim = sim2(
+        small_tank("wall clock").settings(RunSettings {
+            end_time: 100.0,
+            max_dt: 1e-3,
+            output_interval: None,
+            ..Default::default()
+        }),
+        StepParams::default(),
+    );
+    sim.add_hook(Box::new(FnHook::new("slow").after_step(
+        |_: &mut HookContext<'_, 2>| {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            Ok(())
+        },
+    )));
+    sim.add_hook(Box::new(pfem::hooks::WallClockLimit::new(0.3)));
+    let mut per_run = Vec::new();
+    for _ in 0..2 {
+        let before = sim.steps();
+        sim.run(&mut []).unwrap();
+        let why = sim.clear_stop().unwrap_or_default();
+        assert!(why.contains("wall-clock limit of 0.3 s"), "{why}");
+        per_run.push(sim.steps() - before);
+    }
+    println!("steps in each run: {per_run:?}");
+    // 0.3 s at 20 ms a step at least: 15 steps at most; a loaded machine
+    // takes fewer, but not one.
+    assert!(
+        per_run.iter().all(|&n| (3..=16).contains(&n)),
+        "{per_run:?}"
+    );
+}

@@ -381,6 +381,8 @@ where
     /// How many of `hooks` have had their `start` (a hook added during a
     /// run has it before the next step).
     started: usize,
+    /// How many times [`Simulation::run`] was called ([`HookContext::runs`]).
+    runs: u64,
     stop: Option<String>,
     stages: Stages,
     stats: StageStats,
@@ -635,6 +637,7 @@ where
             hooks,
             external_force: Vec::new(),
             started: 0,
+            runs: 0,
             stop: None,
             stages,
             stats: StageStats::default(),
@@ -1005,6 +1008,7 @@ where
                 time: self.clock.time,
                 dt: self.clock.dt,
                 steps: self.clock.steps,
+                runs: self.runs,
                 particles: &mut self.particles,
                 elements: &self.elements,
                 materials: &self.materials,
@@ -1549,6 +1553,7 @@ where
     /// where the last call ended. A run a hook stopped stays stopped
     /// (`run` returns at once) until [`Simulation::clear_stop`].
     pub fn run(&mut self, observers: &mut [&mut dyn Observer<D>]) -> Result<(), RunError> {
+        self.runs += 1;
         // (Before the hooks start: the review of session 45 found a NaN set
         // by hand blamed on the first hook that started.)
         self.no_non_number_by_hand()?;

@@ -161,6 +161,7 @@ where
     pub(crate) time: f64,
     pub(crate) dt: f64,
     pub(crate) steps: u64,
+    pub(crate) runs: u64,
     pub(crate) particles: &'a mut Particles<D>,
     pub(crate) elements: &'a Elements<D>,
     pub(crate) materials: &'a [Box<dyn Material<D>>],
@@ -215,6 +216,14 @@ where
     /// Accepted steps so far.
     pub fn steps(&self) -> u64 {
         self.steps
+    }
+
+    /// How many times `Simulation::run` has been called, this run
+    /// included (0 while steps are taken by `Simulation::step` alone): a
+    /// hook that measures something per run (`WallClockLimit`) sees a new
+    /// run begin when it changes.
+    pub fn runs(&self) -> u64 {
+        self.runs
     }
 
     /// Adds the force `f` (N; N per metre of depth in 2D) on particle `i`
@@ -502,11 +511,15 @@ where
 }
 
 /// Stops the run once it has taken `limit` seconds of wall time (from its
-/// first step), keeping what was written: a wall-clock limit.
+/// first step), keeping what was written: a wall-clock limit. Each
+/// `Simulation::run` has the whole limit: a run continued after the stop
+/// (`Simulation::clear_stop`, then `run`) starts its clock again at its
+/// first step (it stopped after one step, the review of session 45).
 #[derive(Debug, Clone, Copy)]
 pub struct WallClockLimit {
     limit: f64,
-    started: Option<std::time::Instant>,
+    /// The run ([`HookContext::runs`]) the clock started in, and when.
+    started: Option<(u64, std::time::Instant)>,
 }
 
 impl WallClockLimit {
@@ -528,20 +541,27 @@ where
     fn name(&self) -> &str {
         "wall-clock limit"
     }
-    fn start(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+    fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         if self.limit.is_nan() {
             return Err(RunError::Hook {
                 hook: "wall-clock limit".into(),
                 why: "a limit of NaN seconds would never stop the run".into(),
             });
         }
-        self.started = Some(std::time::Instant::now());
+        self.started = Some((ctx.runs(), std::time::Instant::now()));
+        Ok(())
+    }
+    fn after_remesh(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+        // The first step of another run: its own clock.
+        if self.started.is_some_and(|(run, _)| run != ctx.runs()) {
+            self.started = Some((ctx.runs(), std::time::Instant::now()));
+        }
         Ok(())
     }
     fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         if self
             .started
-            .is_some_and(|t| t.elapsed().as_secs_f64() >= self.limit)
+            .is_some_and(|(_, t)| t.elapsed().as_secs_f64() >= self.limit)
         {
             ctx.stop(format!(
                 "wall-clock limit of {} s reached at t = {} s",
