@@ -383,6 +383,8 @@ where
     started: usize,
     /// How many times [`Simulation::run`] was called ([`HookContext::runs`]).
     runs: u64,
+    /// [`Simulation::state_version`].
+    version: u64,
     stop: Option<String>,
     stages: Stages,
     stats: StageStats,
@@ -638,6 +640,7 @@ where
             external_force: Vec::new(),
             started: 0,
             runs: 0,
+            version: next_state_version(),
             stop: None,
             stages,
             stats: StageStats::default(),
@@ -739,6 +742,7 @@ where
     /// a program set by hand are then replaced); call it again after changing
     /// velocities, pressures or constraints by hand before the first step.
     pub fn initialize_acceleration(&mut self) -> Result<(), RunError> {
+        self.version = next_state_version();
         rayon::scope(|_| self.mesh_a_set_changed_by_hand())?;
         let (mut mesh, history) = self.elements.step_mesh();
         mesh.node_material = self.particles.material();
@@ -1258,7 +1262,21 @@ where
     /// thread's serial work (measured: 1.8× slower on 2 cores,
     /// `docs/benchmarks.md`).
     pub fn step(&mut self) -> Result<(), RunError> {
-        rayon::scope(|_| self.step_in_pool())
+        // Before and after: a step that fails may have changed the state.
+        self.version = next_state_version();
+        let r = rayon::scope(|_| self.step_in_pool());
+        self.version = next_state_version();
+        r
+    }
+
+    /// A number that changes whenever this simulation's state may have
+    /// changed (a step, `particles_mut`, `restore`, `run`'s start,
+    /// `initialize_acceleration`) and that no other simulation of the
+    /// process shares: what a measurement taken once and read by several
+    /// probes (a scene file's point probes, a force's columns) keys its
+    /// cache on.
+    pub fn state_version(&self) -> u64 {
+        self.version
     }
 
     /// The fluid particles of a set changed since the last mesh (by hand,
@@ -1565,6 +1583,7 @@ where
         // has the observers start and record the failure.
         let started = rayon::scope(|_| self.start_hooks());
         if let Err(e) = started {
+            self.version = next_state_version();
             // The hook's error is the one returned; an observer that cannot
             // start records nothing.
             for o in observers.iter_mut() {
@@ -1574,6 +1593,8 @@ where
             }
             return Err(e);
         }
+        // What the start changed (a set meshed again, a hook's start).
+        self.version = next_state_version();
         for o in observers.iter_mut() {
             o.start(self)?;
         }
@@ -1670,6 +1691,7 @@ where
     /// [`Simulation::meshed_fluid_particles`] panic between a removal by
     /// hand and the next step (the elements name particles that are gone).
     pub fn particles_mut(&mut self) -> &mut Particles<D> {
+        self.version = next_state_version();
         &mut self.particles
     }
 
@@ -1982,6 +2004,7 @@ where
     /// change kept is the hooks' [`Hook::start`], which a fresh simulation
     /// runs at its first step anyway.
     pub fn restore(&mut self, checkpoint: &Checkpoint) -> Result<(), RunError> {
+        self.version = next_state_version();
         let mut d = Decoder::new(checkpoint.require(SIMULATION)?);
         let mismatch = |what, checkpoint: String, simulation: String| {
             RunError::Checkpoint(CheckpointError::Mismatch {
@@ -2606,6 +2629,12 @@ pub(crate) fn majority_fluid_material(el: &[u32], kind: &[ParticleKind], materia
         }
     }
     best.1
+}
+
+/// The next number of [`Simulation::state_version`], unique in the process.
+fn next_state_version() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 #[cfg(test)]

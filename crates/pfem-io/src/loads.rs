@@ -141,7 +141,9 @@ where
                 .map(|d| khi[d].saturating_sub(klo[d]).saturating_add(1).max(1) as u64)
                 .fold(1u64, |a, b| a.saturating_mul(b));
             if !bucketed {
-                candidates.extend((0..at.len() as u32).filter(|&i| out[i as usize].is_none()));
+                candidates.extend((0..at.len() as u32).filter(|&i| {
+                    out[i as usize].is_none() && at[i as usize].iter().all(|v| v.is_finite())
+                }));
             } else if cells > grid.len() as u64 {
                 for (k, list) in &grid {
                     if (0..D).all(|d| klo[d] <= k[d] && k[d] <= khi[d]) {

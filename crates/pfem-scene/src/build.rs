@@ -551,14 +551,22 @@ where
                 .map(|&i| particles.spacing()[i])
                 .fold(f64::INFINITY, f64::min);
             let mut hit: Option<(usize, usize)> = None;
-            if !fluid.is_empty() {
+            let inside = |x: &Point<D>, lo: &Point<D>, hi: &Point<D>| {
+                (0..D).all(|d| x[d] > lo[d] && x[d] < hi[d])
+            };
+            if wall_boxes.len() <= FEW_BOXES {
+                hit = fluid.iter().zip(&at).find_map(|(&i, x)| {
+                    wall_boxes
+                        .iter()
+                        .position(|(_, lo, hi)| inside(x, lo, hi))
+                        .map(|k| (i, k))
+                });
+            } else if !fluid.is_empty() {
                 let grid = PointGrid::new(&at, h);
                 for (k, (_, lo, hi)) in wall_boxes.iter().enumerate() {
                     grid.for_each_in(lo, hi, &mut |q| {
                         let (i, x) = (fluid[q as usize], at[q as usize]);
-                        if (0..D).all(|d| x[d] > lo[d] && x[d] < hi[d])
-                            && hit.is_none_or(|(first, _)| i < first)
-                        {
+                        if inside(&x, lo, hi) && hit.is_none_or(|(first, _)| i < first) {
                             hit = Some((i, k));
                         }
                     });
@@ -718,6 +726,10 @@ where
     }
 }
 
+/// Up to this many boxes are tested against every particle; more find
+/// their particles on a [`PointGrid`].
+const FEW_BOXES: usize = 8;
+
 /// Points bucketed on a grid of cell width `h`, for the points in a box.
 struct PointGrid {
     h: f64,
@@ -840,9 +852,13 @@ where
     use crate::scene::Clamp;
     let mut held = vec![false; points.len()];
     let mut holds_any = vec![false; clamps.len()];
-    let grid = clamps
+    // A few boxes are cheaper tested against every particle than a grid
+    // is to build.
+    let grid = (clamps
         .iter()
-        .any(|c| matches!(c, Clamp::Box(..)))
+        .filter(|c| matches!(c, Clamp::Box(..)))
+        .count()
+        > FEW_BOXES)
         .then(|| PointGrid::new(points, h));
     let mut visits: u64 = 0;
     for (c, clamp) in clamps.iter().enumerate() {
@@ -977,7 +993,7 @@ mod tests {
     }
 
     /// 10⁵ small clamps on 10⁴ particles are found in linear time; 10⁵
-    /// boxes each over the whole body (10¹⁰ cell visits) are refused, not
+    /// boxes each over the whole body (10⁹ cell visits) are refused, not
     /// worked through.
     #[test]
     fn many_clamps_are_found_fast_and_overlapping_multitudes_refused() {

@@ -1612,15 +1612,16 @@ fn key_line(source: &str, key: &str) -> Option<usize> {
         .map(|i| i + 1)
 }
 
-/// What identifies one row of probes: the step count, the time and the
-/// particle set's generation (the columns of one row share a measurement).
-type RowKey = (u64, u64, u64);
+/// What identifies the state a row of probes measures
+/// ([`Simulation::state_version`]: it changes with every step and every
+/// change by hand, and no two simulations share it).
+type RowKey = u64;
 
 fn row_key<const D: usize>(s: &Simulation<D>) -> RowKey
 where
     Const<D>: Dim,
 {
-    (s.steps(), s.time().to_bits(), s.particles().generation())
+    s.state_version()
 }
 
 /// A scene's point probes, measured together

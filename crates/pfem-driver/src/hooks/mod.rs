@@ -219,7 +219,7 @@ where
     }
 
     /// How many times `Simulation::run` has been called, this run
-    /// included (0 while steps are taken by `Simulation::step` alone): a
+    /// included (0 for steps taken by `Simulation::step` before any run): a
     /// hook that measures something per run (`WallClockLimit`) sees a new
     /// run begin when it changes.
     pub fn runs(&self) -> u64 {
@@ -511,7 +511,7 @@ where
 }
 
 /// Stops the run once it has taken `limit` seconds of wall time (from its
-/// first step), keeping what was written: a wall-clock limit. Each
+/// start), keeping what was written: a wall-clock limit. Each
 /// `Simulation::run` has the whole limit: a run continued after the stop
 /// (`Simulation::clear_stop`, then `run`) starts its clock again at its
 /// first step (it stopped after one step, the review of session 45).
