@@ -1222,3 +1222,128 @@ fn a_restored_checkpoint_s_fluid_particles_are_checked() {
     // Refused, the simulation is as it was and runs on.
     b.step().unwrap();
 }
+
+/// A checkpoint holds its probe rows' count and hash, not the rows (96 MB
+/// a checkpoint for 10 columns over 10⁶ rows before session 46): its
+/// output section is the same size after 0.02 s and after 0.04 s. A
+/// restart reads the rows back from the folder's `probes.csv`, leaving
+/// out those written after the checkpoint; a `probes.csv` that is missing,
+/// shorter or edited is refused, naming the folder.
+#[test]
+fn a_checkpoint_holds_its_probe_rows_count_and_hash_not_the_rows() {
+    let dir = std::env::temp_dir().join(format!("pfem-ck-rows-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let probes = || {
+        vec![
+            Probe::<2>::new("volume", |s: &Simulation<2>| s.fluid_volume()),
+            Probe::<2>::new("nan", |_: &Simulation<2>| f64::NAN),
+            Probe::<2>::new("front", pfem::cases::front_x),
+        ]
+    };
+    let section = |end: f64| {
+        let mut sim = dam_break();
+        sim.set_end_time(end).unwrap();
+        let mut out = StandardOutput::new(&dir, false, probes(), true)
+            .overwrite(true)
+            .checkpoint_every(Some(end));
+        sim.run(&mut [&mut out]).unwrap();
+        let ck = pfem::observe::read_checkpoint(dir.join("checkpoint.bin")).unwrap();
+        (
+            ck.require(pfem::observe::OUTPUT_SECTION).unwrap().len(),
+            out.history.len(),
+            ck,
+        )
+    };
+    let (short, rows_short, _) = section(0.02);
+    let (long, rows_long, ck) = section(0.04);
+    println!("output section: {short} B for {rows_short} rows, {long} B for {rows_long}");
+    assert!(rows_long > rows_short + 3);
+    assert_eq!(short, long);
+    let csv = dir.join("probes.csv");
+    let whole = std::fs::read_to_string(&csv).unwrap();
+    // Rows written after the checkpoint (a kill before the next one) are
+    // left out, and the file is written again as the checkpoint's.
+    std::fs::write(&csv, format!("{whole}0.05,1.0,NaN,2.0\n")).unwrap();
+    let resumed = |text: Option<&str>| {
+        match text {
+            Some(t) => std::fs::write(&csv, t).unwrap(),
+            None => std::fs::remove_file(&csv).unwrap(),
+        }
+        let mut sim = dam_break();
+        sim.restore(&ck).unwrap();
+        let mut out = StandardOutput::new(&dir, false, probes(), true);
+        out.resume(&ck).map(|()| (sim, out))
+    };
+    let (mut sim, mut out) = resumed(Some(&format!("{whole}0.05,1.0,NaN,2.0\n"))).unwrap();
+    // (At its end time: the run only starts the outputs again.)
+    sim.set_end_time(0.04).unwrap();
+    sim.run(&mut [&mut out]).unwrap();
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), whole);
+    assert_eq!(out.history.len(), rows_long);
+    // Another value in one row, a row missing, no file: refused.
+    let mut lines: Vec<&str> = whole.lines().collect();
+    let edited_row = lines[3].replacen(',', ",9", 1);
+    lines[3] = &edited_row;
+    let edited = lines.join("\n") + "\n";
+    let short_file: String = whole
+        .lines()
+        .take(rows_long)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    for (text, expect) in [
+        (
+            Some(edited.as_str()),
+            "not the ones the checkpoint's run recorded",
+        ),
+        (Some(short_file.as_str()), "holds"),
+        (None, "checkpoint's own folder"),
+    ] {
+        let err = resumed(text).err().expect("refused").to_string();
+        assert!(
+            err.contains(expect) && err.contains(&*dir.to_string_lossy()),
+            "{err}"
+        );
+    }
+    // A checkpoint of the layout before (the rows inside, no count and
+    // hash after the names) restores from its own rows, with no
+    // `probes.csv` in the folder, and writes the same file.
+    let mut d = Decoder::new(ck.require(pfem::observe::OUTPUT_SECTION).unwrap());
+    let mut e = Encoder::new();
+    for _ in 0..3 {
+        e.f64(d.f64().unwrap()); // the next frame, probe and checkpoint
+    }
+    assert_eq!(d.u64().unwrap(), 0, "no frames");
+    e.u64(0);
+    assert_eq!(d.u64().unwrap(), 3, "three columns");
+    e.u64(3);
+    assert_eq!(d.u64().unwrap(), 0, "no rows inside");
+    let history: Vec<(f64, Vec<f64>)> = whole
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            (v[0], v[1..].to_vec())
+        })
+        .collect();
+    e.u64(history.len() as u64);
+    for (t, v) in &history {
+        e.f64(*t);
+        e.f64s(v);
+    }
+    e.bool(d.bool().unwrap());
+    e.u64(d.u64().unwrap());
+    for _ in 0..3 {
+        e.str(d.str().unwrap());
+    }
+    let mut old = ck.clone();
+    old.set(pfem::observe::OUTPUT_SECTION, e.finish());
+    let _ = std::fs::remove_file(&csv);
+    let mut sim = dam_break();
+    sim.restore(&old).unwrap();
+    sim.set_end_time(0.04).unwrap();
+    let mut out = StandardOutput::new(&dir, false, probes(), true);
+    out.resume(&old).unwrap();
+    sim.run(&mut [&mut out]).unwrap();
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), whole);
+    let _ = std::fs::remove_dir_all(&dir);
+}

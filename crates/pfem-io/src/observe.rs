@@ -80,6 +80,10 @@ where
     started: Option<Instant>,
     /// Rows of probes recorded so far: `(t, values)`.
     pub history: Vec<(f64, Vec<f64>)>,
+    /// A hash of `history` ([`rows_hash`]), kept as rows are recorded: a
+    /// checkpoint holds it and the rows' count, not the rows, which a
+    /// restart reads back from `probes.csv`.
+    rows_hash: u64,
     /// Extra figures written into `summary.json`.
     pub extra: BTreeMap<String, serde_json::Value>,
     checkpoint_every: Option<f64>,
@@ -147,6 +151,7 @@ where
             overwrite: false,
             started: None,
             history: Vec::new(),
+            rows_hash: ROWS_HASH_START,
             extra: BTreeMap::new(),
             checkpoint_every: None,
             next_checkpoint: f64::INFINITY,
@@ -175,7 +180,10 @@ where
     /// and written again), `probes.csv` is rewritten with the rows up to the
     /// checkpoint, and the frame, probe and checkpoint schedules go on. The
     /// directory should be the one the run wrote into; a non-empty one is
-    /// accepted.
+    /// accepted. The rows are read here from the directory's `probes.csv`
+    /// (a checkpoint holds their count and hash, not the rows, since
+    /// session 46): a file that is missing, shorter than the count or
+    /// whose rows hash otherwise is refused ([`crate::output::OutputError::Resume`]).
     pub fn resume(&mut self, checkpoint: &Checkpoint) -> Result<(), RunError> {
         let mut d = Decoder::new(checkpoint.require(OUTPUT_SECTION)?);
         let next_frame = d.f64()?;
@@ -202,7 +210,7 @@ where
             .into());
         }
         let rows = d.len(16)?;
-        let mut history = Vec::with_capacity(rows);
+        let mut history: Vec<(f64, Vec<f64>)> = Vec::with_capacity(rows);
         for _ in 0..rows {
             let t = d.f64()?;
             let v = d.f64s()?;
@@ -228,7 +236,20 @@ where
                 .into());
             }
         }
+        // Session 46 on: the rows are `probes.csv`'s first `count`, whose
+        // hash the checkpoint holds.
+        let in_csv = if d.is_at_end() {
+            None
+        } else {
+            Some((d.u64()?, d.u64()?))
+        };
         d.end()?;
+        if let Some((count, hash)) = in_csv {
+            if !history.is_empty() {
+                return Err(CheckpointError::Corrupt("probe rows given twice".into()).into());
+            }
+            history = self.rows_from_csv(count, hash)?;
+        }
         // A schedule or frame time that is not a number (an edited
         // checkpoint) would stop the frames or list `NaN` in the `.pvd`.
         let finite_or_later = |t: f64| !t.is_nan() && t > f64::NEG_INFINITY;
@@ -255,6 +276,67 @@ where
         self.dir.join(CHECKPOINT_FILE)
     }
 
+    /// The first `count` rows of the folder's `probes.csv`, which must head
+    /// this output's probes and hash to `hash` ([`rows_hash`]): the rows a
+    /// checkpoint's run had recorded. Rows after them (written after the
+    /// checkpoint, before a kill) are left out.
+    fn rows_from_csv(&self, count: u64, hash: u64) -> Result<Vec<(f64, Vec<f64>)>, RunError> {
+        use std::io::BufRead as _;
+        if count == 0 {
+            return Ok(Vec::new());
+        }
+        let path = self.dir.join("probes.csv");
+        let fail = |why: String| -> RunError {
+            crate::output::OutputError::Resume {
+                dir: self.dir.clone(),
+                why,
+            }
+            .into()
+        };
+        let file = std::fs::File::open(&path).map_err(|e| {
+            fail(format!(
+                "the checkpoint's {count} probe rows are read from probes.csv, which cannot be opened ({e}): continue in the checkpoint's own folder (or a copy of it)"
+            ))
+        })?;
+        let mut lines = std::io::BufReader::new(file).lines();
+        let mut cols = vec!["t".to_string()];
+        cols.extend(self.probes.iter().map(|p| p.name.clone()));
+        let header = lines.next().transpose().ok().flatten().unwrap_or_default();
+        if header != cols.join(",") {
+            return Err(fail(format!(
+                "probes.csv heads `{header}`, the probes `{}`",
+                cols.join(",")
+            )));
+        }
+        let mut rows = Vec::with_capacity(count.min(1 << 20) as usize);
+        for k in 0..count {
+            let line = match lines.next() {
+                Some(Ok(line)) => line,
+                _ => {
+                    return Err(fail(format!(
+                        "probes.csv holds {k} rows, the checkpoint's run had recorded {count}"
+                    )))
+                }
+            };
+            let values: Result<Vec<f64>, _> = line.split(',').map(str::parse::<f64>).collect();
+            match values {
+                Ok(v) if v.len() == cols.len() => rows.push((v[0], v[1..].to_vec())),
+                _ => {
+                    return Err(fail(format!(
+                        "probes.csv's row {} cannot be read: `{line}`",
+                        k + 1
+                    )))
+                }
+            }
+        }
+        if rows_hash(ROWS_HASH_START, &rows) != hash {
+            return Err(fail(
+                "probes.csv's rows are not the ones the checkpoint's run recorded (another run's file, or edited)".into(),
+            ));
+        }
+        Ok(rows)
+    }
+
     /// The output layer's section of a checkpoint: schedules, frames
     /// listed, probe rows.
     fn encode_state(&self) -> Vec<u8> {
@@ -269,11 +351,11 @@ where
             e.str(f);
         }
         e.u64(self.probes.len() as u64);
-        e.u64(self.history.len() as u64);
-        for (t, v) in &self.history {
-            e.f64(*t);
-            e.f64s(v);
-        }
+        // The rows are not written here (session 46): they are
+        // `probes.csv`'s, which a restart reads back, checked against their
+        // count and hash below. Written here, every checkpoint held every
+        // row (96 MB for 10 columns over 10⁶ rows).
+        e.u64(0);
         e.bool(self.series.is_some());
         // The probes' names (session 41 on; a checkpoint without them is
         // compared by their number alone).
@@ -281,6 +363,8 @@ where
         for p in &self.probes {
             e.str(&p.name);
         }
+        e.u64(self.history.len() as u64);
+        e.u64(self.rows_hash);
         e.finish()
     }
 
@@ -513,7 +597,9 @@ where
             row.extend_from_slice(&values);
             csv.row(&row)?;
         }
-        self.history.push((sim.time(), values));
+        let row = (sim.time(), values);
+        self.rows_hash = rows_hash(self.rows_hash, std::slice::from_ref(&row));
+        self.history.push(row);
         Ok(())
     }
 
@@ -695,6 +781,7 @@ where
             }
             self.csv = Some(csv);
         }
+        self.rows_hash = rows_hash(ROWS_HASH_START, &r.history);
         self.history = r.history;
         self.next_frame = r.next_frame;
         self.next_probe = r.next_probe;
@@ -835,6 +922,30 @@ where
             let _ = write_summary(self.dir.join("summary.json"), &self.summary(sim));
         }
     }
+}
+
+/// [`rows_hash`] of no rows.
+const ROWS_HASH_START: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// FNV-1a over the bits of probe rows (time, then values), continuing from
+/// `hash`: what a checkpoint holds of its rows, to know `probes.csv`'s
+/// when a restart reads them back. A NaN counts as one NaN, whatever its
+/// bits (the CSV writes every NaN as `NaN`).
+fn rows_hash(mut hash: u64, rows: &[(f64, Vec<f64>)]) -> u64 {
+    for (t, v) in rows {
+        for x in std::iter::once(t).chain(v) {
+            let bits = if x.is_nan() {
+                f64::NAN.to_bits()
+            } else {
+                x.to_bits()
+            };
+            for byte in bits.to_le_bytes() {
+                hash ^= u64::from(byte);
+                hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        }
+    }
+    hash
 }
 
 /// The cell arrays every frame writes besides the solids' internal

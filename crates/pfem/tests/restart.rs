@@ -282,6 +282,33 @@ fn a_restart_keeps_to_its_own_folder_and_a_wall_clock_stop_says_so() {
         );
         assert_eq!(outputs(&a), files_a, "{extra:?}: A's files changed");
     }
+    // A run without frames (E), continued into a new folder (D): its probe
+    // rows are E's folder's, copied (a checkpoint holds their count and
+    // hash, not the rows: session 46), and the same as E's own restart's.
+    let (d, e) = (tmp("own-d"), tmp("own-e"));
+    assert!(run(&dam, &e, &["--no-vtu"]).status.success());
+    let ck_e = e.join("checkpoint.bin").display().to_string();
+    let go_on = |out: Option<&Path>| {
+        let mut args = vec!["run".to_string(), dam.display().to_string()];
+        args.extend(["--end-time", "0.06", "--quiet", "--no-vtu", "--restart"].map(String::from));
+        args.push(ck_e.clone());
+        if let Some(o) = out {
+            args.extend(["--out".to_string(), o.display().to_string()]);
+        }
+        Command::new(PFEM).args(&args).output().unwrap()
+    };
+    for out in [Some(d.as_path()), None] {
+        let o = go_on(out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let rows = |dir: &Path| std::fs::read_to_string(dir.join("probes.csv")).unwrap();
+    assert_eq!(rows(&d), rows(&e), "the restart into a new folder");
+    assert!(rows(&e).lines().count() > 20);
+    // B (with frames) into a new folder is refused, and leaves it empty.
+    let f = tmp("own-f");
+    let o = restart(Some(&f));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(std::fs::read_dir(&f).map_or(true, |mut d| d.next().is_none()));
     // Without --out, B's checkpoint continues in B's folder.
     let o = restart(None);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -300,7 +327,7 @@ fn a_restart_keeps_to_its_own_folder_and_a_wall_clock_stop_says_so() {
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(c.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["extra"]["status"], "stopped");
-    for d in [a, b, c] {
-        let _ = std::fs::remove_dir_all(d);
+    for dir in [a, b, c, d, e, f] {
+        let _ = std::fs::remove_dir_all(dir);
     }
 }

@@ -57,10 +57,9 @@ Options of `pfem run`:
                         write DIR/checkpoint.bin every T seconds of simulated time
                         and at the end (atomically; the last one is kept)
   --probe-interval T    a row of probes.csv every T seconds of simulated time
-                        (default: every step). The rows are kept in memory and
-                        in every checkpoint: a long run with many probes
-                        wants one (10 columns over 10^6 steps are 96 MB a
-                        checkpoint)
+                        (default: every step). The rows are kept in memory: a
+                        long run with many probes wants one (10 columns over
+                        10^6 steps are 96 MB)
   --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE and
                         options, other ones refused; DIR its output folder, by
                         default the checkpoint's; another folder that is not
@@ -404,9 +403,46 @@ where
         }
         None => None,
     };
-    let mut sim = args
-        .simulation(scene, tessellator)
-        .map_err(|e| e.to_string())?;
+    // The probe rows a checkpoint counts are its folder's `probes.csv`
+    // (a checkpoint holds their count and hash, not the rows): a restart
+    // into another folder (empty, above) starts from a copy of it, removed
+    // again (with the folder, if made for it) when the restart is refused.
+    let mut copied: Option<(PathBuf, bool)> = None;
+    if let Some(f) = args.options.get("restart") {
+        let own = std::fs::canonicalize(f)
+            .ok()
+            .and_then(|real| real.parent().map(Path::to_path_buf));
+        let rows = own.map(|d| d.join("probes.csv")).filter(|p| p.is_file());
+        let there = out.join("probes.csv");
+        if let Some(rows) = rows {
+            let same = std::fs::canonicalize(&rows).ok() == std::fs::canonicalize(&there).ok();
+            if !same && !there.exists() {
+                let made = !out.exists();
+                std::fs::create_dir_all(&out)
+                    .and_then(|()| std::fs::copy(&rows, &there))
+                    .map_err(|e| {
+                        format!(
+                            "--restart {f}: copying {} into {}: {e}",
+                            rows.display(),
+                            out.display()
+                        )
+                    })?;
+                copied = Some((there, made));
+            }
+        }
+    }
+    let undo = |copied: &Option<(PathBuf, bool)>| {
+        if let Some((file, made)) = copied {
+            let _ = std::fs::remove_file(file);
+            if *made {
+                let _ = std::fs::remove_dir(&out);
+            }
+        }
+    };
+    let mut sim = args.simulation(scene, tessellator).map_err(|e| {
+        undo(&copied);
+        e.to_string()
+    })?;
     let interrupted = Arc::new(AtomicBool::new(false));
     install_interrupt(&interrupted)?;
     sim.add_hook(Box::new(pfem::hooks::Interrupt::new(interrupted.clone())));
@@ -415,8 +451,11 @@ where
         .checkpoint_every(checkpoint_every);
     output.probe_interval = probe_interval;
     if let Some(ck) = &restart {
-        sim.restore(ck).map_err(|e| format!("--restart: {e}"))?;
-        output.resume(ck).map_err(|e| format!("--restart: {e}"))?;
+        let resumed = sim.restore(ck).and_then(|()| output.resume(ck));
+        if let Err(e) = resumed {
+            undo(&copied);
+            return Err(format!("--restart: {e}"));
+        }
     }
     eprintln!(
         "{name}: {D}D, {} particles, h_min = {} m, end time {} s{} -> {}",
@@ -430,7 +469,15 @@ where
         },
         out.display()
     );
-    sim.run(&mut [&mut output]).map_err(|e| e.to_string())?;
+    let steps = sim.steps();
+    sim.run(&mut [&mut output]).map_err(|e| {
+        // Refused before its first step (the outputs could not go on
+        // there): the copy goes. After a step the rows are the run's.
+        if sim.steps() == steps {
+            undo(&copied);
+        }
+        e.to_string()
+    })?;
     output.report(&sim).map_err(|e| e.to_string())?;
     if let Some(reason) = sim.stopped() {
         // The run did not reach its end time: say how to go on, and end
