@@ -1182,7 +1182,7 @@ fn a_run_continued_in_process_keeps_its_outputs_and_goes_past_a_stop() {
         t.windows(2).all(|w| w[1] > w[0]),
         "probe times not increasing"
     );
-    assert_eq!(t.len(), out.history.len());
+    assert_eq!(t.len(), out.history().len());
     assert_eq!(t.len() as u64, sim.steps() + 1);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -1250,7 +1250,7 @@ fn a_checkpoint_holds_its_probe_rows_count_and_hash_not_the_rows() {
         let ck = pfem::observe::read_checkpoint(dir.join("checkpoint.bin")).unwrap();
         (
             ck.require(pfem::observe::OUTPUT_SECTION).unwrap().len(),
-            out.history.len(),
+            out.history().len(),
             ck,
         )
     };
@@ -1279,7 +1279,7 @@ fn a_checkpoint_holds_its_probe_rows_count_and_hash_not_the_rows() {
     sim.set_end_time(0.04).unwrap();
     sim.run(&mut [&mut out]).unwrap();
     assert_eq!(std::fs::read_to_string(&csv).unwrap(), whole);
-    assert_eq!(out.history.len(), rows_long);
+    assert_eq!(out.history().len(), rows_long);
     // Another value in one row, a row missing, no file: refused.
     let mut lines: Vec<&str> = whole.lines().collect();
     let edited_row = lines[3].replacen(',', ",9", 1);
@@ -1296,7 +1296,7 @@ fn a_checkpoint_holds_its_probe_rows_count_and_hash_not_the_rows() {
             "not the ones the checkpoint's run recorded",
         ),
         (Some(short_file.as_str()), "holds"),
-        (None, "checkpoint's own folder"),
+        (None, "restart in the checkpoint's folder"),
     ] {
         let err = resumed(text).err().expect("refused").to_string();
         assert!(

@@ -302,7 +302,7 @@ fn work_done_follows_the_scene() {
     assert_eq!(w.remeshes, sim.steps());
     assert!(w.patterns_built >= sim.steps());
     // No frames and no probes asked for: none formatted, none written.
-    assert!(out.history.is_empty());
+    assert!(out.history().is_empty());
     let vtu = std::fs::read_dir(&dir)
         .map(|d| {
             d.flatten()

@@ -68,7 +68,15 @@ pub fn front_x<const D: usize>(s: &Simulation<D>) -> f64
 where
     Const<D>: Dim,
 {
-    let body = main_body(s);
+    front_x_of(s, &main_body(s))
+}
+
+/// [`front_x`] of the particles `body` marks (a [`main_body`] measured
+/// once for several probes).
+pub fn front_x_of<const D: usize>(s: &Simulation<D>, body: &[bool]) -> f64
+where
+    Const<D>: Dim,
+{
     // From −∞, not 0: water wholly at negative x read 0 (the review of
     // session 45); no main body at all reads NaN, not a front.
     let front = (0..s.particles().len())
@@ -88,7 +96,15 @@ pub fn height_at_wall<const D: usize>(s: &Simulation<D>, band: f64) -> f64
 where
     Const<D>: Dim,
 {
-    let body = main_body(s);
+    height_at_wall_of(s, band, &main_body(s))
+}
+
+/// [`height_at_wall`] of the particles `body` marks (a [`main_body`]
+/// measured once for several probes).
+pub fn height_at_wall_of<const D: usize>(s: &Simulation<D>, band: f64, body: &[bool]) -> f64
+where
+    Const<D>: Dim,
+{
     (0..s.particles().len())
         .filter(|&i| body[i] && s.particles().x()[i][0] <= band)
         .map(|i| s.particles().x()[i][1])

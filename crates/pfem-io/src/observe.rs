@@ -78,8 +78,8 @@ where
     quiet: bool,
     overwrite: bool,
     started: Option<Instant>,
-    /// Rows of probes recorded so far: `(t, values)`.
-    pub history: Vec<(f64, Vec<f64>)>,
+    /// Rows of probes recorded so far: `(t, values)` ([`StandardOutput::history`]).
+    history: Vec<(f64, Vec<f64>)>,
     /// A hash of `history` ([`rows_hash`]), kept as rows are recorded: a
     /// checkpoint holds it and the rows' count, not the rows, which a
     /// restart reads back from `probes.csv`.
@@ -106,6 +106,10 @@ struct Resumed {
     next_probe: f64,
     frames: Vec<(f64, String)>,
     history: Vec<(f64, Vec<f64>)>,
+    /// The bytes of the folder's `probes.csv` that hold `history` (a
+    /// checkpoint since session 46); `None`: the rows were the checkpoint's
+    /// own, and the file is written from them.
+    csv_len: Option<u64>,
 }
 
 /// The output layer's section of a checkpoint.
@@ -244,11 +248,16 @@ where
             Some((d.u64()?, d.u64()?))
         };
         d.end()?;
+        let mut csv_len = None;
         if let Some((count, hash)) = in_csv {
             if !history.is_empty() {
                 return Err(CheckpointError::Corrupt("probe rows given twice".into()).into());
             }
-            history = self.rows_from_csv(count, hash)?;
+            if count > 0 {
+                let (rows, len) = self.rows_from_csv(count, hash)?;
+                history = rows;
+                csv_len = Some(len);
+            }
         }
         // A schedule or frame time that is not a number (an edited
         // checkpoint) would stop the frames or list `NaN` in the `.pvd`.
@@ -267,6 +276,7 @@ where
             next_probe,
             frames,
             history,
+            csv_len,
         });
         Ok(())
     }
@@ -278,13 +288,11 @@ where
 
     /// The first `count` rows of the folder's `probes.csv`, which must head
     /// this output's probes and hash to `hash` ([`rows_hash`]): the rows a
-    /// checkpoint's run had recorded. Rows after them (written after the
-    /// checkpoint, before a kill) are left out.
-    fn rows_from_csv(&self, count: u64, hash: u64) -> Result<Vec<(f64, Vec<f64>)>, RunError> {
+    /// checkpoint's run had recorded, and the bytes of the file that hold
+    /// them with the header. Rows after them (written after the checkpoint,
+    /// before a kill) are left out.
+    fn rows_from_csv(&self, count: u64, hash: u64) -> Result<(Vec<ProbeRow>, u64), RunError> {
         use std::io::BufRead as _;
-        if count == 0 {
-            return Ok(Vec::new());
-        }
         let path = self.dir.join("probes.csv");
         let fail = |why: String| -> RunError {
             crate::output::OutputError::Resume {
@@ -295,29 +303,40 @@ where
         };
         let file = std::fs::File::open(&path).map_err(|e| {
             fail(format!(
-                "the checkpoint's {count} probe rows are read from probes.csv, which cannot be opened ({e}): continue in the checkpoint's own folder (or a copy of it)"
+                "a checkpoint holds its {count} probe rows' count, not the rows, which are its folder's probes.csv; {} cannot be opened ({e}): restart in the checkpoint's folder, or copy its probes.csv here",
+                path.display()
             ))
         })?;
-        let mut lines = std::io::BufReader::new(file).lines();
+        let mut reader = std::io::BufReader::new(file);
+        let mut line = String::new();
+        let mut len: u64 = 0;
+        let mut next = |line: &mut String| -> Result<bool, RunError> {
+            line.clear();
+            let n = reader
+                .read_line(line)
+                .map_err(|e| fail(format!("probes.csv cannot be read: {e}")))?;
+            len += n as u64;
+            while line.ends_with(['\n', '\r']) {
+                line.pop();
+            }
+            Ok(n > 0)
+        };
         let mut cols = vec!["t".to_string()];
         cols.extend(self.probes.iter().map(|p| p.name.clone()));
-        let header = lines.next().transpose().ok().flatten().unwrap_or_default();
-        if header != cols.join(",") {
+        next(&mut line)?;
+        if line != cols.join(",") {
             return Err(fail(format!(
-                "probes.csv heads `{header}`, the probes `{}`",
+                "probes.csv heads `{line}`, the probes `{}`",
                 cols.join(",")
             )));
         }
         let mut rows = Vec::with_capacity(count.min(1 << 20) as usize);
         for k in 0..count {
-            let line = match lines.next() {
-                Some(Ok(line)) => line,
-                _ => {
-                    return Err(fail(format!(
-                        "probes.csv holds {k} rows, the checkpoint's run had recorded {count}"
-                    )))
-                }
-            };
+            if !next(&mut line)? {
+                return Err(fail(format!(
+                    "probes.csv holds {k} rows, the checkpoint's run had recorded {count}"
+                )));
+            }
             let values: Result<Vec<f64>, _> = line.split(',').map(str::parse::<f64>).collect();
             match values {
                 Ok(v) if v.len() == cols.len() => rows.push((v[0], v[1..].to_vec())),
@@ -334,11 +353,12 @@ where
                 "probes.csv's rows are not the ones the checkpoint's run recorded (another run's file, or edited)".into(),
             ));
         }
-        Ok(rows)
+        Ok((rows, len))
     }
 
     /// The output layer's section of a checkpoint: schedules, frames
-    /// listed, probe rows.
+    /// listed, the probe rows' count and hash (not the rows: they are
+    /// `probes.csv`'s).
     fn encode_state(&self) -> Vec<u8> {
         let mut e = Encoder::new();
         e.f64(self.next_frame);
@@ -371,6 +391,10 @@ where
     /// Writes the simulation's and the outputs' state to
     /// [`StandardOutput::checkpoint_path`], atomically.
     pub fn write_checkpoint(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        // The rows the checkpoint counts are on the disk before it is.
+        if let Some(csv) = self.csv.as_mut() {
+            csv.sync()?;
+        }
         let mut ck = sim.checkpoint();
         ck.set(OUTPUT_SECTION, self.encode_state());
         crate::output::write_atomic(self.checkpoint_path(), &ck.encode())?;
@@ -438,6 +462,12 @@ where
             }
         }
         Ok(())
+    }
+
+    /// The rows of probes recorded so far: `(t, values)`, one value per
+    /// probe in their order (what `probes.csv` holds).
+    pub fn history(&self) -> &[(f64, Vec<f64>)] {
+        &self.history
     }
 
     /// Values of one probe over the run, `(t, value)`.
@@ -773,13 +803,23 @@ where
         if !self.probes.is_empty() {
             let mut cols = vec!["t"];
             cols.extend(self.probes.iter().map(|p| p.name.as_str()));
-            let mut csv = CsvProbe::create(self.dir.join("probes.csv"), &cols)?;
-            for (t, v) in &r.history {
-                let mut row = vec![*t];
-                row.extend_from_slice(v);
-                csv.row(&row)?;
-            }
-            self.csv = Some(csv);
+            let path = self.dir.join("probes.csv");
+            self.csv = Some(match r.csv_len {
+                // The rows are the file's: kept, not written again (a kill
+                // while they were written again lost their only copy).
+                Some(len) => CsvProbe::resume(path, &cols, len)?,
+                // A checkpoint that held its rows (before session 46), or
+                // none: the file is written from them.
+                None => {
+                    let mut csv = CsvProbe::create(path, &cols)?;
+                    for (t, v) in &r.history {
+                        let mut row = vec![*t];
+                        row.extend_from_slice(v);
+                        csv.row(&row)?;
+                    }
+                    csv
+                }
+            });
         }
         self.rows_hash = rows_hash(ROWS_HASH_START, &r.history);
         self.history = r.history;
@@ -923,6 +963,9 @@ where
         }
     }
 }
+
+/// One row of probes: the time and a value per probe.
+type ProbeRow = (f64, Vec<f64>);
 
 /// [`rows_hash`] of no rows.
 const ROWS_HASH_START: u64 = 0xcbf2_9ce4_8422_2325;

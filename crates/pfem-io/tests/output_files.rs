@@ -290,3 +290,30 @@ fn plot_renders_png_with_text() {
     );
     assert!(matches!(err, Err(OutputError::Plot { .. })));
 }
+
+/// `CsvProbe::resume` keeps the first bytes a checkpoint counts, drops the
+/// rest (rows written after it), ends a kept row cut before its line end,
+/// and appends after them.
+#[test]
+fn a_csv_probe_resumes_after_the_rows_it_keeps() {
+    let dir = temp_dir("csv-resume");
+    let path = dir.join("probes.csv");
+    std::fs::write(&path, "t,a\n0.0,1.0\n0.5,2.0\n1.0,3.0\n").unwrap();
+    let keep = "t,a\n0.0,1.0\n".len() as u64;
+    let mut probe = CsvProbe::resume(&path, &["t", "a"], keep).unwrap();
+    probe.row(&[0.25, 4.0]).unwrap();
+    probe.sync().unwrap();
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        "t,a\n0.0,1.0\n0.25,4.0\n"
+    );
+    // Cut before the line end of its last kept row.
+    let mut probe = CsvProbe::resume(&path, &["t", "a"], keep - 1).unwrap();
+    probe.row(&[0.5, 5.0]).unwrap();
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        "t,a\n0.0,1.0\n0.5,5.0\n"
+    );
+    assert!(CsvProbe::resume(dir.join("none.csv"), &["t"], 0).is_err());
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -83,7 +83,6 @@
 //! (negative spacing, `end_time ≤ 0`, a fluid without material…) are the
 //! typed errors of [`Scene::validate`].
 
-use std::cell::RefCell;
 use std::ops::Range;
 use std::path::Path;
 
@@ -1054,15 +1053,23 @@ impl SceneFile {
         let band = 1.5 * self.fluid_spacing();
         let mut out = Vec::new();
         let points = SharedPoints::default();
+        // The main body, classified once a row for `front_x` and
+        // `height_at_wall` (it was once each).
+        let body = SharedBody::default();
         for p in &self.probes {
             match p.get_ref() {
-                ProbeSpec::FrontX => out.push(Probe::new("front_x", |s: &Simulation<2>| {
-                    crate::cases::front_x(s)
-                })),
-                ProbeSpec::HeightAtWall => out
-                    .push(Probe::new("height_at_wall", move |s: &Simulation<2>| {
-                        crate::cases::height_at_wall(s, band)
-                    })),
+                ProbeSpec::FrontX => {
+                    let body = body.clone();
+                    out.push(Probe::new("front_x", move |s: &Simulation<2>| {
+                        main_body_of(&body, s, |m| crate::cases3d::front_x_of(s, m))
+                    }))
+                }
+                ProbeSpec::HeightAtWall => {
+                    let body = body.clone();
+                    out.push(Probe::new("height_at_wall", move |s: &Simulation<2>| {
+                        main_body_of(&body, s, |m| crate::cases3d::height_at_wall_of(s, band, m))
+                    }))
+                }
                 ProbeSpec::BottomPressure => out
                     .push(Probe::new("bottom_pressure", |s: &Simulation<2>| {
                         crate::cases::bottom_pressure(s)
@@ -1087,15 +1094,23 @@ impl SceneFile {
         let band = 1.5 * self.fluid_spacing();
         let mut out = Vec::new();
         let points = SharedPoints::default();
+        // The main body, classified once a row for `front_x` and
+        // `height_at_wall` (it was once each).
+        let body = SharedBody::default();
         for p in &self.probes {
             match p.get_ref() {
-                ProbeSpec::FrontX => out.push(Probe::new("front_x", |s: &Simulation<3>| {
-                    crate::cases3d::front_x(s)
-                })),
-                ProbeSpec::HeightAtWall => out
-                    .push(Probe::new("height_at_wall", move |s: &Simulation<3>| {
-                        crate::cases3d::height_at_wall(s, band)
-                    })),
+                ProbeSpec::FrontX => {
+                    let body = body.clone();
+                    out.push(Probe::new("front_x", move |s: &Simulation<3>| {
+                        main_body_of(&body, s, |m| crate::cases3d::front_x_of(s, m))
+                    }))
+                }
+                ProbeSpec::HeightAtWall => {
+                    let body = body.clone();
+                    out.push(Probe::new("height_at_wall", move |s: &Simulation<3>| {
+                        main_body_of(&body, s, |m| crate::cases3d::height_at_wall_of(s, band, m))
+                    }))
+                }
                 ProbeSpec::BottomPressure => {
                     return Err(self.error(
                         p.span(),
@@ -1168,18 +1183,20 @@ impl SceneFile {
                     ));
                 }
                 let suffix = name.clone().unwrap_or_else(|| body.clone());
+                // The particles followed, chosen again whenever particles
+                // come or go (their indices then shift), once for the D
+                // columns.
+                let chosen: Shared<(u64, Vec<usize>)> = Arc::default();
                 (0..D)
                     .map(|k| {
                         let body = body.clone();
                         let radius = *radius;
-                        // The particles followed, chosen again whenever
-                        // particles come or go (their indices then shift).
-                        let chosen: RefCell<Option<(u64, Vec<usize>)>> = RefCell::new(None);
+                        let chosen = chosen.clone();
                         Probe::new(
                             &format!("u{}_{suffix}", ["x", "y", "z"][k]),
                             move |s: &Simulation<D>| {
                                 let generation = s.particles().generation();
-                                let mut chosen = chosen.borrow_mut();
+                                let mut chosen = chosen.lock().unwrap_or_else(|e| e.into_inner());
                                 if chosen.as_ref().is_none_or(|c| c.0 != generation) {
                                     *chosen =
                                         Some((generation, followed(s, &body, &point, radius)));
@@ -1203,7 +1220,7 @@ impl SceneFile {
                 }
                 let suffix = name.clone().unwrap_or_else(|| body.clone());
                 // The force, measured once a row for its D columns.
-                let force: Arc<Mutex<Option<(RowKey, Vector<D>)>>> = Arc::default();
+                let force: Shared<(RowKey, Vector<D>)> = Arc::default();
                 (0..D)
                     .map(|k| {
                         let body = body.clone();
@@ -1622,6 +1639,30 @@ where
     Const<D>: Dim,
 {
     s.state_version()
+}
+
+/// The main body of the fluid ([`crate::cases3d::main_body`]) as measured
+/// for the row of the state it names.
+type SharedBody = Shared<(RowKey, Vec<bool>)>;
+
+/// A measurement shared by the columns of one probe (or several).
+type Shared<T> = Arc<Mutex<Option<T>>>;
+
+/// `f` of the main body of `s`, classified once a row.
+fn main_body_of<const D: usize>(
+    body: &SharedBody,
+    s: &Simulation<D>,
+    f: impl FnOnce(&[bool]) -> f64,
+) -> f64
+where
+    Const<D>: Dim,
+{
+    let key = row_key(s);
+    let mut b = body.lock().unwrap_or_else(|e| e.into_inner());
+    if b.as_ref().is_none_or(|b| b.0 != key) {
+        *b = Some((key, crate::cases3d::main_body(s)));
+    }
+    f(b.as_ref().map_or(&[], |b| &b.1))
 }
 
 /// A scene's point probes, measured together

@@ -965,10 +965,12 @@ geometry.polygon = [[0.0, {bottom}], [0.2, {bottom}], [0.2, 0.2], [0.0, 0.2]]
     }
 }
 
-/// A scene's point probes are measured together, once a row, and its force
-/// probe once for its columns: each column still reads what
-/// `Loads::fluid_at` and `Loads::pressure_force_on` give alone, row after
-/// row (a probe that kept a stale row, or the wrong point's, fails).
+/// A scene's point probes are measured together, once a row, its force
+/// probe once for its columns, and `front_x` and `height_at_wall` share one
+/// classification of the main body: each column still reads what
+/// `Loads::fluid_at`, `Loads::pressure_force_on` and the `cases` functions
+/// give alone, row after row (a probe that kept a stale row, or the wrong
+/// point's, fails).
 #[test]
 fn point_and_force_probes_read_the_direct_measurements_every_row() {
     let text = puddle(
@@ -977,6 +979,8 @@ fn point_and_force_probes_read_the_direct_measurements_every_row() {
     { force = { body = "floor" } },
     { point = { at = [0.15, 0.1], name = "b" } },
     { point = { at = [0.5, 0.1], name = "dry" } },
+    "front_x",
+    "height_at_wall",
 ]"#,
         "end_time = 0.05\nmax_dt = 5e-3",
         WATER,
@@ -988,8 +992,19 @@ fn point_and_force_probes_read_the_direct_measurements_every_row() {
     assert_eq!(
         names,
         [
-            "p_a", "vx_a", "vy_a", "fx_floor", "fy_floor", "p_b", "vx_b", "vy_b", "p_dry",
-            "vx_dry", "vy_dry"
+            "p_a",
+            "vx_a",
+            "vy_a",
+            "fx_floor",
+            "fy_floor",
+            "p_b",
+            "vx_b",
+            "vy_b",
+            "p_dry",
+            "vx_dry",
+            "vy_dry",
+            "front_x",
+            "height_at_wall"
         ]
     );
     let mut sim = simulation(scene);
@@ -1008,6 +1023,11 @@ fn point_and_force_probes_read_the_direct_measurements_every_row() {
                 v.extend([f.x, f.y]);
             }
         }
+        // (The band: 1.5 fluid spacings.)
+        v.extend([
+            pfem::cases::front_x(sim),
+            pfem::cases::height_at_wall(sim, 1.5 * 0.025),
+        ]);
         v
     };
     // A second simulation of the scene, measured with the same probes in
@@ -1046,6 +1066,13 @@ fn point_and_force_probes_read_the_direct_measurements_every_row() {
             .iter_mut()
             .for_each(|p| *p *= 0.5);
         check(&other, "the other simulation, its pressures halved by hand");
+        // Positions moved by hand: the main body's front and height too.
+        other
+            .particles_mut()
+            .x_mut()
+            .iter_mut()
+            .for_each(|x| *x += Vector::<2>::new(-1e-3, 2e-3));
+        check(&other, "the other simulation, moved by hand");
         sim.particles_mut()
             .pressure_mut()
             .iter_mut()

@@ -71,6 +71,51 @@ impl CsvProbe {
         })
     }
 
+    /// Continues `path`, a file this type wrote with `columns` (its header
+    /// already there), keeping its first `keep` bytes (the header and the
+    /// rows a checkpoint counts: later ones, written before a kill, go) and
+    /// appending after them. The kept rows are not written again: a kill
+    /// while resuming loses none of them.
+    pub fn resume(
+        path: impl Into<PathBuf>,
+        columns: &[&str],
+        keep: u64,
+    ) -> Result<Self, OutputError> {
+        use std::io::{Read as _, Seek as _};
+        let path = path.into();
+        let io = |e| OutputError::io(&path, e);
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&path)
+            .map_err(io)?;
+        file.set_len(keep).map_err(io)?;
+        // A last kept row cut before its line end gets one.
+        if keep > 0 {
+            let mut last = [0u8; 1];
+            file.seek(std::io::SeekFrom::Start(keep - 1)).map_err(io)?;
+            file.read_exact(&mut last).map_err(io)?;
+            file.seek(std::io::SeekFrom::End(0)).map_err(io)?;
+            if last[0] != b'\n' {
+                file.write_all(b"\n").map_err(io)?;
+            }
+        }
+        Ok(Self {
+            path,
+            file,
+            columns: columns.len(),
+            line: String::new(),
+        })
+    }
+
+    /// Forces the rows written so far to the disk (before a checkpoint that
+    /// counts them is written).
+    pub fn sync(&mut self) -> Result<(), OutputError> {
+        self.file
+            .sync_data()
+            .map_err(|e| OutputError::io(&self.path, e))
+    }
+
     /// Appends one row; `values` must have one entry per column.
     pub fn row(&mut self, values: &[f64]) -> Result<(), OutputError> {
         if values.len() != self.columns {

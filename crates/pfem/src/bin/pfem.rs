@@ -407,7 +407,8 @@ where
     // (a checkpoint holds their count and hash, not the rows): a restart
     // into another folder (empty, above) starts from a copy of it, removed
     // again (with the folder, if made for it) when the restart is refused.
-    let mut copied: Option<(PathBuf, bool)> = None;
+    // Whether a copy was made, and whether its folder was made for it.
+    let mut copied: Option<bool> = None;
     if let Some(f) = args.options.get("restart") {
         let own = std::fs::canonicalize(f)
             .ok()
@@ -427,15 +428,20 @@ where
                             out.display()
                         )
                     })?;
-                copied = Some((there, made));
+                copied = Some(made);
             }
         }
     }
-    let undo = |copied: &Option<(PathBuf, bool)>| {
-        if let Some((file, made)) = copied {
-            let _ = std::fs::remove_file(file);
+    // The folder was empty (or not there): what is in it now is this
+    // refused restart's (the copy, a summary the failed start wrote).
+    let undo = |copied: &Option<bool>| {
+        if let Some(made) = copied {
             if *made {
-                let _ = std::fs::remove_dir(&out);
+                let _ = std::fs::remove_dir_all(&out);
+            } else if let Ok(entries) = std::fs::read_dir(&out) {
+                for e in entries.flatten() {
+                    let _ = std::fs::remove_file(e.path());
+                }
             }
         }
     };
