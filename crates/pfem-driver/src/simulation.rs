@@ -1269,6 +1269,18 @@ where
         r
     }
 
+    /// The largest time step (s): the scene's `max_dt`.
+    pub fn max_dt(&self) -> f64 {
+        self.controller.dt_max
+    }
+
+    /// The memory budget (bytes) the simulation was built within
+    /// ([`Options::memory_budget`]): what an observer checks what it will
+    /// keep against (`StandardOutput`'s probe rows).
+    pub fn memory_budget(&self) -> f64 {
+        self.options.memory_budget
+    }
+
     /// A number that changes whenever this simulation's state may have
     /// changed (a step, `particles_mut`, `restore`, `run`'s start,
     /// `initialize_acceleration`) and that no other simulation of the

@@ -281,6 +281,33 @@ where
         Ok(())
     }
 
+    /// Refuses a run whose probe rows, kept in memory, would exceed its
+    /// memory budget: at least one row every `max(probe_interval, max_dt)`
+    /// to the end time, [`ROW_BYTES`] and 8 bytes a column each (900
+    /// gauges in 3D, 3 600 columns, over 10⁶ steps held 29 GB, found after
+    /// hours).
+    fn rows_fit(&self, sim: &Simulation<D>) -> Result<(), RunError> {
+        if self.probes.is_empty() {
+            return Ok(());
+        }
+        let every = self.probe_interval.unwrap_or(0.0).max(sim.max_dt());
+        let rows =
+            ((sim.end_time() - sim.time()).max(0.0) / every).floor() + self.history.len() as f64;
+        let columns = self.probes.len();
+        let bytes = rows * (ROW_BYTES + 8.0 * columns as f64);
+        if bytes > sim.memory_budget() {
+            return Err(crate::output::OutputError::TooManyRows {
+                dir: self.dir.clone(),
+                columns,
+                rows,
+                gb: bytes / 1e9,
+                budget_gb: sim.memory_budget() / 1e9,
+            }
+            .into());
+        }
+        Ok(())
+    }
+
     /// Where the checkpoint is written.
     pub fn checkpoint_path(&self) -> PathBuf {
         self.dir.join(CHECKPOINT_FILE)
@@ -843,6 +870,7 @@ where
     Const<D>: Dim,
 {
     fn start(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        self.rows_fit(sim)?;
         // A second `run` with this output (a run continued past its end
         // time): the folder, frames, probes and schedules go on; only the
         // progress bar starts again. (It cleared the first run's files, or
@@ -963,6 +991,10 @@ where
         }
     }
 }
+
+/// The memory of a probe row besides its values (bytes): the time, the
+/// values' vector and the allocator's share.
+pub const ROW_BYTES: f64 = 48.0;
 
 /// One row of probes: the time and a value per probe.
 type ProbeRow = (f64, Vec<f64>);

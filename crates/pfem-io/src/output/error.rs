@@ -120,6 +120,21 @@ pub enum OutputError {
         /// What does not match.
         why: String,
     },
+    /// The probe rows a run would keep in memory exceed its memory budget
+    /// (a row every step, or every probe interval, to the end time).
+    #[error("{dir}: {columns} probe columns over at least {rows:.0} rows would hold {gb:.1} GB in memory, more than the memory budget ({budget_gb:.1} GB): give the probes an interval (pfem run --probe-interval, StandardOutput::probe_interval) or fewer columns")]
+    TooManyRows {
+        /// The output folder.
+        dir: PathBuf,
+        /// Columns (probes).
+        columns: usize,
+        /// The fewest rows the run would record.
+        rows: f64,
+        /// Their memory (GB).
+        gb: f64,
+        /// The budget (GB).
+        budget_gb: f64,
+    },
     /// Drawing or encoding a plot failed.
     #[error("cannot draw {path}: {reason}")]
     Plot {

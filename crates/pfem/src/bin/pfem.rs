@@ -59,7 +59,8 @@ Options of `pfem run`:
   --probe-interval T    a row of probes.csv every T seconds of simulated time
                         (default: every step). The rows are kept in memory: a
                         long run with many probes wants one (10 columns over
-                        10^6 steps are 96 MB)
+                        10^6 steps are 128 MB; a run whose rows exceed the
+                        memory budget is refused when it starts)
   --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE and
                         options, other ones refused; DIR its output folder, by
                         default the checkpoint's; another folder that is not
