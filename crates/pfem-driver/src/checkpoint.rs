@@ -22,10 +22,10 @@
 //! volume ledger, body force, hook states) and [`TIMINGS`] (stage timers);
 //! [`Simulation::restore`](crate::Simulation::restore) reads
 //! them back into a simulation built from the same scene. The output layer
-//! adds its own section (frames written, the probe rows' count and hash). What is *not* saved:
-//! the fluid mesh (remade from the positions at the next step, as every
-//! step does), the linear solver's factorisation (remade), and a stop a
-//! hook asked for (a restarted run goes on).
+//! adds its own section (frames written, the probe rows' count and hash).
+//! What is *not* saved: the fluid mesh (remade from the positions at the
+//! next step, as every step does), the linear solver's factorisation
+//! (remade), and a stop a hook asked for (a restarted run goes on).
 //!
 //! ```
 //! use pfem_driver::checkpoint::{Checkpoint, Decoder, Encoder};

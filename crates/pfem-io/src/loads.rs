@@ -75,7 +75,7 @@ where
 
     /// [`Loads::fluid_at`] at many points in one pass over the fluid
     /// elements (the points bucketed on a grid of the largest fluid
-    /// spacing): each point's value is the one `fluid_at` gives it, bit for
+    /// spacing, `pfem_scene::lattice::PointGrid`): each point's value is the one `fluid_at` gives it, bit for
     /// bit (the first element that holds it, in the elements' order). What
     /// a scene's point probes read each row: 900 gauges cost one pass, not
     /// 900.
@@ -88,32 +88,18 @@ where
             .map(|i| self.particles().spacing()[i])
             .fold(0.0, f64::max);
         // A point that is not finite lies in no element (`fluid_at` gives
-        // it `None` too).
-        let mut left = at
-            .iter()
-            .filter(|q| q.iter().all(|v| v.is_finite()))
-            .count();
+        // it `None` too): the finite ones are looked for.
+        let finite: Vec<u32> = (0..at.len() as u32)
+            .filter(|&i| at[i as usize].iter().all(|v| v.is_finite()))
+            .collect();
+        let mut left = finite.len();
         if left == 0 {
             return out;
         }
-        let key = |q: &Point<D>| -> [i64; 3] {
-            // `as` saturates: a point far beyond the mesh keys to the edge.
-            let mut k = [0i64; 3];
-            for d in 0..D {
-                k[d] = (q[d] / cell).floor() as i64;
-            }
-            k
-        };
-        let mut grid: std::collections::HashMap<[i64; 3], Vec<u32>> =
-            std::collections::HashMap::new();
-        let bucketed = cell > 0.0 && cell.is_finite();
-        if bucketed {
-            for (i, q) in at.iter().enumerate() {
-                if q.iter().all(|v| v.is_finite()) {
-                    grid.entry(key(q)).or_default().push(i as u32);
-                }
-            }
-        }
+        let grid = (cell > 0.0 && cell.is_finite()).then(|| {
+            let points: Vec<Point<D>> = finite.iter().map(|&i| at[i as usize]).collect();
+            pfem_scene::lattice::PointGrid::new(&points, cell)
+        });
         let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
         let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
         let mut candidates: Vec<u32> = Vec::new();
@@ -125,46 +111,24 @@ where
                 p[a] = x[el[a] as usize];
             }
             candidates.clear();
-            let (mut lo, mut hi) = (Point::<D>::zeros(), Point::<D>::zeros());
-            for d in 0..D {
-                lo[d] = p[..nv].iter().map(|q| q[d]).fold(f64::INFINITY, f64::min);
-                hi[d] = p[..nv]
-                    .iter()
-                    .map(|q| q[d])
-                    .fold(f64::NEG_INFINITY, f64::max);
-            }
-            let (klo, khi) = (key(&lo), key(&hi));
-            // Cells the element's box covers; a box over more cells than
-            // there are buckets (a stretched element, a spacing far below
-            // the largest) walks the buckets instead.
-            let cells = (0..D)
-                .map(|d| khi[d].saturating_sub(klo[d]).saturating_add(1).max(1) as u64)
-                .fold(1u64, |a, b| a.saturating_mul(b));
-            if !bucketed {
-                candidates.extend((0..at.len() as u32).filter(|&i| {
-                    out[i as usize].is_none() && at[i as usize].iter().all(|v| v.is_finite())
-                }));
-            } else if cells > grid.len() as u64 {
-                for (k, list) in &grid {
-                    if (0..D).all(|d| klo[d] <= k[d] && k[d] <= khi[d]) {
-                        candidates.extend(list.iter().filter(|&&i| out[i as usize].is_none()));
-                    }
-                }
-            } else {
-                let mut k = klo;
-                'cells: loop {
-                    if let Some(list) = grid.get(&k) {
-                        candidates.extend(list.iter().filter(|&&i| out[i as usize].is_none()));
-                    }
+            match &grid {
+                Some(grid) => {
+                    let (mut lo, mut hi) = (Point::<D>::zeros(), Point::<D>::zeros());
                     for d in 0..D {
-                        if k[d] < khi[d] {
-                            k[d] += 1;
-                            continue 'cells;
-                        }
-                        k[d] = klo[d];
+                        lo[d] = p[..nv].iter().map(|q| q[d]).fold(f64::INFINITY, f64::min);
+                        hi[d] = p[..nv]
+                            .iter()
+                            .map(|q| q[d])
+                            .fold(f64::NEG_INFINITY, f64::max);
                     }
-                    break;
+                    grid.for_each_in(&lo, &hi, &mut |k| {
+                        let i = finite[k as usize];
+                        if out[i as usize].is_none() {
+                            candidates.push(i);
+                        }
+                    });
                 }
+                None => candidates.extend(finite.iter().filter(|&&i| out[i as usize].is_none())),
             }
             candidates.retain(|&i| in_box(&p[..nv], &at[i as usize]));
             if candidates.is_empty() {

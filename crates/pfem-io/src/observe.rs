@@ -78,8 +78,8 @@ where
     quiet: bool,
     overwrite: bool,
     started: Option<Instant>,
-    /// Rows of probes recorded so far: `(t, values)` ([`StandardOutput::history`]).
-    history: Vec<(f64, Vec<f64>)>,
+    /// Rows of probes recorded so far ([`StandardOutput::history`]).
+    history: Vec<ProbeRow>,
     /// A hash of `history` ([`rows_hash`]), kept as rows are recorded: a
     /// checkpoint holds it and the rows' count, not the rows, which a
     /// restart reads back from `probes.csv`.
@@ -181,13 +181,14 @@ where
     /// Continues the outputs of the run that wrote `checkpoint` (restored
     /// into the simulation with [`Simulation::restore`]): the frames it
     /// listed stay (later ones, written after the checkpoint, are removed
-    /// and written again), `probes.csv` is rewritten with the rows up to the
-    /// checkpoint, and the frame, probe and checkpoint schedules go on. The
-    /// directory should be the one the run wrote into; a non-empty one is
-    /// accepted. The rows are read here from the directory's `probes.csv`
-    /// (a checkpoint holds their count and hash, not the rows, since
-    /// session 46): a file that is missing, shorter than the count or
-    /// whose rows hash otherwise is refused ([`crate::output::OutputError::Resume`]).
+    /// and written again), `probes.csv` keeps the rows up to the checkpoint
+    /// (later ones are cut off), and the frame, probe and checkpoint
+    /// schedules go on. The directory should be the one the run wrote into;
+    /// a non-empty one is accepted. The rows are read here from the
+    /// directory's `probes.csv` (a checkpoint holds their count and hash,
+    /// not the rows, since session 46): a file that is missing, shorter
+    /// than the count or whose rows hash otherwise is refused
+    /// ([`crate::output::OutputError::Resume`]).
     pub fn resume(&mut self, checkpoint: &Checkpoint) -> Result<(), RunError> {
         let mut d = Decoder::new(checkpoint.require(OUTPUT_SECTION)?);
         let next_frame = d.f64()?;

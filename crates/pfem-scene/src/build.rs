@@ -562,7 +562,7 @@ where
                         .map(|k| (i, k))
                 });
             } else if !fluid.is_empty() {
-                let grid = PointGrid::new(&at, h);
+                let grid = crate::lattice::PointGrid::new(&at, h);
                 for (k, (_, lo, hi)) in wall_boxes.iter().enumerate() {
                     grid.for_each_in(lo, hi, &mut |q| {
                         let (i, x) = (fluid[q as usize], at[q as usize]);
@@ -727,107 +727,8 @@ where
 }
 
 /// Up to this many boxes are tested against every particle; more find
-/// their particles on a [`PointGrid`].
+/// their particles on a [`crate::lattice::PointGrid`].
 const FEW_BOXES: usize = 8;
-
-/// Points bucketed on a grid of cell width `h`, for the points in a box.
-struct PointGrid {
-    h: f64,
-    cells: std::collections::HashMap<[i64; 3], Vec<u32>>,
-    /// The range of occupied cells.
-    min: [i64; 3],
-    max: [i64; 3],
-}
-
-impl PointGrid {
-    fn key<const D: usize>(&self, q: &Point<D>) -> [i64; 3]
-    where
-        Const<D>: Dim,
-    {
-        // `as` saturates: a corner far beyond the points keys to the edge.
-        let mut k = [0i64; 3];
-        for d in 0..D {
-            k[d] = (q[d] / self.h).floor() as i64;
-        }
-        k
-    }
-
-    fn new<const D: usize>(points: &[Point<D>], h: f64) -> Self
-    where
-        Const<D>: Dim,
-    {
-        let mut g = Self {
-            h,
-            cells: std::collections::HashMap::new(),
-            min: [i64::MAX; 3],
-            max: [i64::MIN; 3],
-        };
-        for (i, q) in points.iter().enumerate() {
-            let k = g.key(q);
-            for d in 0..D {
-                g.min[d] = g.min[d].min(k[d]);
-                g.max[d] = g.max[d].max(k[d]);
-            }
-            g.cells.entry(k).or_default().push(i as u32);
-        }
-        g
-    }
-
-    /// Calls `f` with every point of the cells the box `lo`–`hi` covers (a
-    /// superset of the points in it: `floor` keeps the order, so a point in
-    /// the box is in a covered cell), and returns the cells visited: those
-    /// the box covers, or the occupied ones when they are fewer.
-    fn for_each_in<const D: usize>(
-        &self,
-        lo: &Point<D>,
-        hi: &Point<D>,
-        f: &mut impl FnMut(u32),
-    ) -> u64
-    where
-        Const<D>: Dim,
-    {
-        let (klo, khi) = (self.key(lo), self.key(hi));
-        let (mut a, mut b) = ([0i64; 3], [0i64; 3]);
-        let mut cells: u64 = 1;
-        for d in 0..D {
-            a[d] = klo[d].max(self.min[d]);
-            b[d] = khi[d].min(self.max[d]);
-            let n = if b[d] >= a[d] {
-                (b[d] as i128 - a[d] as i128 + 1).min(u64::MAX as i128) as u64
-            } else {
-                0
-            };
-            cells = cells.saturating_mul(n);
-        }
-        if cells == 0 {
-            return 0;
-        }
-        if cells <= self.cells.len() as u64 {
-            let mut k = a;
-            'cells: loop {
-                if let Some(list) = self.cells.get(&k) {
-                    list.iter().for_each(|&i| f(i));
-                }
-                for d in 0..D {
-                    if k[d] < b[d] {
-                        k[d] += 1;
-                        continue 'cells;
-                    }
-                    k[d] = a[d];
-                }
-                break;
-            }
-            cells
-        } else {
-            for (k, list) in &self.cells {
-                if (0..D).all(|d| a[d] <= k[d] && k[d] <= b[d]) {
-                    list.iter().for_each(|&i| f(i));
-                }
-            }
-            self.cells.len() as u64
-        }
-    }
-}
 
 /// The most grid cells the clamp boxes of one body may visit together
 /// ([`clamped`]): some seconds of work. Beyond it the scene is refused
@@ -859,7 +760,7 @@ where
         .filter(|c| matches!(c, Clamp::Box(..)))
         .count()
         > FEW_BOXES)
-        .then(|| PointGrid::new(points, h));
+        .then(|| crate::lattice::PointGrid::new(points, h));
     let mut visits: u64 = 0;
     for (c, clamp) in clamps.iter().enumerate() {
         let mut test = |i: u32| {

@@ -670,6 +670,109 @@ where
     None
 }
 
+/// Points bucketed on a grid of cell width `h`, to find the points in a
+/// box without testing every point (a solid's clamps, the fluid inside a
+/// wall's box, the point probes' elements in `pfem_io`).
+#[derive(Debug, Clone)]
+pub struct PointGrid {
+    h: f64,
+    cells: std::collections::HashMap<[i64; 3], Vec<u32>>,
+    /// The range of occupied cells.
+    min: [i64; 3],
+    max: [i64; 3],
+}
+
+impl PointGrid {
+    fn key<const D: usize>(&self, q: &Point<D>) -> [i64; 3]
+    where
+        Const<D>: Dim,
+    {
+        // `as` saturates: a corner far beyond the points keys to the edge.
+        let mut k = [0i64; 3];
+        for d in 0..D {
+            k[d] = (q[d] / self.h).floor() as i64;
+        }
+        k
+    }
+
+    /// The grid of `points` (finite), cell width `h` (positive, finite).
+    pub fn new<const D: usize>(points: &[Point<D>], h: f64) -> Self
+    where
+        Const<D>: Dim,
+    {
+        let mut g = Self {
+            h,
+            cells: std::collections::HashMap::new(),
+            min: [i64::MAX; 3],
+            max: [i64::MIN; 3],
+        };
+        for (i, q) in points.iter().enumerate() {
+            let k = g.key(q);
+            for d in 0..D {
+                g.min[d] = g.min[d].min(k[d]);
+                g.max[d] = g.max[d].max(k[d]);
+            }
+            g.cells.entry(k).or_default().push(i as u32);
+        }
+        g
+    }
+
+    /// Calls `f` with every point of the cells the box `lo`–`hi` covers (a
+    /// superset of the points in it: `floor` keeps the order, so a point in
+    /// the box is in a covered cell), and returns the cells visited: those
+    /// the box covers, or the occupied ones when they are fewer.
+    pub fn for_each_in<const D: usize>(
+        &self,
+        lo: &Point<D>,
+        hi: &Point<D>,
+        f: &mut impl FnMut(u32),
+    ) -> u64
+    where
+        Const<D>: Dim,
+    {
+        let (klo, khi) = (self.key(lo), self.key(hi));
+        let (mut a, mut b) = ([0i64; 3], [0i64; 3]);
+        let mut cells: u64 = 1;
+        for d in 0..D {
+            a[d] = klo[d].max(self.min[d]);
+            b[d] = khi[d].min(self.max[d]);
+            let n = if b[d] >= a[d] {
+                (b[d] as i128 - a[d] as i128 + 1).min(u64::MAX as i128) as u64
+            } else {
+                0
+            };
+            cells = cells.saturating_mul(n);
+        }
+        if cells == 0 {
+            return 0;
+        }
+        if cells <= self.cells.len() as u64 {
+            let mut k = a;
+            'cells: loop {
+                if let Some(list) = self.cells.get(&k) {
+                    list.iter().for_each(|&i| f(i));
+                }
+                for d in 0..D {
+                    if k[d] < b[d] {
+                        k[d] += 1;
+                        continue 'cells;
+                    }
+                    k[d] = a[d];
+                }
+                break;
+            }
+            cells
+        } else {
+            for (k, list) in &self.cells {
+                if (0..D).all(|d| a[d] <= k[d] && k[d] <= b[d]) {
+                    list.iter().for_each(|&i| f(i));
+                }
+            }
+            self.cells.len() as u64
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
