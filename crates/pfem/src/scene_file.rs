@@ -1050,31 +1050,15 @@ impl SceneFile {
     /// [`SceneError::File`] for a probe naming an unknown body, a point of
     /// the wrong dimension or a repeated column.
     pub fn probes_2d(&self) -> Result<Vec<Probe<2>>, SceneError> {
-        let band = 1.5 * self.fluid_spacing();
         let mut out = Vec::new();
-        let points = SharedPoints::default();
-        // The main body, classified once a row for `front_x` and
-        // `height_at_wall` (it was once each).
-        let body = SharedBody::default();
+        let shared = RowShared::new(1.5 * self.fluid_spacing());
         for p in &self.probes {
             match p.get_ref() {
-                ProbeSpec::FrontX => {
-                    let body = body.clone();
-                    out.push(Probe::new("front_x", move |s: &Simulation<2>| {
-                        main_body_of(&body, s, |m| crate::cases3d::front_x_of(s, m))
-                    }))
-                }
-                ProbeSpec::HeightAtWall => {
-                    let body = body.clone();
-                    out.push(Probe::new("height_at_wall", move |s: &Simulation<2>| {
-                        main_body_of(&body, s, |m| crate::cases3d::height_at_wall_of(s, band, m))
-                    }))
-                }
                 ProbeSpec::BottomPressure => out
                     .push(Probe::new("bottom_pressure", |s: &Simulation<2>| {
                         crate::cases::bottom_pressure(s)
                     })),
-                _ => out.extend(self.any_dimension_probe::<2>(p, &points)?),
+                _ => out.extend(self.any_dimension_probe::<2>(p, &shared)?),
             }
         }
         self.unique(&out)?;
@@ -1091,33 +1075,17 @@ impl SceneFile {
     /// the main body's largest `x`, and its largest `y` within 1.5 spacings
     /// of `x = 0`, as in 2D.
     pub fn probes_3d(&self) -> Result<Vec<Probe<3>>, SceneError> {
-        let band = 1.5 * self.fluid_spacing();
         let mut out = Vec::new();
-        let points = SharedPoints::default();
-        // The main body, classified once a row for `front_x` and
-        // `height_at_wall` (it was once each).
-        let body = SharedBody::default();
+        let shared = RowShared::new(1.5 * self.fluid_spacing());
         for p in &self.probes {
             match p.get_ref() {
-                ProbeSpec::FrontX => {
-                    let body = body.clone();
-                    out.push(Probe::new("front_x", move |s: &Simulation<3>| {
-                        main_body_of(&body, s, |m| crate::cases3d::front_x_of(s, m))
-                    }))
-                }
-                ProbeSpec::HeightAtWall => {
-                    let body = body.clone();
-                    out.push(Probe::new("height_at_wall", move |s: &Simulation<3>| {
-                        main_body_of(&body, s, |m| crate::cases3d::height_at_wall_of(s, band, m))
-                    }))
-                }
                 ProbeSpec::BottomPressure => {
                     return Err(self.error(
                         p.span(),
                         format!("probe `{}` is for 2D scenes only", p.get_ref().label()),
                     ))
                 }
-                _ => out.extend(self.any_dimension_probe::<3>(p, &points)?),
+                _ => out.extend(self.any_dimension_probe::<3>(p, &shared)?),
             }
         }
         self.unique(&out)?;
@@ -1147,12 +1115,24 @@ impl SceneFile {
     fn any_dimension_probe<const D: usize>(
         &self,
         p: &Spanned<ProbeSpec>,
-        points: &SharedPoints<D>,
+        shared: &RowShared<D>,
     ) -> Result<Vec<Probe<D>>, SceneError>
     where
         Const<D>: Dim,
     {
         Ok(match p.get_ref() {
+            ProbeSpec::FrontX => {
+                let body = shared.body.clone();
+                vec![Probe::new("front_x", move |s: &Simulation<D>| {
+                    main_body_of(&body, s, |m| crate::cases3d::front_x_of(s, m))
+                })]
+            }
+            ProbeSpec::HeightAtWall => {
+                let (body, band) = (shared.body.clone(), shared.band);
+                vec![Probe::new("height_at_wall", move |s: &Simulation<D>| {
+                    main_body_of(&body, s, |m| crate::cases3d::height_at_wall_of(s, band, m))
+                })]
+            }
             ProbeSpec::Volume => vec![Probe::new("volume", |s: &Simulation<D>| s.fluid_volume())],
             ProbeSpec::MaxSpeed => vec![Probe::new("max_speed", |s: &Simulation<D>| {
                 (0..s.particles().len())
@@ -1246,6 +1226,7 @@ impl SceneFile {
                 let at = Point::from(self.vector::<D>(at, "point.at")?);
                 // Every point probe of the scene is measured in one pass
                 // over the fluid elements, once a row.
+                let points = &shared.points;
                 let index = {
                     let mut c = points.lock().unwrap_or_else(|e| e.into_inner());
                     c.points.push(at);
@@ -1639,6 +1620,31 @@ where
     Const<D>: Dim,
 {
     s.state_version()
+}
+
+/// What a scene's probes share within a row: the point probes' measurement,
+/// the main body (`front_x`, `height_at_wall`), and the band of
+/// `height_at_wall` (1.5 fluid spacings).
+struct RowShared<const D: usize>
+where
+    Const<D>: Dim,
+{
+    points: SharedPoints<D>,
+    body: SharedBody,
+    band: f64,
+}
+
+impl<const D: usize> RowShared<D>
+where
+    Const<D>: Dim,
+{
+    fn new(band: f64) -> Self {
+        Self {
+            points: SharedPoints::default(),
+            body: SharedBody::default(),
+            band,
+        }
+    }
 }
 
 /// The main body of the fluid ([`crate::cases3d::main_body`]) as measured
