@@ -222,6 +222,17 @@ fn a_restarted_block_in_frictional_contact_ends_bit_for_bit() {
     assert_same("sliding block", &a, &b);
 }
 
+/// Session 47 (a review of contact): a checkpoint written before the
+/// first step restored the contact range as a re-formed one, whose solved
+/// tractions the first step then did not keep: the second step carried
+/// the checkpoint's none, and the run went its own way from there.
+#[test]
+fn a_block_in_frictional_contact_restarted_before_its_first_step_ends_bit_for_bit() {
+    let (a, b) = both(sliding_block, 0);
+    assert!(a.elements().n_contact() > 0);
+    assert_same("sliding block from step 0", &a, &b);
+}
+
 /// A checkpoint written right after a restore, with no step between (a
 /// batch script restarting a finished run with `--checkpoint-every`), is
 /// the checkpoint it was restored from, and a run continued from it ends
@@ -1120,6 +1131,93 @@ fn a_restart_keeps_its_own_checkpoint_schedule_probes_and_frames() {
     }
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_file(&early);
+}
+
+/// Session 47 (a review of the step control): a restart took its frame and
+/// probe schedules from the checkpoint whatever this run's intervals were.
+/// A row every step after rows every 10 ms recorded none until the saved
+/// next time; rows every 4 ms after rows every 10 ms waited for the
+/// saved 10 ms multiple.
+#[test]
+fn a_restart_with_another_probe_interval_takes_it_at_once() {
+    let dir = std::env::temp_dir().join(format!("pfem-ck-interval-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let volume = || {
+        vec![Probe::<2>::new("volume", |s: &Simulation<2>| {
+            s.fluid_volume()
+        })]
+    };
+    let rows = |dir: &std::path::Path| -> Vec<f64> {
+        std::fs::read_to_string(dir.join("probes.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').next().unwrap().parse().unwrap())
+            .collect()
+    };
+    for (first, then) in [
+        (Some(0.01), None),
+        (None, Some(0.01)),
+        (Some(0.01), Some(0.004)),
+    ] {
+        let mut a = dam_break();
+        a.add_hook(Box::new(pfem::hooks::StopWhen::new("test", |t, _| {
+            t >= 0.0072
+        })));
+        let mut out = StandardOutput::new(&dir, false, volume(), true).overwrite(true);
+        out.probe_interval = first;
+        a.run(&mut [&mut out]).unwrap();
+        let stop = a.time();
+        let ck = pfem::observe::read_checkpoint(dir.join("checkpoint.bin")).unwrap();
+        let mut b = dam_break();
+        b.restore(&ck).unwrap();
+        b.set_end_time(0.04).unwrap();
+        let mut out = StandardOutput::new(&dir, false, volume(), true);
+        out.probe_interval = then;
+        out.resume(&ck).unwrap();
+        let mut times = Vec::new();
+        let mut spy = StepTimes(&mut times);
+        b.run(&mut [&mut out, &mut spy]).unwrap();
+        let after: Vec<f64> = rows(&dir).into_iter().filter(|&t| t > stop).collect();
+        let expected: Vec<f64> = match then {
+            None => times.clone(),
+            // The first step at or past each multiple of the interval.
+            Some(every) => {
+                let eps = 1e-9 * 0.04;
+                let mut next = (((stop + eps) / every).floor() + 1.0) * every;
+                let mut at = Vec::new();
+                for &t in &times {
+                    if t + eps >= next {
+                        at.push(t);
+                        next = (((t + eps) / every).floor() + 1.0) * every;
+                    }
+                }
+                at
+            }
+        };
+        assert!(expected.len() >= 2, "{first:?} then {then:?}: {times:?}");
+        assert_eq!(
+            after, expected,
+            "{first:?} then {then:?}, stopped at {stop}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The time of every step of a run.
+struct StepTimes<'a>(&'a mut Vec<f64>);
+
+impl Observer<2> for StepTimes<'_> {
+    fn start(&mut self, _: &Simulation<2>) -> Result<(), RunError> {
+        Ok(())
+    }
+    fn step(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+        self.0.push(sim.time());
+        Ok(())
+    }
+    fn finish(&mut self, _: &Simulation<2>) -> Result<(), RunError> {
+        Ok(())
+    }
 }
 
 /// Session 41 (a review of the library's seams): a run continued in the

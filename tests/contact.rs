@@ -629,6 +629,21 @@ fn bodies_in_contact_closer_than_their_contact_distance_are_refused() {
         StepParams::default()
     )
     .is_ok());
+    // Session 47: the widest onset (½) accepted the first block, half its
+    // contact distance in (67 %), under a tenth of the penalty's modulus
+    // (`K_c x²/2δ`, `x` = 0.33). The starting pressure is bounded by the
+    // default onset's (`K_c δ₀/2`): at ½, 92.9 % is the least accepted.
+    let wide = |lo, hi| {
+        Simulation::new(
+            block(lo, hi).contact_onset(0.5),
+            Box::new(Delaunay2::default()),
+            StepParams::default(),
+        )
+        .map(|_| ())
+    };
+    let err = wide(Point::<2>::new(0.0, h), Point::<2>::new(0.2, h + 0.05)).unwrap_err();
+    assert!(err.to_string().contains("92.9 %"), "{err}");
+    assert!(wide(Point::<2>::new(0.0, y), Point::<2>::new(0.2, y + 0.05)).is_ok());
 }
 
 /// 3D: a free elastic block resting on a floor (contact elements of three
@@ -1055,4 +1070,41 @@ fn a_contact_far_too_soft_for_its_load_is_an_error_not_a_pass_through() {
         }
         other => panic!("expected ContactClosed, got {other}"),
     }
+}
+
+/// Session 47 (a review of contact): friction between a clamped solid and
+/// a wall was accepted and never acted (a clamped solid takes no part in
+/// contact unless `contact_clamped`); it is refused, and accepted with
+/// `contact_clamped`.
+#[test]
+fn friction_that_could_never_act_is_refused() {
+    let (h, hf) = (0.01, 0.02);
+    let y = 0.5 * (h + hf);
+    let scene = || {
+        Scene::<2>::new("clamped beam")
+            .gravity(Vector::<2>::new(0.0, -G))
+            .wall(
+                "floor",
+                Geometry::Box {
+                    min: Point::<2>::new(-0.2, -hf),
+                    max: Point::<2>::new(0.4, 0.0),
+                },
+                hf,
+                WallMotion::Fixed,
+            )
+            .solid(
+                "beam",
+                Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+                Geometry::Box {
+                    min: Point::<2>::new(0.0, y),
+                    max: Point::<2>::new(0.2, y + 0.02),
+                },
+                h,
+                Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(0.001, 1.0))),
+            )
+            .friction("beam", "floor", 0.3)
+    };
+    let err = scene().validate().unwrap_err().to_string();
+    assert!(err.contains("neither body takes part in contact"), "{err}");
+    assert!(scene().contact_clamped(true).validate().is_ok());
 }

@@ -1949,3 +1949,45 @@ fn a_run_continued_after_a_wall_clock_stop_has_the_whole_limit() {
         "{per_run:?}"
     );
 }
+
+/// Session 47 (a review of contact): positions moved by hand before the
+/// first step were solved on the mesh `new` made at the old ones (the
+/// first step does not remesh). A fluid particle moved 10 spacings above
+/// the water stayed in its elements, stretched up to it; it is meshed
+/// first, and flies as a drop.
+#[test]
+fn positions_moved_by_hand_before_the_first_step_are_meshed_first() {
+    let h = 0.05;
+    let mut sim = sim2(small_tank("moved by hand"), StepParams::default());
+    let p = sim.particles();
+    let top = (0..p.len())
+        .filter(|&i| p.kind()[i] == ParticleKind::Fluid)
+        .max_by(|&a, &b| p.x()[a].y.total_cmp(&p.x()[b].y))
+        .unwrap();
+    let in_elements = |sim: &Simulation<2>| sim.elements().fluid().contains(&(top as u32));
+    assert!(in_elements(&sim));
+    sim.particles_mut().x_mut()[top].y += 10.0 * h;
+    // What the first step solves, as an observer's start sees it.
+    struct Meshed(bool, usize);
+    impl Observer<2> for Meshed {
+        fn start(&mut self, sim: &Simulation<2>) -> Result<(), RunError> {
+            self.0 = sim.elements().fluid().contains(&(self.1 as u32));
+            Ok(())
+        }
+    }
+    let mut seen = Meshed(true, top);
+    sim.add_hook(Box::new(StopWhen::new("a step", |t, _| t > 0.0)));
+    sim.run(&mut [&mut seen]).unwrap();
+    assert!(
+        !seen.0,
+        "the moved particle is in the first step's elements"
+    );
+    assert!(!in_elements(&sim));
+    // Velocities changed by hand alone keep the mesh (no second remesh).
+    let mut sim = sim2(small_tank("velocities by hand"), StepParams::default());
+    let remeshed = sim.stats().remesh.0;
+    sim.particles_mut().v_mut()[top].y = 0.1;
+    sim.add_hook(Box::new(StopWhen::new("a step", |t, _| t > 0.0)));
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.stats().remesh.0, remeshed);
+}

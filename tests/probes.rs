@@ -120,13 +120,28 @@ fn probe_rows_beyond_the_memory_budget_are_refused_at_the_start() {
     let mut out = StandardOutput::new(&dir, false, probes(), true).overwrite(true);
     let err = sim.run(&mut [&mut out]).unwrap_err().to_string();
     assert!(
-        err.contains("--probe-interval") && err.contains("memory budget"),
+        err.contains("probe_interval")
+            && err.contains("keep_rows(false)")
+            && err.contains("memory budget"),
         "{err}"
     );
     assert_eq!(sim.steps(), 0);
+    // Rows not kept in memory (written to probes.csv only): the same run
+    // starts (stopped after its first step), its rows written, none held.
+    let mut out = StandardOutput::new(&dir, false, probes(), true)
+        .overwrite(true)
+        .keep_rows(false);
+    sim.add_hook(Box::new(pfem::hooks::StopWhen::new("a step", |t, _| {
+        t > 0.0
+    })));
+    sim.run(&mut [&mut out]).unwrap();
+    assert!(sim.steps() > 0 && sim.time() < 1.0);
+    assert!(out.history().is_empty());
+    let csv = std::fs::read_to_string(dir.join("probes.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 1 + sim.steps() as usize, "{csv}");
     let mut out = StandardOutput::new(&dir, false, probes(), true).overwrite(true);
     out.probe_interval = Some(1.0);
-    sim.set_end_time(0.004).unwrap();
+    sim.set_end_time(sim.time() + 0.004).unwrap();
     sim.run(&mut [&mut out]).unwrap();
     assert!(sim.steps() > 0);
     let _ = std::fs::remove_dir_all(&dir);

@@ -363,6 +363,49 @@ fn a_long_run_ends_on_its_end_time_without_a_sliver_step() {
     assert!(sim.time() > 100.0 + 1e-3);
 }
 
+/// Session 47 (a review of the step control): an end time off the steps'
+/// grid ended with a sliver, 0.010000005 s by steps of 1 ms with one of
+/// 5·10⁻⁹ s; its continuation started from it (about 55 steps to grow
+/// back). The rest is taken in two halves. An end time set less than
+/// `min_dt` after the clock took a step of `min_dt`, past it; and a run
+/// 5·10⁻¹³ s long took no step (an absolute tolerance of 10⁻¹² s).
+#[test]
+fn an_end_time_off_the_steps_grid_ends_without_a_sliver() {
+    let mut sim = Simulation::new(
+        block_at_rest(0.010000005, 1e-3),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.time(), 0.010000005);
+    assert!(sim.dt() > 4e-4, "last step {}", sim.dt());
+    assert!(sim.steps() <= 11, "{} steps", sim.steps());
+    // Continued past it, the steps are `max_dt` again at once.
+    sim.set_end_time(0.02).unwrap();
+    let steps = sim.steps();
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.time(), 0.02);
+    assert!(sim.steps() - steps <= 11, "{} steps", sim.steps() - steps);
+    // An end time less than `min_dt` (10⁻⁹ s) ahead: one step onto it.
+    sim.set_end_time(0.02 + 5e-10).unwrap();
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.time(), 0.02 + 5e-10);
+    // A run shorter than 10⁻¹² s steps to its end.
+    let mut short = Simulation::new(
+        block_at_rest(5e-13, 1e-14),
+        Box::new(Delaunay2::default()),
+        StepParams {
+            min_dt: 1e-16,
+            ..StepParams::default()
+        },
+    )
+    .unwrap();
+    short.run(&mut []).unwrap();
+    assert_eq!(short.time(), 5e-13);
+    assert!(short.steps() >= 50, "{} steps", short.steps());
+}
+
 /// Session 41: a `min_dt` above the scene's `max_dt` ran every step at
 /// `min_dt`, above the ceiling, without a word; it is refused. The default
 /// `min_dt` (10⁻⁹ s) goes under a finer `max_dt` instead (a scene file

@@ -283,8 +283,9 @@ pub struct Assembler<const D: usize>
 where
     Const<D>: Dim,
 {
-    /// How the volumetric term is integrated.
-    pub treatment: VolumetricTreatment,
+    /// How the volumetric term is integrated
+    /// ([`Assembler::set_treatment`]).
+    treatment: VolumetricTreatment,
     n_particles: usize,
     n_elements: usize,
     /// particle → system node (NONE if in no element).
@@ -474,6 +475,21 @@ where
         Self {
             treatment,
             ..Default::default()
+        }
+    }
+
+    /// How the volumetric term is integrated.
+    pub fn treatment(&self) -> VolumetricTreatment {
+        self.treatment
+    }
+
+    /// Integrates the volumetric term by `treatment` from the next
+    /// [`Assembler::prepare`] on (which builds its pattern anew if it
+    /// changed: each element's volumetric term is chosen there).
+    pub fn set_treatment(&mut self, treatment: VolumetricTreatment) {
+        if treatment != self.treatment {
+            self.treatment = treatment;
+            self.last_mesh.3 = usize::MAX;
         }
     }
 

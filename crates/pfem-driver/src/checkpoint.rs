@@ -47,9 +47,9 @@
 /// The file's first eight bytes.
 pub const MAGIC: &[u8; 8] = b"PFEMCKPT";
 
-/// The format this library writes and reads. Bumped whenever the content
-/// of a section changes; an older or newer file is refused
-/// ([`CheckpointError::Version`]).
+/// The format this library writes. Bumped whenever the content of a
+/// section changes; a file older than [`OLDEST_FORMAT_VERSION`] or newer
+/// than this is refused ([`CheckpointError::Version`]).
 ///
 /// Version 2 (session 27): the simulation section records each material's
 /// name, kind, density and wave speed, so that a scene whose material
@@ -69,7 +69,18 @@ pub const MAGIC: &[u8; 8] = b"PFEMCKPT";
 /// Version 5 (session 45): the volume ledger records the drops' share of
 /// the initial volume, and every fluid volume it holds counts the drops
 /// in flight ([`crate::Simulation::drop_volume`]).
-pub const FORMAT_VERSION: u32 = 5;
+///
+/// Version 6 (session 47): the output layer's section holds the probe
+/// rows' count and hash, not the rows (they are `probes.csv`'s, since
+/// session 46). A version 5 file still restores (its rows inside, or its
+/// count and hash if written by session 46's library); an older library
+/// given a version 6 file names the version instead of finding bytes
+/// left over in the output section.
+pub const FORMAT_VERSION: u32 = 6;
+
+/// The oldest format this library reads: version 5, whose sections differ
+/// from version 6's in the output layer's alone, which reads either.
+pub const OLDEST_FORMAT_VERSION: u32 = 5;
 
 /// The driver's section: the simulation state.
 pub const SIMULATION: &str = "simulation";
@@ -97,12 +108,14 @@ pub enum CheckpointError {
     #[error("not a pfem checkpoint (the file does not start with `PFEMCKPT`)")]
     NotACheckpoint,
     /// Written in a format this library does not read.
-    #[error("checkpoint format {found} is not supported (this library reads format {supported}, written by pfem {written_by})")]
+    #[error("checkpoint format {found} is not supported (this library reads formats {oldest} to {supported}; the file was written by pfem {written_by})")]
     Version {
         /// The file's format.
         found: u32,
-        /// The format this library reads.
+        /// The newest format this library reads (the one it writes).
         supported: u32,
+        /// The oldest format this library reads.
+        oldest: u32,
         /// The library version that wrote the file.
         written_by: String,
     },
@@ -321,10 +334,11 @@ impl Checkpoint {
         let body = &bytes[..bytes.len() - 8];
         let mut d = Decoder::new(&bytes[12..]);
         let written_by = d.str().unwrap_or("an unknown version").to_string();
-        if version != FORMAT_VERSION {
+        if !(OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version) {
             return Err(CheckpointError::Version {
                 found: version,
                 supported: FORMAT_VERSION,
+                oldest: OLDEST_FORMAT_VERSION,
                 written_by,
             });
         }
@@ -396,14 +410,32 @@ mod tests {
             b[i] ^= 0x40;
             assert!(Checkpoint::decode(&b).is_err(), "flip {i}");
         }
-        // The next format, and the former one (1, before the materials).
-        for other in [FORMAT_VERSION + 1, FORMAT_VERSION - 1] {
+        // The next format, and the one before the oldest read, are
+        // refused by their version (before the checksum, which covers it).
+        for other in [FORMAT_VERSION + 1, OLDEST_FORMAT_VERSION - 1] {
             let mut v = bytes.clone();
             v[8..12].copy_from_slice(&other.to_le_bytes());
-            assert!(matches!(
-                Checkpoint::decode(&v),
-                Err(CheckpointError::Version { found, .. }) if found == other
-            ));
+            let e = Checkpoint::decode(&v).unwrap_err();
+            assert!(
+                matches!(e, CheckpointError::Version { found, .. } if found == other),
+                "{e}"
+            );
+            let msg = e.to_string();
+            assert!(
+                msg.contains(&format!(
+                    "formats {OLDEST_FORMAT_VERSION} to {FORMAT_VERSION}"
+                )),
+                "{msg}"
+            );
+        }
+        // Every format from the oldest read to this one's is read (its
+        // checksum made for its version).
+        for version in OLDEST_FORMAT_VERSION..=FORMAT_VERSION {
+            let mut v = bytes[..bytes.len() - 8].to_vec();
+            v[8..12].copy_from_slice(&version.to_le_bytes());
+            let sum = fnv1a(&v);
+            v.extend_from_slice(&sum.to_le_bytes());
+            assert_eq!(Checkpoint::decode(&v).unwrap(), c, "format {version}");
         }
         assert_eq!(
             Checkpoint::decode(b"hello world, no checkpoint"),

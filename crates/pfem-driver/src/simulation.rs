@@ -409,6 +409,10 @@ where
     /// by hand since ([`Simulation::particles_mut`]) is remeshed by the
     /// next step.
     meshed: u64,
+    /// Before the first step, the positions the mesh was last made at:
+    /// the first step does not remesh, so positions changed by hand since
+    /// are meshed first ([`Simulation::particles_mut`]). Empty after it.
+    meshed_at: Vec<Point<D>>,
     /// The gravity the accelerations were last set with
     /// ([`Simulation::initialize_acceleration`]): a first step under
     /// another one (a hook's) sets them again.
@@ -435,8 +439,12 @@ where
     /// Per body: takes part in contact (the free solids, and every solid
     /// with [`pfem_scene::ContactSettings::clamped`]).
     in_contact: Vec<bool>,
-    /// Friction by pair of bodies.
+    /// Friction by pair of bodies, as the scene gave them.
     friction: Vec<(u32, u32, f64)>,
+    /// The same, each pair as (lower, higher) body, sorted: looked up
+    /// for each contact element (a pass over the pairs for each cost
+    /// 10¹⁰ comparisons a remeshing for 10⁶ pairs and 10⁴ elements).
+    friction_by_pair: Vec<((u32, u32), f64)>,
     /// The candidates of the step (buffer).
     candidates: Vec<pfem_geometry::ContactCandidate<D>>,
 }
@@ -665,6 +673,7 @@ where
             start_rigid: options.free_solids_start_rigid,
             options,
             meshed: u64::MAX,
+            meshed_at: Vec::new(),
             accelerated_with: None,
             stepper: Stepper {
                 tessellator,
@@ -680,6 +689,14 @@ where
                 stiffness: contact_stiffness,
                 free: free_solids,
                 in_contact,
+                friction_by_pair: {
+                    let mut by: Vec<((u32, u32), f64)> = friction
+                        .iter()
+                        .map(|&(a, b, mu)| ((a.min(b), a.max(b)), mu))
+                        .collect();
+                    by.sort_by_key(|f| f.0);
+                    by
+                },
                 friction,
                 candidates: Vec::new(),
             },
@@ -710,14 +727,26 @@ where
                 .filter(|((el, _), _)| !held(el))
                 .map(|((_, h), b)| (h.internal[GAP_RATIO], *b))
                 .min_by(|a, b| a.0.total_cmp(&b.0));
-            let least = 1.0 - contact_onset.max(0.0);
+            // Accepted: a closure within the onset, and a starting
+            // pressure no higher than the default onset's bound
+            // (`K_c δ₀/2`): a wide onset (up to ½) took bodies half their
+            // contact distance apart at a quarter of the penalty's
+            // modulus (session 47's review). Past `δ₀` the closure
+            // `√(δ δ₀)` starts at `K_c δ₀/2` on the onset's parabola.
+            let (onset, usual) = (contact_onset.max(0.0), pfem_scene::scene::CONTACT_ONSET);
+            let least = 1.0
+                - if onset > usual {
+                    (onset * usual).sqrt()
+                } else {
+                    onset
+                };
             if let Some((ratio, (a, b))) = closest {
                 if ratio < least - 1e-9 {
                     let name = |i: u32| sim.body_names[i as usize].clone();
                     return Err(SceneError::InvalidGeometry {
                         body: name(a),
                         why: format!(
-                            "it starts at {:.1} % of its contact distance from body `{}` (half the sum of the two spacings; at least {:.1} % is accepted, the contact's onset): place them that far apart, or a solid on a wall's lattice, where it is welded",
+                            "it starts at {:.1} % of its contact distance from body `{}` (half the sum of the two spacings; at least {:.1} % is accepted, by the contact's onset): place them that far apart, or a solid on a wall's lattice, where it is welded",
                             100.0 * ratio,
                             name(b),
                             100.0 * least
@@ -923,12 +952,11 @@ where
                 &mut cands,
             )
             .map_err(RunError::Geometry)?;
-            let friction = &self.contact.friction;
+            let friction = &self.contact.friction_by_pair;
             let mu = |a: u32, b: u32| {
                 friction
-                    .iter()
-                    .find(|(x, y, _)| (*x == a && *y == b) || (*x == b && *y == a))
-                    .map_or(0.0, |f| f.2)
+                    .binary_search_by_key(&(a.min(b), a.max(b)), |f| f.0)
+                    .map_or(0.0, |k| friction[k].1)
             };
             // The stiffest penalty among the element's bodies: a wall brings
             // none, and an element may join three bodies (two walls at a
@@ -955,6 +983,12 @@ where
                 &mu,
             );
             self.contact.candidates = cands;
+        }
+        if self.clock.steps == 0 {
+            self.meshed_at.clear();
+            self.meshed_at.extend_from_slice(self.particles.x());
+        } else {
+            self.meshed_at = Vec::new();
         }
         self.stats.remesh.0 += 1;
         self.stats.remesh.1 += t0.elapsed().as_secs_f64();
@@ -1350,7 +1384,14 @@ where
     /// first frame, the accelerations' start), whose indices are the old
     /// set's.
     fn mesh_a_set_changed_by_hand(&mut self) -> Result<(), RunError> {
-        if self.particles.generation() != self.meshed {
+        // Positions moved by hand before the first step, which solves the
+        // mesh `new` made (session 47's review: a particle moved far from
+        // the water stayed in its elements, and a solid moved towards a
+        // wall kept a contact layer of the old gap).
+        let moved = self.clock.steps == 0
+            && !self.meshed_at.is_empty()
+            && self.meshed_at.as_slice() != self.particles.x();
+        if self.particles.generation() != self.meshed || moved {
             self.elements.clear_fluid();
             self.remesh()?;
             // The step remeshes again (after its first): it carries from
@@ -1428,11 +1469,16 @@ where
             self.controller.next(0.0, 0.0, self.clock.dt)
         };
         // The step that ends the run lands on the end time: one within
-        // `END_SNAP` of it is stretched to it, and one that would leave
-        // less than `min_dt` after it is split in two halves of the rest,
-        // so that the clock's round-off (about 10⁻¹⁰ s after 10⁵ steps)
-        // leaves no sliver to take. Past the end time (`step` called by
-        // hand) the step is the controller's.
+        // `END_SNAP` of it is stretched to it, and the rest, if shorter
+        // than two steps, is taken in two equal halves, so that neither
+        // the clock's round-off (about 10⁻¹⁰ s after 10⁵ steps) nor an end
+        // time off the steps' grid leaves a sliver to take (session 47's
+        // review: a sliver of 5·10⁻⁹ s ended a run, whose continuation
+        // grew its step back by 1.25 a step, and whose last acceleration
+        // `(v − vⁿ)/(γΔt)` magnified the Picard loop's error by 1/Δt). A
+        // rest below `min_dt` (an end time set just after the clock) is
+        // taken as one step, not one of `min_dt` past it. Past the end time
+        // (`step` called by hand) the step is the controller's.
         // So does a step that would cross a kink of a hook's prescribed
         // motion (a table's row, `Hook::next_kink`): kinks closer than
         // `min_dt` to the clock, or to the end time, are passed over (a
@@ -1453,15 +1499,14 @@ where
         };
         let remaining = landing - t;
         if remaining > 0.0 && remaining <= dt * (1.0 + END_SNAP) {
-            dt = remaining.max(dt_min);
-        } else if remaining > 0.0 && remaining - dt < dt_min {
-            // Two steps of half the rest, not one past `max_dt`.
+            // (A kink is at least `min_dt` ahead.)
+            dt = remaining;
+        } else if remaining > 0.0 && remaining < 2.0 * dt {
+            // Two equal steps to a kink or the end, not a full one and a
+            // sliver (the controller grows the step back by 1.25 a step: a
+            // sliver of 10⁻³ of it cost some 30 steps more), nor one past
+            // `max_dt`.
             dt = (0.5 * remaining).max(dt_min);
-        } else if landing == kink && remaining < 2.0 * dt {
-            // Two equal steps to a kink, not a full one and a sliver (the
-            // controller grows the step back by 1.25 a step: a sliver of
-            // 10⁻³ of it cost some 30 steps more).
-            dt = 0.5 * remaining;
         }
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();
@@ -1611,7 +1656,11 @@ where
             o.start(self)?;
         }
         let steps = (|| -> Result<(), RunError> {
-            while self.clock.time < self.end_time - 1e-12 && self.stop.is_none() {
+            // (A step lands on the end time exactly; the tolerance is for
+            // a clock restored or set within round-off of it.)
+            while self.end_time - self.clock.time > END_REACHED * self.end_time
+                && self.stop.is_none()
+            {
                 self.step()?;
                 let t0 = Instant::now();
                 for o in observers.iter_mut() {
@@ -1694,8 +1743,9 @@ where
     /// structured way). After changing velocities or pressures before the
     /// first step, call [`Simulation::initialize_acceleration`]. A set
     /// changed in number ([`Particles::remap`], [`Particles::push`]) is
-    /// remeshed by the next step, its first included; until then the
-    /// elements are the old set's.
+    /// remeshed by the next step, its first included, and so are positions
+    /// moved before the first step (every later step remeshes); until
+    /// then the elements are the old set's, or the old positions'.
     ///
     /// # Panics
     ///
@@ -2383,7 +2433,14 @@ where
             // this simulation last meshed.
             self.meshed = u64::MAX;
             self.remesh()?;
-            self.elements.keep_stash();
+            // The next step carries from the stash, not from this range
+            // re-formed from it; but the first step does not remesh: it
+            // solves this range, as a new simulation's first step solves
+            // the one `new` formed, and keeps its tractions (session 47's
+            // review: a checkpoint of step 0 lost them).
+            if self.clock.steps > 0 {
+                self.elements.keep_stash();
+            }
             Ok(())
         })();
         // The solver's carried preconditioners name particles by index:
@@ -2449,10 +2506,14 @@ where
 const MIN_DT_OF_END_TIME: f64 = 1.0 / (1u64 << 50) as f64;
 
 /// A step within this fraction of itself of the end time is stretched to
-/// it (`Simulation::step`; one that would leave less than `min_dt` is
-/// split in two): the last step lands on the end time, with no sliver
-/// after it.
+/// it (`Simulation::step`; a rest shorter than two steps is taken in two
+/// halves): the last step lands on the end time, with no sliver after it.
 const END_SNAP: f64 = 1e-6;
+
+/// A run has reached its end time when less than this share of it is
+/// left (relative: an absolute 10⁻¹² s took no step of a run 5·10⁻¹³ s
+/// long).
+const END_REACHED: f64 = 1e-12;
 
 /// What a checkpoint records of a material to recognise it: its name, kind
 /// (0 fluid, 1 solid), density and wave speed (which moves with its bulk

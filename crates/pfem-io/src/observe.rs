@@ -78,11 +78,17 @@ where
     quiet: bool,
     overwrite: bool,
     started: Option<Instant>,
-    /// Rows of probes recorded so far ([`StandardOutput::history`]).
+    /// Rows of probes recorded so far ([`StandardOutput::history`]); none
+    /// kept with [`StandardOutput::keep_rows`]`(false)`.
     history: Vec<ProbeRow>,
-    /// A hash of `history` ([`rows_hash`]), kept as rows are recorded: a
-    /// checkpoint holds it and the rows' count, not the rows, which a
-    /// restart reads back from `probes.csv`.
+    /// Whether the rows are kept in `history` (they are written to
+    /// `probes.csv` either way).
+    keep_rows: bool,
+    /// The number of rows recorded so far, kept or not.
+    rows: u64,
+    /// A hash of the rows recorded so far ([`rows_hash`]), kept as rows
+    /// are recorded: a checkpoint holds it and the rows' count, not the
+    /// rows, which a restart reads back from `probes.csv`.
     rows_hash: u64,
     /// Extra figures written into `summary.json`.
     pub extra: BTreeMap<String, serde_json::Value>,
@@ -105,8 +111,12 @@ struct Resumed {
     next_frame: f64,
     next_probe: f64,
     frames: Vec<(f64, String)>,
+    /// The checkpoint's rows, if they are to be kept or written.
     history: Vec<(f64, Vec<f64>)>,
-    /// The bytes of the folder's `probes.csv` that hold `history` (a
+    /// Their count and hash.
+    rows: u64,
+    rows_hash: u64,
+    /// The bytes of the folder's `probes.csv` that hold the rows (a
     /// checkpoint since session 46); `None`: the rows were the checkpoint's
     /// own, and the file is written from them.
     csv_len: Option<u64>,
@@ -155,6 +165,8 @@ where
             overwrite: false,
             started: None,
             history: Vec::new(),
+            keep_rows: true,
+            rows: 0,
             rows_hash: ROWS_HASH_START,
             extra: BTreeMap::new(),
             checkpoint_every: None,
@@ -175,6 +187,19 @@ where
         // Checked when the run starts (a value that is not positive and
         // finite wrote no checkpoint at all, not even the last one).
         self.checkpoint_every = interval;
+        self
+    }
+
+    /// Whether the probe rows are kept in memory for
+    /// [`StandardOutput::history`] and [`StandardOutput::probe_series`]
+    /// (the default, `true`). With `false` they are written to
+    /// `probes.csv` only, and those two read nothing: a long run's rows
+    /// then cost no memory (128 bytes a row for 10 probes, kept), and the
+    /// run is not refused for rows beyond its memory budget
+    /// ([`crate::output::OutputError::TooManyRows`]). A checkpoint and a
+    /// restart work alike either way. `pfem run` keeps none.
+    pub fn keep_rows(mut self, keep: bool) -> Self {
+        self.keep_rows = keep;
         self
     }
 
@@ -250,15 +275,17 @@ where
         };
         d.end()?;
         let mut csv_len = None;
-        if let Some((count, hash)) = in_csv {
+        let (mut count, mut hash) = (history.len() as u64, rows_hash(ROWS_HASH_START, &history));
+        if let Some((c, h)) = in_csv {
             if !history.is_empty() {
                 return Err(CheckpointError::Corrupt("probe rows given twice".into()).into());
             }
-            if count > 0 {
-                let (rows, len) = self.rows_from_csv(count, hash)?;
+            if c > 0 {
+                let (rows, len) = self.rows_from_csv(c, h)?;
                 history = rows;
                 csv_len = Some(len);
             }
+            (count, hash) = (c, h);
         }
         // A schedule or frame time that is not a number (an edited
         // checkpoint) would stop the frames or list `NaN` in the `.pvd`.
@@ -277,6 +304,8 @@ where
             next_probe,
             frames,
             history,
+            rows: count,
+            rows_hash: hash,
             csv_len,
         });
         Ok(())
@@ -288,12 +317,11 @@ where
     /// gauges in 3D, 3 600 columns, over 10⁶ steps held 29 GB, found after
     /// hours).
     fn rows_fit(&self, sim: &Simulation<D>) -> Result<(), RunError> {
-        if self.probes.is_empty() {
+        if self.probes.is_empty() || !self.keep_rows {
             return Ok(());
         }
         let every = self.probe_interval.unwrap_or(0.0).max(sim.max_dt());
-        let rows =
-            ((sim.end_time() - sim.time()).max(0.0) / every).floor() + self.history.len() as f64;
+        let rows = ((sim.end_time() - sim.time()).max(0.0) / every).floor() + self.rows as f64;
         let columns = self.probes.len();
         let bytes = rows * (ROW_BYTES + 8.0 * columns as f64);
         if bytes > sim.memory_budget() {
@@ -318,7 +346,8 @@ where
     /// this output's probes and hash to `hash` ([`rows_hash`]): the rows a
     /// checkpoint's run had recorded, and the bytes of the file that hold
     /// them with the header. Rows after them (written after the checkpoint,
-    /// before a kill) are left out.
+    /// before a kill) are left out. The rows are returned only if they are
+    /// kept ([`StandardOutput::keep_rows`]); they are hashed either way.
     fn rows_from_csv(&self, count: u64, hash: u64) -> Result<(Vec<ProbeRow>, u64), RunError> {
         use std::io::BufRead as _;
         let path = self.dir.join("probes.csv");
@@ -358,7 +387,12 @@ where
                 cols.join(",")
             )));
         }
-        let mut rows = Vec::with_capacity(count.min(1 << 20) as usize);
+        let mut rows = Vec::with_capacity(if self.keep_rows {
+            count.min(1 << 20) as usize
+        } else {
+            0
+        });
+        let mut found = ROWS_HASH_START;
         for k in 0..count {
             if !next(&mut line)? {
                 return Err(fail(format!(
@@ -367,7 +401,13 @@ where
             }
             let values: Result<Vec<f64>, _> = line.split(',').map(str::parse::<f64>).collect();
             match values {
-                Ok(v) if v.len() == cols.len() => rows.push((v[0], v[1..].to_vec())),
+                Ok(v) if v.len() == cols.len() && v[0].is_finite() => {
+                    let row = (v[0], v[1..].to_vec());
+                    found = rows_hash(found, std::slice::from_ref(&row));
+                    if self.keep_rows {
+                        rows.push(row);
+                    }
+                }
                 _ => {
                     return Err(fail(format!(
                         "probes.csv's row {} cannot be read: `{line}`",
@@ -376,7 +416,7 @@ where
                 }
             }
         }
-        if rows_hash(ROWS_HASH_START, &rows) != hash {
+        if found != hash {
             return Err(fail(
                 "probes.csv's rows are not the ones the checkpoint's run recorded (another run's file, or edited)".into(),
             ));
@@ -411,7 +451,7 @@ where
         for p in &self.probes {
             e.str(&p.name);
         }
-        e.u64(self.history.len() as u64);
+        e.u64(self.rows);
         e.u64(self.rows_hash);
         e.finish()
     }
@@ -493,12 +533,19 @@ where
     }
 
     /// The rows of probes recorded so far: `(t, values)`, one value per
-    /// probe in their order (what `probes.csv` holds).
+    /// probe in their order (what `probes.csv` holds). None if the rows are
+    /// not kept ([`StandardOutput::keep_rows`]).
     pub fn history(&self) -> &[(f64, Vec<f64>)] {
         &self.history
     }
 
-    /// Values of one probe over the run, `(t, value)`.
+    /// The number of probes (columns of `probes.csv` after `t`).
+    pub fn probe_count(&self) -> usize {
+        self.probes.len()
+    }
+
+    /// Values of one probe over the run, `(t, value)`. None if the rows are
+    /// not kept ([`StandardOutput::keep_rows`]).
     pub fn probe_series(&self, name: &str) -> Vec<(f64, f64)> {
         match self.probes.iter().position(|p| p.name == name) {
             Some(i) => self.history.iter().map(|(t, v)| (*t, v[i])).collect(),
@@ -657,7 +704,10 @@ where
         }
         let row = (sim.time(), values);
         self.rows_hash = rows_hash(self.rows_hash, std::slice::from_ref(&row));
-        self.history.push(row);
+        self.rows += 1;
+        if self.keep_rows {
+            self.history.push(row);
+        }
         Ok(())
     }
 
@@ -849,10 +899,26 @@ where
                 }
             });
         }
-        self.rows_hash = rows_hash(ROWS_HASH_START, &r.history);
-        self.history = r.history;
-        self.next_frame = r.next_frame;
-        self.next_probe = r.next_probe;
+        self.rows = r.rows;
+        self.rows_hash = r.rows_hash;
+        self.history = if self.keep_rows {
+            r.history
+        } else {
+            Vec::new()
+        };
+        // The frame and probe schedules go on from the checkpoint's next
+        // times if they are this run's intervals' (a multiple of one, at
+        // most one interval ahead); an interval changed since (another
+        // `--probe-interval`, none, or the scene's output interval) takes
+        // effect at once. Taken as saved, a row every step after rows
+        // every 0.1 s recorded none until the saved next time.
+        let now = sim.time() + 1e-9 * sim.end_time();
+        self.next_frame = resumed_next(r.next_frame, now, sim.output_interval());
+        self.next_probe = match self.probe_interval {
+            // Every step.
+            None => 0.0,
+            every => resumed_next(r.next_probe, now, every),
+        };
         // The checkpoint schedule is this run's: a run restarted with
         // `--checkpoint-every` from one without it (whose checkpoint, written
         // at a stop, holds no next time) writes them, and a new interval
@@ -1027,6 +1093,18 @@ fn rows_hash(mut hash: u64, rows: &[(f64, Vec<f64>)]) -> u64 {
 /// The cell arrays every frame writes besides the solids' internal
 /// variables.
 const FRAME_CELL_ARRAYS: [&str; 4] = ["material", "stress", "stress_zz", "contact_pressure"];
+
+/// The next time of a schedule of `interval` resumed at `now`: the
+/// checkpoint's `saved` one if it is that schedule's (a multiple of the
+/// interval after `now`, at most one interval ahead: the one
+/// [`next_after`] gave), else the first multiple of `interval` after `now`
+/// (infinite without an interval).
+fn resumed_next(saved: f64, now: f64, interval: Option<f64>) -> f64 {
+    match interval {
+        Some(dt) if saved > now && saved - dt <= now && (saved / dt).round() * dt == saved => saved,
+        _ => next_after(now, interval),
+    }
+}
 
 /// The first multiple of `interval` after `t` (infinite without an
 /// interval). Computed, not stepped: an interval too small to move a sum

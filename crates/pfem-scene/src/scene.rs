@@ -1272,9 +1272,19 @@ where
                 }
             }
             // Contact is between two bodies; a pair given twice would be
-            // ambiguous.
+            // ambiguous. A pair of which no body takes part in contact (a
+            // free solid, or a clamped one with `contact_clamped`) would
+            // have a coefficient that never acts (session 47's review: two
+            // walls, or a clamped beam and the floor it passes through).
+            let takes_part = |n: &String| {
+                by_name.get(n.as_str()).is_some_and(|x| {
+                    x.kind == ParticleKind::Solid && (x.clamps.is_empty() || self.contact.clamped)
+                })
+            };
             let why = if a == b {
                 Some("a body has no contact with itself")
+            } else if !takes_part(a) && !takes_part(b) {
+                Some("neither body takes part in contact (a free solid does, and a clamped one with contact_clamped): the coefficient would never act")
             } else if !pairs.insert(if a < b { (a, b) } else { (b, a) }) {
                 Some("this pair's friction is given twice")
             } else {

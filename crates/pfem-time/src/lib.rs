@@ -440,11 +440,17 @@ impl StepParams {
         for (setting, value) in [
             ("velocity_floor", self.velocity_floor),
             ("pressure_stabilisation", self.pressure_stabilisation),
-            ("picard_forcing", self.picard_forcing),
         ] {
             if !(value >= 0.0 && value.is_finite()) {
                 return out(setting, value, "[0, ∞)");
             }
+        }
+        // An iterate asked for the last change times 1 or more may return
+        // its start unchanged: a zero change that cannot end the loop, and
+        // then counts the next real change as growth (`pfem run` refused
+        // it; the library accepted it).
+        if !(0.0..1.0).contains(&self.picard_forcing) {
+            return out("picard_forcing", self.picard_forcing, "[0, 1)");
         }
         if self.scheme == Scheme::Bossak && !(-1.0 / 3.0..=0.0).contains(&self.bossak_alpha) {
             return out("bossak_alpha", self.bossak_alpha, "[-1/3, 0]");
@@ -979,6 +985,9 @@ where
     /// `n` particles: split when the solver wants it or the pressure is
     /// stabilised (which needs it).
     fn configure_assembly(&mut self, n: usize) {
+        // (`params` is public: a treatment changed since `new` is the
+        // step's, as every other setting is.)
+        self.assembler.set_treatment(self.params.volumetric);
         let stabilised = self.params.pressure_stabilisation > 0.0;
         self.assembler
             .set_split(stabilised || self.solver.wants_split(n * D));
@@ -1590,6 +1599,13 @@ mod tests {
             (
                 StepParams {
                     picard_forcing: -1e-3,
+                    ..d
+                },
+                "picard_forcing",
+            ),
+            (
+                StepParams {
+                    picard_forcing: 1.0,
                     ..d
                 },
                 "picard_forcing",

@@ -277,7 +277,8 @@ fn the_contact_table_sets_friction_stiffness_and_damping() {
 }
 
 /// Friction pairs that mean nothing are refused (session 26's review: they
-/// were accepted): a body with itself, a fluid, the same pair twice.
+/// were accepted): a body with itself, a fluid, the same pair twice, two
+/// bodies neither of which takes part in contact (session 47).
 #[test]
 fn meaningless_friction_pairs_are_refused() {
     let text = std::fs::read_to_string(scenes().join("dam_break_block_2d.toml")).unwrap();
@@ -295,6 +296,11 @@ fn meaningless_friction_pairs_are_refused() {
         (
             "friction = [{ bodies = [\"block\", \"floor\"], mu = 0.1 }, { bodies = [\"floor\", \"block\"], mu = 0.3 }]",
             "given twice",
+        ),
+        // Session 47: two walls never touch.
+        (
+            "friction = [{ bodies = [\"wall0\", \"floor\"], mu = 0.1 }]",
+            "neither body takes part in contact",
         ),
     ] {
         let err = SceneFile::parse(&text.replace(pair, with), "bad.toml")

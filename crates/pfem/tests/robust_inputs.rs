@@ -586,6 +586,31 @@ fn a_paddle_with_a_motion_law_runs_from_a_scene_file() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
+    // A run whose rows would fill gigabytes says so before it starts
+    // (session 47: `pfem run` keeps its rows on disk only), and runs.
+    let long = Command::new(env!("CARGO_BIN_EXE_pfem"))
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            dir.join("long").to_str().unwrap(),
+            "--end-time",
+            "4e4",
+            "--quiet",
+            "--no-vtu",
+            "--max-wall-time",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&long.stderr);
+    assert_eq!(long.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("note: probes.csv will hold at least 8000000 rows")
+            && err.contains("--probe-interval"),
+        "{err}"
+    );
+    assert!(!String::from_utf8_lossy(&run.stderr).contains("note: probes.csv"));
     let csv = std::fs::read_to_string(dir.join("probes.csv")).unwrap();
     let times: Vec<f64> = csv
         .lines()

@@ -122,7 +122,7 @@ pub enum OutputError {
     },
     /// The probe rows a run would keep in memory exceed its memory budget
     /// (a row every step, or every probe interval, to the end time).
-    #[error("{dir}: {columns} probe columns over at least {rows:.0} rows would hold {gb:.1} GB in memory, more than the memory budget ({budget_gb:.1} GB): give the probes an interval (pfem run --probe-interval, StandardOutput::probe_interval) or fewer columns")]
+    #[error("{dir}: {columns} probe columns over at least {rows:.0} rows would hold {gb:.1} GB in memory, more than the memory budget ({budget_gb:.1} GB): give the probes an interval (StandardOutput::probe_interval), fewer columns, or keep the rows in probes.csv only (StandardOutput::keep_rows(false))")]
     TooManyRows {
         /// The output folder.
         dir: PathBuf,

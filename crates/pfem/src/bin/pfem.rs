@@ -453,9 +453,12 @@ where
     let interrupted = Arc::new(AtomicBool::new(false));
     install_interrupt(&interrupted)?;
     sim.add_hook(Box::new(pfem::hooks::Interrupt::new(interrupted.clone())));
+    // The rows go to probes.csv; none is kept in memory (a long run's
+    // would grow with its steps).
     let mut output = StandardOutput::new(&out, !args.no_vtu, probes, args.quiet)
         .overwrite(args.overwrite)
-        .checkpoint_every(checkpoint_every);
+        .checkpoint_every(checkpoint_every)
+        .keep_rows(false);
     output.probe_interval = probe_interval;
     if let Some(ck) = &restart {
         let resumed = sim.restore(ck).and_then(|()| output.resume(ck));
@@ -476,6 +479,23 @@ where
         },
         out.display()
     );
+    // The rows go to the disk, not to memory: a file that would grow past
+    // a gigabyte is said before the run (at least a row every
+    // `max(probe interval, max_dt)`, some 22 bytes a value).
+    let columns = 1 + output.probe_count();
+    let every = probe_interval.unwrap_or(0.0).max(sim.max_dt());
+    let rows = ((sim.end_time() - sim.time()).max(0.0) / every).floor();
+    let bytes = rows * 22.0 * columns as f64;
+    if output.probe_count() > 0 && bytes > 1e9 {
+        eprintln!(
+            "note: probes.csv will hold at least {rows:.0} rows of {columns} values, {:.1} GB or more ({}); --probe-interval thins it",
+            bytes / 1e9,
+            match probe_interval {
+                Some(t) => format!("a row every {t} s"),
+                None => "a row every step".into(),
+            }
+        );
+    }
     let steps = sim.steps();
     sim.run(&mut [&mut output]).map_err(|e| {
         // Refused before its first step (the outputs could not go on
