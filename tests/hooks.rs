@@ -1990,4 +1990,21 @@ fn positions_moved_by_hand_before_the_first_step_are_meshed_first() {
     sim.add_hook(Box::new(StopWhen::new("a step", |t, _| t > 0.0)));
     sim.run(&mut []).unwrap();
     assert_eq!(sim.stats().remesh.0, remeshed);
+    // A hook's move within the first step is the step's, on the mesh it
+    // saw: a force added before the solve sets the accelerations again,
+    // which remeshed the moved positions (the review of the change).
+    let mut sim = sim2(small_tank("moved by a hook"), StepParams::default());
+    let remeshed = sim.stats().remesh.0;
+    sim.add_hook(Box::new(FnHook::new("nudge and push").before_solve(
+        move |ctx: &mut HookContext<'_, 2>| {
+            if ctx.steps() == 0 {
+                ctx.particles_mut().x_mut()[top].y += 1e-3;
+            }
+            ctx.add_force(top, Vector::<2>::new(0.0, -1e-3))
+        },
+    )));
+    sim.add_hook(Box::new(StopWhen::new("a step", |t, _| t > 0.0)));
+    sim.run(&mut []).unwrap();
+    assert_eq!(sim.steps(), 1);
+    assert_eq!(sim.stats().remesh.0, remeshed);
 }

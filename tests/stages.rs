@@ -404,6 +404,66 @@ fn an_end_time_off_the_steps_grid_ends_without_a_sliver() {
     short.run(&mut []).unwrap();
     assert_eq!(short.time(), 5e-13);
     assert!(short.steps() >= 50, "{} steps", short.steps());
+    // The step at its floor (`min_dt` = `max_dt`) and a rest below two of
+    // them: one step of the rest, not one of `min_dt` and a sliver of
+    // 5·10⁻⁷ s (the review of the change).
+    let mut floor = Simulation::new(
+        block_at_rest(0.0100005, 1e-3),
+        Box::new(Delaunay2::default()),
+        StepParams {
+            min_dt: 1e-3,
+            ..StepParams::default()
+        },
+    )
+    .unwrap();
+    floor.run(&mut []).unwrap();
+    assert_eq!(floor.time(), 0.0100005);
+    assert!(floor.dt() >= 1e-3, "last step {}", floor.dt());
+    assert_eq!(floor.steps(), 10);
+}
+
+/// A restart with a later end time (the review of session 47's change):
+/// the schedules' tolerance is `10⁻⁹` of the end time, and a saved next
+/// row just ahead of the clock (5·10⁻⁶ s, within `10⁻⁹ × 10⁴ s`) was taken
+/// for one behind it: the row due at 4 ms was skipped.
+#[test]
+fn a_restart_with_a_later_end_time_keeps_the_row_due() {
+    let dir = std::env::temp_dir().join(format!("pfem-later-end-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let probes = || vec![Probe::<2>::new("clock", |s: &Simulation<2>| s.time())];
+    let build = || {
+        Simulation::new(
+            block_at_rest(0.003995, 1e-3),
+            Box::new(Delaunay2::default()),
+            StepParams::default(),
+        )
+        .unwrap()
+    };
+    let mut a = build();
+    let mut out = StandardOutput::new(&dir, false, probes(), true).checkpoint_every(Some(1.0));
+    out.probe_interval = Some(0.002);
+    a.run(&mut [&mut out]).unwrap();
+    let ck = pfem::observe::read_checkpoint(dir.join("checkpoint.bin")).unwrap();
+    let mut b = build();
+    b.restore(&ck).unwrap();
+    b.set_end_time(1e4).unwrap();
+    b.add_hook(Box::new(pfem::hooks::StopWhen::new("two steps", |t, _| {
+        t > 0.0055
+    })));
+    let mut out = StandardOutput::new(&dir, false, probes(), true);
+    out.probe_interval = Some(0.002);
+    out.resume(&ck).unwrap();
+    b.run(&mut [&mut out]).unwrap();
+    let rows: Vec<f64> = std::fs::read_to_string(dir.join("probes.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    let after: Vec<f64> = rows.iter().copied().filter(|&t| t > 0.003995).collect();
+    // The first step past 4 ms records the row due there.
+    assert!(after.first().is_some_and(|&t| t < 0.0051), "rows {rows:?}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Session 41: a `min_dt` above the scene's `max_dt` ran every step at

@@ -771,8 +771,16 @@ where
     /// a program set by hand are then replaced); call it again after changing
     /// velocities, pressures or constraints by hand before the first step.
     pub fn initialize_acceleration(&mut self) -> Result<(), RunError> {
+        self.accelerations(true)
+    }
+
+    /// [`Simulation::initialize_acceleration`]; `by_hand`: called from
+    /// outside a step, where positions moved since the first mesh were
+    /// moved by hand (within the first step, by its hooks, whose mesh the
+    /// step solves).
+    fn accelerations(&mut self, by_hand: bool) -> Result<(), RunError> {
         self.version = next_state_version();
-        rayon::scope(|_| self.mesh_a_set_changed_by_hand())?;
+        rayon::scope(|_| self.mesh_a_set_changed_by_hand(by_hand))?;
         let (mut mesh, history) = self.elements.step_mesh();
         mesh.node_material = self.particles.material();
         // (Forces may cover a prefix of the particles after a hook's
@@ -1383,12 +1391,15 @@ where
     /// meshed before anything reads the elements (a hook, an observer's
     /// first frame, the accelerations' start), whose indices are the old
     /// set's.
-    fn mesh_a_set_changed_by_hand(&mut self) -> Result<(), RunError> {
+    fn mesh_a_set_changed_by_hand(&mut self, positions: bool) -> Result<(), RunError> {
         // Positions moved by hand before the first step, which solves the
         // mesh `new` made (session 47's review: a particle moved far from
         // the water stayed in its elements, and a solid moved towards a
-        // wall kept a contact layer of the old gap).
-        let moved = self.clock.steps == 0
+        // wall kept a contact layer of the old gap). Not within the first
+        // step (`positions` false): its hooks' moves are the step's, on
+        // the mesh they saw.
+        let moved = positions
+            && self.clock.steps == 0
             && !self.meshed_at.is_empty()
             && self.meshed_at.as_slice() != self.particles.x();
         if self.particles.generation() != self.meshed || moved {
@@ -1422,7 +1433,7 @@ where
 
     fn step_in_pool(&mut self) -> Result<(), RunError> {
         self.no_non_number_by_hand()?;
-        self.mesh_a_set_changed_by_hand()?;
+        self.mesh_a_set_changed_by_hand(true)?;
         self.start_hooks()?;
         // The fluid volume at the end of the last step is `volume_now`; it is
         // measured once after remeshing and once after the solution.
@@ -1505,8 +1516,14 @@ where
             // Two equal steps to a kink or the end, not a full one and a
             // sliver (the controller grows the step back by 1.25 a step: a
             // sliver of 10⁻³ of it cost some 30 steps more), nor one past
-            // `max_dt`.
-            dt = (0.5 * remaining).max(dt_min);
+            // `max_dt`. A rest below `2 min_dt` (the step at its floor) is
+            // one step: two halves would be below `min_dt`, and one of
+            // `min_dt` would leave a sliver (the review of the change).
+            dt = if 0.5 * remaining >= dt_min {
+                0.5 * remaining
+            } else {
+                remaining
+            };
         }
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();
@@ -1522,7 +1539,7 @@ where
         if self.clock.steps == 0
             && (!self.external_force.is_empty() || self.gravity != self.accelerated_with)
         {
-            self.initialize_acceleration()?;
+            self.accelerations(false)?;
         }
         // The attempts, halving the step after each rejected one; the hooks
         // before the solve run again for each smaller step, so that what
@@ -1632,7 +1649,7 @@ where
         // (Before the hooks start: the review of session 45 found a NaN set
         // by hand blamed on the first hook that started.)
         self.no_non_number_by_hand()?;
-        rayon::scope(|_| self.mesh_a_set_changed_by_hand())?;
+        rayon::scope(|_| self.mesh_a_set_changed_by_hand(true))?;
         // The hooks start before the observers, so that the first frame
         // shows what they set at the start: a moving wall's velocity (it
         // showed at rest at t = 0, session 44's review), a wall a law
@@ -1658,9 +1675,7 @@ where
         let steps = (|| -> Result<(), RunError> {
             // (A step lands on the end time exactly; the tolerance is for
             // a clock restored or set within round-off of it.)
-            while self.end_time - self.clock.time > END_REACHED * self.end_time
-                && self.stop.is_none()
-            {
+            while !self.reached_end_time() && self.stop.is_none() {
                 self.step()?;
                 let t0 = Instant::now();
                 for o in observers.iter_mut() {
@@ -1841,6 +1856,13 @@ where
     /// End time (s).
     pub fn end_time(&self) -> f64 {
         self.end_time
+    }
+
+    /// Whether the clock has reached the end time: `run` takes no step
+    /// then. (A step lands on the end time exactly; a clock restored or
+    /// set within a relative 10⁻¹² of it has reached it too.)
+    pub fn reached_end_time(&self) -> bool {
+        self.end_time - self.clock.time <= END_REACHED * self.end_time
     }
 
     /// Sets the end time (s), e.g. to continue a finished run.

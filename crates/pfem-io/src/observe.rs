@@ -197,7 +197,9 @@ where
     /// then cost no memory (128 bytes a row for 10 probes, kept), and the
     /// run is not refused for rows beyond its memory budget
     /// ([`crate::output::OutputError::TooManyRows`]). A checkpoint and a
-    /// restart work alike either way. `pfem run` keeps none.
+    /// restart work alike either way. `pfem run` keeps none. Set it before
+    /// [`StandardOutput::resume`], which reads the checkpoint's rows back
+    /// only if they are kept.
     pub fn keep_rows(mut self, keep: bool) -> Self {
         self.keep_rows = keep;
         self
@@ -817,7 +819,7 @@ where
                 e.insert("fluid_volume_final_drops".into(), sim.drop_volume().into());
                 let status = match sim.stopped() {
                     _ if self.failure.is_some() => "failed",
-                    None if sim.time() >= sim.end_time() - 1e-12 => "finished",
+                    None if sim.reached_end_time() => "finished",
                     None => "running",
                     Some(pfem_driver::hooks::Interrupt::REASON) => "interrupted",
                     Some(_) => "stopped",
@@ -912,12 +914,12 @@ where
         // `--probe-interval`, none, or the scene's output interval) takes
         // effect at once. Taken as saved, a row every step after rows
         // every 0.1 s recorded none until the saved next time.
-        let now = sim.time() + 1e-9 * sim.end_time();
-        self.next_frame = resumed_next(r.next_frame, now, sim.output_interval());
+        let (t, now) = (sim.time(), sim.time() + 1e-9 * sim.end_time());
+        self.next_frame = resumed_next(r.next_frame, t, now, sim.output_interval());
         self.next_probe = match self.probe_interval {
             // Every step.
             None => 0.0,
-            every => resumed_next(r.next_probe, now, every),
+            every => resumed_next(r.next_probe, t, now, every),
         };
         // The checkpoint schedule is this run's: a run restarted with
         // `--checkpoint-every` from one without it (whose checkpoint, written
@@ -1094,14 +1096,16 @@ fn rows_hash(mut hash: u64, rows: &[(f64, Vec<f64>)]) -> u64 {
 /// variables.
 const FRAME_CELL_ARRAYS: [&str; 4] = ["material", "stress", "stress_zz", "contact_pressure"];
 
-/// The next time of a schedule of `interval` resumed at `now`: the
-/// checkpoint's `saved` one if it is that schedule's (a multiple of the
-/// interval after `now`, at most one interval ahead: the one
-/// [`next_after`] gave), else the first multiple of `interval` after `now`
-/// (infinite without an interval).
-fn resumed_next(saved: f64, now: f64, interval: Option<f64>) -> f64 {
+/// The next time of a schedule of `interval` resumed at the clock `t`
+/// (`now` with the schedules' tolerance): the checkpoint's `saved` one if
+/// it is that schedule's (a multiple of the interval after `t`, at most
+/// one interval ahead: the one [`next_after`] gave), else the first
+/// multiple of `interval` after `now` (infinite without an interval). (Not
+/// "after `now`": the tolerance is this run's end time's, and a later end
+/// time would have skipped a saved time just ahead of the clock.)
+fn resumed_next(saved: f64, t: f64, now: f64, interval: Option<f64>) -> f64 {
     match interval {
-        Some(dt) if saved > now && saved - dt <= now && (saved / dt).round() * dt == saved => saved,
+        Some(dt) if saved > t && saved - dt <= now && (saved / dt).round() * dt == saved => saved,
         _ => next_after(now, interval),
     }
 }
