@@ -1108,3 +1108,76 @@ fn friction_that_could_never_act_is_refused() {
     assert!(err.contains("neither body takes part in contact"), "{err}");
     assert!(scene().contact_clamped(true).validate().is_ok());
 }
+
+/// A known gap, asserted as it stands (session 47's review of contact):
+/// 3D has no corner rule, so a free block one spacing from the floor and
+/// the side wall of one wall body (a tank drawn as one surface) meets a
+/// tetrahedron across the concave corner, edge against edge at `h/√2`,
+/// and starts at 70.7 % of its contact distance: refused, with the way
+/// out. The same walls as two bodies build and run (the three-body rule
+/// measures the nearest pair).
+#[test]
+fn a_block_in_the_corner_of_one_wall_body_in_3d_is_refused_with_the_way_out() {
+    let h = 0.05;
+    let lattice = |is: std::ops::RangeInclusive<i32>, js: std::ops::RangeInclusive<i32>| {
+        let mut p = Vec::new();
+        for i in is.clone() {
+            for j in js.clone() {
+                for k in -2..=6 {
+                    p.push(Point::<3>::new(i as f64 * h, j as f64 * h, k as f64 * h));
+                }
+            }
+        }
+        p
+    };
+    // The floor (two layers) and the side wall at x ≤ 0 (two layers).
+    let floor = lattice(0..=8, -1..=0);
+    let side = lattice(-1..=0, 1..=6);
+    let build = |one_body: bool| {
+        let mut scene = Scene::<3>::new("corner")
+            .gravity(Vector::<3>::new(0.0, -G, 0.0))
+            .settings(RunSettings {
+                end_time: 0.01,
+                max_dt: 2e-3,
+                output_interval: None,
+                ..Default::default()
+            });
+        scene = if one_body {
+            let all = floor.iter().chain(&side).copied().collect();
+            scene.wall("tank", Geometry::Particles(all), h, WallMotion::Fixed)
+        } else {
+            scene
+                .wall(
+                    "floor",
+                    Geometry::Particles(floor.clone()),
+                    h,
+                    WallMotion::Fixed,
+                )
+                .wall(
+                    "side",
+                    Geometry::Particles(side.clone()),
+                    h,
+                    WallMotion::Fixed,
+                )
+        };
+        let scene = scene.solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<3>::new(h, h, 0.0),
+                max: Point::<3>::new(h + 0.15, h + 0.1, 0.15),
+            },
+            h,
+            None,
+        );
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default())
+    };
+    let err = build(true).map(|_| ()).unwrap_err().to_string();
+    assert!(
+        err.contains("70.7 %") && err.contains("separate bodies"),
+        "{err}"
+    );
+    let mut two = build(false).unwrap();
+    assert!(two.elements().n_contact() > 0);
+    two.run(&mut []).unwrap();
+}

@@ -743,10 +743,26 @@ where
             if let Some((ratio, (a, b))) = closest {
                 if ratio < least - 1e-9 {
                     let name = |i: u32| sim.body_names[i as usize].clone();
+                    // 3D has no corner rule (`pfem_geometry::contact`): a
+                    // solid one spacing from two faces of one wall body (a
+                    // tank drawn as one surface) is measured across the
+                    // corner, at 1/√2 of its distance. Two bodies are not.
+                    let wall = |i: u32| {
+                        sim.particles
+                            .body()
+                            .iter()
+                            .zip(sim.particles.kind())
+                            .any(|(&bi, &k)| bi == i && k == ParticleKind::Wall)
+                    };
+                    let corner = if D == 3 && (wall(a) || wall(b)) {
+                        "; in 3D a solid in the corner of one wall body (a tank drawn as one surface) is measured across the corner: give the walls that meet there as separate bodies"
+                    } else {
+                        ""
+                    };
                     return Err(SceneError::InvalidGeometry {
                         body: name(a),
                         why: format!(
-                            "it starts at {:.1} % of its contact distance from body `{}` (half the sum of the two spacings; at least {:.1} % is accepted, by the contact's onset): place them that far apart, or a solid on a wall's lattice, where it is welded",
+                            "it starts at {:.1} % of its contact distance from body `{}` (half the sum of the two spacings; at least {:.1} % is accepted, by the contact's onset): place them that far apart, or a solid on a wall's lattice, where it is welded{corner}",
                             100.0 * ratio,
                             name(b),
                             100.0 * least
