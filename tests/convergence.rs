@@ -2,10 +2,13 @@
 //! three resolutions, the error falling at each refinement and at an
 //! observed order (the least-squares slope of log error against log h)
 //! near the one the method should reach: at least 1.8 where linear
-//! elements and a second-order scheme give 2 (measured 2.47–2.77), 1.5 for
-//! the cantilever's frequency (1.82) and 1.3 for its static deflection
-//! (1.53: linear triangles lock in bending at two and four cells through
-//! the thickness). Until session 39 every case asserted only 0.9, which an
+//! elements and a second-order scheme give 2 (measured 2.47–2.77), and
+//! for the cantilever 1.8 for its frequency (2.03) and 1.5 for its static
+//! deflection (1.71: linear triangles lock in bending at two and four
+//! cells through the thickness). (Before session 47 the cantilever's root
+//! was held by a full clamp, stiffer than its beam-theory references'; it
+//! reached 1.82 and 1.53 against them, asserted 1.5 and 1.3.) Until
+//! session 39 every case asserted only 0.9, which an
 //! order lost would have passed. The dam break's self-convergence asserts
 //! 0.9 against a finer run of its own, which overstates an order
 //! (`docs/accuracy-cost.md`). The full sweeps, with
@@ -88,8 +91,8 @@ fn cantilever_static_deflection_and_frequency_converge() {
                 .error,
         );
     }
-    assert_converges("cantilever (static tip deflection)", &h, &es, 1.3);
-    assert_converges("cantilever (first frequency)", &h, &ev, 1.5);
+    assert_converges("cantilever (static tip deflection)", &h, &es, 1.5);
+    assert_converges("cantilever (first frequency)", &h, &ev, 1.8);
 }
 
 /// Water at rest is reproduced exactly: linear pressure is in the P1

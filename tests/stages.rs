@@ -617,3 +617,31 @@ fn builder_calls_that_cannot_act_are_refused() {
         .with_velocity(Vector::<2>::new(1.0, 0.0));
     fine.validate().unwrap();
 }
+
+/// Session 47 (a review of the step control): past an end time of about
+/// 1.1·10⁶ s the smallest step is raised to `end_time · 2⁻⁵⁰`, and it was
+/// among the settings a restart must repeat: a long quasi-static run
+/// restarted with a later end time was refused for its `min_dt`. The
+/// check compares `min_dt` as set; another `max_dt` is still refused.
+#[test]
+fn a_long_run_restarted_with_a_later_end_time_is_accepted() {
+    let build = |end: f64, max_dt: f64| {
+        Simulation::new(
+            block_at_rest(end, max_dt),
+            Box::new(Delaunay2::default()),
+            StepParams::default(),
+        )
+        .unwrap()
+    };
+    let mut a = build(2e6, 1.0);
+    for _ in 0..3 {
+        a.step().unwrap();
+    }
+    let ck = a.checkpoint();
+    let mut b = build(3e6, 1.0);
+    b.restore(&ck).unwrap();
+    assert_eq!(b.steps(), 3);
+    b.step().unwrap();
+    let err = build(2e6, 0.5).restore(&ck).unwrap_err().to_string();
+    assert!(err.contains("setting"), "{err}");
+}

@@ -44,20 +44,20 @@ pub enum Fidelity {
     /// Quick look: twice the default spacing, Courant 0.5, Picard 1e-3.
     /// Couette 2.3 %, standing wave 3.8 %, cantilever static 34 % and
     /// frequency 22 % (two linear triangles through the thickness lock in
-    /// bending), dam break (a/10) 9.2 % against a/45 and 2.0 % against the
+    /// bending), dam break (a/10) 9.1 % against a/45 and 2.0 % against the
     /// experiment; its runs of the study take about 0.3 s together.
     Draft,
     /// The library defaults: default spacing, Courant 0.5, Picard 1e-6.
-    /// Couette 0.33 % (0.7 s), standing wave 0.65 % (0.06 s), cantilever
-    /// static 12.5 % and frequency 6.5 %, dam break (a/20) 2.2 % against
-    /// a/45 and 1.8 % against the experiment; about 2.2 s together.
+    /// Couette 0.33 % (0.8 s), standing wave 0.65 % (0.07 s), cantilever
+    /// static 11.5 % and frequency 5.9 %, dam break (a/20) 1.9 % against
+    /// a/45 and 1.8 % against the experiment; about 2.5 s together.
     #[default]
     Standard,
     /// Refined: 0.7 × the default spacing, Courant 0.5, Picard 1e-6.
-    /// Couette 0.19 % (1.0 s), standing wave 0.27 % (0.2 s), cantilever
-    /// static 6.5 % and frequency 3.1 %, dam break (a/29) 1.4 % against
-    /// a/45 and 1.1 % against the experiment; about 6.3 s together: about
-    /// 3.5× Standard's time on the dam break for 0.65 of its difference to
+    /// Couette 0.19 % (1.1 s), standing wave 0.27 % (0.2 s), cantilever
+    /// static 5.6 % and frequency 2.6 %, dam break (a/29) 1.2 % against
+    /// a/45 and 1.1 % against the experiment; about 6.1 s together: about
+    /// 3.0× Standard's time on the dam break for 0.62 of its difference to
     /// a/45 (a biased measure, `docs/accuracy-cost.md`: 0.74 to 0.86 of
     /// Standard's error with the orders its four points also fit).
     Fine,

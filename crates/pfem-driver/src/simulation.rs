@@ -405,6 +405,10 @@ where
     /// The driver options the simulation was built with (their print goes
     /// into checkpoints: [`Simulation::settings_print`]).
     options: Options,
+    /// `min_dt` as the program and the scene set it, before the end
+    /// time's floor (`end_time · 2⁻⁵⁰`): what a restart must repeat (a
+    /// later `--end-time` raises the floor past 1.1·10⁶ s).
+    min_dt_set: f64,
     /// The particles' generation the mesh was last made for: a set changed
     /// by hand since ([`Simulation::particles_mut`]) is remeshed by the
     /// next step.
@@ -509,6 +513,14 @@ where
         // smallest step is raised to it (a long run's default `min_dt` of
         // 10⁻⁹ s is below it past 1.1·10⁶ s).
         let mut params = params;
+        // (The same rule without the floor, for the restart's check.)
+        let min_dt_set = if params.min_dt > scene.settings.max_dt
+            && params.min_dt == StepParams::default().min_dt
+        {
+            1e-3 * scene.settings.max_dt
+        } else {
+            params.min_dt
+        };
         params.min_dt = params
             .min_dt
             .max(scene.settings.end_time * MIN_DT_OF_END_TIME);
@@ -672,6 +684,7 @@ where
             cut_against,
             start_rigid: options.free_solids_start_rigid,
             options,
+            min_dt_set,
             meshed: u64::MAX,
             meshed_at: Vec::new(),
             accelerated_with: None,
@@ -1964,8 +1977,17 @@ where
     /// `max_dt`) would not continue the run it claims to, so
     /// [`Simulation::restore`] refuses it.
     /// (The memory budget is left out: it follows the machine's memory,
-    /// and a run may continue on another machine.)
-    fn settings_print(&self) -> String {
+    /// and a run may continue on another machine.) `min_dt` is printed as
+    /// set, before the end time's floor, unless `floored` (what a
+    /// checkpoint before session 47 holds): a run continued to a later end
+    /// time raises the floor past 1.1·10⁶ s, and was refused for it.
+    fn settings_print(&self, floored: bool) -> String {
+        let mut params = self.stepper.integrator.params;
+        let mut controller = self.controller;
+        if !floored {
+            params.min_dt = self.min_dt_set;
+            controller.dt_min = self.min_dt_set;
+        }
         let options = Options {
             memory_budget: 0.0,
             ..self.options
@@ -1978,8 +2000,8 @@ where
         };
         format!(
             "{:?}; {:?}; solver {}; {:?}; {:?}",
-            self.stepper.integrator.params,
-            self.controller,
+            params,
+            controller,
             self.stepper.integrator.solver_settings(),
             options,
             alpha
@@ -2065,7 +2087,7 @@ where
         ck.set(SIMULATION, e.finish());
         ck.set(TIMINGS, t.finish());
         let mut st = Encoder::new();
-        st.str(&self.settings_print());
+        st.str(&self.settings_print(false));
         ck.set(SETTINGS, st.finish());
         let mut cs = Encoder::new();
         cs.str(&self.contact_print());
@@ -2180,8 +2202,8 @@ where
             let mut sd = Decoder::new(bytes);
             let saved = sd.str()?.to_string();
             sd.end()?;
-            let now = self.settings_print();
-            if saved != now {
+            let now = self.settings_print(false);
+            if saved != now && saved != self.settings_print(true) {
                 // The first setting that differs, `name: value` each.
                 let split = |s: &str| -> Vec<String> {
                     s.split([';', ',', '{', '}'])
