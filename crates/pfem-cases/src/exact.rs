@@ -411,10 +411,10 @@ pub struct StandingWave {
     /// Water depth (m), default 0.5.
     pub depth: f64,
     /// Surface amplitude `a` (m), default 0.001 (`k a = 0.0031`). The
-    /// particles' (Lagrangian) elevation differs from the Eulerian `η` by
-    /// `O(ka · a)`, which moves the measured crossing by `O(ka)` relative:
-    /// with `a` = 5 mm the frequency read at 80 cells was 1.8·10⁻³ high, at
-    /// 1 mm 1.4·10⁻⁴.
+    /// frequency read grows with it: with `a` = 5 mm it was 1.8·10⁻³ high
+    /// at 80 cells, at 1 mm 1.4·10⁻⁴ (12.6 times less; the cause, the
+    /// wave's nonlinearity or the particles' Lagrangian elevation, is not
+    /// separated: `docs/accuracy-cost.md`).
     pub amplitude: f64,
     /// Cells across the width (`h = length / cells`), default 20.
     pub cells: usize,
