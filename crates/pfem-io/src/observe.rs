@@ -322,8 +322,7 @@ where
         if self.probes.is_empty() || !self.keep_rows {
             return Ok(());
         }
-        let every = self.probe_interval.unwrap_or(0.0).max(sim.max_dt());
-        let rows = ((sim.end_time() - sim.time()).max(0.0) / every).floor() + self.rows as f64;
+        let rows = self.rows_to_come(sim) + self.rows as f64;
         let columns = self.probes.len();
         let bytes = rows * (ROW_BYTES + 8.0 * columns as f64);
         if bytes > sim.memory_budget() {
@@ -539,6 +538,17 @@ where
     /// not kept ([`StandardOutput::keep_rows`]).
     pub fn history(&self) -> &[(f64, Vec<f64>)] {
         &self.history
+    }
+
+    /// The fewest probe rows `sim`'s run will still record: one every
+    /// `max(probe_interval, max_dt)` to the end time (none without
+    /// probes). What a run's rows will cost is judged by it.
+    pub fn rows_to_come(&self, sim: &Simulation<D>) -> f64 {
+        if self.probes.is_empty() {
+            return 0.0;
+        }
+        let every = self.probe_interval.unwrap_or(0.0).max(sim.max_dt());
+        ((sim.end_time() - sim.time()).max(0.0) / every).floor()
     }
 
     /// The number of probes (columns of `probes.csv` after `t`).

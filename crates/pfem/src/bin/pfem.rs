@@ -480,13 +480,11 @@ where
         out.display()
     );
     // The rows go to the disk, not to memory: a file that would grow past
-    // a gigabyte is said before the run (at least a row every
-    // `max(probe interval, max_dt)`, some 22 bytes a value).
+    // a gigabyte is said before the run (some 22 bytes a value).
     let columns = 1 + output.probe_count();
-    let every = probe_interval.unwrap_or(0.0).max(sim.max_dt());
-    let rows = ((sim.end_time() - sim.time()).max(0.0) / every).floor();
+    let rows = output.rows_to_come(&sim);
     let bytes = rows * 22.0 * columns as f64;
-    if output.probe_count() > 0 && bytes > 1e9 {
+    if bytes > 1e9 {
         eprintln!(
             "note: probes.csv will hold at least {rows:.0} rows of {columns} values, {:.1} GB or more ({}); --probe-interval thins it",
             bytes / 1e9,
