@@ -644,6 +644,34 @@ fn bodies_in_contact_closer_than_their_contact_distance_are_refused() {
     let err = wide(Point::<2>::new(0.0, h), Point::<2>::new(0.2, h + 0.05)).unwrap_err();
     assert!(err.to_string().contains("92.9 %"), "{err}");
     assert!(wide(Point::<2>::new(0.0, y), Point::<2>::new(0.2, y + 0.05)).is_ok());
+    // Session 48: the accepted block moved by hand down to the first
+    // block's place before the first step was meshed there (session 47)
+    // but not checked again: it started under the penalty and was kicked.
+    // The first step refuses it, naming a particle of the block; moved by
+    // hand to another accepted place, it runs.
+    for (dy, refused) in [(y - h, true), (-0.002, false)] {
+        let mut s = Simulation::new(
+            block(Point::<2>::new(0.0, y), Point::<2>::new(0.2, y + 0.05)),
+            Box::new(Delaunay2::default()),
+            StepParams::default(),
+        )
+        .unwrap();
+        let ids = s.body_particles("block").unwrap();
+        for &i in &ids {
+            s.particles_mut().x_mut()[i].y -= dy;
+        }
+        let r = s.step();
+        match r {
+            Err(RunError::InvalidParticle { particle, why }) if refused => {
+                assert!(ids.contains(&particle), "{particle}: {why}");
+                assert!(
+                    why.contains("moved by hand") && why.contains("contact distance"),
+                    "{why}"
+                );
+            }
+            r => assert_eq!(r.is_ok(), !refused, "{dy}: {r:?}"),
+        }
+    }
 }
 
 /// 3D: a free elastic block resting on a floor (contact elements of three

@@ -425,6 +425,17 @@ where
     contact: ContactSetup<D>,
 }
 
+/// Two bodies closer than the start accepts
+/// ([`Simulation::too_close_at_start`]).
+struct TooClose {
+    /// The body named first.
+    body: String,
+    /// One of its particles in the closest contact element.
+    particle: usize,
+    /// What the error says.
+    why: String,
+}
+
 /// What contact needs each step.
 #[derive(Debug, Clone)]
 struct ContactSetup<const D: usize>
@@ -451,6 +462,9 @@ where
     friction_by_pair: Vec<((u32, u32), f64)>,
     /// The candidates of the step (buffer).
     candidates: Vec<pfem_geometry::ContactCandidate<D>>,
+    /// The penalty's rounded onset
+    /// ([`pfem_scene::ContactSettings::onset`]).
+    onset: f64,
 }
 
 impl<const D: usize> std::fmt::Debug for Simulation<D>
@@ -620,6 +634,13 @@ where
             dt_min: params.min_dt,
             growth: 1.25,
         };
+        // (Each field was checked above; the controller's own check keeps
+        // this so if the rules above change.)
+        controller.validate().map_err(|e| SceneError::OutOfRange {
+            setting: e.setting,
+            value: e.value,
+            range: e.range,
+        })?;
         let mut hooks: Vec<Box<dyn Hook<D>>> = Vec::new();
         if has_fluid && options.volume_correction > 0.0 {
             hooks.push(Box::new(
@@ -712,6 +733,7 @@ where
                 },
                 friction,
                 candidates: Vec::new(),
+                onset: contact_onset,
             },
         };
         sim.remesh()
@@ -722,67 +744,11 @@ where
         // kicked apart at the first step (session 44's review: a fine
         // block one of its spacings over a floor twice as coarse, a block
         // on a floor with its lattice offset). Refused, naming the pair.
-        {
-            use pfem_constitutive::contact::GAP_RATIO;
-            // (An element whose every particle is held, a clamped or welded
-            // solid beside a wall, carries no load: it is left alone.)
-            let nv = D + 1;
-            let held = |el: &[u32]| {
-                el.iter()
-                    .all(|&i| sim.particles.constraints().is_fully_fixed(i as usize))
-            };
-            let closest = sim
-                .elements
-                .contact()
-                .chunks_exact(nv)
-                .zip(sim.elements.contact_history())
-                .zip(sim.elements.contact_bodies())
-                .filter(|((el, _), _)| !held(el))
-                .map(|((_, h), b)| (h.internal[GAP_RATIO], *b))
-                .min_by(|a, b| a.0.total_cmp(&b.0));
-            // Accepted: a closure within the onset, and a starting
-            // pressure no higher than the default onset's bound
-            // (`K_c δ₀/2`): a wide onset (up to ½) took bodies half their
-            // contact distance apart at a quarter of the penalty's
-            // modulus (session 47's review). Past `δ₀` the closure
-            // `√(δ δ₀)` starts at `K_c δ₀/2` on the onset's parabola.
-            let (onset, usual) = (contact_onset.max(0.0), pfem_scene::scene::CONTACT_ONSET);
-            let least = 1.0
-                - if onset > usual {
-                    (onset * usual).sqrt()
-                } else {
-                    onset
-                };
-            if let Some((ratio, (a, b))) = closest {
-                if ratio < least - 1e-9 {
-                    let name = |i: u32| sim.body_names[i as usize].clone();
-                    // 3D has no corner rule (`pfem_geometry::contact`): a
-                    // solid one spacing from two faces of one wall body (a
-                    // tank drawn as one surface) is measured across the
-                    // corner, at 1/√2 of its distance. Two bodies are not.
-                    let wall = |i: u32| {
-                        sim.particles
-                            .body()
-                            .iter()
-                            .zip(sim.particles.kind())
-                            .any(|(&bi, &k)| bi == i && k == ParticleKind::Wall)
-                    };
-                    let corner = if D == 3 && (wall(a) || wall(b)) {
-                        "; in 3D a solid in the corner of one wall body (a tank drawn as one surface) is measured across the corner: give the walls that meet there as separate bodies"
-                    } else {
-                        ""
-                    };
-                    return Err(SceneError::InvalidGeometry {
-                        body: name(a),
-                        why: format!(
-                            "it starts at {:.1} % of its contact distance from body `{}` (half the sum of the two spacings; at least {:.1} % is accepted, by the contact's onset): place them that far apart, or a solid on a wall's lattice, where it is welded{corner}",
-                            100.0 * ratio,
-                            name(b),
-                            100.0 * least
-                        ),
-                    });
-                }
-            }
+        if let Some(close) = sim.too_close_at_start() {
+            return Err(SceneError::InvalidGeometry {
+                body: close.body,
+                why: close.why,
+            });
         }
         sim.volume.initial = sim.fluid_volume();
         sim.volume.initial_drops = sim.drop_volume();
@@ -1416,6 +1382,81 @@ where
         RunError::Step(e)
     }
 
+    /// The closest pair of bodies in contact on the current mesh, if
+    /// closer than the start accepts: `Simulation::new` refuses such a
+    /// scene, and the first step positions moved by hand before it.
+    fn too_close_at_start(&self) -> Option<TooClose> {
+        use pfem_constitutive::contact::GAP_RATIO;
+        // (An element whose every particle is held, a clamped or welded
+        // solid beside a wall, carries no load: it is left alone.)
+        let nv = D + 1;
+        let held = |el: &[u32]| {
+            el.iter()
+                .all(|&i| self.particles.constraints().is_fully_fixed(i as usize))
+        };
+        let (ratio, el, (a, b)) = self
+            .elements
+            .contact()
+            .chunks_exact(nv)
+            .zip(self.elements.contact_history())
+            .zip(self.elements.contact_bodies())
+            .filter(|((el, _), _)| !held(el))
+            .map(|((el, h), b)| (h.internal[GAP_RATIO], el, *b))
+            .min_by(|a, b| a.0.total_cmp(&b.0))?;
+        // Accepted: a closure within the onset, and a starting
+        // pressure no higher than the default onset's bound
+        // (`K_c δ₀/2`): a wide onset (up to ½) took bodies half their
+        // contact distance apart at a quarter of the penalty's
+        // modulus (session 47's review). Past `δ₀` the closure
+        // `√(δ δ₀)` starts at `K_c δ₀/2` on the onset's parabola.
+        let (onset, usual) = (
+            self.contact.onset.max(0.0),
+            pfem_scene::scene::CONTACT_ONSET,
+        );
+        let least = 1.0
+            - if onset > usual {
+                (onset * usual).sqrt()
+            } else {
+                onset
+            };
+        if ratio >= least - 1e-9 {
+            return None;
+        }
+        let name = |i: u32| self.body_names[i as usize].clone();
+        // 3D has no corner rule (`pfem_geometry::contact`): a
+        // solid one spacing from two faces of one wall body (a
+        // tank drawn as one surface) is measured across the
+        // corner, at 1/√2 of its distance. Two bodies are not.
+        let wall = |i: u32| {
+            self.particles
+                .body()
+                .iter()
+                .zip(self.particles.kind())
+                .any(|(&bi, &k)| bi == i && k == ParticleKind::Wall)
+        };
+        let corner = if D == 3 && (wall(a) || wall(b)) {
+            "; in 3D a solid in the corner of one wall body (a tank drawn as one surface) is measured across the corner: give the walls that meet there as separate bodies"
+        } else {
+            ""
+        };
+        // A particle of body `a` in the element, else its first.
+        let particle = el
+            .iter()
+            .map(|&i| i as usize)
+            .find(|&i| self.particles.body()[i] == a)
+            .unwrap_or(el[0] as usize);
+        Some(TooClose {
+            body: name(a),
+            particle,
+            why: format!(
+                "it starts at {:.1} % of its contact distance from body `{}` (half the sum of the two spacings; at least {:.1} % is accepted, by the contact's onset): place them that far apart, or a solid on a wall's lattice, where it is welded{corner}",
+                100.0 * ratio,
+                name(b),
+                100.0 * least
+            ),
+        })
+    }
+
     /// A set changed by hand since the last mesh (`particles_mut`) is
     /// meshed before anything reads the elements (a hook, an observer's
     /// first frame, the accelerations' start), whose indices are the old
@@ -1434,6 +1475,19 @@ where
         if self.particles.generation() != self.meshed || moved {
             self.elements.clear_fluid();
             self.remesh()?;
+            // Moved by hand before the first step: the start's check of
+            // bodies in contact again (session 47 left it).
+            if moved {
+                if let Some(close) = self.too_close_at_start() {
+                    return Err(RunError::InvalidParticle {
+                        particle: close.particle,
+                        why: format!(
+                            "moved by hand before the first step, its body `{}`: {}",
+                            close.body, close.why
+                        ),
+                    });
+                }
+            }
             // The step remeshes again (after its first): it carries from
             // the solved range, not from this one formed from it.
             if self.clock.steps > 0 {

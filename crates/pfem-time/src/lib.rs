@@ -1536,8 +1536,45 @@ impl Default for CourantController {
 }
 
 impl CourantController {
+    /// Checks the fields' ranges, naming the first out of range: `courant`
+    /// and `dt_max` in (0, ∞), `dt_min` in (0, `dt_max`], `growth` in
+    /// [1, ∞). [`CourantController::next`] assumes them (a NaN field
+    /// would give a NaN step, a `dt_min` above `dt_max` steps above the
+    /// ceiling, a growth below 1 steps that shrink to `dt_min` without a
+    /// cause); `pfem_driver::Simulation` checks its controller once, up
+    /// front.
+    pub fn validate(&self) -> Result<(), InvalidStepParam> {
+        let out = |setting, value, range| {
+            Err(InvalidStepParam {
+                setting,
+                value,
+                range,
+            })
+        };
+        for (setting, value) in [("courant", self.courant), ("dt_max", self.dt_max)] {
+            if !(value > 0.0 && value.is_finite()) {
+                return out(setting, value, "(0, ∞)");
+            }
+        }
+        if !(self.dt_min > 0.0 && self.dt_min <= self.dt_max) {
+            return out("dt_min", self.dt_min, "(0, dt_max]");
+        }
+        if !(self.growth >= 1.0 && self.growth.is_finite()) {
+            return out("growth", self.growth, "[1, ∞)");
+        }
+        Ok(())
+    }
+
     /// The next time step from the smallest element size `h_min` (m), the
-    /// largest particle speed `v_max` (m/s) and the previous step.
+    /// largest particle speed `v_max` (m/s) and the previous step: within
+    /// [`dt_min`, `dt_max`] for fields that pass
+    /// [`CourantController::validate`]. A speed or size that is not a
+    /// positive number (zero, NaN) sets no Courant bound, and a previous
+    /// step that is not positive no growth bound: the caller checks its
+    /// particles' speeds are finite.
+    ///
+    /// [`dt_min`]: CourantController::dt_min
+    /// [`dt_max`]: CourantController::dt_max
     pub fn next(&self, h_min: f64, v_max: f64, previous: f64) -> f64 {
         let mut dt = self.dt_max;
         if v_max > 0.0 && h_min > 0.0 {
@@ -1553,6 +1590,62 @@ impl CourantController {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each field of a [`CourantController`] out of its range is named;
+    /// the steps of a valid one stay within its bounds, whatever the
+    /// speeds and sizes (zero, NaN, infinite).
+    #[test]
+    fn courant_controller_fields_out_of_range_are_named() {
+        let d = CourantController::default();
+        assert_eq!(d.validate(), Ok(()));
+        for (c, name) in [
+            (CourantController { courant: 0.0, ..d }, "courant"),
+            (
+                CourantController {
+                    courant: f64::NAN,
+                    ..d
+                },
+                "courant",
+            ),
+            (
+                CourantController {
+                    dt_max: f64::INFINITY,
+                    ..d
+                },
+                "dt_max",
+            ),
+            (CourantController { dt_min: 0.0, ..d }, "dt_min"),
+            (CourantController { dt_min: 0.1, ..d }, "dt_min"),
+            (
+                CourantController {
+                    dt_min: f64::NAN,
+                    ..d
+                },
+                "dt_min",
+            ),
+            (CourantController { growth: 0.9, ..d }, "growth"),
+            (
+                CourantController {
+                    growth: f64::NAN,
+                    ..d
+                },
+                "growth",
+            ),
+        ] {
+            assert_eq!(c.validate().map_err(|e| e.setting), Err(name), "{c:?}");
+        }
+        for h in [0.0, 1e-3, f64::NAN, f64::INFINITY] {
+            for v in [0.0, 1e-6, 3.0, 1e30, f64::NAN, f64::INFINITY] {
+                for prev in [0.0, 1e-12, 1e-3, f64::NAN] {
+                    let dt = d.next(h, v, prev);
+                    assert!(
+                        (d.dt_min..=d.dt_max).contains(&dt),
+                        "h {h}, v {v}, previous {prev}: {dt}"
+                    );
+                }
+            }
+        }
+    }
 
     /// Each setting outside its range is named by [`StepParams::validate`]
     /// (the integrator's attempt: `tests/closed_forms.rs`).
