@@ -16,10 +16,18 @@ use crate::{GeometryError, Tessellation, Tessellator, NO_NEIGHBOR};
 /// Parameters of [`Delaunay2`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Delaunay2Params {
-    /// Two particles closer than `coincidence_tolerance × L` are reported as
-    /// [`GeometryError::NearCoincident`], with `L` the larger side of the
-    /// particles' bounding box. Dimensionless, `≥ 0`; `0` reports exact
-    /// duplicates only. Default `1e-10`.
+    /// Two particles joined by an edge and closer than
+    /// `coincidence_tolerance × L` are reported as
+    /// [`GeometryError::NearCoincident`], with `L` their own scale: the
+    /// distance from the nearer of the two to the third vertex of a
+    /// triangle on their edge, the smaller of the two sides (the local
+    /// spacing). Exact duplicates (which spade would merge) are reported
+    /// with `L` the larger side of the set's bounding box. Dimensionless,
+    /// `≥ 0`; `0` reports exact duplicates only. Default `1e-10`.
+    ///
+    /// (Until session 48 `L` was the larger side of the whole set's
+    /// bounding box: one particle flung 10⁸ spacings away made every
+    /// pair of a splash "near coincident".)
     pub coincidence_tolerance: f64,
 }
 
@@ -155,7 +163,7 @@ impl Tessellator<2> for Delaunay2 {
         if extent == 0.0 {
             return Err(degenerate);
         }
-        let tolerance = self.params.coincidence_tolerance * extent;
+        let tol = self.params.coincidence_tolerance;
         let max_abs = lo.abs().sup(&hi.abs()).max();
         // Exact power-of-two rescaling to bring max |x| into [0.5, 1).
         let e = -exponent(max_abs) - 1;
@@ -196,7 +204,7 @@ impl Tessellator<2> for Delaunay2 {
             return Err(find_duplicate(
                 points,
                 |p| (scaled(p.x), scaled(p.y)),
-                tolerance,
+                tol * extent,
             ));
         }
         let nf = tri.num_inner_faces();
@@ -205,7 +213,6 @@ impl Tessellator<2> for Delaunay2 {
         }
         out.simplices.resize(3 * nf, 0);
         out.neighbors.resize(3 * nf, 0);
-        let tol2 = tolerance * tolerance;
         // Face handles in index order (inner face f is simplex f - 1), then
         // the half-edge structure is read in parallel.
         let faces: Vec<_> = tri.fixed_inner_faces().collect();
@@ -215,7 +222,7 @@ impl Tessellator<2> for Delaunay2 {
             .zip(out.simplices.par_chunks_mut(3 * CHUNK))
             .zip(out.neighbors.par_chunks_mut(3 * CHUNK))
             .map(|((faces, simplices), neighbors)| {
-                let mut close: Option<(f64, usize, usize)> = None;
+                let mut close: Option<(f64, usize, usize, f64)> = None;
                 for (j, &f) in faces.iter().enumerate() {
                     let edges = tri.face(f).adjacent_edges();
                     // vertices()[k] = edges[k].from(); edge k+1 is opposite
@@ -233,10 +240,23 @@ impl Tessellator<2> for Delaunay2 {
                         if a > b && nb != NO_NEIGHBOR {
                             continue;
                         }
-                        let d2 = (points[a] - points[b]).norm_squared();
-                        if d2 < tol2 {
-                            let c = (d2, a.min(b), a.max(b));
-                            if close.is_none_or(|old| c < old) {
+                        let (pa, pb) = (points[a], points[b]);
+                        let d = (pa - pb).norm();
+                        // The edge's own scale: the nearer of its two ends
+                        // to the third vertex of each triangle on it, the
+                        // smaller of the two sides (a pair at the edge of
+                        // a splash beside a far drop's long triangle is
+                        // measured on the splash's side).
+                        let third = |c: usize| (points[c] - pa).norm().min((points[c] - pb).norm());
+                        let mut local = third(v[k]);
+                        if nb != NO_NEIGHBOR {
+                            let c = edges[(k + 1) % 3].rev().next().to().fix().index();
+                            local = local.min(third(c));
+                        }
+                        let tolerance = tol * local;
+                        if d < tolerance {
+                            let c = (d, a.min(b), a.max(b), tolerance);
+                            if close.is_none_or(|old| (c.0, c.1, c.2) < (old.0, old.1, old.2)) {
                                 close = Some(c);
                             }
                         }
@@ -247,18 +267,22 @@ impl Tessellator<2> for Delaunay2 {
             .reduce(
                 || None,
                 |x, y| match (x, y) {
-                    (Some(a), Some(b)) => Some(if b < a { b } else { a }),
+                    (Some(a), Some(b)) => Some(if (b.0, b.1, b.2) < (a.0, a.1, a.2) {
+                        b
+                    } else {
+                        a
+                    }),
                     (a, None) => a,
                     (None, b) => b,
                 },
             );
-        if let Some((d2, first, second)) = close {
+        if let Some((distance, first, second, tolerance)) = close {
             out.simplices.clear();
             out.neighbors.clear();
             return Err(GeometryError::NearCoincident {
                 first,
                 second,
-                distance: d2.sqrt(),
+                distance,
                 tolerance,
             });
         }
@@ -474,6 +498,40 @@ mod tests {
             Err(GeometryError::NearCoincident {
                 first: 7,
                 second: 16,
+                ..
+            })
+        ));
+        // Session 48: one particle flung 10⁹ units away (a drop with
+        // nothing under it) made the tolerance 10⁻¹ (relative to the whole
+        // set's extent), and a pair of the lattice 10⁻³ apart "near
+        // coincident". Each pair is measured on its own scale: accepted,
+        // and the near pair beside it still refused.
+        let mut far = lattice(4, 4, 1.0, Point::<2>::zeros());
+        far.push(far[6] + Point::<2>::new(1e-3, 0.0));
+        far.push(Point::<2>::new(1.5, -1e9));
+        let t = mesh(&far).unwrap();
+        check(&far, &t);
+        far.push(far[9] + Point::<2>::new(0.0, 1e-11));
+        assert!(matches!(
+            mesh(&far),
+            Err(GeometryError::NearCoincident {
+                first: 9,
+                second: 18,
+                ..
+            })
+        ));
+        // A far drop of two particles one unit apart: their scale is their
+        // distance to the lattice (10⁹), their tolerance 10⁻¹.
+        let mut drop = lattice(4, 4, 1.0, Point::<2>::zeros());
+        drop.push(Point::<2>::new(1.5, -1e9));
+        drop.push(Point::<2>::new(2.5, -1e9));
+        check(&drop, &mesh(&drop).unwrap());
+        drop[17].x = 1.55;
+        assert!(matches!(
+            mesh(&drop),
+            Err(GeometryError::NearCoincident {
+                first: 16,
+                second: 17,
                 ..
             })
         ));
