@@ -25,6 +25,49 @@ fn solid_only() -> Scene<2> {
         )
 }
 
+/// A scene of a free block over a floor, no fluid: it remeshes for
+/// contact, but has no free surface to find nor fluid volume to measure
+/// (the free-surface stage was counted at every remeshing until session
+/// 48). Its frames' tags: `pfem-io`'s `output_vtu.rs`.
+#[test]
+fn a_contact_scene_without_fluid_finds_no_free_surface() {
+    let h = 0.01;
+    let scene = Scene::<2>::new("block")
+        .gravity(Vector::<2>::new(0.0, -9.81))
+        .settings(RunSettings {
+            end_time: 0.01,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.1, -h),
+                max: Point::<2>::new(0.3, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 1.5 * h),
+                max: Point::<2>::new(0.1, 1.5 * h + 0.05),
+            },
+            h,
+            None,
+        );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    sim.run(&mut []).unwrap();
+    assert!(sim.stages().remesh && sim.stages().contact && !sim.stages().free_surface);
+    assert!(sim.stats().remesh.0 > 0);
+    assert_eq!(sim.stats().free_surface, (0, 0.0));
+    assert_eq!(sim.fluid_volume(), 0.0);
+}
+
 #[test]
 fn a_solid_only_scene_never_remeshes_nor_updates_pressure() {
     let mut sim = Simulation::new(
@@ -263,6 +306,23 @@ fn work_done_follows_the_scene() {
     );
     // Assemblies: the initial acceleration's one and one per iterate.
     assert_eq!(w.elements_assembled, n_el * (sim.stats().assemble.0 + 1));
+    // A pressure stabilisation asked of a scene without fluid has no
+    // pressure row to act on: the same work and the same answer. (Until
+    // session 48 it split the system, and the split solve factorised
+    // afresh every iterate: a symbolic analysis per solve.)
+    let mut stabilised = Simulation::new(
+        solid_only(),
+        Box::new(Delaunay2::default()),
+        StepParams {
+            pressure_stabilisation: 1.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    stabilised.run(&mut []).unwrap();
+    assert_eq!(stabilised.work().symbolic_analyses, 1);
+    assert_eq!(stabilised.work().factorizations, w.factorizations);
+    assert_eq!(stabilised.particles().x(), sim.particles().x());
 
     let h = 0.05;
     let scene = Scene::<2>::new("puddle")

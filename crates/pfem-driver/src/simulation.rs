@@ -855,6 +855,11 @@ where
     /// cells ([`Simulation::drop_volume`]) (m³; m² per metre of depth in
     /// 2D).
     pub fn fluid_volume(&self) -> f64 {
+        // A scene without fluid has none, nor can it gain any (a fluid
+        // particle needs a fluid material): no pass over the particles.
+        if !self.stages.pressure {
+            return 0.0;
+        }
         self.elements.fluid_volume(self.particles.x()) + self.drop_volume()
     }
 
@@ -862,6 +867,9 @@ where
     /// fluid particle in no fluid element counts its lattice cell `hᵢ^D`
     /// ([`Elements::drop_volume`]).
     pub fn drop_volume(&self) -> f64 {
+        if !self.stages.pressure {
+            return 0.0;
+        }
         self.elements
             .drop_volume(self.particles.kind(), self.particles.spacing())
     }
@@ -936,8 +944,12 @@ where
         self.elements.set_fluid(shape, self.alpha.up, |el| {
             majority_fluid_material(el, kind, material)
         });
-        self.stats.free_surface.0 += 1;
-        self.stats.free_surface.1 += ts.elapsed().as_secs_f64();
+        // (Without fluid the alpha shape returns at once, after checking
+        // the tessellation the contact reads: no free surface to count.)
+        if self.stages.free_surface {
+            self.stats.free_surface.0 += 1;
+            self.stats.free_surface.1 += ts.elapsed().as_secs_f64();
+        }
         if self.stages.contact {
             // Contact elements: simplices joining a solid in contact (free,
             // or clamped when asked) to a wall or another solid, no fluid

@@ -573,8 +573,15 @@ where
         let nv = D + 1;
         let cells = sim.elements().all();
         let n_cells = cells.len() / nv;
-        // Boundary tags only when a frame is written.
-        let mut tags = vec![0i32; n];
+        // Boundary tags only when a frame is written. A wall or solid
+        // particle of a scene without fluid touches no fluid (5); it was
+        // written "interior" (0), a fluid's tag, until session 48.
+        let mut tags: Vec<i32> = sim
+            .particles()
+            .kind()
+            .iter()
+            .map(|&k| if k == ParticleKind::Fluid { 0 } else { 5 })
+            .collect();
         let mut vertex_cells = Vec::new();
         if sim.stages().free_surface {
             if let Ok(cls) = classify(

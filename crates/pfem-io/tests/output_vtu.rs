@@ -557,3 +557,57 @@ fn a_flying_drop_shows_its_own_material() {
     assert_eq!(tags.values[drop], 4.0, "isolated");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scene without fluid (a free block over a floor): its particles touch
+/// no fluid, tag 5. Until session 48 the tags were left at 0, "interior",
+/// a fluid particle's.
+#[test]
+fn a_scene_without_fluid_tags_its_particles_dry() {
+    use pfem_constitutive::Hypoelastic;
+    use pfem_driver::Simulation;
+    use pfem_io::StandardOutput;
+    use pfem_scene::{Geometry, RunSettings, Scene, WallMotion};
+    let h = 0.01;
+    let scene = Scene::<2>::new("block")
+        .gravity(Vector::<2>::new(0.0, -9.81))
+        .settings(RunSettings {
+            end_time: 0.004,
+            max_dt: 2e-3,
+            output_interval: Some(0.004),
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.1, -h),
+                max: Point::<2>::new(0.3, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 1.5 * h),
+                max: Point::<2>::new(0.1, 1.5 * h + 0.05),
+            },
+            h,
+            None,
+        );
+    let mut sim = Simulation::new(
+        scene,
+        Box::new(pfem_geometry::Delaunay2::default()),
+        pfem_time::StepParams::default(),
+    )
+    .unwrap();
+    let dir = temp_dir("dry-tags");
+    std::fs::remove_dir_all(&dir).unwrap();
+    let mut out = StandardOutput::new(&dir, true, Vec::new(), true);
+    sim.run(&mut [&mut out]).unwrap();
+    let v = read_vtu(&dir.join("block_000001.vtu"));
+    let tags = find(&v.point_data, "boundary_tag");
+    assert_eq!(tags.values.len(), sim.particles().len());
+    assert!(tags.values.iter().all(|&t| t == 5.0), "{:?}", tags.values);
+    let _ = std::fs::remove_dir_all(&dir);
+}
