@@ -580,6 +580,7 @@ where
             contact_stiffness,
             contact_damping,
             contact_onset,
+            domain,
         } = built;
         let can_touch = cloud.solid_can_touch();
         let particles = Particles::from_cloud(cloud);
@@ -642,6 +643,16 @@ where
             range: e.range,
         })?;
         let mut hooks: Vec<Box<dyn Hook<D>>> = Vec::new();
+        // The domain first: the fluid it removes is booked as leaving
+        // before the volume correction measures the step's water.
+        if let Some((lo, hi)) = domain.filter(|_| has_fluid) {
+            hooks.push(Box::new(crate::hooks::Domain::new(lo, hi).map_err(
+                |e| SceneError::InvalidGeometry {
+                    body: String::new(),
+                    why: e.to_string(),
+                },
+            )?));
+        }
         if has_fluid && options.volume_correction > 0.0 {
             hooks.push(Box::new(
                 VolumeCorrection::new(options.volume_correction).map_err(|_| {

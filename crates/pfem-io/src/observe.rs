@@ -569,7 +569,6 @@ where
         let Some(series) = self.series.as_mut() else {
             return Ok(());
         };
-        let n = sim.particles().len();
         let nv = D + 1;
         let cells = sim.elements().all();
         let n_cells = cells.len() / nv;

@@ -175,6 +175,8 @@ where
     /// Width of the contact penalty's rounded onset (fraction of the
     /// contact distance).
     pub contact_onset: f64,
+    /// The domain box ([`Scene::domain`]).
+    pub domain: Option<(Point<D>, Point<D>)>,
 }
 
 /// What [`Scene::build`] did to one body's particles that fell on another
@@ -228,6 +230,7 @@ where
             pressure_stabilisation: _,
             misuse: _,
             forces,
+            domain,
         } = scene;
         let mut free_solids = vec![false; bodies.len()];
         let mut particles = Cloud::<D>::default();
@@ -722,6 +725,7 @@ where
             merges,
             laws,
             forces,
+            domain,
         })
     }
 }

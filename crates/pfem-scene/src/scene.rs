@@ -366,6 +366,9 @@ where
     pub misuse: Vec<String>,
     /// Forces on solid bodies in time ([`Scene::force`]).
     pub forces: Vec<AppliedLoad<D>>,
+    /// The domain box (lower and upper corners, m), `None` for none
+    /// ([`Scene::domain`]): fluid particles that leave it are removed.
+    pub domain: Option<(Point<D>, Point<D>)>,
 }
 
 /// Contact settings ([`Scene::friction`], [`Scene::contact_stiffness`],
@@ -452,7 +455,21 @@ where
             pressure_stabilisation: 0.0,
             misuse: Vec::new(),
             forces: Vec::new(),
+            domain: None,
         }
+    }
+
+    /// The domain: the box `[min, max]` (m) outside which fluid particles
+    /// are removed at the end of each step, as fluid leaving (an outflow:
+    /// the volume ledger books it in `sources`, and the volume correction
+    /// keeps the water that is left). A drop that flies off an open tank
+    /// with nothing under it otherwise falls for the rest of the run, and
+    /// its growing speed shortens every step (the Courant bound counts
+    /// it). Every fluid body must start inside; walls and solids may
+    /// reach out of it and are never removed. Default: none.
+    pub fn domain(mut self, min: Point<D>, max: Point<D>) -> Self {
+        self.domain = Some((min, max));
+        self
     }
 
     /// Asks for the pressure stabilisation with factor `alpha` (≥ 0; see
@@ -835,6 +852,40 @@ where
         }
         if self.bodies.is_empty() {
             return Err(SceneError::Empty);
+        }
+        if let Some((lo, hi)) = self.domain {
+            if let Some(v) = lo.iter().chain(hi.iter()).find(|v| !v.is_finite()) {
+                return Err(SceneError::OutOfRange {
+                    setting: "domain",
+                    value: *v,
+                    range: "finite corners (m)",
+                });
+            }
+            if let Some(k) = (0..D).find(|&k| lo[k] >= hi[k]) {
+                return Err(SceneError::OutOfRange {
+                    setting: "domain",
+                    value: hi[k] - lo[k],
+                    range: "a positive width along every axis (max above min)",
+                });
+            }
+            for b in &self.bodies {
+                if b.kind != ParticleKind::Fluid {
+                    continue;
+                }
+                let (blo, bhi) = b.geometry.bounds();
+                if (0..D).any(|k| blo[k] < lo[k] || bhi[k] > hi[k]) {
+                    return Err(SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: format!(
+                            "it reaches out of the domain [{:?}, {:?}] (its bounds [{:?}, {:?}]): a fluid must start inside the domain, outside which its particles are removed",
+                            lo.as_slice(),
+                            hi.as_slice(),
+                            blo.as_slice(),
+                            bhi.as_slice()
+                        ),
+                    });
+                }
+            }
         }
         if self.bodies.len() > MAX_BODIES {
             return Err(SceneError::OutOfRange {

@@ -70,6 +70,7 @@
 //! | `dimension` | `2` or `3` |
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
+//! | `domain` | `{ min, max }` (m): fluid particles that leave this box are removed at the end of their step, booked as fluid leaving ([`Scene::domain`]); every fluid body must start inside; omit for none |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`]; `pressure_stabilisation` (factor α ≥ 0, default 0: [`Scene::pressure_stabilisation`]) |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` (m, s, s), `table = [[t, dx, dy], …]` (s, m) or `rotation = { center, axis (3D), rate, amplitude, period, ramp }` (m, –, rad/s, rad, s, s)), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }` (points m; values m/s or Pa), the nearest sample's value; points whose box misses the body's by more than two spacings are refused) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
@@ -134,6 +135,10 @@ pub struct SceneFile {
     /// Forces on solids in time (`[[force]]` tables), in order.
     #[serde(default, rename = "force")]
     pub forces: Vec<Spanned<ForceSpec>>,
+    /// The domain box, `domain = { min = [..], max = [..] }` (m): fluid
+    /// particles that leave it are removed (`Scene::domain`).
+    #[serde(default)]
+    pub domain: Option<BoxSpec>,
     /// The file's text, to turn spans into line numbers.
     #[serde(skip)]
     source: String,
@@ -743,6 +748,12 @@ impl SceneFile {
             .pressure_stabilisation(self.run.pressure_stabilisation.unwrap_or(0.0));
         if let Some(g) = &self.gravity {
             scene = scene.gravity(self.vector::<D>(g, "gravity")?);
+        }
+        if let Some(d) = &self.domain {
+            scene = scene.domain(
+                Point::from(self.vector::<D>(&d.min, "domain.min")?),
+                Point::from(self.vector::<D>(&d.max, "domain.max")?),
+            );
         }
         for spanned in &self.bodies {
             let b = spanned.get_ref();

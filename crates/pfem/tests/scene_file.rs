@@ -1082,3 +1082,37 @@ fn point_and_force_probes_read_the_direct_measurements_every_row() {
     }
     assert!(rows >= 10, "{rows} rows");
 }
+
+/// `domain = { min, max }` (session 48) reaches the scene and installs
+/// the domain's hook; a domain that does not hold the water, or of the
+/// wrong dimension, is refused naming what is wrong.
+#[test]
+fn a_domain_is_read_and_checked() {
+    let text = puddle(
+        "domain = { min = [-1.0, -1.0], max = [1.0, 1.0] }",
+        "end_time = 0.01\nmax_dt = 5e-3",
+        WATER,
+    );
+    let LoadedScene::Two(scene, _) = build(&text).unwrap() else {
+        panic!("2D")
+    };
+    assert_eq!(
+        scene.domain,
+        Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(1.0, 1.0)))
+    );
+    let sim = simulation(scene);
+    assert_eq!(sim.hook_names()[0], "domain");
+    let text = puddle(
+        "domain = { min = [-1.0, -1.0], max = [1.0, 0.1] }",
+        "end_time = 0.01",
+        WATER,
+    );
+    let err = build(&text).map(|_| ()).unwrap_err().to_string();
+    assert!(err.contains("water") && err.contains("domain"), "{err}");
+    let why = file_error(&puddle(
+        "domain = { min = [-1.0, -1.0, 0.0], max = [1.0, 1.0, 1.0] }",
+        "end_time = 0.01",
+        WATER,
+    ));
+    assert!(why.contains("domain"), "{why}");
+}

@@ -57,10 +57,12 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod domain;
 mod force;
 mod motion;
 mod volume;
 
+pub use domain::Domain;
 pub use force::AppliedForce;
 pub use motion::PrescribedMotion;
 pub use pfem_scene::motion::{MotionLaw, PiecewiseLinear, Rotation, Sinusoidal};
