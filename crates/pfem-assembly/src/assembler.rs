@@ -269,6 +269,39 @@ fn increment_scale(il: &crate::amg::Csr) -> f64 {
     let sum: f64 = il.diagonal().iter().map(|d| d - 1.0).sum();
     sum / il.nrows.max(1) as f64
 }
+/// What is wrong with an element at the iterate (the assembly's first
+/// failure in element order).
+#[derive(Debug, Clone, Copy)]
+enum Bad {
+    /// Degenerate or inverted: a smaller step may cure it.
+    Inverted,
+    /// Its material returned a non-number.
+    NonFinite,
+    /// Its material returned what no step size cures.
+    Invalid(&'static str),
+}
+
+/// Whether `σ̂` (with its out-of-plane `σ̂_zz` in 2D) is isotropic, to a
+/// relative 10⁻¹², the sum of its diagonal's three terms rounded.
+fn isotropic<const D: usize>(sigma_hat: &Tensor<D>, zz: f64) -> bool
+where
+    Const<D>: Dim,
+{
+    let scale = sigma_hat.amax().max(zz.abs());
+    if scale == 0.0 {
+        return true;
+    }
+    let tr = sigma_hat.trace() + if D == 2 { zz } else { 0.0 };
+    let mean = tr / 3.0;
+    let tol = 1e-12 * scale;
+    (0..D).all(|i| {
+        (0..D).all(|j| {
+            let dev = sigma_hat[(i, j)] - if i == j { mean } else { 0.0 };
+            dev.abs() <= tol
+        })
+    }) && (D == 3 || (zz - mean).abs() <= tol)
+}
+
 /// Relative residual at which that CG stops; the sparse factor it replaces
 /// reaches about 10⁻¹⁴.
 const INCREMENT_TOLERANCE: f64 = 1e-12;
@@ -1227,16 +1260,29 @@ where
                         *st = s;
                         let mat = &input.materials[self.elem_material[e] as usize];
                         *un = mat.unified(&s.kin, &input.element_history[e]);
-                        if un.mu.is_finite()
+                        if !(un.mu.is_finite()
                             && un.kappa.is_finite()
-                            && un.sigma_hat.iter().all(|v| v.is_finite())
+                            && un.sigma_hat_zz.is_finite()
+                            && un.sigma_hat.iter().all(|v| v.is_finite()))
                         {
-                            None
+                            Some((e, Bad::NonFinite))
+                        } else if un.mu < 0.0 || un.kappa < 0.0 {
+                            // (Negative, the system is indefinite: a solver
+                            // or the Picard loop failed at every step size,
+                            // naming no material; a negative 𝒦 made the
+                            // split form's square root a NaN.)
+                            Some((e, Bad::Invalid("a negative μ or 𝒦 (they are the unified form's viscosity and volumetric coefficient, eq. 44, ≥ 0)")))
+                        } else if elem_fluid[e] && !isotropic(&un.sigma_hat, un.sigma_hat_zz) {
+                            // A fluid's stress beyond `2μD' + 𝒦 ε_v` is its
+                            // nodal pressure: a deviatoric `σ̂` (a yield
+                            // stress written there) was ignored without a
+                            // word (a review, session 48).
+                            Some((e, Bad::Invalid("a fluid's σ̂ with a deviatoric part, which the assembly would ignore (a fluid's stress is 2μD' + 𝒦 ε_v I and its nodal pressure: put a yield stress or other shear stress into μ, as an effective viscosity)")))
                         } else {
-                            Some((e, false))
+                            None
                         }
                     }
-                    None => Some((e, true)),
+                    None => Some((e, Bad::Inverted)),
                 }
             })
             // The first bad element, whatever the threads did: the error (and
@@ -1261,17 +1307,23 @@ where
             self.cut_share
                 .push(below_water_line::<D>(&xn[..nv], mask, &up));
         }
-        if let Some((e, inverted)) = bad {
+        if let Some((e, bad)) = bad {
             let nodes = (0..nv)
                 .map(|a| self.particle_of[self.elem_sys[e * nv + a] as usize])
                 .collect();
-            return Err(if inverted {
-                AssemblyError::InvertedElement { element: e, nodes }
-            } else {
-                AssemblyError::NonFiniteMaterial {
+            let material = self.elem_material[e];
+            return Err(match bad {
+                Bad::Inverted => AssemblyError::InvertedElement { element: e, nodes },
+                Bad::NonFinite => AssemblyError::NonFiniteMaterial {
                     element: e,
-                    material: self.elem_material[e],
-                }
+                    material,
+                },
+                Bad::Invalid(why) => AssemblyError::InvalidMaterial {
+                    element: e,
+                    material,
+                    name: input.materials[material as usize].name().to_string(),
+                    why,
+                },
             });
         }
         self.values.iter_mut().for_each(|v| *v = 0.0);

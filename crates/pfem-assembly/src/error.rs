@@ -21,6 +21,19 @@ pub enum AssemblyError {
         /// Material index.
         material: u16,
     },
+    /// A material returned a constitutive triple that no step size cures
+    /// (a negative `μ` or `𝒦`, a fluid's deviatoric `σ̂`): returned at once.
+    #[error("material {material} (`{name}`) on element {element}: {why}")]
+    InvalidMaterial {
+        /// Element index.
+        element: usize,
+        /// Material index.
+        material: u16,
+        /// The material's name ([`pfem_constitutive::Material::name`]).
+        name: String,
+        /// What is wrong.
+        why: &'static str,
+    },
     /// The right-hand side is not finite.
     #[error("the assembled right-hand side is not finite at unknown {dof}")]
     NonFiniteSystem {

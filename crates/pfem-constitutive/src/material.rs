@@ -193,7 +193,8 @@ where
 /// struct literal, which breaks when a field is added.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Unified<const D: usize> {
-    /// Effective viscosity `μ⁽ⁿ⁺¹⁾` (Pa·s): `μ_f` for a fluid,
+    /// Effective viscosity `μ⁽ⁿ⁺¹⁾` (Pa·s, `≥ 0`, as `kappa`: the assembly
+    /// refuses a negative one): `μ_f` for a fluid,
     /// `μ_h w / J` for a hypoelastic solid (`w`: the scheme's displacement
     /// weight, [`Kinematics::displacement_weight`]; `Δt` in the paper's
     /// trapezoidal rule).
@@ -201,7 +202,10 @@ pub struct Unified<const D: usize> {
     /// Effective volumetric coefficient `𝒦⁽ⁿ⁺¹⁾` (Pa·s): `Δt K_f` for a
     /// fluid, `(λ_h + ⅔ μ_h) w / J` for a hypoelastic solid.
     pub kappa: f64,
-    /// History stress `σ̂⁽ⁿ⁾` (Pa): `−pⁿ I` for a fluid; for a hypoelastic
+    /// History stress `σ̂⁽ⁿ⁾` (Pa): `−pⁿ I` for a fluid in the paper, but a
+    /// fluid's pressure is nodal and added by the assembly, so a fluid's
+    /// isotropic `σ̂` is not used and a deviatoric one is refused
+    /// (`pfem_assembly::AssemblyError::InvalidMaterial`); for a hypoelastic
     /// solid the stress at the iterate less its linear part,
     /// `σ − (𝒦 ε_v I + 2 μ D')` ([`Self::returning`]; ARCHITECTURE.md,
     /// deviation 6), where the paper has `F σⁿ Fᵀ / J`.

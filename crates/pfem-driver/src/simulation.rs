@@ -417,6 +417,9 @@ where
     /// the first step does not remesh, so positions changed by hand since
     /// are meshed first ([`Simulation::particles_mut`]). Empty after it.
     meshed_at: Vec<Point<D>>,
+    /// Positions moved by hand before the first step wait for the start's
+    /// check of bodies in contact ([`Simulation::too_close_at_start`]).
+    start_check: bool,
     /// The gravity the accelerations were last set with
     /// ([`Simulation::initialize_acceleration`]): a first step under
     /// another one (a hook's) sets them again.
@@ -643,8 +646,9 @@ where
             range: e.range,
         })?;
         let mut hooks: Vec<Box<dyn Hook<D>>> = Vec::new();
-        // The domain first: the fluid it removes is booked as leaving
-        // before the volume correction measures the step's water.
+        // The domain first: after each remeshing the fluid it removes is
+        // booked as leaving before the volume correction measures the
+        // step's water.
         if let Some((lo, hi)) = domain.filter(|_| has_fluid) {
             hooks.push(Box::new(crate::hooks::Domain::new(lo, hi).map_err(
                 |e| SceneError::InvalidGeometry {
@@ -719,6 +723,7 @@ where
             min_dt_set,
             meshed: u64::MAX,
             meshed_at: Vec::new(),
+            start_check: false,
             accelerated_with: None,
             stepper: Stepper {
                 tessellator,
@@ -1498,19 +1503,6 @@ where
         if self.particles.generation() != self.meshed || moved {
             self.elements.clear_fluid();
             self.remesh()?;
-            // Moved by hand before the first step: the start's check of
-            // bodies in contact again (session 47 left it).
-            if moved {
-                if let Some(close) = self.too_close_at_start() {
-                    return Err(RunError::InvalidParticle {
-                        particle: close.particle,
-                        why: format!(
-                            "moved by hand before the first step, its body `{}`: {}",
-                            close.body, close.why
-                        ),
-                    });
-                }
-            }
             // The step remeshes again (after its first): it carries from
             // the solved range, not from this one formed from it.
             if self.clock.steps > 0 {
@@ -1520,6 +1512,22 @@ where
             let after = self.fluid_volume();
             self.volume.remeshing += after - self.volume_now;
             self.volume_now = after;
+            self.start_check |= moved;
+        }
+        // Moved by hand before the first step: the start's check of bodies
+        // in contact again (session 47 left it), until it passes (a second
+        // `step` after a refusal found the positions meshed and ran).
+        if self.start_check && self.clock.steps == 0 {
+            if let Some(close) = self.too_close_at_start() {
+                return Err(RunError::InvalidParticle {
+                    particle: close.particle,
+                    why: format!(
+                        "moved by hand before the first step, its body `{}`: {}",
+                        close.body, close.why
+                    ),
+                });
+            }
+            self.start_check = false;
         }
         Ok(())
     }

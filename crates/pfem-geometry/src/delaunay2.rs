@@ -18,12 +18,11 @@ use crate::{GeometryError, Tessellation, Tessellator, NO_NEIGHBOR};
 pub struct Delaunay2Params {
     /// Two particles joined by an edge and closer than
     /// `coincidence_tolerance × L` are reported as
-    /// [`GeometryError::NearCoincident`], with `L` their own scale: the
-    /// distance from the nearer of the two to the third vertex of a
-    /// triangle on their edge, the smaller of the two sides (the local
-    /// spacing). Exact duplicates (which spade would merge) are reported
-    /// with `L` the larger side of the set's bounding box. Dimensionless,
-    /// `≥ 0`; `0` reports exact duplicates only. Default `1e-10`.
+    /// [`GeometryError::NearCoincident`], with `L` the mesh's median edge
+    /// length (its typical spacing). Exact duplicates (which
+    /// spade would merge) are reported with `L` the larger side of the
+    /// set's bounding box. Dimensionless, `≥ 0`; `0` reports exact
+    /// duplicates only. Default `1e-10`.
     ///
     /// (Until session 48 `L` was the larger side of the whole set's
     /// bounding box: one particle flung 10⁸ spacings away made every
@@ -217,12 +216,15 @@ impl Tessellator<2> for Delaunay2 {
         // the half-edge structure is read in parallel.
         let faces: Vec<_> = tri.fixed_inner_faces().collect();
         let tri = &tri;
-        let close = faces
+        // Each edge's length once, in the slot of the face and local edge
+        // that read it (its twin's slot holds −1).
+        let mut lengths = vec![-1.0f64; 3 * nf];
+        faces
             .par_chunks(CHUNK)
             .zip(out.simplices.par_chunks_mut(3 * CHUNK))
             .zip(out.neighbors.par_chunks_mut(3 * CHUNK))
-            .map(|((faces, simplices), neighbors)| {
-                let mut close: Option<(f64, usize, usize, f64)> = None;
+            .zip(lengths.par_chunks_mut(3 * CHUNK))
+            .for_each(|(((faces, simplices), neighbors), lengths)| {
                 for (j, &f) in faces.iter().enumerate() {
                     let edges = tri.face(f).adjacent_edges();
                     // vertices()[k] = edges[k].from(); edge k+1 is opposite
@@ -234,48 +236,42 @@ impl Tessellator<2> for Delaunay2 {
                         let across = edges[(k + 1) % 3].rev().face().fix();
                         let nb = face_to_simplex(across);
                         neighbors[3 * j + k] = nb;
-                        // Edge k+1 joins vertices k+1 and k+2; check each
-                        // edge once (hull edges have no twin face).
+                        // Edge k+1 joins vertices k+1 and k+2; each edge
+                        // once (hull edges have no twin face).
                         let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
-                        if a > b && nb != NO_NEIGHBOR {
-                            continue;
-                        }
-                        let (pa, pb) = (points[a], points[b]);
-                        let d = (pa - pb).norm();
-                        // The edge's own scale: the nearer of its two ends
-                        // to the third vertex of each triangle on it, the
-                        // smaller of the two sides (a pair at the edge of
-                        // a splash beside a far drop's long triangle is
-                        // measured on the splash's side).
-                        let third = |c: usize| (points[c] - pa).norm().min((points[c] - pb).norm());
-                        let mut local = third(v[k]);
-                        if nb != NO_NEIGHBOR {
-                            let c = edges[(k + 1) % 3].rev().next().to().fix().index();
-                            local = local.min(third(c));
-                        }
-                        let tolerance = tol * local;
-                        if d < tolerance {
-                            let c = (d, a.min(b), a.max(b), tolerance);
-                            if close.is_none_or(|old| (c.0, c.1, c.2) < (old.0, old.1, old.2)) {
-                                close = Some(c);
-                            }
+                        if a < b || nb == NO_NEIGHBOR {
+                            lengths[3 * j + k] = (points[a] - points[b]).norm();
                         }
                     }
                 }
-                close
+            });
+        // The mesh's own scale: its median edge. A particle flung far away
+        // adds a few long hull edges, which do not move it (until session
+        // 48 the scale was the whole set's extent: one particle 10⁹ units
+        // away made a splash's pairs "near coincident").
+        let mut sample: Vec<f64> = lengths.iter().copied().filter(|&l| l >= 0.0).collect();
+        let mid = sample.len() / 2;
+        let median = if sample.is_empty() {
+            extent
+        } else {
+            *sample.select_nth_unstable_by(mid, f64::total_cmp).1
+        };
+        drop(sample);
+        let simplices = &out.simplices;
+        let close = lengths
+            .par_iter()
+            .enumerate()
+            .filter_map(|(slot, &d)| {
+                if d < 0.0 {
+                    return None;
+                }
+                let (f, k) = (slot / 3, slot % 3);
+                let a = simplices[3 * f + (k + 1) % 3] as usize;
+                let b = simplices[3 * f + (k + 2) % 3] as usize;
+                let tolerance = tol * median;
+                (d < tolerance).then_some((d, a.min(b), a.max(b), tolerance))
             })
-            .reduce(
-                || None,
-                |x, y| match (x, y) {
-                    (Some(a), Some(b)) => Some(if (b.0, b.1, b.2) < (a.0, a.1, a.2) {
-                        b
-                    } else {
-                        a
-                    }),
-                    (a, None) => a,
-                    (None, b) => b,
-                },
-            );
+            .min_by(|x, y| (x.0, x.1, x.2).partial_cmp(&(y.0, y.1, y.2)).unwrap());
         if let Some((distance, first, second, tolerance)) = close {
             out.simplices.clear();
             out.neighbors.clear();
@@ -504,8 +500,8 @@ mod tests {
         // Session 48: one particle flung 10⁹ units away (a drop with
         // nothing under it) made the tolerance 10⁻¹ (relative to the whole
         // set's extent), and a pair of the lattice 10⁻³ apart "near
-        // coincident". Each pair is measured on its own scale: accepted,
-        // and the near pair beside it still refused.
+        // coincident". The scale is the mesh's median edge: accepted, and
+        // the near pair beside it still refused.
         let mut far = lattice(4, 4, 1.0, Point::<2>::zeros());
         far.push(far[6] + Point::<2>::new(1e-3, 0.0));
         far.push(Point::<2>::new(1.5, -1e9));
@@ -520,13 +516,13 @@ mod tests {
                 ..
             })
         ));
-        // A far drop of two particles one unit apart: their scale is their
-        // distance to the lattice (10⁹), their tolerance 10⁻¹.
+        // A far drop of two particles 0.05 apart is meshed; the same
+        // particle twice is not.
         let mut drop = lattice(4, 4, 1.0, Point::<2>::zeros());
         drop.push(Point::<2>::new(1.5, -1e9));
-        drop.push(Point::<2>::new(2.5, -1e9));
+        drop.push(Point::<2>::new(1.55, -1e9));
         check(&drop, &mesh(&drop).unwrap());
-        drop[17].x = 1.55;
+        drop[17].x = 1.5;
         assert!(matches!(
             mesh(&drop),
             Err(GeometryError::NearCoincident {
@@ -534,6 +530,20 @@ mod tests {
                 second: 17,
                 ..
             })
+        ));
+        // A cluster of three, 10⁻¹³ apart (a review of session 48: a rule
+        // of each edge's nearest third vertex measured the cluster on its
+        // own triangle, and accepted it).
+        let mut cluster = lattice(4, 4, 1.0, Point::<2>::zeros());
+        let p = Point::<2>::new(1.5, 1.5);
+        cluster.extend([
+            p,
+            p + Point::<2>::new(1e-13, 0.0),
+            p + Point::<2>::new(0.0, 1e-13),
+        ]);
+        assert!(matches!(
+            mesh(&cluster),
+            Err(GeometryError::NearCoincident { first: 16, .. })
         ));
         // Tolerance 0 accepts it, spade resolves it exactly.
         let mut t = Tessellation::default();

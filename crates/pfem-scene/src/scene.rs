@@ -460,7 +460,8 @@ where
     }
 
     /// The domain: the box `[min, max]` (m) outside which fluid particles
-    /// are removed at the end of each step, as fluid leaving (an outflow:
+    /// are removed at the start of each step, after its remeshing, as
+    /// fluid leaving (an outflow:
     /// the volume ledger books it in `sources`, and the volume correction
     /// keeps the water that is left). A drop that flies off an open tank
     /// with nothing under it otherwise falls for the rest of the run, and

@@ -405,7 +405,8 @@ impl Default for StepParams {
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error("the step parameter `{setting}` = {value} is outside {range}")]
 pub struct InvalidStepParam {
-    /// The field of [`StepParams`].
+    /// The field of [`StepParams`] (or of [`CourantController`], from its
+    /// `validate`).
     pub setting: &'static str,
     /// Its value (a count as `f64`).
     pub value: f64,
@@ -636,7 +637,9 @@ impl StepError {
         use pfem_assembly::{AssemblyError as A, SolveError as S};
         match self {
             StepError::InvalidInput { .. } => false,
-            StepError::Assembly { source, .. } => !matches!(source, A::MeshMismatch { .. }),
+            StepError::Assembly { source, .. } => {
+                !matches!(source, A::MeshMismatch { .. } | A::InvalidMaterial { .. })
+            }
             StepError::Solve { source, .. } => !matches!(
                 source,
                 S::DimensionMismatch { .. } | S::InvalidSystem { .. } | S::NonFiniteSolution { .. }
@@ -1351,13 +1354,15 @@ where
         let materials = input.materials;
         let (x_it, v_it, x_n) = (&self.x_it, &self.v_it, &state.x);
         let assembler = &self.assembler;
-        let outcome: Vec<Result<Option<History<D>>, StepError>> =
+        // (Only the solid elements' histories and the failures are kept,
+        // in element order.)
+        let outcome: Vec<(usize, Result<History<D>, StepError>)> =
             (0..input.mesh.element_material.len())
                 .into_par_iter()
                 .with_min_len(256)
-                .map(|e| {
+                .filter_map(|e| {
                     if assembler.is_frozen(e) {
-                        return Ok(None); // a sliver on its geometry at tⁿ, a fluid element
+                        return None; // a sliver on its geometry at tⁿ, a fluid element
                     }
                     let el = &input.mesh.elements[e * nv..(e + 1) * nv];
                     let mut xs = [Point::<D>::zeros(); pfem_core::MAX_NV];
@@ -1369,24 +1374,28 @@ where
                         xn[a] = x_n[p];
                         vs[a] = v_it[p];
                     }
-                    let st = pfem_assembly::kernels::element_state::<D>(
+                    let Some(st) = pfem_assembly::kernels::element_state::<D>(
                         &xs[..nv],
                         &xn[..nv],
                         &vs[..nv],
                         dt,
                         inertia.displacement_weight,
-                    )
-                    .ok_or(StepError::Assembly {
-                        time,
-                        dt,
-                        source: AssemblyError::InvertedElement {
-                            element: e,
-                            nodes: el.to_vec(),
-                        },
-                    })?;
+                    ) else {
+                        return Some((
+                            e,
+                            Err(StepError::Assembly {
+                                time,
+                                dt,
+                                source: AssemblyError::InvertedElement {
+                                    element: e,
+                                    nodes: el.to_vec(),
+                                },
+                            }),
+                        ));
+                    };
                     let mat = &materials[input.mesh.element_material[e] as usize];
                     if mat.kind() != MaterialKind::Solid {
-                        return Ok(None);
+                        return None;
                     }
                     // An element whose every particle is prescribed (a
                     // clamped solid beside a wall) has a state no step size
@@ -1396,24 +1405,25 @@ where
                         .all(|&p| input.constraints.is_fully_fixed(p as usize));
                     if let Some(why) = (!held).then(|| mat.refuses(&st.kin, &history[e])).flatten()
                     {
-                        return Err(StepError::Refused {
-                            time,
-                            dt,
-                            element: e,
-                            nodes: el.to_vec(),
-                            why,
-                        });
+                        return Some((
+                            e,
+                            Err(StepError::Refused {
+                                time,
+                                dt,
+                                element: e,
+                                nodes: el.to_vec(),
+                                why,
+                            }),
+                        ));
                     }
                     let mut h = history[e];
                     mat.update_history(&st.kin, &mut h); // eq. 63
-                    Ok(Some(h))
+                    Some((e, Ok(h)))
                 })
                 .collect();
-        let mut new_history: Vec<(usize, History<D>)> = Vec::new();
-        for (e, r) in outcome.into_iter().enumerate() {
-            if let Some(h) = r? {
-                new_history.push((e, h));
-            }
+        let mut new_history: Vec<(usize, History<D>)> = Vec::with_capacity(outcome.len());
+        for (e, r) in outcome {
+            new_history.push((e, r?));
         }
         // A material's update or the stabilised increments may return a
         // non-number: refused before anything is written (the state, its

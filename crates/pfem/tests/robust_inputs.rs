@@ -1084,3 +1084,113 @@ fn a_motion_law_too_fast_to_follow_is_refused() {
         }
     }
 }
+
+/// A material whose unified triple no step size cures is named at once
+/// (session 48's review): a negative `𝒦` or `μ`, or a fluid's `σ̂` with a
+/// deviatoric part (a yield stress written there, which the assembly
+/// ignored without a word). Before, a negative `𝒦` failed the split
+/// form's square root as a non-finite matrix, retried down to `min_dt`,
+/// and ended as "step too small" naming no material; a negative `μ` as a
+/// solver's failure; the deviatoric `σ̂` ran, ignored.
+#[test]
+fn a_material_whose_triple_no_step_cures_is_named_at_once() {
+    #[derive(Debug)]
+    struct Odd {
+        water: Newtonian,
+        what: &'static str,
+    }
+    impl Material<2> for Odd {
+        fn name(&self) -> &str {
+            "odd water"
+        }
+        fn kind(&self) -> MaterialKind {
+            MaterialKind::Fluid
+        }
+        fn density(&self) -> f64 {
+            1000.0
+        }
+        fn wave_speed(&self) -> f64 {
+            <Newtonian as Material<2>>::wave_speed(&self.water)
+        }
+        fn unified(
+            &self,
+            kin: &pfem::constitutive::Kinematics<2>,
+            h: &pfem::constitutive::History<2>,
+        ) -> pfem::constitutive::Unified<2> {
+            let mut u = self.water.unified(kin, h);
+            // Well behaved for the start's accelerations (Δt → 0), odd in
+            // a step.
+            if kin.dt > 1e-6 {
+                match self.what {
+                    "kappa" => u.kappa = -u.kappa,
+                    "mu" => u.mu = -1.0,
+                    _ => u.sigma_hat[(0, 1)] = 40.0,
+                }
+            }
+            u
+        }
+        fn update_history(
+            &self,
+            kin: &pfem::constitutive::Kinematics<2>,
+            h: &mut pfem::constitutive::History<2>,
+        ) {
+            self.water.update_history(kin, h)
+        }
+    }
+    for (what, says) in [
+        ("kappa", "negative"),
+        ("mu", "negative"),
+        ("shear", "deviatoric"),
+    ] {
+        let mut s = puddle("odd");
+        s.bodies[1].material = Some(Box::new(Odd {
+            water: Newtonian::water(),
+            what,
+        }));
+        let mut sim = build(s).unwrap();
+        let err = sim.step().unwrap_err().to_string();
+        assert!(
+            err.contains("odd water") && err.contains(says) && !err.contains("too small"),
+            "{what}: {err}"
+        );
+        assert_eq!(sim.rejected(), 0, "{what}: not retried");
+    }
+    // An isotropic σ̂ (what a fluid written as the paper's −pⁿ I returns)
+    // is accepted.
+    #[derive(Debug)]
+    struct Isotropic(Newtonian);
+    impl Material<2> for Isotropic {
+        fn name(&self) -> &str {
+            "isotropic"
+        }
+        fn kind(&self) -> MaterialKind {
+            MaterialKind::Fluid
+        }
+        fn density(&self) -> f64 {
+            1000.0
+        }
+        fn wave_speed(&self) -> f64 {
+            <Newtonian as Material<2>>::wave_speed(&self.0)
+        }
+        fn unified(
+            &self,
+            kin: &pfem::constitutive::Kinematics<2>,
+            h: &pfem::constitutive::History<2>,
+        ) -> pfem::constitutive::Unified<2> {
+            let mut u = self.0.unified(kin, h);
+            u.sigma_hat = pfem::core::Tensor::<2>::identity() * -3.7e3;
+            u.sigma_hat_zz = -3.7e3;
+            u
+        }
+        fn update_history(
+            &self,
+            kin: &pfem::constitutive::Kinematics<2>,
+            h: &mut pfem::constitutive::History<2>,
+        ) {
+            self.0.update_history(kin, h)
+        }
+    }
+    let mut s = puddle("isotropic");
+    s.bodies[1].material = Some(Box::new(Isotropic(Newtonian::water())));
+    build(s).unwrap().step().unwrap();
+}

@@ -58,7 +58,8 @@ impl From<MaterialError> for J2Error {
 /// hypoelastic law, so that under rotation-free loading (uniaxial stress,
 /// pure shear) the response is the small-strain closed form in logarithmic
 /// strain and Cauchy stress. The unified triple (eq. 44) uses the elastic
-/// moduli (a secant Picard iteration) with `σ̂` chosen so that eq. 43
+/// moduli (an initial-stiffness Picard iteration: linear convergence once
+/// yielding, slower as the hardening goes to zero) with `σ̂` chosen so that eq. 43
 /// returns the returned stress exactly at every iterate. 2D is plane strain
 /// (the out-of-plane stress takes part in the yield function).
 #[derive(Debug, Clone, Copy, PartialEq)]

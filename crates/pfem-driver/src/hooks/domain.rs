@@ -8,12 +8,16 @@ use super::{Hook, HookContext};
 use crate::checkpoint::{CheckpointError, Decoder, Encoder};
 use crate::RunError;
 
-/// Removes, at the end of each step, the fluid particles outside the box
-/// `[min, max]` (m): fluid leaving the domain, an outflow. The driver
+/// Removes, at the start of each step (after its remeshing, before the
+/// volume correction and the step size), the fluid particles outside the
+/// box `[min, max]` (m): fluid leaving the domain, an outflow. The driver
 /// installs it for a scene with a domain (`pfem_scene::Scene::domain`),
 /// first among its hooks; the volume ledger books what it removes in
 /// `sources` ([`Hook::sources_fluid`]), so the volume correction keeps the
-/// water that is left. Walls and solids are never removed.
+/// water that is left. Walls and solids are never removed. (At the end of
+/// a step the change would be measured against the step's solved mesh:
+/// the step's remeshing change, booked as leaving, would never be
+/// corrected; a review of session 48.)
 ///
 /// Without it a drop that flies off an open tank with nothing under it
 /// falls for the rest of the run, and the Courant bound of its growing
@@ -76,7 +80,7 @@ where
         true
     }
 
-    fn after_step(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
+    fn after_remesh(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let p = ctx.particles();
         let out = |i: usize| p.kind()[i] == ParticleKind::Fluid && !self.holds(&p.x()[i]);
         // Fluid particles come after walls and solids, which are kept.
@@ -110,10 +114,23 @@ where
 
     fn save_state(&self, out: &mut Encoder) {
         out.u64(self.removed as u64);
+        out.f64s(self.min.as_slice());
+        out.f64s(self.max.as_slice());
     }
 
+    /// The saved count; a run restored under another box is refused (it
+    /// would not continue the run it claims to).
     fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
-        self.removed = from.len(0)?;
+        let removed = from.len(0)?;
+        let (min, max) = (from.f64s()?, from.f64s()?);
+        if min.as_slice() != self.min.as_slice() || max.as_slice() != self.max.as_slice() {
+            return Err(CheckpointError::Mismatch {
+                what: "the domain box",
+                checkpoint: format!("[{min:?}, {max:?}]"),
+                simulation: format!("[{:?}, {:?}]", self.min.as_slice(), self.max.as_slice()),
+            });
+        }
+        self.removed = removed;
         Ok(())
     }
 }

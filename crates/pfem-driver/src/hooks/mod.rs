@@ -13,10 +13,11 @@
 //!
 //! What a hook does to the fluid volume is measured by the driver and
 //! booked in the [`VolumeLedger`](crate::VolumeLedger) under the hook's
-//! [`Hook::name`]. Hooks run in the order they were added; the driver's own
-//! options ([`crate::Options`]) add theirs first.
+//! [`Hook::name`]. Hooks run in the order they were added; the driver adds
+//! its own first: [`Domain`] (a scene's domain box), those of its options
+//! ([`crate::Options`]), then those of the scene's motion laws and forces.
 //!
-//! Here: the driver's own [`VolumeCorrection`] and
+//! Here: the driver's own [`Domain`], [`VolumeCorrection`] and
 //! [`FreeSurfacePressureZero`], [`PrescribedMotion`] (a wall along a motion
 //! law of `pfem_scene::motion`), [`AppliedForce`], [`StopWhen`],
 //! [`WallClockLimit`], [`Interrupt`] and [`FnHook`] (a hook from closures).
