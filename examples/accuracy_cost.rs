@@ -36,7 +36,7 @@
 //! the presets on every case) and `DIR/<case>.png` (log10 error against
 //! log10 wall time: one curve per knob, the presets, the Pareto front),
 //! `DIR/convergence.png` (log10 error against log10 relative spacing).
-//! The full study (73 runs) took 74–77 s on 2 cores (6 December 2026);
+//! The full study (73 runs) took 87–91 s on 2 cores (6 December 2026, `docs/accuracy-cost.md`);
 //! `--quick` runs 53 smaller ones.
 
 use std::fmt::Write as _;
