@@ -25,7 +25,10 @@ const ENERGY_TOL: f64 = 0.05;
 /// Water with its real bulk modulus (2.2 GPa, `Newtonian::water()`) at
 /// Courant 1: `CourantController` has no upper cap on `C`; 1 (a particle may
 /// cross a whole element per step) is the largest value the step
-/// rejection still absorbs on this dam break (a/10, T ≤ 3).
+/// rejection still absorbs on this dam break (a/10, T ≤ 3). `max_dt` is
+/// raised from the case's 2 ms to 20 ms so that the Courant bound is the
+/// one that acts (session 48's review: at 2 ms the run's largest Courant
+/// number was about 0.7, and "Courant 1" was never taken); asserted.
 #[test]
 fn real_bulk_modulus_at_courant_one() {
     let mut case = DamBreak::default();
@@ -33,9 +36,15 @@ fn real_bulk_modulus_at_courant_one() {
     case.end_time = 0.17;
     let mut scene = case.scene();
     scene.settings.courant = 1.0;
+    scene.settings.max_dt = 0.02;
     scene.settings.output_interval = None;
     let o = run_checked(scene, StepParams::default());
     o.report("bulk modulus, C = 1");
+    assert!(
+        o.watch.courant_max > 0.9,
+        "the largest Courant number taken was {:.2}",
+        o.watch.courant_max
+    );
     o.assert_stable(ENERGY_TOL);
     o.assert_volume_change(VOLUME_CHANGE_TOL);
     o.assert_volume(VOLUME_STEP_TOL);
@@ -69,6 +78,7 @@ fn violent_splash_stays_bounded() {
     let o = run_checked(splash(), StepParams::default());
     o.report("splash");
     o.assert_stable(ENERGY_TOL);
+    o.assert_speed(SPLASH_SPEED);
     o.assert_volume_change(VOLUME_CHANGE_TOL);
     o.assert_volume(VOLUME_STEP_TOL);
 }
@@ -84,7 +94,12 @@ fn violent_splash_stays_bounded_with_backward_euler() {
     let o = run_checked(splash(), params);
     o.report("splash (backward Euler)");
     o.assert_stable(ENERGY_TOL);
+    o.assert_speed(SPLASH_SPEED);
 }
+
+/// The splash's speed bound (m/s): twice the free fall from the column's
+/// top, `2 √(2 g H)` with `H` = 0.25 m.
+const SPLASH_SPEED: f64 = 4.43;
 
 /// A step far beyond the stable limit: `max_dt` = 0.05 s and Courant 50 let
 /// the controller propose steps where particles cross many elements; the
@@ -109,6 +124,15 @@ fn oversized_steps_are_rejected_halved_and_recovered() {
     );
     assert!(o.result.is_ok(), "did not recover: {:?}", o.result);
     o.assert_stable(ENERGY_TOL);
+    // Large steps were taken, not only halved ones (session 48's review:
+    // a run halving every step down to small ones passed).
+    assert!(
+        o.watch.dt_max >= 0.01 && o.watch.courant_max > 1.0,
+        "largest step {:.2e} s, largest Courant number {:.2}",
+        o.watch.dt_max,
+        o.watch.courant_max
+    );
+    o.assert_volume(VOLUME_STEP_TOL);
 }
 
 /// Sloshing: a 0.2 m × 0.15 m block at the left of a 0.4 m closed tank

@@ -866,7 +866,8 @@ where
         materials: &[Box<dyn Material<D>>],
     ) -> Result<(), AssemblyError> {
         let nv = <Const<D> as Dim>::NV;
-        if mesh.elements.len() % nv != 0 || mesh.elements.len() / nv != mesh.element_material.len()
+        if !mesh.elements.len().is_multiple_of(nv)
+            || mesh.elements.len() / nv != mesh.element_material.len()
         {
             return Err(AssemblyError::MeshMismatch {
                 what: "element connectivity and element materials have different lengths",
@@ -892,7 +893,7 @@ where
             }
         }
         let ns = self.particle_of.len();
-        if mesh.closures.len() % nv != 0 {
+        if !mesh.closures.len().is_multiple_of(nv) {
             return Err(AssemblyError::MeshMismatch {
                 what: "closure connectivity is not a whole number of simplices",
             });

@@ -341,7 +341,7 @@ fn a_checkerboard_pressure_is_damped() {
     }
     let hydro: Vec<f64> = t.x.iter().map(|q| 9810.0 * (1.0 - q.y)).collect();
     let check = |k: usize| {
-        if (k % (n + 1) + k / (n + 1)) % 2 == 0 {
+        if (k % (n + 1) + k / (n + 1)).is_multiple_of(2) {
             100.0
         } else {
             -100.0

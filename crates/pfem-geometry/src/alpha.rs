@@ -235,7 +235,7 @@ where
             reason: "nv is not D + 1",
         });
     }
-    if tess.simplices.len() % nv != 0 {
+    if !tess.simplices.len().is_multiple_of(nv) {
         return Err(GeometryError::InvalidConnectivity {
             reason: "connectivity length is not a multiple of D + 1",
         });

@@ -212,7 +212,7 @@ where
     /// triangle surface, shared by an odd number of facets).
     pub fn check(&self) -> Result<(), String> {
         let n = self.vertices.len();
-        if self.facets.len() % D != 0 || self.facets.len() / D < D + 1 {
+        if !self.facets.len().is_multiple_of(D) || self.facets.len() / D < D + 1 {
             return Err(format!(
                 "a closed boundary needs at least {} {}",
                 D + 1,

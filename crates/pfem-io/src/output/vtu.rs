@@ -384,7 +384,7 @@ where
 
 fn validate(g: &Grid<'_>) -> Result<(), FrameError> {
     let nv = g.nodes_per_cell;
-    if g.cells.len() % nv != 0 {
+    if !g.cells.len().is_multiple_of(nv) {
         return Err(FrameError::CellsLength {
             len: g.cells.len(),
             nodes_per_cell: nv,
