@@ -2008,3 +2008,48 @@ fn positions_moved_by_hand_before_the_first_step_are_meshed_first() {
     assert_eq!(sim.steps(), 1);
     assert_eq!(sim.stats().remesh.0, remeshed);
 }
+
+/// A force a hook adds after it changed the particle set in the same call
+/// is on the new numbering and acts (session 48's review: the driver
+/// dropped every fluid force after such a hook); a failed step's forces
+/// do not outlive it.
+#[test]
+fn a_force_added_after_the_set_changed_in_the_same_hook_acts() {
+    use pfem::hooks::FnHook;
+    // The fluid particle lowest in the water (in elements, so it has mass)
+    // after the last one is removed; its vertical velocity after one step.
+    let run = |push: f64| {
+        let mut sim = sim2(small_tank("forced"), StepParams::default());
+        let hook = FnHook::new("remove then push").before_solve(
+            move |ctx: &mut pfem::hooks::HookContext<'_, 2>| {
+                let p = ctx.particles();
+                let n = p.len() as u32;
+                if p.kind()[n as usize - 1] == ParticleKind::Fluid
+                    && ctx.steps() == 0
+                    && !ctx.set_changed()
+                {
+                    let mut old_to_new: Vec<u32> = (0..n).collect();
+                    old_to_new[n as usize - 1] = pfem::geometry::REMOVED;
+                    let origin = (0..n - 1).map(pfem::geometry::Origin::Kept).collect();
+                    let map = pfem::geometry::ParticleMap { old_to_new, origin };
+                    ctx.particles_mut().remap(&map).unwrap();
+                }
+                let p = ctx.particles();
+                let low = (p.fixed_prefix()..p.len())
+                    .min_by(|&a, &b| p.x()[a].y.total_cmp(&p.x()[b].y))
+                    .unwrap();
+                ctx.add_force(low, Vector::<2>::new(0.0, push))
+            },
+        );
+        sim.add_hook(Box::new(hook));
+        sim.step().unwrap();
+        let p = sim.particles();
+        let low = (p.fixed_prefix()..p.len())
+            .min_by(|&a, &b| p.x()[a].y.total_cmp(&p.x()[b].y))
+            .unwrap();
+        p.v()[low].y
+    };
+    let (free, pushed) = (run(0.0), run(500.0));
+    eprintln!("vertical velocity {free:e} m/s without the force, {pushed:e} with");
+    assert!(pushed > free + 1e-3, "{pushed} against {free}");
+}

@@ -104,3 +104,73 @@ fn particle_management_keeps_elements_shapely_and_the_ledger_closed() {
         off.worst
     );
 }
+
+/// Within a hook that has removed or inserted particles, the mesh it reads
+/// is the old set's until it returns (session 48's review): its fluid
+/// volume is NaN, not a read past the end of the shrunk set (a panic), and
+/// a call to `manage_particles` is refused, naming the way (it read the
+/// old set's Delaunay for the new particles). The next hook sees the new
+/// set meshed.
+#[test]
+fn a_hook_that_changed_the_set_reads_no_stale_mesh() {
+    use pfem::hooks::FnHook;
+    use std::sync::{Arc, Mutex};
+    let mut case = DamBreak::default();
+    case.spacing = case.width / 8.0;
+    case.end_time = 0.01;
+    let mut sim = Simulation::new(
+        case.scene(),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    let seen: Arc<Mutex<Vec<String>>> = Arc::default();
+    let log = seen.clone();
+    let mut done = false;
+    let drop_one =
+        FnHook::new("drop one").after_remesh(move |ctx: &mut pfem::hooks::HookContext<'_, 2>| {
+            if done {
+                return Ok(());
+            }
+            done = true;
+            assert!(!ctx.set_changed() && ctx.fluid_volume().is_finite());
+            let p = ctx.particles();
+            let last = p.len() - 1;
+            assert_eq!(p.kind()[last], ParticleKind::Fluid);
+            let n = p.len() as u32;
+            let mut old_to_new: Vec<u32> = (0..n).collect();
+            old_to_new[last] = pfem::geometry::REMOVED;
+            let origin = (0..n - 1).map(pfem::geometry::Origin::Kept).collect();
+            let map = pfem::geometry::ParticleMap { old_to_new, origin };
+            ctx.particles_mut().remap(&map).unwrap();
+            let mut log = log.lock().unwrap();
+            log.push(format!("changed {}", ctx.set_changed()));
+            log.push(format!("volume {}", ctx.fluid_volume()));
+            let err = ctx
+                .manage_particles(&ParticleManagementParams::default())
+                .unwrap_err();
+            log.push(err.to_string());
+            Ok(())
+        });
+    let after = seen.clone();
+    let next =
+        FnHook::new("next").after_remesh(move |ctx: &mut pfem::hooks::HookContext<'_, 2>| {
+            let mut log = after.lock().unwrap();
+            if log.len() == 3 {
+                log.push(format!(
+                    "next: changed {}, volume finite {}",
+                    ctx.set_changed(),
+                    ctx.fluid_volume().is_finite()
+                ));
+            }
+            Ok(())
+        });
+    sim.add_hook(Box::new(drop_one));
+    sim.add_hook(Box::new(next));
+    sim.step().unwrap();
+    let log = seen.lock().unwrap();
+    assert_eq!(log[0], "changed true");
+    assert_eq!(log[1], "volume NaN");
+    assert!(log[2].contains("once per hook call"), "{}", log[2]);
+    assert_eq!(log[3], "next: changed false, volume finite true");
+}

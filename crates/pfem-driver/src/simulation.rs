@@ -1094,6 +1094,8 @@ where
                 sources: self.volume.sources,
                 moved: false,
                 touched: false,
+                mesh_generation: generation,
+                forces_generation: generation,
             };
             let r = match point {
                 HookPoint::Start => hook.start(&mut ctx),
@@ -1106,6 +1108,9 @@ where
             // `particles_mut`) has its mesh remade: the elements' indices
             // are the old set's.
             let (moved, touched) = (ctx.moved, ctx.touched);
+            // (Forces the hook added after its last change of the set are
+            // on the new numbering.)
+            let forces_current = ctx.forces_generation == ctx.particles.generation();
             let remesh = self.particles.generation() != generation;
             let moved = moved || remesh;
             // A non-number a hook left in the state is named with the
@@ -1165,7 +1170,9 @@ where
                 // Forces added on the old numbering: walls and solids come
                 // first and keep their indices through any change of the
                 // set, so theirs stay; a fluid particle's are dropped.
-                self.external_force.truncate(self.particles.fixed_prefix());
+                if !forces_current {
+                    self.external_force.truncate(self.particles.fixed_prefix());
+                }
                 // Before the solve the contact range was formed this step
                 // and never solved: its tractions are the stash's, averaged
                 // at the particles. The next range carries from the same
@@ -1331,6 +1338,12 @@ where
         self.version = next_state_version();
         let r = rayon::scope(|_| self.step_in_pool());
         self.version = next_state_version();
+        // A failed step's forces were its own: a set changed by hand after
+        // it and `initialize_acceleration` read them on the new numbering
+        // (a review of session 48).
+        if r.is_err() {
+            self.external_force.clear();
+        }
         r
     }
 

@@ -184,6 +184,11 @@ where
     /// Whether the hook took any mutable access to the particles (the
     /// driver then checks they are all finite).
     pub(crate) touched: bool,
+    /// The particle set's generation the mesh (`elements`, `delaunay`)
+    /// was made for: a set this hook changed is meshed when it returns.
+    pub(crate) mesh_generation: u64,
+    /// The generation the external forces are numbered in.
+    pub(crate) forces_generation: u64,
 }
 
 impl<const D: usize> std::fmt::Debug for HookContext<'_, D>
@@ -240,7 +245,10 @@ where
     /// stay: their indices do not change). A particle outside every element (a flying
     /// drop) has no mass in the system and does not feel it; a prescribed
     /// velocity component wins over it. A force that is not finite, or a
-    /// particle out of range, is an error.
+    /// particle out of range, is an error. Forces added after this hook
+    /// changed the set are on the new numbering and kept (those added
+    /// before it on fluid particles are dropped; until session 48 the
+    /// later ones were dropped too).
     pub fn add_force(&mut self, i: usize, f: Vector<D>) -> Result<(), RunError> {
         let n = self.particles.len();
         if i >= n || f.iter().any(|c| !c.is_finite()) {
@@ -250,10 +258,12 @@ where
                 reason: "on a particle of the set, and finite",
             });
         }
-        if self.external_force.len() > n {
-            // The set shrank in this call: the walls' and solids' forces
-            // (a prefix that keeps its indices) stay.
+        if self.particles.generation() != self.forces_generation {
+            // The set changed in this call: the walls' and solids' forces
+            // (a prefix that keeps its indices) stay, the fluid's were on
+            // the old numbering.
             self.external_force.truncate(self.particles.fixed_prefix());
+            self.forces_generation = self.particles.generation();
         }
         self.external_force.resize(n, Vector::<D>::zeros());
         self.external_force[i] += f;
@@ -296,7 +306,9 @@ where
     }
 
     /// The elements of the step (the mesh of the current step: after a
-    /// hook changes the particle set it is remade before the next hook).
+    /// hook changes the particle set it is remade before the next hook;
+    /// within the hook that changed it, it is the old set's:
+    /// [`HookContext::set_changed`]).
     pub fn elements(&self) -> &Elements<D> {
         self.elements
     }
@@ -354,14 +366,30 @@ where
 
     /// Fluid volume of the current mesh at the current positions (m³; m²
     /// per metre in 2D), wall pockets and drops included
-    /// ([`crate::Simulation::fluid_volume`]).
+    /// ([`crate::Simulation::fluid_volume`]). NaN once this hook has
+    /// removed or inserted particles: the mesh names the old set until the
+    /// driver meshes the new one, when the hook returns (it read past the
+    /// end of a shrunk set, a review of session 48).
     pub fn fluid_volume(&self) -> f64 {
+        if self.set_changed() {
+            return f64::NAN;
+        }
         self.elements.fluid_volume(self.particles.x()) + self.drop_volume()
+    }
+
+    /// Whether this hook removed or inserted particles: the mesh it reads
+    /// ([`HookContext::elements`], the tessellation) is then the old set's
+    /// until it returns.
+    pub fn set_changed(&self) -> bool {
+        self.particles.generation() != self.mesh_generation
     }
 
     /// Of [`HookContext::fluid_volume`], the fluid flying as drops
     /// ([`crate::Elements::drop_volume`]).
     pub fn drop_volume(&self) -> f64 {
+        if self.set_changed() {
+            return f64::NAN;
+        }
         self.elements
             .drop_volume(self.particles.kind(), self.particles.spacing())
     }
@@ -413,6 +441,15 @@ where
         &mut self,
         params: &ParticleManagementParams,
     ) -> Result<(usize, usize), RunError> {
+        // The mesh it reads is the set's the hook was called with: a
+        // second call in one hook, or one after a `remap`, read the old
+        // set's Delaunay for the new particles (a review of session 48).
+        if self.set_changed() {
+            return Err(RunError::Hook {
+                hook: "manage_particles".into(),
+                why: "the particles were removed or inserted in this hook call since the mesh was made: call it once per hook call (the driver meshes the new set when the hook returns)".into(),
+            });
+        }
         let upd = pfem_geometry::manage_particles(
             self.tessellator,
             self.particles.x(),
