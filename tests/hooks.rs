@@ -2053,3 +2053,31 @@ fn a_force_added_after_the_set_changed_in_the_same_hook_acts() {
     eprintln!("vertical velocity {free:e} m/s without the force, {pushed:e} with");
     assert!(pushed > free + 1e-3, "{pushed} against {free}");
 }
+
+/// A step that fails after its hooks added forces leaves none behind:
+/// `initialize_acceleration` afterwards gives the accelerations of a run
+/// that never had them (session 48's review: they lingered, read on
+/// whatever numbering the set had next).
+#[test]
+fn a_failed_steps_forces_do_not_outlive_it() {
+    use pfem::hooks::FnHook;
+    let mut sim = sim2(small_tank("failing"), StepParams::default());
+    let hook =
+        FnHook::new("push then fail").before_solve(|ctx: &mut pfem::hooks::HookContext<'_, 2>| {
+            let p = ctx.particles();
+            let low = (p.fixed_prefix()..p.len())
+                .min_by(|&a, &b| p.x()[a].y.total_cmp(&p.x()[b].y))
+                .unwrap();
+            ctx.add_force(low, Vector::<2>::new(0.0, 500.0))?;
+            Err(RunError::Hook {
+                hook: "push then fail".into(),
+                why: "on purpose".into(),
+            })
+        });
+    sim.add_hook(Box::new(hook));
+    assert!(sim.step().is_err());
+    sim.initialize_acceleration().unwrap();
+    let mut fresh = sim2(small_tank("failing"), StepParams::default());
+    fresh.initialize_acceleration().unwrap();
+    assert_eq!(sim.particles().a(), fresh.particles().a());
+}
