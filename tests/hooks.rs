@@ -675,6 +675,47 @@ fn bad_hook_settings_and_a_set_changed_by_hand_are_handled() {
         ));
     }
     assert_eq!(sim.particles().len(), n, "a refused map changes nothing");
+    // Session 48's review: kept particles out of their old order, and an
+    // inserted particle whose weights do not sum to 1 (or are negative),
+    // were documented as invalid but accepted (the latter put the particle
+    // away from its parents, at the origin for zero weights).
+    let (a, b) = (n as u32 - 2, n as u32 - 1);
+    let mut swapped: Vec<u32> = (0..n as u32).collect();
+    swapped.swap(a as usize, b as usize);
+    let mut origin: Vec<Origin> = (0..n as u32).map(Origin::Kept).collect();
+    origin.swap(a as usize, b as usize);
+    let bad_weights = |w: [f64; 3]| {
+        let mut nodes = [a; pfem::core::MAX_NV];
+        nodes[1] = b;
+        nodes[2] = a - 1;
+        let mut weights = [0.0; pfem::core::MAX_NV];
+        weights[..3].copy_from_slice(&w);
+        ParticleMap {
+            old_to_new: (0..n as u32).collect(),
+            origin: (0..n as u32)
+                .map(Origin::Kept)
+                .chain([Origin::Inserted { nodes, weights }])
+                .collect(),
+        }
+    };
+    for map in [
+        ParticleMap {
+            old_to_new: swapped,
+            origin,
+        },
+        bad_weights([0.0, 0.0, 0.0]),
+        bad_weights([1.5, -0.5, 0.0]),
+    ] {
+        assert!(matches!(
+            sim.particles_mut().remap(&map),
+            Err(pfem::particles::RemapError::Inconsistent { .. })
+        ));
+    }
+    assert_eq!(sim.particles().len(), n, "a refused map changes nothing");
+    // The same insertion with weights that sum to 1 is taken (then undone).
+    let mut with = sim.particles().clone();
+    with.remap(&bad_weights([0.25, 0.25, 0.5])).unwrap();
+    assert_eq!(with.len(), n + 1);
     // The last fluid particle removed by hand, then a run.
     let map = ParticleMap {
         old_to_new: (0..n as u32)

@@ -52,9 +52,11 @@ pub enum RemapError {
     )]
     NotFluid(usize),
     /// The map's new particles do not match its old ones: a kept particle
-    /// that is not an old one or not where `old_to_new` puts it, a kept old
-    /// particle missing from the new ones, or an inserted particle whose
-    /// parents are not old particles or whose weights are not finite.
+    /// that is not an old one or not where `old_to_new` puts it, kept
+    /// particles out of their old order, a kept old particle missing from
+    /// the new ones, or an inserted particle whose parents are not old
+    /// particles or whose weights are not each finite and ≥ 0, summing to
+    /// 1.
     #[error("the particle map is inconsistent at new particle {index}: {why}")]
     Inconsistent {
         /// The new particle (the map's length when one is missing).
@@ -376,6 +378,7 @@ where
         // 35's review: a kept index past the set panicked, an empty
         // `origin` removed every particle).
         let mut kept = 0usize;
+        let mut last_kept: Option<u32> = None;
         for (j, o) in map.origin.iter().enumerate() {
             let bad = |why| Err(RemapError::Inconsistent { index: j, why });
             match o {
@@ -383,13 +386,22 @@ where
                     if *i as usize >= n || map.old_to_new[*i as usize] as usize != j {
                         return bad("a kept particle is not the old one `old_to_new` puts here");
                     }
+                    // (Session 48's review: the order was documented, not
+                    // checked.)
+                    if last_kept.is_some_and(|l| *i <= l) {
+                        return bad("the kept particles are not in their old order");
+                    }
+                    last_kept = Some(*i);
                     kept += 1;
                 }
                 Origin::Inserted { nodes, weights } => {
-                    if nodes.iter().any(|&q| q as usize >= n)
-                        || weights.iter().any(|w| !w.is_finite())
+                    if nodes.is_empty()
+                        || nodes.len() != weights.len()
+                        || nodes.iter().any(|&q| q as usize >= n)
+                        || weights.iter().any(|w| !(w.is_finite() && *w >= 0.0))
+                        || (weights.iter().sum::<f64>() - 1.0).abs() > 1e-9
                     {
-                        return bad("an inserted particle's parents or weights are not valid");
+                        return bad("an inserted particle's parents or weights are not valid (old particles, as many weights, each ≥ 0, summing to 1)");
                     }
                 }
             }
