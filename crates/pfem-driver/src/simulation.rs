@@ -869,12 +869,18 @@ where
     /// Fluid volume: the measure of the current fluid elements and of the
     /// wall pockets ([`Elements::wall_pockets`]), and the drops' lattice
     /// cells ([`Simulation::drop_volume`]) (m³; m² per metre of depth in
-    /// 2D).
+    /// 2D). NaN between a change of the set by hand and the next step,
+    /// which meshes it ([`Simulation::particles_mut`]).
     pub fn fluid_volume(&self) -> f64 {
         // A scene without fluid has none, nor can it gain any (a fluid
         // particle needs a fluid material): no pass over the particles.
         if !self.stages.pressure {
             return 0.0;
+        }
+        // A set changed by hand and not yet meshed: the elements name the
+        // old set's particles.
+        if self.particles.generation() != self.meshed {
+            return f64::NAN;
         }
         self.elements.fluid_volume(self.particles.x()) + self.drop_volume()
     }
@@ -885,6 +891,9 @@ where
     pub fn drop_volume(&self) -> f64 {
         if !self.stages.pressure {
             return 0.0;
+        }
+        if self.particles.generation() != self.meshed {
+            return f64::NAN;
         }
         self.elements
             .drop_volume(self.particles.kind(), self.particles.spacing())
@@ -1887,13 +1896,15 @@ where
     /// changed in number ([`Particles::remap`], [`Particles::push`]) is
     /// remeshed by the next step, its first included, and so are positions
     /// moved before the first step (every later step remeshes); until
-    /// then the elements are the old set's, or the old positions'.
+    /// then the elements are the old set's, or the old positions', and
+    /// [`Simulation::fluid_volume`] is NaN (it panicked after a removal
+    /// until session 48: the elements named particles that were gone).
     ///
-    /// # Panics
-    ///
-    /// [`Simulation::fluid_volume`] and
-    /// [`Simulation::meshed_fluid_particles`] panic between a removal by
-    /// hand and the next step (the elements name particles that are gone).
+    /// Water added or removed by hand is booked as remeshing, not as
+    /// fluid entering or leaving: the volume correction then restores the
+    /// intended volume over the next steps. A source or a sink is a hook
+    /// with [`crate::hooks::Hook::sources_fluid`] (an `FnHook` with
+    /// `sources_fluid(true)`), or a scene's domain.
     pub fn particles_mut(&mut self) -> &mut Particles<D> {
         self.version = next_state_version();
         &mut self.particles
@@ -2048,6 +2059,9 @@ where
     /// Particles of fluid bodies that are in at least one fluid element.
     pub fn meshed_fluid_particles(&self) -> Vec<bool> {
         let mut m = vec![false; self.particles.len()];
+        if self.particles.generation() != self.meshed {
+            return m; // the elements are the old set's (particles_mut)
+        }
         for &p in self.elements.fluid() {
             if self.particles.kind()[p as usize] == ParticleKind::Fluid {
                 m[p as usize] = true;

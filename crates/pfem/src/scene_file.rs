@@ -477,6 +477,10 @@ pub enum ProbeSpec {
     /// that started within `radius` of `point` (the nearest one when
     /// `radius` is omitted or no particle is that close); columns
     /// `ux_NAME`, `uy_NAME` (and `uz_NAME`), `NAME` defaulting to the body.
+    /// Meant for solids, whose particles stay: on a fluid body whose
+    /// particles are removed or inserted (a domain, particle management,
+    /// an inflow) the particles are chosen again at each change, from
+    /// where each entered the simulation, so the series may jump.
     BodyDisplacement {
         /// The body.
         body: String,
