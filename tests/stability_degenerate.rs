@@ -43,7 +43,9 @@ fn lattice_aligned_particles_run() {
 /// A fixed pseudo-random offset in `[−1, 1]` for coordinate `k` of
 /// particle `i` (a hash: the same every run).
 pub fn jitter(i: usize, k: usize) -> f64 {
-    let mut z = ((i as u64) * 0x9E37_79B9_7F4A_7C15) ^ ((k as u64 + 1) * 0xBF58_476D_1CE4_E5B9);
+    // (Wrapping: a debug build checks overflow.)
+    let mut z = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (k as u64 + 1).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z ^= z >> 31;
     z = z.wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^= z >> 29;

@@ -54,9 +54,11 @@ pub struct Watch {
     pub at_e_max: (f64, u64),
     /// Largest non-wall particle speed seen (m/s) and its time (s).
     pub v_max: (f64, f64),
-    /// Largest Courant number an accepted step took:
-    /// `Δt · maxᵢ |vᵢ|/hᵢ` over the non-wall particles at its end.
+    /// Largest Courant number an accepted step took, as the controller
+    /// reckons it: its `Δt` over the crossing time `minᵢ hᵢ/|vᵢ|` at its
+    /// start ([`Simulation::crossing_time`]).
     pub courant_max: f64,
+    crossing: f64,
     /// Largest accepted step (s).
     pub dt_max: f64,
     mass: Vec<f64>,
@@ -124,20 +126,19 @@ impl Watch {
             self.e_max = e;
             self.at_e_max = (sim.time(), sim.steps());
         }
-        let mut rate: f64 = 0.0;
         for i in 0..sim.particles().len() {
             let v = sim.particles().v()[i].norm();
             if self.mass[i] > 0.0 && v > self.v_max.0 {
                 self.v_max = (v, sim.time());
             }
-            if self.mass[i] > 0.0 {
-                rate = rate.max(v / sim.particles().spacing()[i]);
-            }
         }
         if sim.steps() > 0 {
-            self.courant_max = self.courant_max.max(sim.dt() * rate);
+            if self.crossing > 0.0 && self.crossing.is_finite() {
+                self.courant_max = self.courant_max.max(sim.dt() / self.crossing);
+            }
             self.dt_max = self.dt_max.max(sim.dt());
         }
+        self.crossing = sim.crossing_time();
         self.e_end = e;
         if self.v0 > 0.0 {
             let dv = (sim.fluid_volume() - self.v0) / self.v0;

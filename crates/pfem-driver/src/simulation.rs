@@ -905,13 +905,18 @@ where
         // A set changed since the last mesh (by a hook, particle management
         // or by hand) has its fluid particles checked first; a refused set
         // is checked again at the next try.
-        if self.particles.generation() != self.meshed {
+        let generation = self.particles.generation();
+        if generation != self.meshed {
             self.check_fluid_particles()?;
         }
-        self.meshed = self.particles.generation();
         if !self.stages.remesh {
+            self.meshed = generation;
             return Ok(());
         }
+        // (`meshed` is set once the mesh is made: a failed remeshing left
+        // the set marked meshed with an empty fluid range, and its fluid
+        // volume read as the drops' alone; a review of session 48.)
+        self.meshed = u64::MAX;
         let t0 = Instant::now();
         let x = self.particles.x();
         let st = &mut self.stepper;
@@ -1032,6 +1037,7 @@ where
         }
         self.stats.remesh.0 += 1;
         self.stats.remesh.1 += t0.elapsed().as_secs_f64();
+        self.meshed = generation;
         Ok(())
     }
 
@@ -1103,7 +1109,9 @@ where
                 sources: self.volume.sources,
                 moved: false,
                 touched: false,
-                mesh_generation: generation,
+                // (The set the mesh was made for: a set changed by hand
+                // and not yet meshed reads as changed from the start.)
+                mesh_generation: self.meshed,
                 forces_generation: generation,
             };
             let r = match point {
@@ -1142,6 +1150,10 @@ where
                 // read it).
                 let mut meshed = true;
                 if remesh {
+                    // (Its forces on the old numbering go too, as below.)
+                    if !forces_current {
+                        self.external_force.truncate(self.particles.fixed_prefix());
+                    }
                     if matches!(point, HookPoint::AfterRemesh | HookPoint::BeforeSolve) {
                         self.elements.keep_stash();
                     }
@@ -2554,7 +2566,9 @@ where
         };
         // Nothing has changed so far. Hooks see the scene's initial state
         // at their start, as in the uninterrupted run; their saved state is
-        // read after.
+        // read after. (A set changed by hand before is meshed first, as
+        // `run` and `step` do: the hooks' start read the old set's mesh.)
+        self.mesh_a_set_changed_by_hand(false)?;
         self.start_hooks()?;
         let before = Backup {
             particles: self.particles.clone(),

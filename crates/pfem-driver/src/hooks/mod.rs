@@ -271,7 +271,9 @@ where
     }
 
     /// The external forces added so far for the coming step (N; empty
-    /// when none, and after the step): [`HookContext::add_force`].
+    /// when none, and after the step): [`HookContext::add_force`]. After
+    /// this hook changed the set and before its next `add_force`, they are
+    /// on the old numbering (the fluid's are dropped when it returns).
     pub fn external_forces(&self) -> &[Vector<D>] {
         self.external_force
     }
