@@ -2056,8 +2056,7 @@ fn positions_moved_by_hand_before_the_first_step_are_meshed_first() {
 
 /// A force a hook adds after it changed the particle set in the same call
 /// is on the new numbering and acts (session 48's review: the driver
-/// dropped every fluid force after such a hook); a failed step's forces
-/// do not outlive it.
+/// dropped every fluid force after such a hook).
 #[test]
 fn a_force_added_after_the_set_changed_in_the_same_hook_acts() {
     use pfem::hooks::FnHook;

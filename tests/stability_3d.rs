@@ -61,8 +61,9 @@ fn column(name: &str, length: f64, height: f64, h: f64, end_time: f64, max_dt: f
 
 /// Water with its real bulk modulus at Courant 1 (a particle may cross a
 /// whole element a step): a 0.1 m cube collapsing in a 0.3 m tank.
-/// Measured (5 December 2026): 30 steps (0 rejected), volume within
-/// 2.21 % at every step, +0.19 % at the end.
+/// Measured (5 December 2026, `max_dt` 5 ms): 30 steps (0 rejected),
+/// volume within 2.21 % at every step, +0.19 % at the end; session 48
+/// (20 ms): 10 steps (1 rejected), 3.27 %, +0.10 %, Courant number 1.00.
 #[test]
 fn real_bulk_modulus_at_courant_one_3d() {
     // (`max_dt` 20 ms: at 5 ms every step was the ceiling's, a Courant
@@ -111,7 +112,7 @@ fn violent_splash_stays_bounded_3d() {
     );
     o.assert_stable(ENERGY_TOL);
     // Twice the free fall from the column's top, 2 √(2 g 0.25 m).
-    o.assert_speed(4.43);
+    o.assert_speed(free_fall_bound(0.25));
     o.assert_volume_change(VOLUME_CHANGE_TOL);
     o.assert_volume(VOLUME_STEP_TOL);
 }
@@ -127,7 +128,6 @@ fn violent_splash_stays_bounded_3d() {
 /// mesh reached the 3D solver in this suite).
 #[test]
 fn jittered_particles_run_3d() {
-    use crate::stability_degenerate::jitter;
     let h = 0.02;
     let mut pts = Vec::new();
     for i in 0..5 {
@@ -184,7 +184,8 @@ fn jittered_particles_run_3d() {
     o.assert_stable(ENERGY_TOL);
     o.assert_volume_change(VOLUME_CHANGE_TOL);
     o.assert_volume(VOLUME_STEP_TOL);
-    o.assert_speed(2.0 * (2.0 * 9.81 * 0.12f64).sqrt());
+    // (The column's top: 0.1 m and a jitter, 0.12 m with a margin.)
+    o.assert_speed(free_fall_bound(0.12));
 }
 
 /// Steps far beyond the stable limit (`max_dt` = 0.05 s, Courant 50): the

@@ -40,18 +40,6 @@ fn lattice_aligned_particles_run() {
     o.assert_volume(VOLUME_STEP_TOL);
 }
 
-/// A fixed pseudo-random offset in `[−1, 1]` for coordinate `k` of
-/// particle `i` (a hash: the same every run).
-pub fn jitter(i: usize, k: usize) -> f64 {
-    // (Wrapping: a debug build checks overflow.)
-    let mut z = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        ^ (k as u64 + 1).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z ^= z >> 31;
-    z = z.wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 29;
-    2.0 * (z >> 11) as f64 / (1u64 << 53) as f64 - 1.0
-}
-
 /// Near-degenerate elements that reach the solver: the lattice of the test
 /// above with every particle moved by up to 0.2 h in each coordinate, and
 /// a companion 0.3 h from every fifth (above the h/4 that
@@ -119,7 +107,7 @@ fn jittered_particles_run() {
     o.assert_stable(ENERGY_TOL);
     o.assert_volume_change(VOLUME_CHANGE_TOL);
     o.assert_volume(VOLUME_STEP_TOL);
-    o.assert_speed(2.0 * (2.0 * 9.81 * 0.16f64).sqrt());
+    o.assert_speed(free_fall_bound(0.16));
 }
 
 /// A fluid block with one particle duplicated at 1e-9 m: building must not

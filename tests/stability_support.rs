@@ -478,7 +478,7 @@ impl Outcome {
     /// No non-wall particle faster than `limit` (m/s) at the end of any
     /// step: the splashes' free-fall bound `2 √(2 g H)`, `H` the water's
     /// highest start above its lowest (the undamped trapezoidal rule's
-    /// splash reached 14 m/s against 3.2).
+    /// splash reached 14 m/s against about 3).
     pub fn assert_speed(&self, limit: f64) {
         assert!(
             self.watch.v_max.0 <= limit,
@@ -487,4 +487,22 @@ impl Outcome {
             self.watch.v_max.1
         );
     }
+}
+
+/// A fixed pseudo-random offset in `[−1, 1]` for coordinate `k` of
+/// particle `i` (a hash: the same every run).
+pub fn jitter(i: usize, k: usize) -> f64 {
+    // (Wrapping: a debug build checks overflow.)
+    let mut z = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (k as u64 + 1).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z ^= z >> 31;
+    z = z.wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 29;
+    2.0 * (z >> 11) as f64 / (1u64 << 53) as f64 - 1.0
+}
+
+/// Twice the free fall from `height` (m) under 9.81 m/s², `2 √(2 g H)`:
+/// the splashes' speed bound (m/s).
+pub fn free_fall_bound(height: f64) -> f64 {
+    2.0 * (2.0 * 9.81 * height).sqrt()
 }

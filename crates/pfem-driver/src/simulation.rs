@@ -638,8 +638,8 @@ where
             dt_min: params.min_dt,
             growth: 1.25,
         };
-        // (Each field was checked above; the controller's own check keeps
-        // this so if the rules above change.)
+        // (Each field was checked above; this keeps it so if those rules
+        // change.)
         controller.validate().map_err(|e| SceneError::OutOfRange {
             setting: e.setting,
             value: e.value,
@@ -650,10 +650,12 @@ where
         // booked as leaving before the volume correction measures the
         // step's water.
         if let Some((lo, hi)) = domain.filter(|_| has_fluid) {
+            // (`Scene::validate` checked the box.)
             hooks.push(Box::new(crate::hooks::Domain::new(lo, hi).map_err(
-                |e| SceneError::InvalidGeometry {
-                    body: String::new(),
-                    why: e.to_string(),
+                |_| SceneError::OutOfRange {
+                    setting: "domain",
+                    value: f64::NAN,
+                    range: "finite corners, max above min along every axis",
                 },
             )?));
         }
@@ -855,7 +857,8 @@ where
     }
 
     /// Adds a hook, run after those added before it (and after the
-    /// driver's own, [`Options`]). A hook added after the run has started
+    /// driver's own: the scene's domain, those of [`Options`], the
+    /// scene's motion laws and forces). A hook added after the run has started
     /// has its `start` before the next step, seeing the state of then.
     pub fn add_hook(&mut self, hook: Box<dyn Hook<D>>) {
         self.hooks.push(hook);
@@ -869,31 +872,40 @@ where
     /// Fluid volume: the measure of the current fluid elements and of the
     /// wall pockets ([`Elements::wall_pockets`]), and the drops' lattice
     /// cells ([`Simulation::drop_volume`]) (m³; m² per metre of depth in
-    /// 2D). NaN between a change of the set by hand and the next step,
-    /// which meshes it ([`Simulation::particles_mut`]).
+    /// 2D). NaN while the set is not meshed: after a change by hand
+    /// ([`Simulation::particles_mut`]) or a failed remeshing, until the
+    /// next mesh.
     pub fn fluid_volume(&self) -> f64 {
-        // A scene without fluid has none, nor can it gain any (a fluid
-        // particle needs a fluid material): no pass over the particles.
+        if let Some(v) = self.volume_without_mesh() {
+            return v;
+        }
+        self.elements.fluid_volume(self.particles.x())
+            + self
+                .elements
+                .drop_volume(self.particles.kind(), self.particles.spacing())
+    }
+
+    /// The fluid volume when the mesh cannot give it: 0 in a scene
+    /// without fluid (none, nor can it gain any: a fluid particle needs a
+    /// fluid material; no pass over the particles), NaN while the set is
+    /// not meshed (changed by hand, or its remeshing failed: the elements
+    /// name the old set's particles).
+    fn volume_without_mesh(&self) -> Option<f64> {
         if !self.stages.pressure {
-            return 0.0;
+            Some(0.0)
+        } else if self.particles.generation() != self.meshed {
+            Some(f64::NAN)
+        } else {
+            None
         }
-        // A set changed by hand and not yet meshed: the elements name the
-        // old set's particles.
-        if self.particles.generation() != self.meshed {
-            return f64::NAN;
-        }
-        self.elements.fluid_volume(self.particles.x()) + self.drop_volume()
     }
 
     /// Of [`Simulation::fluid_volume`], the fluid flying as drops: each
     /// fluid particle in no fluid element counts its lattice cell `hᵢ^D`
     /// ([`Elements::drop_volume`]).
     pub fn drop_volume(&self) -> f64 {
-        if !self.stages.pressure {
-            return 0.0;
-        }
-        if self.particles.generation() != self.meshed {
-            return f64::NAN;
+        if let Some(v) = self.volume_without_mesh() {
+            return v;
         }
         self.elements
             .drop_volume(self.particles.kind(), self.particles.spacing())
@@ -1129,6 +1141,13 @@ where
             // on the new numbering.)
             let forces_current = ctx.forces_generation == ctx.particles.generation();
             let remesh = self.particles.generation() != generation;
+            // Forces added on the old numbering: walls and solids come
+            // first and keep their indices through any change of the set,
+            // so theirs stay; a fluid particle's are dropped (whether the
+            // hook failed or not).
+            if remesh && !forces_current {
+                self.external_force.truncate(self.particles.fixed_prefix());
+            }
             let moved = moved || remesh;
             // A non-number a hook left in the state is named with the
             // hook: after the last step it would reach the outputs (and the
@@ -1150,10 +1169,6 @@ where
                 // read it).
                 let mut meshed = true;
                 if remesh {
-                    // (Its forces on the old numbering go too, as below.)
-                    if !forces_current {
-                        self.external_force.truncate(self.particles.fixed_prefix());
-                    }
                     if matches!(point, HookPoint::AfterRemesh | HookPoint::BeforeSolve) {
                         self.elements.keep_stash();
                     }
@@ -1188,12 +1203,6 @@ where
                 || (point == HookPoint::Start
                     && x_before.is_some_and(|x| x.as_slice() != self.particles.x()));
             if remesh {
-                // Forces added on the old numbering: walls and solids come
-                // first and keep their indices through any change of the
-                // set, so theirs stay; a fluid particle's are dropped.
-                if !forces_current {
-                    self.external_force.truncate(self.particles.fixed_prefix());
-                }
                 // Before the solve the contact range was formed this step
                 // and never solved: its tractions are the stash's, averaged
                 // at the particles. The next range carries from the same
@@ -1909,8 +1918,10 @@ where
     /// remeshed by the next step, its first included, and so are positions
     /// moved before the first step (every later step remeshes); until
     /// then the elements are the old set's, or the old positions', and
-    /// [`Simulation::fluid_volume`] is NaN (it panicked after a removal
-    /// until session 48: the elements named particles that were gone).
+    /// [`Simulation::fluid_volume`] and [`Simulation::drop_volume`] are
+    /// NaN and [`Simulation::meshed_fluid_particles`] marks none (they
+    /// panicked after a removal until session 48: the elements named
+    /// particles that were gone).
     ///
     /// Water added or removed by hand is booked as remeshing, not as
     /// fluid entering or leaving: the volume correction then restores the
@@ -2068,11 +2079,12 @@ where
             .collect())
     }
 
-    /// Particles of fluid bodies that are in at least one fluid element.
+    /// Particles of fluid bodies that are in at least one fluid element;
+    /// none while the set is not meshed ([`Simulation::particles_mut`]).
     pub fn meshed_fluid_particles(&self) -> Vec<bool> {
         let mut m = vec![false; self.particles.len()];
-        if self.particles.generation() != self.meshed {
-            return m; // the elements are the old set's (particles_mut)
+        if self.volume_without_mesh().is_some() {
+            return m; // no fluid, or the elements are the old set's
         }
         for &p in self.elements.fluid() {
             if self.particles.kind()[p as usize] == ParticleKind::Fluid {

@@ -25,8 +25,8 @@ pub struct Delaunay2Params {
     /// duplicates only. Default `1e-10`.
     ///
     /// (Until session 48 `L` was the larger side of the whole set's
-    /// bounding box: one particle flung 10⁸ spacings away made every
-    /// pair of a splash "near coincident".)
+    /// bounding box: one particle flung 10⁹ units away made the
+    /// tolerance 0.1, and a splash's pairs "near coincident".)
     pub coincidence_tolerance: f64,
 }
 
@@ -258,20 +258,21 @@ impl Tessellator<2> for Delaunay2 {
         };
         drop(sample);
         let simplices = &out.simplices;
+        let tolerance = tol * median;
+        // The closest pair (lengths are finite: ties by index).
         let close = lengths
             .par_iter()
             .enumerate()
             .filter_map(|(slot, &d)| {
-                if d < 0.0 {
+                if !(0.0..tolerance).contains(&d) {
                     return None;
                 }
                 let (f, k) = (slot / 3, slot % 3);
                 let a = simplices[3 * f + (k + 1) % 3] as usize;
                 let b = simplices[3 * f + (k + 2) % 3] as usize;
-                let tolerance = tol * median;
-                (d < tolerance).then_some((d, a.min(b), a.max(b), tolerance))
+                Some((d, a.min(b), a.max(b), tolerance))
             })
-            .min_by(|x, y| (x.0, x.1, x.2).partial_cmp(&(y.0, y.1, y.2)).unwrap());
+            .min_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
         if let Some((distance, first, second, tolerance)) = close {
             out.simplices.clear();
             out.neighbors.clear();

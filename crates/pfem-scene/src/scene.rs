@@ -460,14 +460,15 @@ where
     }
 
     /// The domain: the box `[min, max]` (m) outside which fluid particles
-    /// are removed at the start of each step, after its remeshing, as
-    /// fluid leaving (an outflow:
+    /// are removed at the start of the next step, after its remeshing and
+    /// before the volume correction, as fluid leaving (an outflow:
     /// the volume ledger books it in `sources`, and the volume correction
     /// keeps the water that is left). A drop that flies off an open tank
     /// with nothing under it otherwise falls for the rest of the run, and
     /// its growing speed shortens every step (the Courant bound counts
     /// it). Every fluid body must start inside; walls and solids may
-    /// reach out of it and are never removed. Default: none.
+    /// reach out of it and are never removed (a scene without fluid
+    /// installs no domain). Default: none.
     pub fn domain(mut self, min: Point<D>, max: Point<D>) -> Self {
         self.domain = Some((min, max));
         self

@@ -368,8 +368,8 @@ where
 
     /// Fluid volume of the current mesh at the current positions (m³; m²
     /// per metre in 2D), wall pockets and drops included
-    /// ([`crate::Simulation::fluid_volume`]). NaN once this hook has
-    /// removed or inserted particles: the mesh names the old set until the
+    /// ([`crate::Simulation::fluid_volume`]). NaN while
+    /// [`HookContext::set_changed`]: the mesh names the old set until the
     /// driver meshes the new one, when the hook returns (it read past the
     /// end of a shrunk set, a review of session 48).
     pub fn fluid_volume(&self) -> f64 {
@@ -379,9 +379,10 @@ where
         self.elements.fluid_volume(self.particles.x()) + self.drop_volume()
     }
 
-    /// Whether this hook removed or inserted particles: the mesh it reads
-    /// ([`HookContext::elements`], the tessellation) is then the old set's
-    /// until it returns.
+    /// Whether the set differs from the one the mesh was made for (this
+    /// hook removed or inserted particles, or a change by hand is not yet
+    /// meshed): the mesh it reads ([`HookContext::elements`], the
+    /// tessellation) is then the old set's.
     pub fn set_changed(&self) -> bool {
         self.particles.generation() != self.mesh_generation
     }
@@ -449,7 +450,7 @@ where
         if self.set_changed() {
             return Err(RunError::Hook {
                 hook: "manage_particles".into(),
-                why: "the particles were removed or inserted in this hook call since the mesh was made: call it once per hook call (the driver meshes the new set when the hook returns)".into(),
+                why: "the particles were removed or inserted since the mesh was made (in this hook call, or by hand): call it once per hook call (the driver meshes the new set when the hook returns)".into(),
             });
         }
         let upd = pfem_geometry::manage_particles(
