@@ -1029,14 +1029,24 @@ where
                 }
             }
             if let Some(m) = &b.material {
+                // (A material's error, not a geometry's: session 48's
+                // review.)
                 let (rho, c) = (m.density(), m.wave_speed());
-                if !(rho > 0.0 && rho.is_finite() && c > 0.0 && c.is_finite()) {
-                    return Err(SceneError::InvalidGeometry {
+                let source = if !(rho > 0.0 && rho.is_finite()) {
+                    Some(pfem_constitutive::MaterialError::InvalidParameter {
+                        parameter: pfem_constitutive::Parameter::Density,
+                        value: rho,
+                        allowed: "positive and finite (kg/m³)",
+                    })
+                } else if !(c > 0.0 && c.is_finite()) {
+                    Some(pfem_constitutive::MaterialError::DegenerateWaveSpeed { wave_speed: c })
+                } else {
+                    None
+                };
+                if let Some(source) = source {
+                    return Err(SceneError::InvalidMaterial {
                         body: b.name.clone(),
-                        why: format!(
-                            "material `{}` has density {rho} kg/m³ and wave speed {c} m/s; both must be positive and finite",
-                            m.name()
-                        ),
+                        source,
                     });
                 }
             }

@@ -751,9 +751,23 @@ fn bad_settings_are_refused_with_the_right_message() {
     };
     let mut s = puddle("negative");
     s.bodies[1].material = Some(altered(-1000.0, &[]));
+    // A material's error, naming the body (it was an `InvalidGeometry`
+    // until session 48).
     match build(s) {
-        Err(e) => assert!(e.to_string().contains("density"), "{e}"),
-        Ok(_) => panic!("a negative density"),
+        Err(SceneError::InvalidMaterial { body, source }) => {
+            assert_eq!(body, "water");
+            assert!(
+                matches!(
+                    source,
+                    pfem::constitutive::MaterialError::InvalidParameter {
+                        parameter: pfem::constitutive::Parameter::Density,
+                        ..
+                    }
+                ),
+                "{source}"
+            );
+        }
+        other => panic!("a negative density: {other:?}"),
     }
 
     // A fluid that names an internal variable (a thixotropic structure
