@@ -158,13 +158,7 @@ fn jittered_particles_run_3d() {
     );
     let mut sim = Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default())
         .expect("scene builds");
-    let fluid = sim
-        .particles()
-        .kind()
-        .iter()
-        .filter(|&&k| k == pfem::core::ParticleKind::Fluid)
-        .count();
-    assert_eq!(fluid, pts.len());
+    assert_eq!(fluid_count(&sim), pts.len());
     // The least `V/R³` of the kept fluid tetrahedra, against a regular
     // one's (0.513).
     let x = sim.particles().x();

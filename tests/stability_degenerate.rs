@@ -81,13 +81,7 @@ fn jittered_particles_run() {
         .expect("scene builds");
     // Every particle kept, and the first mesh has flat triangles: the
     // least quality `4√3 A / Σ l²` (1 for an equilateral one).
-    let fluid = sim
-        .particles()
-        .kind()
-        .iter()
-        .filter(|&&k| k == pfem::core::ParticleKind::Fluid)
-        .count();
-    assert_eq!(fluid, pts.len());
+    assert_eq!(fluid_count(&sim), pts.len());
     let x = sim.particles().x();
     let worst = sim
         .elements()

@@ -506,3 +506,15 @@ pub fn jitter(i: usize, k: usize) -> f64 {
 pub fn free_fall_bound(height: f64) -> f64 {
     2.0 * (2.0 * 9.81 * height).sqrt()
 }
+
+/// Fluid particles of the set.
+pub fn fluid_count<const D: usize>(sim: &Simulation<D>) -> usize
+where
+    Const<D>: Dim,
+{
+    sim.particles()
+        .kind()
+        .iter()
+        .filter(|&&k| k == ParticleKind::Fluid)
+        .count()
+}
