@@ -10,6 +10,7 @@ mod block_solver;
 mod checkpoint;
 mod contact;
 mod convergence;
+mod custom_materials;
 mod determinism;
 mod floating;
 mod floating_3d;

@@ -187,8 +187,10 @@ where
     pub a_n: &'a [Vector<D>],
     /// Nodal pressure at `t_n` (Pa); read for nodes of fluid elements.
     pub pressure_n: &'a [f64],
-    /// Per element history at `t_n` (solid stress); fluid elements' entries
-    /// are not read.
+    /// Per element history at `t_n` (solid stress). A fluid element's
+    /// entry is read with its `pressure` replaced by the mean of its
+    /// nodes' `pressure_n` (a fluid's history is nodal, eq. 62), which its
+    /// material's `unified` sees.
     pub element_history: &'a [History<D>],
     /// The materials, indexed by [`StepMesh::element_material`].
     pub materials: &'a [Box<dyn Material<D>>],
@@ -1260,7 +1262,26 @@ where
                     Some(s) => {
                         *st = s;
                         let mat = &input.materials[self.elem_material[e] as usize];
-                        *un = mat.unified(&s.kin, &input.element_history[e]);
+                        let stored = &input.element_history[e];
+                        *un = if elem_fluid[e] {
+                            // A fluid's history is its nodal pressure (eq.
+                            // 62): the element is given its nodes' mean at
+                            // `tⁿ`, so that a fluid's `μ` or `𝒦` may depend
+                            // on it (a pressure-dependent viscosity).
+                            // Before, it was given 0.
+                            let mean = parts[..nv]
+                                .iter()
+                                .map(|&p| input.pressure_n[p])
+                                .sum::<f64>()
+                                / nv as f64;
+                            let h = History {
+                                pressure: mean,
+                                ..*stored
+                            };
+                            mat.unified(&s.kin, &h)
+                        } else {
+                            mat.unified(&s.kin, stored)
+                        };
                         if !(un.mu.is_finite()
                             && un.kappa.is_finite()
                             && un.sigma_hat_zz.is_finite()

@@ -196,8 +196,10 @@ pub fn element_history_force<const D: usize>(
 }
 
 /// The unified triple of an element's material at its current kinematics
-/// (eq. 44). Fluids ignore the history passed here: their pressure history
-/// is nodal and enters through [`element_history_force`]'s nodal analogue.
+/// (eq. 44). A fluid's `σ̂` is not used: its pressure history is nodal and
+/// enters through [`element_history_force`]'s nodal analogue (the
+/// assembly hands a fluid element its nodes' mean pressure, which its `μ`
+/// or `𝒦` may read).
 pub fn element_unified<const D: usize>(
     material: &dyn Material<D>,
     st: &ElementState<D>,

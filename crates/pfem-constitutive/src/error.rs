@@ -100,6 +100,10 @@ pub enum MaterialError {
         /// How many the material names.
         count: usize,
     },
+    /// A solid's [`crate::Material::initial_history`] with an entry that is
+    /// NaN or infinite.
+    #[error("its initial history (stress, internal variables) is not finite")]
+    NonFiniteInitialHistory,
     /// A setting that holds in one dimension only, used in another (plane
     /// stress in 3D).
     #[error("{what} does not apply in {dimension}D")]
@@ -119,7 +123,8 @@ impl MaterialError {
             MaterialError::DegenerateWaveSpeed { .. }
             | MaterialError::TooManyInternalVariables { .. }
             | MaterialError::FluidWithInternalVariables { .. }
-            | MaterialError::NotInDimension { .. } => None,
+            | MaterialError::NotInDimension { .. }
+            | MaterialError::NonFiniteInitialHistory => None,
         }
     }
 }

@@ -1,7 +1,7 @@
 //! The unified material interface (paper §3.5, eqs. 43–44).
 
 use crate::error::MaterialError;
-use pfem_core::{Const, Dim, Tensor, Vector};
+use pfem_core::{Const, Dim, Point, Tensor, Vector};
 
 /// Kinematics of one element at the current Picard iterate, in the Updated
 /// Lagrangian frame whose reference is the configuration at `t_n`.
@@ -147,7 +147,9 @@ pub struct History<const D: usize> {
     /// Out-of-plane normal stress `σ_zz` (Pa) in 2D plane strain; unused
     /// (zero) in 3D.
     pub stress_zz: f64,
-    /// Pressure `pⁿ` (Pa) of a fluid, positive in compression.
+    /// Pressure `pⁿ` (Pa) of a fluid, positive in compression. The solver
+    /// keeps a fluid's pressure on its nodes; a fluid element's
+    /// [`Material::unified`] is given the mean of its nodes'.
     pub pressure: f64,
     /// A solid's internal variables at `t_n` (plastic strain, damage,
     /// viscous strains…), as many as its
@@ -415,11 +417,12 @@ where
     /// from the step's displacement.
     ///
     /// A solid's `history` is its element's. A fluid's pressure lives on
-    /// the nodes (eq. 62), not in elements: a fluid element is given
-    /// `History::default()` (pressure 0, no internal variables), and its
-    /// `σ̂` is not used (the nodal pressures enter the system instead). A
-    /// fluid whose `μ` or `𝒦` should depend on the pressure cannot read it
-    /// here.
+    /// the nodes (eq. 62), not in elements: a fluid element is given a
+    /// history whose `pressure` is the mean of its nodes' pressures at
+    /// `t_n` (its other entries zero), so that a fluid's `μ` or `𝒦` may
+    /// depend on the pressure (explicitly: the pressure at `t_n`, not the
+    /// iterate's). Its `σ̂` is not used (the nodal pressures enter the
+    /// system instead) and must be isotropic.
     fn unified(&self, kin: &Kinematics<D>, history: &History<D>) -> Unified<D>;
 
     /// After the step has converged, advance the history from `t_n` to
@@ -450,6 +453,22 @@ where
     /// ([`crate::MaterialError::FluidWithInternalVariables`]).
     fn internal_variables(&self) -> &[&str] {
         &[]
+    }
+
+    /// A solid element's history at the start of a run, given the
+    /// element's centroid in the initial configuration (m): a prestress
+    /// (a geostatic stress growing with depth, a bolt's preload) in
+    /// `stress` (and `stress_zz` in 2D), an initial plastic strain or
+    /// damage in `internal`. Zero by default. Asked once per solid element
+    /// when the simulation is built (a restart takes the checkpoint's
+    /// instead); every entry must be finite, or the scene is refused
+    /// ([`crate::MaterialError::NonFiniteInitialHistory`]). The run starts
+    /// from the accelerations this stress gives with the loads: a stress
+    /// they do not balance sets the body moving (no equilibrium is sought).
+    /// A fluid's is not asked: its state is the nodal pressure.
+    fn initial_history(&self, centroid: &Point<D>) -> History<D> {
+        let _ = centroid;
+        History::default()
     }
 
     /// Refuses a material that does not apply in this dimension `D` (a 2D

@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use pfem_constitutive::{History, Kinematics, Material, MaterialKind};
+use pfem_constitutive::{History, Kinematics, Material, MaterialError, MaterialKind};
 use pfem_core::{Const, Dim, ParticleKind, Point, Tensor, Vector};
 use pfem_geometry::{
     alpha_shape_cutting_into, near_matter, tessellate_or_empty, tessellate_subset,
@@ -679,13 +679,18 @@ where
             hooks.push(Box::new(crate::hooks::AppliedForce::from_load(load)));
         }
         // The solid elements weigh their initial volume (eq. 46).
-        let elements = Elements::new(
+        let mut elements = Elements::new(
             solid_elements,
             solid_material,
             particles.initial_positions(),
             options.close_sealed_voids,
             options.count_wall_pockets,
         );
+        // Each solid element's state at `t₀`, from its material at its
+        // centroid (a prestress, an initial plastic strain; zero by
+        // default).
+        let start = initial_solid_history(&elements, &materials, &particles, &body_names)?;
+        elements.set_solid_history(&start);
         let fixed_body = particles.fixed_bodies(body_names.len());
         let mut sim = Self {
             name,
@@ -2731,6 +2736,42 @@ where
         m.wave_speed(),
         material_response(m),
     )
+}
+
+/// Each solid element's history at `t₀`: its material's
+/// [`Material::initial_history`] at the element's centroid in the initial
+/// configuration. One that is not finite is refused, naming the body.
+fn initial_solid_history<const D: usize>(
+    elements: &Elements<D>,
+    materials: &[Box<dyn Material<D>>],
+    particles: &Particles<D>,
+    body_names: &[String],
+) -> Result<Vec<History<D>>, SceneError>
+where
+    Const<D>: Dim,
+{
+    let x0 = particles.initial_positions();
+    let mut start = Vec::with_capacity(elements.solid_material().len());
+    for (el, &m) in elements
+        .solid()
+        .chunks_exact(D + 1)
+        .zip(elements.solid_material())
+    {
+        let centroid = el
+            .iter()
+            .fold(Point::<D>::zeros(), |c, &i| c + x0[i as usize])
+            / (D + 1) as f64;
+        let h = materials[m as usize].initial_history(&centroid);
+        if !h.is_finite() {
+            let body = particles.body()[el[0] as usize] as usize;
+            return Err(SceneError::InvalidMaterial {
+                body: body_names.get(body).cloned().unwrap_or_default(),
+                source: MaterialError::NonFiniteInitialHistory,
+            });
+        }
+        start.push(h);
+    }
+    Ok(start)
 }
 
 /// A fingerprint of a material: its [`Material::parameters`], the names
