@@ -146,3 +146,50 @@ fn probe_rows_beyond_the_memory_budget_are_refused_at_the_start() {
     assert!(sim.steps() > 0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `height_at_wall` reads the main body's largest `y` within the band of
+/// `x = 0`, whatever its sign, and NaN with no water there. Before
+/// session 49 it folded from 0 (water wholly below `y = 0` read 0, as did
+/// no water at the wall) and took every particle with `x ≤ band`.
+#[test]
+fn the_height_at_the_wall_is_read_below_zero_and_nan_without_water() {
+    let h = 0.025;
+    let boxed = |x0: f64, y0: f64, x1: f64, y1: f64| Geometry::Box {
+        min: Point::<2>::new(x0, y0),
+        max: Point::<2>::new(x1, y1),
+    };
+    let tank = |x0: f64| {
+        Scene::<2>::new("low")
+            .gravity(Vector::<2>::new(0.0, -9.81))
+            .wall(
+                "floor",
+                boxed(-0.1, -1.0 - h, 0.6, -1.0),
+                h,
+                WallMotion::Fixed,
+            )
+            .wall("back", boxed(-0.1, -1.0, 0.0, -0.5), h, WallMotion::Fixed)
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(x0, -1.0, x0 + 0.2, -0.75),
+                h,
+            )
+    };
+    let at_wall = Simulation::new(
+        tank(0.0),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    let height = pfem::cases::height_at_wall(&at_wall, 1.5 * h);
+    // The top row of the water, at y = −0.75.
+    assert!((height + 0.75).abs() < 1e-9, "height {height}");
+    let away = Simulation::new(
+        tank(0.3),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    let height = pfem::cases::height_at_wall(&away, 1.5 * h);
+    assert!(height.is_nan(), "height {height} with no water at the wall");
+}

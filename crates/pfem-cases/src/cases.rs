@@ -160,13 +160,9 @@ pub fn front_x(s: &Simulation<2>) -> f64 {
 }
 
 /// Height of the fluid at the back wall: the largest `y` of a meshed fluid
-/// particle within `band` of `x = 0`.
+/// particle within `band` of `x = 0` (`|x| ≤ band`); NaN when none is.
 pub fn height_at_wall(s: &Simulation<2>, band: f64) -> f64 {
-    let meshed = main_body(s);
-    (0..s.particles().len())
-        .filter(|&i| meshed[i] && s.particles().x()[i].x <= band)
-        .map(|i| s.particles().x()[i].y)
-        .fold(0.0, f64::max)
+    crate::cases3d::height_at_wall_of(s, band, &main_body(s))
 }
 
 /// Linear interpolation of a time series at `t` (clamped at the ends).

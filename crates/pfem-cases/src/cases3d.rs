@@ -91,7 +91,8 @@ where
 }
 
 /// Height of the fluid at the back wall (`x = 0`): the largest `y` of a
-/// fluid particle of the main body within `band` of the wall.
+/// fluid particle of the main body within `band` of the wall (`|x| ≤
+/// band`); NaN when none is.
 pub fn height_at_wall<const D: usize>(s: &Simulation<D>, band: f64) -> f64
 where
     Const<D>: Dim,
@@ -105,10 +106,18 @@ pub fn height_at_wall_of<const D: usize>(s: &Simulation<D>, band: f64, body: &[b
 where
     Const<D>: Dim,
 {
-    (0..s.particles().len())
-        .filter(|&i| body[i] && s.particles().x()[i][0] <= band)
+    // Within `band` of the wall on either side, from −∞: water wholly
+    // below `y = 0` read 0, and so did no water at the wall (a review in
+    // session 49, as `front_x_of`'s in session 45); none reads NaN.
+    let height = (0..s.particles().len())
+        .filter(|&i| body[i] && s.particles().x()[i][0].abs() <= band)
         .map(|i| s.particles().x()[i][1])
-        .fold(0.0, f64::max)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if height.is_finite() {
+        height
+    } else {
+        f64::NAN
+    }
 }
 
 /// A 3D tank, walls two particle layers thick (spacing `h`): the floor

@@ -78,6 +78,12 @@ where
     quiet: bool,
     overwrite: bool,
     started: Option<Instant>,
+    /// The wall time of the run's earlier invocations (s), from the
+    /// checkpoint it was resumed from ([`OUTPUT_WALL_SECTION`]).
+    wall_before: f64,
+    /// The frames a resumed run listed, kept listed while this one writes
+    /// none (`--no-vtu`): its checkpoints carry them on.
+    listed: Vec<(f64, String)>,
     /// Rows of probes recorded so far ([`StandardOutput::history`]); none
     /// kept with [`StandardOutput::keep_rows`]`(false)`.
     history: Vec<ProbeRow>,
@@ -125,6 +131,11 @@ struct Resumed {
 /// The output layer's section of a checkpoint.
 pub const OUTPUT_SECTION: &str = "output";
 
+/// The output layer's wall time of the run so far (s, one `f64`), in its
+/// own section: the output section stays the same bits for the same run,
+/// interrupted or not.
+pub const OUTPUT_WALL_SECTION: &str = "output_wall";
+
 /// The file name of the checkpoint [`StandardOutput`] writes in its
 /// directory.
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
@@ -135,10 +146,39 @@ pub fn read_checkpoint(path: impl AsRef<std::path::Path>) -> Result<Checkpoint, 
     let path = path.as_ref();
     let io = |e| RunError::Output(Box::new(crate::output::OutputError::io(path, e)));
     // A device or a pipe (`/dev/zero`) would be read without end.
-    if !std::fs::metadata(path).map_err(io)?.is_file() {
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
         return Err(io(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             "not a regular file",
+        )));
+    }
+    // Its first bytes before the whole (before session 49 a 1 GB file of
+    // anything was read into memory to be told it is not a checkpoint,
+    // and one larger than the memory would have exhausted it).
+    let mut magic = [0u8; pfem_driver::checkpoint::MAGIC.len()];
+    {
+        use std::io::Read;
+        let mut f = std::fs::File::open(path).map_err(io)?;
+        let mut got = 0;
+        while got < magic.len() {
+            match f.read(&mut magic[got..]).map_err(io)? {
+                0 => break,
+                k => got += k,
+            }
+        }
+        if got < magic.len() || &magic != pfem_driver::checkpoint::MAGIC {
+            return Err(pfem_driver::checkpoint::CheckpointError::NotACheckpoint.into());
+        }
+    }
+    let budget = pfem_scene::default_memory_budget();
+    if meta.len() as f64 > budget {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "{} bytes, more than the memory budget ({budget:.3e} bytes, 80 % of this machine's memory)",
+                meta.len()
+            ),
         )));
     }
     let bytes = std::fs::read(path).map_err(io)?;
@@ -164,6 +204,8 @@ where
             quiet,
             overwrite: false,
             started: None,
+            wall_before: 0.0,
+            listed: Vec::new(),
             history: Vec::new(),
             keep_rows: true,
             rows: 0,
@@ -217,6 +259,19 @@ where
     /// than the count or whose rows hash otherwise is refused
     /// ([`crate::output::OutputError::Resume`]).
     pub fn resume(&mut self, checkpoint: &Checkpoint) -> Result<(), RunError> {
+        // (A checkpoint before session 49 holds none: 0.)
+        let wall_before = match checkpoint.section(OUTPUT_WALL_SECTION) {
+            Some(b) => {
+                let mut d = Decoder::new(b);
+                let w = d.f64()?;
+                d.end()?;
+                if !(w.is_finite() && w >= 0.0) {
+                    return Err(CheckpointError::Corrupt(format!("the run's wall time {w}")).into());
+                }
+                w
+            }
+            None => 0.0,
+        };
         let mut d = Decoder::new(checkpoint.require(OUTPUT_SECTION)?);
         let next_frame = d.f64()?;
         let next_probe = d.f64()?;
@@ -310,6 +365,7 @@ where
             rows_hash: hash,
             csv_len,
         });
+        self.wall_before = wall_before;
         Ok(())
     }
 
@@ -433,7 +489,14 @@ where
         e.f64(self.next_frame);
         e.f64(self.next_probe);
         e.f64(self.next_checkpoint);
-        let frames = self.series.as_ref().map(|s| s.entries()).unwrap_or(&[]);
+        // A run continued without frames carries on the ones listed
+        // before (before session 49 its checkpoint listed none and said
+        // "no frames", and the run could never write frames again).
+        let frames = self
+            .series
+            .as_ref()
+            .map(|s| s.entries())
+            .unwrap_or(&self.listed);
         e.u64(frames.len() as u64);
         for (t, f) in frames {
             e.f64(*t);
@@ -445,7 +508,7 @@ where
         // count and hash below. Written here, every checkpoint held every
         // row (96 MB for 10 columns over 10⁶ rows).
         e.u64(0);
-        e.bool(self.series.is_some());
+        e.bool(self.series.is_some() || !self.listed.is_empty());
         // The probes' names (session 41 on; a checkpoint without them is
         // compared by their number alone).
         e.u64(self.probes.len() as u64);
@@ -466,15 +529,20 @@ where
         }
         let mut ck = sim.checkpoint();
         ck.set(OUTPUT_SECTION, self.encode_state());
+        let mut wall = Encoder::new();
+        wall.f64(self.wall_total());
+        ck.set(OUTPUT_WALL_SECTION, wall.finish());
         crate::output::write_atomic(self.checkpoint_path(), &ck.encode())?;
         self.checkpoints += 1;
         Ok(())
     }
 
     /// Whether a non-empty output directory is accepted: its previous run's
-    /// files (`*.vtu`, `*.pvd`, `probes.csv`, `summary.json`) are removed
-    /// first (and a checkpoint, and the temporaries of a killed run's atomic
-    /// writes), other files are left alone. Without it (the default) a
+    /// files (this scene's `*.vtu` and `.pvd`, `probes.csv`,
+    /// `summary.json`) are removed first (and a checkpoint, and the
+    /// temporaries of a killed run's atomic writes), other files are left
+    /// alone; a folder holding another scene's series (its `.pvd`) is
+    /// refused ([`crate::output::OutputError::OtherScene`]). Without it (the default) a
     /// non-empty directory is refused at the start of the run
     /// ([`crate::output::OutputError::NotEmpty`]): frames of an old run must
     /// not sit beside the new ones.
@@ -514,10 +582,23 @@ where
                 example: names[0].to_string_lossy().into_owned(),
             });
         }
+        // Another scene's series here: its run's files (probes, summary,
+        // checkpoint) share their names with this one's, so clearing would
+        // leave it half deleted (a review in session 49): refused.
+        if let Some(other) = names
+            .iter()
+            .map(|n| n.to_string_lossy())
+            .find(|s| s.ends_with(".pvd") && *s != format!("{name}.pvd"))
+        {
+            return Err(OutputError::OtherScene {
+                dir: self.dir.clone(),
+                series: other.into_owned(),
+            });
+        }
         for n in names {
             let s = n.to_string_lossy();
-            // This scene's series only: another scene's frames in the same
-            // folder are not the previous run's.
+            // This scene's series only (another scene's frames without
+            // their `.pvd` are left alone).
             let ours = crate::output::frame_index(&s, name).is_some()
                 || s == format!("{name}.pvd")
                 || s == "probes.csv"
@@ -781,6 +862,16 @@ where
         Ok(summary)
     }
 
+    /// The run's wall time so far (s): this invocation's since its start,
+    /// with the earlier invocations' a resumed run's checkpoint holds.
+    pub fn wall_total(&self) -> f64 {
+        self.wall_before
+            + self
+                .started
+                .map(|s| s.elapsed().as_secs_f64())
+                .unwrap_or(0.0)
+    }
+
     /// The run's summary as it stands.
     pub fn summary(&self, sim: &Simulation<D>) -> RunSummary {
         let mut wall = BTreeMap::new();
@@ -795,12 +886,10 @@ where
         wall.insert("hooks".to_string(), sim.stats().hooks.1);
         wall.insert("output".to_string(), sim.stats().observe.1);
         wall.insert("rejected_attempts".to_string(), sim.stats().rejected.1);
-        wall.insert(
-            "total".to_string(),
-            self.started
-                .map(|s| s.elapsed().as_secs_f64())
-                .unwrap_or(0.0),
-        );
+        // The whole run's, earlier invocations included, as the stage
+        // timers are (before session 49 a resumed run's total was its last
+        // invocation's, below the sum of its stages).
+        wall.insert("total".to_string(), self.wall_total());
         let mut causes = BTreeMap::new();
         causes.insert("remeshing".to_string(), sim.volume().remeshing);
         causes.insert("solution".to_string(), sim.volume().solution);
@@ -894,7 +983,8 @@ where
             // No frames from here on (`--no-vtu`), but the run's listed
             // ones stay listed: the collection is put back to the
             // checkpoint's, without the frames written after it.
-            VtuSeries::resume(&self.dir, sim.name(), Encoding::Base64, r.frames)?;
+            VtuSeries::resume(&self.dir, sim.name(), Encoding::Base64, r.frames.clone())?;
+            self.listed = r.frames;
         }
         if !self.probes.is_empty() {
             let mut cols = vec!["t"];

@@ -535,6 +535,12 @@ where
         let n = particles.len();
         for (i, vel) in fixed {
             particles.fixed[i] = Some(vel);
+            // A clamped or welded particle starts at its prescribed
+            // velocity, whatever its body's initial velocity (before, it
+            // started at the body's and was displaced by it in the first
+            // step: a clamped beam given 1 m/s moved its clamp 0.94 mm, a
+            // review in session 49).
+            particles.v[i] = vel;
         }
         // A fluid particle inside a wall's box (deeper than half the wall's
         // spacing): only boxes against boxes are refused before placement,
@@ -646,8 +652,8 @@ where
             });
         }
         // Initial pressure fields replace the hydrostatic start.
-        for (range, f) in pressure_fields {
-            for i in range {
+        for (range, f) in &pressure_fields {
+            for i in range.clone() {
                 let p = (f.0)(particles.x()[i].as_slice());
                 if !p.is_finite() {
                     return Err(SceneError::InvalidSetting {
@@ -655,6 +661,48 @@ where
                         value: p,
                     });
                 }
+                particles.pressure[i] = p;
+            }
+        }
+        // The walls and solids next to such a fluid carry its field too
+        // (eq. 62 puts the pressure on every node of a fluid element), at
+        // their own positions: each whose nearest fluid particle within a
+        // lattice cell's diagonal (the hydrostatic start's rule) has a
+        // field. Before session 49 they kept the hydrostatic start (or 0
+        // without gravity): a uniform 10⁵ Pa moved water at rest in a
+        // closed box at 1 cm/s (a review).
+        if !pressure_fields.is_empty() {
+            let (x, kind, spacing) = (particles.x(), particles.kind(), particles.spacing());
+            let fluid =
+                crate::lattice::SpacingGrids::new(x, spacing, |i| kind[i] == ParticleKind::Fluid);
+            let diagonal = 1.01 * (D as f64).sqrt();
+            let mut set = Vec::new();
+            for i in (0..x.len()).filter(|&i| kind[i] != ParticleKind::Fluid) {
+                let mut near: Option<(f64, usize)> = None;
+                fluid.visit(&x[i], 0.0, diagonal, x, |j| {
+                    let d = (x[i] - x[j]).norm();
+                    if d <= diagonal * spacing[j] && near.is_none_or(|(b, bj)| (d, j) < (b, bj)) {
+                        near = Some((d, j));
+                    }
+                });
+                let field = near.and_then(|(_, j)| {
+                    pressure_fields
+                        .iter()
+                        .find(|(range, _)| range.contains(&j))
+                        .map(|(_, f)| f)
+                });
+                if let Some(f) = field {
+                    let p = (f.0)(x[i].as_slice());
+                    if !p.is_finite() {
+                        return Err(SceneError::InvalidSetting {
+                            setting: "pressure field",
+                            value: p,
+                        });
+                    }
+                    set.push((i, p));
+                }
+            }
+            for (i, p) in set {
                 particles.pressure[i] = p;
             }
         }
@@ -707,6 +755,30 @@ where
                 Some((ia, ib, *mu))
             })
             .collect();
+        // An applied force acts on its body's free particles inside its
+        // region: one that holds none is refused here, where `check` sees
+        // it (before session 49 only the run's hook found it, and a force
+        // on clamped particles was accepted and lost).
+        for load in &forces {
+            let Some(id) = body_names.iter().position(|n| *n == load.body) else {
+                continue; // (`validate` refused it.)
+            };
+            let inside = |x: &Point<D>| {
+                load.region
+                    .is_none_or(|(lo, hi)| (0..D).all(|k| x[k] >= lo[k] && x[k] <= hi[k]))
+            };
+            let free = (0..particles.len()).any(|i| {
+                particles.body()[i] as usize == id
+                    && particles.fixed[i].is_none()
+                    && inside(&particles.x()[i])
+            });
+            if !free {
+                return Err(SceneError::InvalidGeometry {
+                    body: load.body.clone(),
+                    why: "an applied force's region holds none of its free particles (clamped and welded ones do not move: a force on them would be lost)".into(),
+                });
+            }
+        }
         Ok(Built {
             free_solids,
             in_contact,

@@ -85,6 +85,15 @@ pub enum SceneError {
         /// Second body.
         second: String,
     },
+    /// A wall motion law whose parameters or table cannot hold (the law's
+    /// constructor; the scene names the wall it moves).
+    #[error("{law}: {why}")]
+    InvalidMotion {
+        /// The law ("a piecewise-linear motion", "a rotation").
+        law: &'static str,
+        /// What is wrong.
+        why: String,
+    },
     /// A call of the scene builder that had nothing to act on, or
     /// settings of a body that exclude each other.
     #[error("scene: {why}")]

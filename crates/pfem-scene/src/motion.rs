@@ -207,8 +207,8 @@ where
     /// A table law; its rows must start at `t = 0` with zero displacement,
     /// with finite, strictly increasing times and finite displacements.
     pub fn new(rows: Vec<(f64, Vector<D>)>) -> Result<Self, SceneError> {
-        let bad = |why: &str| SceneError::InvalidGeometry {
-            body: "piecewise-linear motion".into(),
+        let bad = |why: &str| SceneError::InvalidMotion {
+            law: "a piecewise-linear motion",
             why: why.into(),
         };
         let Some(first) = rows.first() else {
@@ -351,8 +351,8 @@ where
         period: f64,
         ramp: f64,
     ) -> Result<Self, SceneError> {
-        let bad = |why: String| SceneError::InvalidGeometry {
-            body: "rotation".into(),
+        let bad = |why: String| SceneError::InvalidMotion {
+            law: "a rotation",
             why,
         };
         let finite = center.iter().all(|c| c.is_finite())

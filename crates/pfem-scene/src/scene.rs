@@ -309,8 +309,9 @@ pub fn default_memory_budget() -> f64 {
 }
 
 /// A force on a solid body in time ([`Scene::force`]): `force(t)` (N; N
-/// per metre of depth in 2D) split evenly among the body's particles that
-/// start inside `region` (all of them without one). The driver applies it
+/// per metre of depth in 2D) split evenly among the body's free particles
+/// (not clamped or welded) that start inside `region` (all of them
+/// without one; a region that holds none is refused). The driver applies it
 /// with its `AppliedForce` hook.
 #[derive(Clone)]
 pub struct AppliedLoad<const D: usize>
@@ -632,8 +633,9 @@ where
     }
 
     /// A force `force(t)` (N; N per metre of depth in 2D, `t` in s) on the
-    /// solid `body`, split evenly among its particles that start inside
-    /// `region` (`None`: all of them): a tip load, a traction on a face,
+    /// solid `body`, split evenly among its free particles (not clamped or
+    /// welded) that start inside `region` (`None`: all of them; a region
+    /// that holds none is refused): a tip load, a traction on a face,
     /// a push. Applied at the end of each step (`t = tₙ + Δt`).
     pub fn force(
         mut self,

@@ -77,7 +77,7 @@
 //! | `[contact]` | `stiffness` (Pa), `damping` (dimensionless: the dashpot's time constant in steps, default 0.1), `onset` (the penalty's rounded onset, a fraction of the contact distance, half the sum of the two bodies' spacings, in `[0, 0.5]`, default 0.01), `friction = [{ bodies = ["a", "b"], mu = 0.3 }, …]`, `clamped` (`true`: clamped solids too, default `false`): contact of free solids (no clamp) with walls and other solids |
 //! | `geometry` | `box = { min, max }`, `ball = { center, radius }`, `cylinder = { base, axis, radius, height }` (3D), `polygon = [[x, y], …]` (2D, a closed polygon), `stl = { file, scale, offset }` (3D, a closed triangle surface; `file` relative to the scene file, `scale` to metres, default 1) or `particles = [[x, y], …]` (m) |
 //! | `probes` | columns of `probes.csv`: see [`ProbeSpec`] |
-//! | `[[force]]` | a force on a solid in time: `body`, `region = { min, max }` (m, optional: the whole body), and `value = [fx, fy]` (N; N/m in 2D) with an optional `ramp` (s), or `table = [[t, fx, fy], …]` (s, N): [`ForceSpec`] |
+//! | `[[force]]` | a force on a solid in time, split evenly among the body's free (not clamped or welded) particles in `region`: `body`, `region = { min, max }` (m, optional: the whole body), and `value = [fx, fy]` (N; N/m in 2D) with an optional `ramp` (s), or `table = [[t, fx, fy], …]` (s, N): [`ForceSpec`] |
 //!
 //! A malformed file (syntax, unknown key, wrong type, wrong number of
 //! coordinates) is a [`SceneError::File`] naming the line; impossible values
@@ -1036,7 +1036,18 @@ impl SceneFile {
                 "contact_stiffness" => &["stiffness"],
                 _ => std::slice::from_ref(setting),
             },
-            SceneError::InvalidName { .. } => &["name"],
+            // The scene's own `name`, above the first table: a name taken
+            // from the file's stem has no line (before session 49 a body's
+            // `name` line was given).
+            SceneError::InvalidName { .. } => {
+                let top = self
+                    .source
+                    .lines()
+                    .take_while(|l| !l.trim_start().starts_with('['))
+                    .collect::<Vec<_>>()
+                    .join("\n");
+                return key_line(&top, "name").map(|at| format!("line {at}"));
+            }
             SceneError::CannotFinish { what, .. } if what.contains("output frames") => {
                 &["output_interval", "end_time"]
             }
@@ -1210,8 +1221,19 @@ impl SceneFile {
                     .collect()
             }
             ProbeSpec::Force { body, name } => {
-                if !self.bodies.iter().any(|b| &b.get_ref().name == body) {
-                    return Err(self.error(p.span(), format!("probe `force`: no body `{body}`")));
+                match self.bodies.iter().find(|b| &b.get_ref().name == body) {
+                    None => {
+                        return Err(self.error(p.span(), format!("probe `force`: no body `{body}`")))
+                    }
+                    // The water's force on a body; on water itself it read
+                    // a round-off 10⁻¹² every row (a review in session 49).
+                    Some(b) if b.get_ref().kind == BodyKind::Fluid => {
+                        return Err(self.error(
+                            p.span(),
+                            format!("probe `force`: `{body}` is a fluid (the probe measures the fluids' pressure force on a wall or solid)"),
+                        ))
+                    }
+                    Some(_) => {}
                 }
                 let suffix = name.clone().unwrap_or_else(|| body.clone());
                 // The force, measured once a row for its D columns.

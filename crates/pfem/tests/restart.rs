@@ -315,6 +315,115 @@ fn a_restart_keeps_to_its_own_folder_and_a_wall_clock_stop_says_so() {
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(b.join("summary.json")).unwrap()).unwrap();
     assert!((summary["simulated_time"].as_f64().unwrap() - 0.06).abs() < 1e-9);
+    // Its wall time is the whole run's, as its stages' are (before session
+    // 49, the last invocation's alone: below the sum of the stages).
+    let wall = &summary["wall_time_s"];
+    let stages: f64 = ["remesh", "assemble", "solve", "update", "hooks", "output"]
+        .iter()
+        .map(|k| wall[*k].as_f64().unwrap())
+        .sum();
+    let total = wall["total"].as_f64().unwrap();
+    assert!(
+        total >= stages,
+        "total {total} s below its stages' {stages} s"
+    );
+    // B's checkpoint (t = 0.04 s) to an end time before it: nothing to
+    // run, said, and its summary as it was (before session 49:
+    // "finished", the summary rewritten from a fresh remeshing's volume).
+    let before = std::fs::read(b.join("summary.json")).unwrap();
+    let o = Command::new(PFEM)
+        .args([
+            "run",
+            &dam.display().to_string(),
+            "--end-time",
+            "0.03",
+            "--quiet",
+            "--restart",
+            &ck_b,
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("nothing to run"), "{err}");
+    assert_eq!(std::fs::read(b.join("summary.json")).unwrap(), before);
+    // B's checkpoint through a link in another folder L: a refused
+    // restart (another scene) leaves L's files (before session 49 it
+    // continued in the link's folder and, refused, emptied it).
+    let l = tmp("own-l");
+    std::fs::create_dir_all(&l).unwrap();
+    std::fs::write(l.join("notes.txt"), "mine").unwrap();
+    #[cfg(unix)]
+    {
+        let link = l.join("ck.bin");
+        std::os::unix::fs::symlink(b.join("checkpoint.bin"), &link).unwrap();
+        let o = Command::new(PFEM)
+            .args(["run", &still.display().to_string(), "--quiet", "--restart"])
+            .arg(&link)
+            .output()
+            .unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(1),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(
+            std::fs::read_to_string(l.join("notes.txt")).unwrap(),
+            "mine"
+        );
+        assert!(link.exists(), "the link was removed");
+        let mut names: Vec<String> = std::fs::read_dir(&l)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["ck.bin", "notes.txt"]);
+    }
+    let _ = std::fs::remove_dir_all(&l);
+    // A run with frames (G), continued without (`--no-vtu`), then with
+    // frames again: the frames listed before are carried on by the
+    // checkpoints of the part without (before session 49 that part's
+    // checkpoint listed none and said "no frames", and the third part was
+    // refused for good).
+    let g = tmp("own-g");
+    assert!(run(&dam, &g, &[]).status.success());
+    let ck_g = g.join("checkpoint.bin").display().to_string();
+    let go = |end: &str, extra: &[&str]| {
+        let mut args = vec!["run".to_string(), dam.display().to_string()];
+        args.extend(
+            [
+                "--end-time",
+                end,
+                "--checkpoint-every",
+                "0.02",
+                "--quiet",
+                "--restart",
+            ]
+            .map(String::from),
+        );
+        args.push(ck_g.clone());
+        args.extend(extra.iter().map(|s| s.to_string()));
+        Command::new(PFEM).args(&args).output().unwrap()
+    };
+    let listed = || {
+        std::fs::read_to_string(g.join("dam_break_2d.pvd"))
+            .unwrap()
+            .matches("<DataSet")
+            .count()
+    };
+    let first = listed();
+    let o = go("0.06", &["--no-vtu"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(listed(), first);
+    let o = go("0.08", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        listed() > first,
+        "{} frames listed, {first} before",
+        listed()
+    );
+    let _ = std::fs::remove_dir_all(&g);
     // A wall-clock limit shorter than a step: status 2, the hint printed.
     let c = tmp("own-c");
     let o = run(&dam, &c, &["--max-wall-time", "1e-6"]);

@@ -176,10 +176,26 @@ fn a_used_output_folder_is_refused_unless_overwritten() {
     assert_eq!(files(&dir, "vtu"), first, "nothing written or removed");
 
     // Another scene's series in the same folder is not this run's to
-    // clear (session 27: overwriting removed every `.vtu` and `.pvd`).
+    // clear (session 27: overwriting removed every `.vtu` and `.pvd`), and
+    // its run's probes, summary and checkpoint share this one's names:
+    // refused, nothing removed (session 49: they were removed, its frames
+    // left, a review).
     std::fs::write(dir.join("other.pvd"), "theirs").unwrap();
     std::fs::write(dir.join("other_000000.vtu"), "theirs").unwrap();
     std::fs::write(dir.join("reuse_notes.vtu"), "not a frame").unwrap();
+    let before = files(&dir, "vtu") + files(&dir, "csv") + files(&dir, "json");
+    let mut sim = build(puddle("reuse")).unwrap();
+    let mut out = StandardOutput::new(&dir, true, vec![], true).overwrite(true);
+    let err = sim
+        .run(&mut [&mut out])
+        .expect_err("another scene's series");
+    assert!(err.to_string().contains("another scene's series"), "{err}");
+    assert_eq!(
+        files(&dir, "vtu") + files(&dir, "csv") + files(&dir, "json"),
+        before
+    );
+    // Its frames without their collection are left alone.
+    std::fs::remove_file(dir.join("other.pvd")).unwrap();
     let mut sim = build(puddle("reuse")).unwrap();
     let mut out = StandardOutput::new(&dir, true, vec![], true).overwrite(true);
     sim.run(&mut [&mut out]).unwrap();
@@ -189,8 +205,37 @@ fn a_used_output_folder_is_refused_unless_overwritten() {
         "frames at 0, 0.01, 0.02 s, and the two files not of this series"
     );
     assert!(dir.join("notes.txt").is_file());
-    assert!(dir.join("other.pvd").is_file());
     assert!(dir.join("other_000000.vtu").is_file());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A checkpoint is told from other files by its first bytes, before the
+/// whole is read, and one larger than the memory budget is refused
+/// unread: sparse files of 64 GiB, one of anything and one that starts as
+/// a checkpoint. Before session 49 any file was read whole first (1 GB of
+/// memory to refuse a 1 GB file of zeros; more than the machine's
+/// memory aborts).
+#[test]
+fn a_checkpoint_is_checked_before_it_is_read() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-bigck-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let sparse = |name: &str, head: &[u8]| {
+        let p = dir.join(name);
+        let f = std::fs::File::create(&p).unwrap();
+        std::io::Write::write_all(&mut &f, head).unwrap();
+        f.set_len(64 << 30).unwrap();
+        p
+    };
+    let anything = sparse("zeros.bin", b"");
+    let err = pfem::observe::read_checkpoint(&anything)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("not a pfem checkpoint"), "{err}");
+    let big = sparse("big.bin", pfem::checkpoint::MAGIC);
+    let err = pfem::observe::read_checkpoint(&big)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("memory budget"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -9,8 +9,8 @@ use crate::RunError;
 
 /// A force on a solid body as a function of time: `force(t)` (N; N per
 /// metre of depth in 2D) at the end of each step, `t = tₙ + Δt`, split
-/// evenly among the body's particles that start inside the box
-/// `[min, max]` (all of them without a box): a point load on a tip, a
+/// evenly among the body's free particles (not clamped or welded) that
+/// start inside the box `[min, max]` (all of them without a box): a point load on a tip, a
 /// traction on a face, a push on a free block. Applied through
 /// [`HookContext::add_force`] before every solve; stateless, so a
 /// restarted run applies the same.
@@ -84,8 +84,11 @@ where
                 });
             }
             // By where it started (a restart runs `start` again on moved
-            // particles: the same ones must be loaded).
-            if inside(&p.initial_positions()[i]) {
+            // particles: the same ones must be loaded). A clamped or
+            // welded particle does not move: its share would be lost
+            // (before session 49 it took one, and the body felt less than
+            // the force asked).
+            if inside(&p.initial_positions()[i]) && !p.constraints().is_fully_fixed(i) {
                 on.push(i);
             }
         }
@@ -93,7 +96,7 @@ where
             return Err(RunError::Hook {
                 hook: Self::NAME.into(),
                 why: format!(
-                    "no particle of body `{}` inside the load's region",
+                    "no free particle of body `{}` inside the load's region (clamped and welded ones do not move)",
                     self.load.body
                 ),
             });

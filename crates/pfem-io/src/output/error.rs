@@ -21,6 +21,17 @@ pub enum OutputError {
         /// One of them.
         example: String,
     },
+    /// `--overwrite` (`StandardOutput::overwrite`) into a folder that holds
+    /// another scene's series: clearing this scene's files there would
+    /// take that run's `probes.csv`, `summary.json` and checkpoint and
+    /// leave its frames.
+    #[error("output directory {dir} holds another scene's series (`{series}`): --overwrite clears this scene's run only; choose another directory")]
+    OtherScene {
+        /// The directory.
+        dir: PathBuf,
+        /// The other series' collection file.
+        series: String,
+    },
     /// The operating system refused a read, write, rename or directory
     /// creation.
     #[error("I/O error on {path}: {source}")]

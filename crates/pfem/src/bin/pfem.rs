@@ -273,16 +273,21 @@ where
     args.check_dimension(D).map_err(|e| e.to_string())?;
     let budget = args.memory_budget().map_err(|e| e.to_string())?;
     let estimate = scene.validate_within(budget).map_err(|e| e.to_string())?;
-    let (name, bodies, t, dt) = (
+    // `run`'s step ceiling (`--max-dt` overrides the scene's).
+    let dt = args
+        .number("max-dt", scene.settings.max_dt)
+        .map_err(|e| e.to_string())?;
+    let (name, bodies, t) = (
         scene.name.clone(),
         scene.bodies.len(),
         scene.settings.end_time,
-        scene.settings.max_dt,
     );
     let courant = scene.settings.courant;
     let kinks = scene.motion_kinks(pfem::scene::MAX_STEPS);
+    // Within `--memory-budget`, as `run` builds it (before session 49 the
+    // default budget: a raised one was refused here, honoured by `run`).
     let built = scene
-        .build(tessellator.as_mut())
+        .build_within(budget, tessellator.as_mut())
         .map_err(|e| e.to_string())?;
     // The step count's lower bound: the largest step, or the Courant
     // limit of the initial speeds when that is tighter.
@@ -361,13 +366,13 @@ fn simulate<const D: usize>(
 where
     Const<D>: Dim,
 {
-    // A restart continues in its checkpoint's folder unless told otherwise.
+    // A restart continues in its checkpoint's folder unless told otherwise:
+    // its real file's (a link's folder is another's; before session 49 a
+    // refused restart through a link emptied the link's folder).
     let out = args.out.clone().unwrap_or_else(|| {
-        match args
-            .options
-            .get("restart")
-            .and_then(|f| Path::new(f).parent())
-        {
+        let f = args.options.get("restart").map(Path::new);
+        let real = f.and_then(|f| std::fs::canonicalize(f).ok());
+        match real.as_deref().or(f).and_then(Path::parent) {
             // `checkpoint.bin` alone: its parent is "", the current folder.
             Some(dir) if dir.as_os_str().is_empty() => PathBuf::from("."),
             Some(dir) => dir.to_path_buf(),
@@ -380,14 +385,15 @@ where
     // anything is refused (the review of session 45: another run's files
     // there were replaced). The checkpoint's own folder is its real file's
     // (a link to it names another).
-    if let (Some(f), Some(given)) = (args.options.get("restart"), &args.out) {
-        let own = std::fs::canonicalize(f)
-            .ok()
-            .and_then(|real| real.parent().map(Path::to_path_buf));
-        let same = match (own, std::fs::canonicalize(given)) {
-            (Some(a), Ok(b)) => a == b,
-            _ => false,
-        };
+    // (A checkpoint that cannot be found is reported by its reading.)
+    let own_folder = args
+        .options
+        .get("restart")
+        .and_then(|f| std::fs::canonicalize(f).ok())
+        .and_then(|real| real.parent().map(Path::to_path_buf));
+    if let (Some(f), Some(own)) = (args.options.get("restart"), own_folder) {
+        let given = &out;
+        let same = std::fs::canonicalize(given).is_ok_and(|b| b == own);
         let used = std::fs::read_dir(given).is_ok_and(|mut d| d.next().is_some());
         if !same && used {
             return Err(format!(
@@ -409,6 +415,11 @@ where
     // again (with the folder, if made for it) when the restart is refused.
     // Whether a copy was made, and whether its folder was made for it.
     let mut copied: Option<bool> = None;
+    // What the folder held before (a refused restart removes only what it
+    // added).
+    let before: Vec<PathBuf> = std::fs::read_dir(&out)
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
     if let Some(f) = args.options.get("restart") {
         let own = std::fs::canonicalize(f)
             .ok()
@@ -432,15 +443,18 @@ where
             }
         }
     }
-    // The folder was empty (or not there): what is in it now is this
-    // refused restart's (the copy, a summary the failed start wrote).
+    // What this refused restart added (the copy, a summary the failed
+    // start wrote) is removed, and the folder if it was made for it;
+    // nothing that was there before.
     let undo = |copied: &Option<bool>| {
         if let Some(made) = copied {
             if *made {
                 let _ = std::fs::remove_dir_all(&out);
             } else if let Ok(entries) = std::fs::read_dir(&out) {
                 for e in entries.flatten() {
-                    let _ = std::fs::remove_file(e.path());
+                    if !before.contains(&e.path()) && e.path().is_file() {
+                        let _ = std::fs::remove_file(e.path());
+                    }
                 }
             }
         }
@@ -464,6 +478,17 @@ where
         if let Err(e) = resumed {
             undo(&copied);
             return Err(format!("--restart: {e}"));
+        }
+        // Nothing left to run: said, not reported as a finished run (its
+        // summary rewritten from a fresh remeshing's volume, a review in
+        // session 49).
+        if sim.reached_end_time() {
+            undo(&copied);
+            return Err(format!(
+                "--restart: the checkpoint is at t = {} s, at or past the end time {} s: nothing to run (give a later --end-time to continue)",
+                sim.time(),
+                sim.end_time()
+            ));
         }
     }
     eprintln!(
