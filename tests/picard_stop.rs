@@ -120,3 +120,46 @@ fn a_predicted_first_iterate_saves_iterations_with_the_same_answer() {
     };
     fewer_iterations_same_answer("start", "predicted", params, 0.2);
 }
+
+/// A stiff solid at rest without gravity or load (a clamped beam,
+/// `E` = 2 GPa, 7 800 kg/m³): its velocities are round-off
+/// (5·10⁻¹³ m/s), and so are their changes from iterate to iterate
+/// (4·10⁻¹⁵ to 4·10⁻¹⁴ m/s), which the Picard loop accepts
+/// (`pfem_time::ROUNDOFF_FLOOR`): one step of 2 ms, none rejected, the
+/// beam where it was. Before session 49 the loop asked for changes of
+/// 10⁻¹⁵ m/s (10⁻⁶ of the default floor, 10⁻⁹ m/s) and rejected 620 of
+/// 1 894 steps to 2 ms (a review: a beam whose vibration has died out,
+/// or a load table that starts late, crawled).
+#[test]
+fn a_stiff_solid_at_rest_without_gravity_takes_its_largest_steps() {
+    let scene = Scene::<2>::new("resting_beam")
+        .settings(RunSettings {
+            end_time: 4e-3,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .solid(
+            "beam",
+            Box::new(Hypoelastic::new(7800.0, 2e9, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, -0.025),
+                max: Point::<2>::new(0.5, 0.025),
+            },
+            0.0125,
+            Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(0.001, 1.0))),
+        );
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    sim.run(&mut []).unwrap();
+    let moved = (0..sim.particles().len())
+        .map(|i| (sim.particles().x()[i] - sim.initial_position(i)).norm())
+        .fold(0.0, f64::max);
+    println!(
+        "resting beam: {} steps, {} rejected, moved at most {moved:.1e} m",
+        sim.steps(),
+        sim.rejected()
+    );
+    assert_eq!((sim.steps(), sim.rejected()), (2, 0));
+    assert!(moved < 1e-12, "moved {moved} m");
+}
