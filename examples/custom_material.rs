@@ -72,8 +72,9 @@ where
 
     fn unified(&self, kin: &Kinematics<D>, _history: &History<D>) -> Unified<D> {
         // A fluid's pressure is nodal (eq. 62): the assembly adds it, so a
-        // fluid element's `σ̂` is not used and the history it is given
-        // holds no pressure (`Material::unified`).
+        // fluid element's `σ̂` is not used (the history it is given holds
+        // its nodes' mean pressure, which this law does not need:
+        // `Material::unified`).
         Unified::new(
             self.effective_viscosity(Self::shear_rate(kin)),
             kin.dt * self.bulk_modulus,

@@ -657,6 +657,24 @@ fn a_restart_under_another_alpha_solver_motion_law_or_hook_is_refused() {
     same.step().unwrap();
     sim.step().unwrap();
     assert_eq!(same.particles().x(), sim.particles().x());
+    // A checkpoint of step 0, right after `new`, before the law's start
+    // set the paddle moving (its velocity at t = 0, the ramp being 0), into
+    // a fresh simulation and into one that has run: each first step is
+    // the uninterrupted run's, bit for bit. Before session 49 the restore
+    // started the hooks, then put back the checkpoint's particles over
+    // what the law's start had set: the paddle's positions differed.
+    let mut first = paddle(Some(0.01));
+    let ck0 = first.checkpoint();
+    first.step().unwrap();
+    let mut fresh = paddle(Some(0.01));
+    fresh.restore(&ck0).unwrap();
+    fresh.step().unwrap();
+    assert_eq!(fresh.particles().x(), first.particles().x());
+    let mut ran = paddle(Some(0.01));
+    ran.step().unwrap();
+    ran.restore(&ck0).unwrap();
+    ran.step().unwrap();
+    assert_eq!(ran.particles().x(), first.particles().x());
 }
 
 /// A scene whose material changed since the checkpoint (the gate's Young's

@@ -174,3 +174,61 @@ fn a_hook_that_changed_the_set_reads_no_stale_mesh() {
     assert!(log[2].contains("once per hook call"), "{}", log[2]);
     assert_eq!(log[3], "next: changed false, volume finite true");
 }
+
+/// Between a change of the set by hand and its meshing the elements name
+/// the old set's particles: the measurements that read them
+/// (`pfem::Loads`, the probes of `pfem::cases`) give nothing, NaN or
+/// `RunError::NotMeshed`, and the next step measures again. Before
+/// session 49 each indexed the shrunk set with the old indices and
+/// panicked (a review: "step, remove an outflow, measure").
+#[test]
+fn measurements_of_a_set_changed_by_hand_wait_for_its_mesh() {
+    let mut case = DamBreak::default();
+    case.spacing = case.width / 8.0;
+    case.end_time = 0.02;
+    let mut sim = Simulation::new(
+        case.scene(),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    sim.step().unwrap();
+    assert!(sim.is_meshed());
+    let at = sim.particles().x()[sim.particles().len() - 1];
+    assert!(sim.fluid_at(&at).is_some());
+    // The fluid particles of the last column removed.
+    let p = sim.particles();
+    let n = p.len() as u32;
+    let x_last = p.x()[p.len() - 1][0];
+    let mut old_to_new = Vec::with_capacity(n as usize);
+    let mut origin = Vec::new();
+    for i in 0..n {
+        let gone =
+            p.kind()[i as usize] == ParticleKind::Fluid && p.x()[i as usize][0] >= x_last - 1e-9;
+        if gone {
+            old_to_new.push(pfem::geometry::REMOVED);
+        } else {
+            old_to_new.push(origin.len() as u32);
+            origin.push(pfem::geometry::Origin::Kept(i));
+        }
+    }
+    let map = pfem::geometry::ParticleMap { old_to_new, origin };
+    sim.particles_mut().remap(&map).unwrap();
+    assert!(!sim.is_meshed());
+    assert!(sim.fluid_at(&at).is_none());
+    assert!(sim.fluid_at_points(&[at, at]).iter().all(Option::is_none));
+    assert!(sim.water_pressure().iter().all(|p| p.is_nan()));
+    for r in [
+        sim.pressure_force_on("floor").map(|_| ()),
+        sim.contact_force("floor", "wall0").map(|_| ()),
+    ] {
+        assert!(matches!(r, Err(RunError::NotMeshed)), "{r:?}");
+    }
+    assert!(pfem::cases::front_x(&sim).is_nan());
+    assert!(pfem::cases::bottom_pressure(&sim).is_nan());
+    assert!(pfem::cases::height_at_wall(&sim, 0.01).is_nan());
+    sim.step().unwrap();
+    assert!(sim.is_meshed());
+    assert!(sim.pressure_force_on("floor").unwrap()[1] < 0.0);
+    assert!(pfem::cases::front_x(&sim).is_finite());
+}

@@ -1,6 +1,8 @@
 //! Linear solvers behind an object-safe trait.
 //!
-//! The default, [`DirectSolver`], is faer's sparse Cholesky, since the
+//! The integrator's default is the block solver (`crate::BlockSolver`,
+//! the split system with a direct or multigrid inner solve); the plain
+//! direct one, [`DirectSolver`], is faer's sparse Cholesky, since the
 //! assembled system is symmetric positive definite by construction
 //! (symmetric constraint elimination in [`crate::Assembler`], symmetric
 //! nodal volumetric term), with faer's sparse LU as its fallback; both are
@@ -154,7 +156,9 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
 
     /// Whether this solver wants a system of about `dofs` unknowns in split
     /// form ([`SplitSystem`], solved by [`LinearSolver::solve_split`])
-    /// rather than assembled whole. Asked once per step, before assembly.
+    /// rather than assembled whole. Asked before each assembly of a new
+    /// mesh (every attempt of a step, and the initial accelerations), with
+    /// `dofs` = `D` times the particle count.
     fn wants_split(&self, _dofs: usize) -> bool {
         false
     }

@@ -29,6 +29,10 @@ where
     Const<D>: Dim,
 {
     let mut m = vec![false; s.particles().len()];
+    // (A set changed by hand: its elements are the old set's, session 49.)
+    if !s.is_meshed() {
+        return m;
+    }
     let Ok(cls) = pfem_geometry::classify(
         s.particles().x(),
         s.particles().kind(),

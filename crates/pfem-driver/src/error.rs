@@ -93,6 +93,12 @@ pub enum RunError {
         /// What does not fit.
         why: String,
     },
+    /// A measurement of the elements asked between a change of the
+    /// particle set by hand and its meshing
+    /// (`Simulation::is_meshed`): the elements name the old set's
+    /// particles.
+    #[error("the particle set changed since it was meshed (by hand): take a step, or call initialize_acceleration, before measuring the fluid's or the contacts' forces")]
+    NotMeshed,
     /// A particle position became non-finite.
     #[error("particle {particle} has a non-finite position at t = {time} s")]
     NonFinite {

@@ -356,8 +356,9 @@ where
     /// Carries every array to a new cloud described by `map`
     /// ([`pfem_geometry::manage_particles`]): kept particles keep their
     /// values, inserted ones get the barycentric interpolation of their
-    /// parents' position, velocity, acceleration and pressure, their
-    /// parents' mean spacing, the first fluid parent's body and material,
+    /// parents' position, velocity, acceleration, pressure and spacing
+    /// (each weighted as the position), the body and material of the first
+    /// parent of the parents' majority fluid,
     /// no constraint, and their own position as initial position. Only
     /// fluid particles may be removed or inserted, and kept particles must
     /// keep their order (so wall and solid indices do not move).

@@ -895,6 +895,18 @@ where
     /// fluid material; no pass over the particles), NaN while the set is
     /// not meshed (changed by hand, or its remeshing failed: the elements
     /// name the old set's particles).
+    /// Whether the elements are the current particle set's: false between
+    /// a change of the set (particles removed or added through
+    /// [`Simulation::particles_mut`], a checkpoint restored over another
+    /// set) and the next meshing (a step, `run`,
+    /// [`Simulation::initialize_acceleration`]). The fluid and contact
+    /// elements name the old set's particles then: what reads them (the
+    /// fluid volume, `pfem::Loads`, the probes of `pfem::cases`) gives NaN,
+    /// nothing or an error until then.
+    pub fn is_meshed(&self) -> bool {
+        self.particles.generation() == self.meshed
+    }
+
     fn volume_without_mesh(&self) -> Option<f64> {
         if !self.stages.pressure {
             Some(0.0)
@@ -1371,13 +1383,18 @@ where
     pub fn step(&mut self) -> Result<(), RunError> {
         // Before and after: a step that fails may have changed the state.
         self.version = next_state_version();
+        let last_dt = self.clock.dt;
         let r = rayon::scope(|_| self.step_in_pool());
         self.version = next_state_version();
         // A failed step's forces were its own: a set changed by hand after
         // it and `initialize_acceleration` read them on the new numbering
-        // (a review of session 48).
+        // (a review of session 48). Its attempts' steps were not taken:
+        // `dt` is the last one taken again (before session 49 it was the
+        // last attempt's, near `min_dt` after a step too small, and the
+        // next step grew from it by 1.25 a step).
         if r.is_err() {
             self.external_force.clear();
+            self.clock.dt = last_dt;
         }
         r
     }
@@ -1804,8 +1821,10 @@ where
     /// Runs to the end time (or until a hook stops it,
     /// [`Simulation::stopped`]), calling the observers after every step.
     /// Called again after [`Simulation::set_end_time`], it goes on from
-    /// where the last call ended. A run a hook stopped stays stopped
-    /// (`run` returns at once) until [`Simulation::clear_stop`].
+    /// where the last call ended. A run a hook stopped stays stopped (`run`
+    /// takes no step: it starts the hooks not yet started and calls the
+    /// observers' `start` and `finish`, which write their outputs again)
+    /// until [`Simulation::clear_stop`].
     pub fn run(&mut self, observers: &mut [&mut dyn Observer<D>]) -> Result<(), RunError> {
         self.runs += 1;
         // (Before the hooks start: the review of session 45 found a NaN set
@@ -2251,7 +2270,10 @@ where
     /// density, wave speed, response to two fixed probes) and solid meshes
     /// are checked; [`crate::checkpoint::CheckpointError::Mismatch`]
     /// otherwise). The hooks' [`Hook::start`] runs first on the initial
-    /// state, then each hook's saved state is read back by name (a hook
+    /// state (those not started yet: a simulation that has run keeps its
+    /// started hooks; for a checkpoint of step 0 none: they all start at
+    /// the first step, on the restored state, as a fresh simulation's
+    /// do), then each hook's saved state is read back by name (a hook
     /// added since starts fresh if it keeps no state, and is refused if it
     /// does). The fluid mesh is
     /// remade from the restored positions; a stop asked for before the
@@ -2586,7 +2608,17 @@ where
         // read after. (A set changed by hand before is meshed first, as
         // `run` and `step` do: the hooks' start read the old set's mesh.)
         self.mesh_a_set_changed_by_hand(false)?;
-        self.start_hooks()?;
+        // A checkpoint of step 0 holds the scene's initial state, before
+        // the hooks' start acted on it or after (every bundled `start` sets
+        // what it sets again alike): its hooks start at the first step, on
+        // the restored state, as a fresh simulation's do. Before session
+        // 49 they started here and the restored particles then replaced
+        // what they had set (a moving wall's velocity at t = 0: the
+        // restored run's first step differed, a review).
+        let start_at_first_step = clock.steps == 0;
+        if !start_at_first_step {
+            self.start_hooks()?;
+        }
         let before = Backup {
             particles: self.particles.clone(),
             elements: self.elements.clone(),
@@ -2646,11 +2678,17 @@ where
             }
             Ok(())
         })();
-        // The solver's carried preconditioners name particles by index:
-        // the next step tells it the indices may have changed.
-        self.stepper.numbering = Some(u64::MAX);
         match result {
             Ok(()) => {
+                if start_at_first_step {
+                    self.started = 0;
+                }
+                // The solver's carried preconditioners name particles by
+                // index: the next step tells it the indices may have
+                // changed (only when they did: a refused checkpoint left
+                // them, and before session 49 it dropped the carried
+                // hierarchies all the same).
+                self.stepper.numbering = Some(u64::MAX);
                 if let Some(s) = stats {
                     self.stats = s;
                 }

@@ -52,6 +52,11 @@ where
     /// `None` where no fluid element does (a dry point, or outside the
     /// fluid). A point probe.
     fn fluid_at(&self, at: &Point<D>) -> Option<(f64, Vector<D>)> {
+        // (The elements of a set changed by hand name the old set's
+        // particles: nothing is read from them, session 49.)
+        if !self.is_meshed() {
+            return None;
+        }
         let nv = D + 1;
         let x = self.particles().x();
         let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
@@ -81,6 +86,9 @@ where
     /// 900.
     fn fluid_at_points(&self, at: &[Point<D>]) -> Vec<Option<(f64, Vector<D>)>> {
         let mut out = vec![None; at.len()];
+        if !self.is_meshed() {
+            return out;
+        }
         let nv = D + 1;
         let (x, kind) = (self.particles().x(), self.particles().kind());
         let cell = (0..self.particles().len())
@@ -156,6 +164,7 @@ where
     /// the two do not touch (or the scene has no contact stage).
     fn contact_force(&self, on: &str, from: &str) -> Result<ContactForce<D>, RunError> {
         let (a, b) = (self.body_id(on)?, self.body_id(from)?);
+        not_meshed(self)?;
         let nv = D + 1;
         let x = self.particles().x();
         let body = self.particles().body();
@@ -228,6 +237,7 @@ where
     /// `pfem::cases3d::fluid_force` measures).
     fn pressure_force_on(&self, name: &str) -> Result<Vector<D>, RunError> {
         let id = self.body_id(name)?;
+        not_meshed(self)?;
         let nv = D + 1;
         let (x, a, pressure) = (
             self.particles().x(),
@@ -311,6 +321,9 @@ where
     /// ratio of the spacings.
     fn water_pressure(&self) -> Vec<f64> {
         let n = self.particles().len();
+        if !self.is_meshed() {
+            return vec![f64::NAN; n];
+        }
         let nv = D + 1;
         let mut out = vec![0.0; n];
         // Fluid elements of each particle.
@@ -364,6 +377,20 @@ where
             out[i] = fit_pressure_at(self, i, nb);
         }
         out
+    }
+}
+
+/// [`RunError::NotMeshed`] for a set changed since it was meshed
+/// ([`Simulation::is_meshed`]): its elements name the old set's particles
+/// (before session 49 reading them panicked, a review).
+fn not_meshed<const D: usize>(sim: &Simulation<D>) -> Result<(), RunError>
+where
+    Const<D>: Dim,
+{
+    if sim.is_meshed() {
+        Ok(())
+    } else {
+        Err(RunError::NotMeshed)
     }
 }
 

@@ -637,8 +637,9 @@ where
         self.probes.len()
     }
 
-    /// Values of one probe over the run, `(t, value)`. None if the rows are
-    /// not kept ([`StandardOutput::keep_rows`]).
+    /// Values of one probe over the run, `(t, value)`. Empty if the rows
+    /// are not kept ([`StandardOutput::keep_rows`]), or if no probe has
+    /// that name.
     pub fn probe_series(&self, name: &str) -> Vec<(f64, f64)> {
         match self.probes.iter().position(|p| p.name == name) {
             Some(i) => self.history.iter().map(|(t, v)| (*t, v[i])).collect(),
@@ -1081,7 +1082,10 @@ where
         for m in sim.materials() {
             let names = m.internal_variables();
             for (k, name) in names.iter().enumerate() {
-                let why = if FRAME_CELL_ARRAYS.contains(name) {
+                let why = if name.trim().is_empty() {
+                    // (An array ParaView lists without a name: session 49.)
+                    Some("is empty: name the material's internal variable")
+                } else if FRAME_CELL_ARRAYS.contains(name) {
                     Some("is a built-in cell array of the frames: rename the material's internal variable")
                 } else if names[..k].contains(name) {
                     Some("is given twice by one material's internal variables")

@@ -270,7 +270,7 @@ impl Material<2> for Named {
 }
 
 /// A solid's internal variable named like a built-in cell array of the
-/// frames, or twice by one material, is refused when the output starts;
+/// frames, twice by one material, or not at all, is refused when the output starts;
 /// before, the frame held two arrays of one name and ParaView showed one.
 #[test]
 fn internal_variables_named_like_built_in_arrays_are_refused() {
@@ -279,6 +279,9 @@ fn internal_variables_named_like_built_in_arrays_are_refused() {
         (&["stress_zz"][..], false),
         (&["material"][..], false),
         (&["damage", "damage"][..], false),
+        // (Session 49: an empty name was written as `Name=""`.)
+        (&[""][..], false),
+        (&[" "][..], false),
         (&["damage", "equivalent_plastic_strain"][..], true),
     ] {
         std::fs::remove_dir_all(&dir).ok();
@@ -1252,4 +1255,77 @@ fn a_material_whose_triple_no_step_cures_is_named_at_once() {
     let mut s = puddle("isotropic");
     s.bodies[1].material = Some(Box::new(Isotropic(Newtonian::water())));
     build(s).unwrap().step().unwrap();
+}
+
+/// Whether [`Refusing`] refuses every state.
+static REFUSE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Rubber that refuses every state while [`REFUSE`] is set.
+#[derive(Debug)]
+struct Refusing(Hypoelastic);
+
+impl Material<2> for Refusing {
+    fn name(&self) -> &str {
+        "refusing"
+    }
+    fn kind(&self) -> MaterialKind {
+        MaterialKind::Solid
+    }
+    fn density(&self) -> f64 {
+        Material::<2>::density(&self.0)
+    }
+    fn wave_speed(&self) -> f64 {
+        Material::<2>::wave_speed(&self.0)
+    }
+    fn unified(&self, kin: &Kinematics<2>, history: &History<2>) -> Unified<2> {
+        self.0.unified(kin, history)
+    }
+    fn update_history(&self, kin: &Kinematics<2>, history: &mut History<2>) {
+        self.0.update_history(kin, history)
+    }
+    fn refuses(&self, _: &Kinematics<2>, _: &History<2>) -> Option<String> {
+        REFUSE
+            .load(std::sync::atomic::Ordering::Relaxed)
+            .then(|| "told to".into())
+    }
+}
+
+/// A failed step leaves `dt` the last step taken, and the next step goes
+/// on from it. Before session 49 `dt` was the failed step's last attempt
+/// (about `min_dt` after a step too small), and the next step grew from
+/// it by 1.25 a step (a review).
+#[test]
+fn a_failed_step_leaves_the_last_step_taken() {
+    let scene = Scene::<2>::new("refusing")
+        .gravity(Vector::<2>::new(0.0, -9.81))
+        .settings(RunSettings {
+            end_time: 1.0,
+            max_dt: 1e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .solid(
+            "beam",
+            Box::new(Refusing(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap())),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.2, 0.02),
+            },
+            0.01,
+            Some((Point::<2>::new(-1.0, -1.0), Point::<2>::new(0.001, 1.0))),
+        );
+    let params = StepParams {
+        min_dt: 1e-7,
+        ..StepParams::default()
+    };
+    let mut sim = Simulation::new(scene, Box::new(Delaunay2::default()), params).unwrap();
+    sim.step().unwrap();
+    let taken = sim.dt();
+    REFUSE.store(true, std::sync::atomic::Ordering::Relaxed);
+    let failed = sim.step();
+    REFUSE.store(false, std::sync::atomic::Ordering::Relaxed);
+    assert!(failed.is_err());
+    assert_eq!(sim.dt(), taken);
+    sim.step().unwrap();
+    assert!(sim.dt() >= taken, "{} after {taken}", sim.dt());
 }
