@@ -148,3 +148,91 @@ fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
     assert!(vmax <= 5e-3, "largest speed {vmax} √(gH)");
     assert!(pressure <= 0.02, "pressure {pressure} RMS");
 }
+
+/// The water's force on a block floating at its draft (a 3D box of
+/// 500 kg/m³, 8 cm, in a tank 20 cm wide; a review's scene) is its weight,
+/// at every step: `Loads::pressure_force_on` counts the elements cut at a
+/// free solid's water line below the line only, as the assembly does.
+/// Before session 49 it counted them whole, the drifting pressures of
+/// their dry nodes included: 2.51 N at the start, then 20–25 N by 0.06 s
+/// while the block moved 2 µm.
+#[test]
+fn the_water_force_on_a_floating_block_is_its_weight() {
+    let text = r#"
+name = "float"
+dimension = 3
+gravity = [0.0, -9.81, 0.0]
+spacing = 0.02
+[run]
+end_time = 0.1
+max_dt = 5e-3
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = { min = [-0.02, -0.02, -0.02], max = [0.22, 0.0, 0.22] }
+[[body]]
+name = "x0"
+kind = "wall"
+geometry.box = { min = [-0.02, 0.02, -0.02], max = [0.0, 0.2, 0.22] }
+[[body]]
+name = "x1"
+kind = "wall"
+geometry.box = { min = [0.2, 0.02, -0.02], max = [0.22, 0.2, 0.22] }
+[[body]]
+name = "z0"
+kind = "wall"
+geometry.box = { min = [0.02, 0.02, -0.02], max = [0.18, 0.2, 0.0] }
+[[body]]
+name = "z1"
+kind = "wall"
+geometry.box = { min = [0.02, 0.02, 0.2], max = [0.18, 0.2, 0.22] }
+[[body]]
+name = "block"
+kind = "solid"
+material.hypoelastic = { density = 500.0, young = 1e7, poisson = 0.3 }
+geometry.box = { min = [0.06, 0.08, 0.06], max = [0.14, 0.16, 0.14] }
+[[body]]
+name = "w0"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.02, 0.02, 0.02], max = [0.18, 0.06, 0.18] }
+[[body]]
+name = "w1"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.02, 0.08, 0.02], max = [0.04, 0.12, 0.18] }
+[[body]]
+name = "w2"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.16, 0.08, 0.02], max = [0.18, 0.12, 0.18] }
+[[body]]
+name = "w3"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.06, 0.08, 0.02], max = [0.14, 0.12, 0.04] }
+[[body]]
+name = "w4"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.06, 0.08, 0.16], max = [0.14, 0.12, 0.18] }
+
+"#;
+    let scene = pfem::scene_file::SceneFile::parse(text, "float.toml")
+        .and_then(|f| f.scene::<3>())
+        .unwrap();
+    let mut sim =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    let weight = 500.0 * G * 0.08f64.powi(3);
+    let mut worst: f64 = 0.0;
+    while sim.time() < 0.1 - 1e-12 {
+        sim.step().unwrap();
+        let f = sim.pressure_force_on("block").unwrap();
+        worst = worst.max((f[1] / weight - 1.0).abs());
+    }
+    println!(
+        "floating block: water force within {:.2} % of its weight {weight:.3} N",
+        100.0 * worst
+    );
+    assert!(worst < 0.03, "off by {worst} of its weight");
+}

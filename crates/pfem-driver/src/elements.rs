@@ -382,6 +382,24 @@ where
         }
     }
 
+    /// The surface cuts of the fluid range (issue 19): each cut element's
+    /// index in [`Elements::fluid`]'s order and the bit mask of its
+    /// free-surface vertices, with the `up` direction of their water line
+    /// (`pfem_core::below_water_line`): the assembly counts such an
+    /// element's part below the line only (its volume, lumped mass and
+    /// pressure rows).
+    pub fn fluid_surface_cuts(
+        &self,
+    ) -> (impl Iterator<Item = (usize, u8)> + '_, pfem_core::Vector<D>) {
+        let first = self.n_solid;
+        (
+            self.cuts
+                .iter()
+                .map(move |&(e, mask)| (e as usize - first, mask)),
+            pfem_core::Vector::<D>::from_fn(|k, _| self.up[k]),
+        )
+    }
+
     /// Fluid volume at positions `x`: the measure of the fluid elements and
     /// of the weighted wall pockets (m³; m² per metre of depth in 2D).
     pub fn fluid_volume(&self, x: &[Point<D>]) -> f64 {

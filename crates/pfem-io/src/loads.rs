@@ -250,10 +250,19 @@ where
             self.particles().material(),
         );
         let gravity = self.gravity().unwrap_or_else(Vector::<D>::zeros);
+        // The elements cut at a free solid's water line count their part
+        // below it, as the assembly does (before session 49 they counted
+        // whole: the dry nodes' drifting pressures weighed in, and a
+        // floating block read 10 times its weight, a review).
+        let (cuts, up) = self.elements().fluid_surface_cuts();
+        let mut cut_of = vec![0u8; self.elements().fluid().len() / nv];
+        for (e, mask) in cuts {
+            cut_of[e] = mask;
+        }
         let mut f = Vector::<D>::zeros();
         let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
         let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
-        for el in self.elements().fluid().chunks_exact(nv) {
+        for (e, el) in self.elements().fluid().chunks_exact(nv).enumerate() {
             if !el.iter().any(|&q| body[q as usize] == id) {
                 continue;
             }
@@ -263,7 +272,19 @@ where
             let Some(vol) = pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]) else {
                 continue;
             };
-            let p_sum: f64 = el.iter().map(|&q| pressure[q as usize]).sum();
+            // `∫ W_a` over the element, or over its part below the line.
+            let mut w = [vol / nv as f64; pfem_core::MAX_NV];
+            if cut_of[e] != 0 {
+                let (share, l) = pfem_core::below_water_line::<D>(&p[..nv], cut_of[e], &up);
+                for a in 0..nv {
+                    w[a] = vol * share * l[a];
+                }
+            }
+            let p_w: f64 = el
+                .iter()
+                .zip(&w)
+                .map(|(&q, w)| pressure[q as usize] * w)
+                .sum();
             // The assembly's lumped mass: the midrange of the element's
             // fluids (`pfem_constitutive::fluid_element_density`).
             let rho = el
@@ -278,9 +299,8 @@ where
                 });
             for (k, &q) in el.iter().enumerate() {
                 if body[q as usize] == id {
-                    f += g[k] * (p_sum * vol / nv as f64);
-                    let m = rho * vol / nv as f64;
-                    f += (gravity - a[q as usize]) * m;
+                    f += g[k] * p_w;
+                    f += (gravity - a[q as usize]) * (rho * w[k]);
                 }
             }
         }
