@@ -2224,3 +2224,94 @@ fn a_failed_steps_forces_do_not_outlive_it() {
     fresh.initialize_acceleration().unwrap();
     assert_eq!(sim.particles().a(), fresh.particles().a());
 }
+
+/// What an observer was asked, and where it fails.
+#[derive(Default)]
+struct Calls {
+    fail_start: bool,
+    fail_finish: bool,
+    log: Vec<&'static str>,
+}
+
+impl Observer<2> for Calls {
+    fn start(&mut self, _: &Simulation<2>) -> Result<(), RunError> {
+        self.log.push("start");
+        if self.fail_start {
+            return Err(RunError::InvalidSetting {
+                name: "test",
+                value: 0.0,
+                reason: "start fails",
+            });
+        }
+        Ok(())
+    }
+    fn finish(&mut self, _: &Simulation<2>) -> Result<(), RunError> {
+        self.log.push("finish");
+        if self.fail_finish {
+            return Err(RunError::InvalidSetting {
+                name: "test",
+                value: 0.0,
+                reason: "finish fails",
+            });
+        }
+        Ok(())
+    }
+    fn failed(&mut self, _: &Simulation<2>, _: &RunError) {
+        self.log.push("failed");
+    }
+}
+
+/// The observers' contract when one of them fails: one whose `start`
+/// fails fails the run, and the ones started before it are told
+/// (`failed`); one whose `finish` fails does not keep the others from
+/// finishing, and is told. Before session 49 both returned at once: the
+/// started observers were never told (no summary), and those after a
+/// failed `finish` never finished (a review).
+#[test]
+fn observers_that_fail_leave_the_others_told() {
+    let scene = || {
+        Scene::<2>::new("observed")
+            .settings(RunSettings {
+                end_time: 2e-3,
+                max_dt: 1e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall(
+                "floor",
+                boxed(-0.1, -0.01, 0.1, 0.0),
+                0.01,
+                WallMotion::Fixed,
+            )
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(0.0, 0.0, 0.05, 0.05),
+                0.01,
+            )
+    };
+    let (mut a, mut b) = (
+        Calls::default(),
+        Calls {
+            fail_start: true,
+            ..Calls::default()
+        },
+    );
+    let mut sim = sim2(scene(), StepParams::default());
+    assert!(sim.run(&mut [&mut a, &mut b]).is_err());
+    assert_eq!(a.log, ["start", "failed"]);
+    assert_eq!(b.log, ["start"]);
+    assert_eq!(sim.steps(), 0);
+    let (mut a, mut b) = (
+        Calls {
+            fail_finish: true,
+            ..Calls::default()
+        },
+        Calls::default(),
+    );
+    let mut sim = sim2(scene(), StepParams::default());
+    let err = sim.run(&mut [&mut a, &mut b]).unwrap_err();
+    assert!(err.to_string().contains("finish fails"), "{err}");
+    assert_eq!(a.log, ["start", "finish", "failed"]);
+    assert_eq!(b.log, ["start", "finish"]);
+}

@@ -131,14 +131,17 @@ where
     fn step(&mut self, _sim: &Simulation<D>) -> Result<(), RunError> {
         Ok(())
     }
-    /// Called once after the last step.
+    /// Called once after the last step. Every observer's is called, one
+    /// failing or not; `run` returns the first error.
     fn finish(&mut self, _sim: &Simulation<D>) -> Result<(), RunError> {
         Ok(())
     }
     /// Called once when [`Simulation::run`] fails (a step's or an
-    /// observer's error, passed here before `run` returns it), instead of
-    /// [`Observer::finish`]: a last record of the run, on a best-effort
-    /// basis (its own failures are not reported).
+    /// observer's error, passed here before `run` returns it) on every
+    /// observer that started, instead of [`Observer::finish`] (or after
+    /// its own `finish` failed): a last record of the run, on a
+    /// best-effort basis (its own failures are not reported). An observer
+    /// whose `start` failed is not called.
     fn failed(&mut self, _sim: &Simulation<D>, _error: &RunError) {}
 }
 
@@ -1850,8 +1853,17 @@ where
         }
         // What the start changed (a set meshed again, a hook's start).
         self.version = next_state_version();
-        for o in observers.iter_mut() {
-            o.start(self)?;
+        // An observer that cannot start fails the run: the ones started
+        // before it are told (`Observer::failed`: their summary says so),
+        // as a step's failure tells them all (before session 49 they were
+        // left started, without a summary, a review).
+        for k in 0..observers.len() {
+            if let Err(e) = observers[k].start(self) {
+                for o in observers[..k].iter_mut() {
+                    o.failed(self, &e);
+                }
+                return Err(e);
+            }
         }
         let steps = (|| -> Result<(), RunError> {
             // (A step lands on the end time exactly; the tolerance is for
@@ -1873,10 +1885,17 @@ where
             }
             return Err(e);
         }
+        // Every observer finishes, one failing or not (a full disk for one
+        // output is not the others'); the first error is returned, and the
+        // one that failed is told.
+        let mut first: Option<RunError> = None;
         for o in observers.iter_mut() {
-            o.finish(self)?;
+            if let Err(e) = o.finish(self) {
+                o.failed(self, &e);
+                first.get_or_insert(e);
+            }
         }
-        Ok(())
+        first.map_or(Ok(()), Err)
     }
 
     /// The work done so far: remeshes, sparsity patterns built, elements

@@ -125,7 +125,9 @@ where
     }
     if let Some(i) = valence.iter().position(|&c| c == 0) {
         return Err(err(format!(
-            "solid mesh: particle {i} is in no element (particles too sparse for alpha = {})",
+            "solid mesh: its particle {} (counting from 1), at {:?}, is in no element (particles too sparse for alpha = {})",
+            i + 1,
+            points[i].as_slice(),
             params.alpha
         )));
     }
