@@ -1387,6 +1387,7 @@ where
         // Before and after: a step that fails may have changed the state.
         self.version = next_state_version();
         let last_dt = self.clock.dt;
+        let remeshes = self.stats.remesh.0;
         let r = rayon::scope(|_| self.step_in_pool());
         self.version = next_state_version();
         // A failed step's forces were its own: a set changed by hand after
@@ -1398,6 +1399,15 @@ where
         if r.is_err() {
             self.external_force.clear();
             self.clock.dt = last_dt;
+            // A contact range formed by its remeshing was never solved: the
+            // next range carries the tangential tractions from the last
+            // solved one, as the failed step did (before session 49 it
+            // carried from the unsolved one, whose tractions were that
+            // step's averages, so stick's memory was averaged twice, and a
+            // checkpoint then wrote them, a review).
+            if self.stats.remesh.0 > remeshes {
+                self.elements.keep_stash();
+            }
         }
         r
     }
