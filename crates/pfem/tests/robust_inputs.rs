@@ -1382,8 +1382,7 @@ fn a_failed_step_changes_nothing_the_next_one_reads() {
         min_dt: 1e-5,
         ..StepParams::default()
     };
-    let build =
-        || Simulation::new(scene(), Box::new(Delaunay2::default()), params.clone()).unwrap();
+    let build = || Simulation::new(scene(), Box::new(Delaunay2::default()), params).unwrap();
     let mut whole = build();
     for _ in 0..3 {
         whole.step().unwrap();
