@@ -188,9 +188,9 @@ where
     /// Nodal pressure at `t_n` (Pa); read for nodes of fluid elements.
     pub pressure_n: &'a [f64],
     /// Per element history at `t_n` (solid stress). A fluid element's
-    /// entry is read with its `pressure` replaced by the mean of its
-    /// nodes' `pressure_n` (a fluid's history is nodal, eq. 62), which its
-    /// material's `unified` sees.
+    /// entry is not read: its material's `unified` is handed a history
+    /// whose `pressure` is the mean of its nodes' `pressure_n` (a fluid's
+    /// history is nodal, eq. 62), the rest zero.
     pub element_history: &'a [History<D>],
     /// The materials, indexed by [`StepMesh::element_material`].
     pub materials: &'a [Box<dyn Material<D>>],
@@ -447,6 +447,10 @@ where
     /// Per element, decided with `frozen`: kept in shape and carrying no
     /// pressure stabilisation ([`Assembler::set_sliver_stabilisation`]).
     frozen_bare: Vec<bool>,
+    /// Per element, decided with `frozen`: a fluid element's mean nodal
+    /// pressure at `tⁿ`, which its material's `unified` is handed (the
+    /// same at every iterate of a step: found once, not at each).
+    mean_pressure: Vec<f64>,
     /// Per particle: a node of a solid element of the mesh
     /// ([`Assembler::is_solid_particle`]).
     in_solid: Vec<bool>,
@@ -1193,6 +1197,28 @@ where
         frozen_w.resize(ne, (0.0, [Vector::<D>::zeros(); MAX_NV]));
         let mut frozen_bare = std::mem::take(&mut self.frozen_bare);
         frozen_bare.resize(ne, false);
+        // The fluid elements' mean pressures at `tⁿ`, at the step's first
+        // assembly (read at every iterate: 10 % of a 3D assembly when each
+        // iterate gathered them again).
+        if decide {
+            let (elem_sys, particle_of) = (&self.elem_sys, &self.particle_of);
+            let elem_fluid = &self.elem_fluid;
+            let mut mean = std::mem::take(&mut self.mean_pressure);
+            mean.clear();
+            mean.par_extend((0..ne).into_par_iter().map(|e| {
+                if elem_fluid[e] {
+                    elem_sys[e * nv..(e + 1) * nv]
+                        .iter()
+                        .map(|&k| input.pressure_n[particle_of[k as usize] as usize])
+                        .sum::<f64>()
+                        / nv as f64
+                } else {
+                    0.0
+                }
+            }));
+            self.mean_pressure = mean;
+        }
+        let mean_pressure = &self.mean_pressure;
         let (elem_fluid, sliver_quality) = (&self.elem_fluid, self.sliver_quality);
         let stabilised_from = self.sliver_stabilised_from;
         let predict = self.sliver_prediction;
@@ -1262,25 +1288,19 @@ where
                     Some(s) => {
                         *st = s;
                         let mat = &input.materials[self.elem_material[e] as usize];
-                        let stored = &input.element_history[e];
                         *un = if elem_fluid[e] {
                             // A fluid's history is its nodal pressure (eq.
                             // 62): the element is given its nodes' mean at
                             // `tⁿ`, so that a fluid's `μ` or `𝒦` may depend
                             // on it (a pressure-dependent viscosity).
                             // Before, it was given 0.
-                            let mean = parts[..nv]
-                                .iter()
-                                .map(|&p| input.pressure_n[p])
-                                .sum::<f64>()
-                                / nv as f64;
                             let h = History {
-                                pressure: mean,
-                                ..*stored
+                                pressure: mean_pressure[e],
+                                ..History::default()
                             };
                             mat.unified(&s.kin, &h)
                         } else {
-                            mat.unified(&s.kin, stored)
+                            mat.unified(&s.kin, &input.element_history[e])
                         };
                         if !(un.mu.is_finite()
                             && un.kappa.is_finite()
