@@ -1213,3 +1213,82 @@ fn a_block_in_the_corner_of_one_wall_body_in_3d_is_refused_with_the_way_out() {
     assert!(two.elements().n_contact() > 0);
     two.run(&mut []).unwrap();
 }
+
+/// 3D Coulomb friction on a slope (a review in session 49): a free block
+/// (0.1 m cube, `E` = 10⁷ Pa) on a floor under gravity tilted 35° along
+/// `z`, `μ` = 0.5, should slide at `g (sin θ − μ cos θ)` = 1.609 m/s²:
+/// 32.2 mm in 0.2 s, straight down the slope. Known gap: it slides
+/// 35.1 mm (+9 %), drifts 2.0 mm sideways and lifts 1.3 mm (the 2D block is exact,
+/// `friction_holds_below_the_friction_angle_and_lets_go_above_it`; without
+/// friction the 3D block is exact).
+///
+/// The cause found (a read-only analysis, session 49): the contact range
+/// keeps a third of the layer between two aligned lattices, since the
+/// reach cuts every tetrahedron with a cell's diagonal across the gap
+/// (√3 h > 1.6 h; 2D's longest is √2 h), the third kept changes as the
+/// block slides, and friction rocks it. Measuring the cross-body edges by
+/// their part along the facets (tried in session 49) gave 33.1 mm and
+/// 0.014 mm sideways, but the Hertz ball's approaching surface then formed
+/// long elements that inverted (`hertz_3d`'s bounce failed at 12.6 ms,
+/// also with the longer edges admitted only near the contact distance):
+/// not kept.
+#[test]
+#[ignore = "known gap: 3D friction on a slope slides 9 % too far and 2 mm sideways: cargo test --release --test suite contact::a_block_slides -- --ignored --nocapture"]
+fn a_block_slides_straight_down_a_slope_with_friction_in_3d() {
+    let (h, theta, mu): (f64, f64, f64) = (0.02, 35f64.to_radians(), 0.5);
+    let scene = Scene::<3>::new("slope3d")
+        .gravity(Vector::<3>::new(0.0, -G * theta.cos(), G * theta.sin()))
+        .settings(RunSettings {
+            end_time: 0.2,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<3>::new(-0.06, -h, -0.1),
+                max: Point::<3>::new(0.16, 0.0, 0.5),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<3>::new(0.0, h, 0.0),
+                max: Point::<3>::new(0.1, h + 0.1, 0.1),
+            },
+            h,
+            None,
+        )
+        .friction("block", "floor", mu);
+    let mut s =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    let block = s.body_particles("block").unwrap();
+    let mean = |s: &Simulation<3>| {
+        block
+            .iter()
+            .map(|&i| s.particles().x()[i] - s.initial_position(i))
+            .fold(Vector::<3>::zeros(), |a, d| a + d)
+            / block.len() as f64
+    };
+    let mut lift: f64 = 0.0;
+    while s.time() < s.end_time() - 1e-12 {
+        s.step().unwrap();
+        lift = lift.max(mean(&s)[1]);
+    }
+    let u = mean(&s);
+    let want = 0.5 * G * (theta.sin() - mu * theta.cos()) * 0.2 * 0.2;
+    println!(
+        "3D block on a slope, mu {mu}: slid {:.2} mm against {:.2} mm, sideways {:.3} mm, lifted at most {:.3} mm",
+        1e3 * u[2],
+        1e3 * want,
+        1e3 * u[0],
+        1e3 * lift
+    );
+    assert!((u[2] / want - 1.0).abs() < 0.05, "slid {} m", u[2]);
+    assert!(u[0].abs() < 1e-4, "sideways {} m", u[0]);
+    assert!(lift < 1e-4, "lifted {lift} m");
+}
