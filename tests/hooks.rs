@@ -2315,3 +2315,60 @@ fn observers_that_fail_leave_the_others_told() {
     assert_eq!(a.log, ["start", "finish", "failed"]);
     assert_eq!(b.log, ["start", "finish"]);
 }
+
+/// A step that fails after it was taken (an after-step hook's error) keeps
+/// its `dt`: the clock is the uninterrupted run's. (Session 49's first
+/// version of "a failed step leaves the last step taken" put the step
+/// before back, a review of the day's change.)
+#[test]
+fn a_step_that_fails_after_it_was_taken_keeps_its_dt() {
+    let scene = || {
+        Scene::<2>::new("taken")
+            .gravity(Vector::<2>::new(0.0, -G))
+            .settings(RunSettings {
+                end_time: 1.0,
+                max_dt: 1e-2,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall(
+                "floor",
+                boxed(-0.1, -0.01, 0.1, 0.0),
+                0.01,
+                WallMotion::Fixed,
+            )
+            // Falling at 5 m/s and faster: each step's Courant bound is
+            // a little shorter than the last.
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(0.0, 0.5, 0.05, 0.55),
+                0.01,
+            )
+            .with_velocity(Vector::<2>::new(0.0, -5.0))
+    };
+    let mut whole = sim2(scene(), StepParams::default());
+    let mut broken = sim2(scene(), StepParams::default());
+    whole.step().unwrap();
+    broken.step().unwrap();
+    let dt1 = whole.dt();
+    let mut once = true;
+    broken.add_hook(Box::new(pfem::hooks::FnHook::new("fails once").after_step(
+        move |_: &mut pfem::hooks::HookContext<'_, 2>| {
+            if std::mem::take(&mut once) {
+                return Err(RunError::Hook {
+                    hook: "fails once".into(),
+                    why: "told to".into(),
+                });
+            }
+            Ok(())
+        },
+    )));
+    whole.step().unwrap();
+    assert!(broken.step().is_err());
+    println!("steps' dt: the second {}, the first {dt1}", whole.dt());
+    assert_ne!(whole.dt(), dt1);
+    assert_eq!(broken.steps(), whole.steps());
+    assert_eq!(broken.time(), whole.time());
+    assert_eq!(broken.dt(), whole.dt());
+}

@@ -893,15 +893,10 @@ where
                 .drop_volume(self.particles.kind(), self.particles.spacing())
     }
 
-    /// The fluid volume when the mesh cannot give it: 0 in a scene
-    /// without fluid (none, nor can it gain any: a fluid particle needs a
-    /// fluid material; no pass over the particles), NaN while the set is
-    /// not meshed (changed by hand, or its remeshing failed: the elements
-    /// name the old set's particles).
     /// Whether the elements are the current particle set's: false between
     /// a change of the set (particles removed or added through
-    /// [`Simulation::particles_mut`], a checkpoint restored over another
-    /// set) and the next meshing (a step, `run`,
+    /// [`Simulation::particles_mut`], or by a hook within its call) and the
+    /// next meshing (a step, `run`,
     /// [`Simulation::initialize_acceleration`]). The fluid and contact
     /// elements name the old set's particles then: what reads them (the
     /// fluid volume, `pfem::Loads`, the probes of `pfem::cases`) gives NaN,
@@ -910,6 +905,11 @@ where
         self.particles.generation() == self.meshed
     }
 
+    /// The fluid volume when the mesh cannot give it: 0 in a scene
+    /// without fluid (none, nor can it gain any: a fluid particle needs a
+    /// fluid material; no pass over the particles), NaN while the set is
+    /// not meshed (changed by hand, or its remeshing failed: the elements
+    /// name the old set's particles).
     fn volume_without_mesh(&self) -> Option<f64> {
         if !self.stages.pressure {
             Some(0.0)
@@ -1386,7 +1386,7 @@ where
     pub fn step(&mut self) -> Result<(), RunError> {
         // Before and after: a step that fails may have changed the state.
         self.version = next_state_version();
-        let last_dt = self.clock.dt;
+        let (last_dt, steps) = (self.clock.dt, self.clock.steps);
         let remeshes = self.stats.remesh.0;
         let r = rayon::scope(|_| self.step_in_pool());
         self.version = next_state_version();
@@ -1396,16 +1396,21 @@ where
         // `dt` is the last one taken again (before session 49 it was the
         // last attempt's, near `min_dt` after a step too small, and the
         // next step grew from it by 1.25 a step).
+        // (A step that failed after it was taken, at the non-finite check
+        // or in an after-step hook, keeps its `dt` and its solved range.)
         if r.is_err() {
             self.external_force.clear();
+        }
+        if r.is_err() && self.clock.steps == steps {
             self.clock.dt = last_dt;
             // A contact range formed by its remeshing was never solved: the
             // next range carries the tangential tractions from the last
             // solved one, as the failed step did (before session 49 it
             // carried from the unsolved one, whose tractions were that
             // step's averages, so stick's memory was averaged twice, and a
-            // checkpoint then wrote them, a review).
-            if self.stats.remesh.0 > remeshes {
+            // checkpoint then wrote them, a review). Not at step 0, whose
+            // retry solves the range it has (as `restore` keeps it).
+            if steps > 0 && self.stats.remesh.0 > remeshes {
                 self.elements.keep_stash();
             }
         }

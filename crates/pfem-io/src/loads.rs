@@ -221,9 +221,11 @@ where
     /// Pressure force the fluid exerts on body `name` (N, per metre of depth
     /// in 2D), or [`RunError::UnknownBody`]: at each of the body's particles
     /// `i`, the nodal pressure force `Gᵀ p` of eq. 58,
-    /// `Σ_e Σ_{a∈e} p_a (V_e/(D+1)) grad W_i` over the fluid elements `e`
+    /// `Σ_e Σ_{a∈e} p_a (∫_e W_a) grad W_i` over the fluid elements `e`
     /// holding `i`, plus the weight less the inertia of the fluid mass those
-    /// elements lump on `i`, `Σ_e ρ_e V_e/(D+1) (g − aᵢ)`. The lumped mass
+    /// elements lump on `i`, `Σ_e ρ_e (∫_e W_i) (g − aᵢ)`; `∫_e W_a` is
+    /// `V_e/(D+1)`, or over the part below the water line of an element
+    /// cut at a free solid's (as the assembly integrates it). The lumped mass
     /// puts part of the adjacent fluid's weight on the body's nodes, where
     /// the nodal pressure force holds it up; without the second term a
     /// block held under water at rest read its buoyancy +40 % (issue 13;

@@ -141,8 +141,19 @@ pub const OUTPUT_WALL_SECTION: &str = "output_wall";
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
 
 /// Reads a checkpoint file ([`pfem_driver::checkpoint`]); a path that is
-/// not a regular file (a device, a pipe) is refused.
+/// not a regular file (a device, a pipe), one that does not start as a
+/// checkpoint, or one larger than the default memory budget is refused
+/// ([`read_checkpoint_within`] another budget).
 pub fn read_checkpoint(path: impl AsRef<std::path::Path>) -> Result<Checkpoint, RunError> {
+    read_checkpoint_within(path, pfem_scene::default_memory_budget())
+}
+
+/// [`read_checkpoint`] within a memory budget of `budget` bytes (`pfem
+/// run --memory-budget`).
+pub fn read_checkpoint_within(
+    path: impl AsRef<std::path::Path>,
+    budget: f64,
+) -> Result<Checkpoint, RunError> {
     let path = path.as_ref();
     let io = |e| RunError::Output(Box::new(crate::output::OutputError::io(path, e)));
     // A device or a pipe (`/dev/zero`) would be read without end.
@@ -171,12 +182,11 @@ pub fn read_checkpoint(path: impl AsRef<std::path::Path>) -> Result<Checkpoint, 
             return Err(pfem_driver::checkpoint::CheckpointError::NotACheckpoint.into());
         }
     }
-    let budget = pfem_scene::default_memory_budget();
     if meta.len() as f64 > budget {
         return Err(io(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             format!(
-                "{} bytes, more than the memory budget ({budget:.3e} bytes, 80 % of this machine's memory)",
+                "{} bytes, more than the memory budget ({budget:.3e} bytes; --memory-budget raises it)",
                 meta.len()
             ),
         )));

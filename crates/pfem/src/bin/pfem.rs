@@ -405,7 +405,11 @@ where
     let name = scene.name.clone();
     let restart = match args.options.get("restart") {
         Some(f) => {
-            Some(pfem::observe::read_checkpoint(f).map_err(|e| format!("--restart {f}: {e}"))?)
+            let budget = args.memory_budget().map_err(|e| e.to_string())?;
+            Some(
+                pfem::observe::read_checkpoint_within(f, budget)
+                    .map_err(|e| format!("--restart {f}: {e}"))?,
+            )
         }
         None => None,
     };
