@@ -1237,7 +1237,9 @@ where
                     .zip(frozen_bare.par_iter_mut()),
             )
             .enumerate()
-            .map(|(e, ((st, un), ((fr, fw), bare)))| {
+            // (A fluid element's history, one a thread, its pressure set
+            // for each: not made anew for every element.)
+            .map_init(History::<D>::default, |fluid_h, (e, ((st, un), ((fr, fw), bare)))| {
                 let mut x = [Point::<D>::zeros(); MAX_NV];
                 let mut xn = [Point::<D>::zeros(); MAX_NV];
                 let mut v = [Vector::<D>::zeros(); MAX_NV];
@@ -1294,11 +1296,8 @@ where
                             // `tⁿ`, so that a fluid's `μ` or `𝒦` may depend
                             // on it (a pressure-dependent viscosity).
                             // Before, it was given 0.
-                            let h = History {
-                                pressure: mean_pressure[e],
-                                ..History::default()
-                            };
-                            mat.unified(&s.kin, &h)
+                            fluid_h.pressure = mean_pressure[e];
+                            mat.unified(&s.kin, fluid_h)
                         } else {
                             mat.unified(&s.kin, &input.element_history[e])
                         };
