@@ -2225,6 +2225,30 @@ fn a_failed_steps_forces_do_not_outlive_it() {
     assert_eq!(sim.particles().a(), fresh.particles().a());
 }
 
+/// A 5 cm square of water (spacing 1 cm) whose bottom is at `y0`, over a
+/// floor at `y = 0`; `(end_time, max_dt)` in s.
+fn square_of_water(name: &str, (end_time, max_dt): (f64, f64), y0: f64) -> Scene<2> {
+    Scene::<2>::new(name)
+        .settings(RunSettings {
+            end_time,
+            max_dt,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            boxed(-0.1, -0.01, 0.1, 0.0),
+            0.01,
+            WallMotion::Fixed,
+        )
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.0, y0, 0.05, y0 + 0.05),
+            0.01,
+        )
+}
+
 /// What an observer was asked, and where it fails.
 #[derive(Default)]
 struct Calls {
@@ -2269,27 +2293,7 @@ impl Observer<2> for Calls {
 /// failed `finish` never finished (a review).
 #[test]
 fn observers_that_fail_leave_the_others_told() {
-    let scene = || {
-        Scene::<2>::new("observed")
-            .settings(RunSettings {
-                end_time: 2e-3,
-                max_dt: 1e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall(
-                "floor",
-                boxed(-0.1, -0.01, 0.1, 0.0),
-                0.01,
-                WallMotion::Fixed,
-            )
-            .fluid(
-                "water",
-                Box::new(Newtonian::water()),
-                boxed(0.0, 0.0, 0.05, 0.05),
-                0.01,
-            )
-    };
+    let scene = || square_of_water("observed", (2e-3, 1e-3), 0.0);
     let (mut a, mut b) = (
         Calls::default(),
         Calls {
@@ -2322,30 +2326,12 @@ fn observers_that_fail_leave_the_others_told() {
 /// before back, a review of the day's change.)
 #[test]
 fn a_step_that_fails_after_it_was_taken_keeps_its_dt() {
+    // Falling at 5 m/s and faster: each step's Courant bound is a little
+    // shorter than the last.
     let scene = || {
-        Scene::<2>::new("taken")
-            .gravity(Vector::<2>::new(0.0, -G))
-            .settings(RunSettings {
-                end_time: 1.0,
-                max_dt: 1e-2,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall(
-                "floor",
-                boxed(-0.1, -0.01, 0.1, 0.0),
-                0.01,
-                WallMotion::Fixed,
-            )
-            // Falling at 5 m/s and faster: each step's Courant bound is
-            // a little shorter than the last.
-            .fluid(
-                "water",
-                Box::new(Newtonian::water()),
-                boxed(0.0, 0.5, 0.05, 0.55),
-                0.01,
-            )
+        square_of_water("taken", (1.0, 1e-2), 0.5)
             .with_velocity(Vector::<2>::new(0.0, -5.0))
+            .gravity(Vector::<2>::new(0.0, -G))
     };
     let mut whole = sim2(scene(), StepParams::default());
     let mut broken = sim2(scene(), StepParams::default());

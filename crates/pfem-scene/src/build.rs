@@ -675,17 +675,10 @@ where
             let (x, kind, spacing) = (particles.x(), particles.kind(), particles.spacing());
             let fluid =
                 crate::lattice::SpacingGrids::new(x, spacing, |i| kind[i] == ParticleKind::Fluid);
-            let diagonal = 1.01 * (D as f64).sqrt();
             let mut set = Vec::new();
             for i in (0..x.len()).filter(|&i| kind[i] != ParticleKind::Fluid) {
-                let mut near: Option<(f64, usize)> = None;
-                fluid.visit(&x[i], 0.0, diagonal, x, |j| {
-                    let d = (x[i] - x[j]).norm();
-                    if d <= diagonal * spacing[j] && near.is_none_or(|(b, bj)| (d, j) < (b, bj)) {
-                        near = Some((d, j));
-                    }
-                });
-                let field = near.and_then(|(_, j)| {
+                let near = crate::hydrostatic::nearest_fluid(&fluid, x, spacing, i);
+                let field = near.and_then(|j| {
                     pressure_fields
                         .iter()
                         .find(|(range, _)| range.contains(&j))
@@ -763,14 +756,10 @@ where
             let Some(id) = body_names.iter().position(|n| *n == load.body) else {
                 continue; // (`validate` refused it.)
             };
-            let inside = |x: &Point<D>| {
-                load.region
-                    .is_none_or(|(lo, hi)| (0..D).all(|k| x[k] >= lo[k] && x[k] <= hi[k]))
-            };
             let free = (0..particles.len()).any(|i| {
                 particles.body()[i] as usize == id
                     && particles.fixed[i].is_none()
-                    && inside(&particles.x()[i])
+                    && load.covers(&particles.x()[i])
             });
             if !free {
                 return Err(SceneError::InvalidGeometry {

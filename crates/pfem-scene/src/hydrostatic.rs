@@ -32,6 +32,31 @@ use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 
 use crate::lattice::SpacingGrids;
 
+/// The fluid particle nearest to particle `i` (a wall's or a solid's)
+/// within a lattice cell's diagonal of the fluid particle's spacing, the
+/// farthest a wall or solid particle of a fluid element's corner lies from
+/// the fluid; the lower index of two at one distance. `fluid` holds the
+/// fluid particles.
+pub(crate) fn nearest_fluid<const D: usize>(
+    fluid: &SpacingGrids<D>,
+    x: &[Point<D>],
+    spacing: &[f64],
+    i: usize,
+) -> Option<usize>
+where
+    Const<D>: Dim,
+{
+    let diagonal = 1.01 * (D as f64).sqrt();
+    let mut near: Option<(f64, usize)> = None;
+    fluid.visit(&x[i], 0.0, diagonal, x, |j| {
+        let d = (x[i] - x[j]).norm();
+        if d <= diagonal * spacing[j] && near.is_none_or(|(b, bj)| (d, j) < (b, bj)) {
+            near = Some((d, j));
+        }
+    });
+    near.map(|(_, j)| j)
+}
+
 /// How a column's top particle is loaded.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Top {
@@ -245,21 +270,11 @@ where
             p.max(0.0)
         }
     };
-    // A lattice cell's diagonal: the farthest a wall or solid particle of
-    // a fluid element's corner lies from the fluid.
-    let diagonal = 1.01 * (D as f64).sqrt();
     for i in 0..n {
         if kind[i] == ParticleKind::Fluid {
             continue;
         }
-        let mut near: Option<(f64, usize)> = None;
-        fluid_grid.visit(&x[i], 0.0, diagonal, x, |j| {
-            let d = (x[i] - x[j]).norm();
-            if d <= diagonal * spacing[j] && near.is_none_or(|(b, bj)| (d, j) < (b, bj)) {
-                near = Some((d, j));
-            }
-        });
-        if let Some((_, f)) = near {
+        if let Some(f) = nearest_fluid(&fluid_grid, x, spacing, i) {
             let v = value[root[f]].expect("every column resolved");
             pressure[i] = field(i, v, density[f], spacing[f] * 1.01);
             continue;

@@ -327,6 +327,18 @@ where
     pub force: std::sync::Arc<dyn Fn(f64) -> Vector<D> + Send + Sync>,
 }
 
+impl<const D: usize> AppliedLoad<D>
+where
+    Const<D>: Dim,
+{
+    /// Whether a particle starting at `x` lies in the load's region (every
+    /// one without a region).
+    pub fn covers(&self, x: &Point<D>) -> bool {
+        self.region
+            .is_none_or(|(lo, hi)| (0..D).all(|k| x[k] >= lo[k] && x[k] <= hi[k]))
+    }
+}
+
 impl<const D: usize> std::fmt::Debug for AppliedLoad<D>
 where
     Const<D>: Dim,

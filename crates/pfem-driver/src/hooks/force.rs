@@ -64,11 +64,6 @@ where
     fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let id = ctx.body(&self.load.body)?;
         let p = ctx.particles();
-        let inside = |x: &Point<D>| {
-            self.load
-                .region
-                .is_none_or(|(lo, hi)| (0..D).all(|k| x[k] >= lo[k] && x[k] <= hi[k]))
-        };
         let mut on = Vec::new();
         for i in 0..p.len() {
             if p.body()[i] != id {
@@ -88,7 +83,7 @@ where
             // welded particle does not move: its share would be lost
             // (before session 49 it took one, and the body felt less than
             // the force asked).
-            if inside(&p.initial_positions()[i]) && !p.constraints().is_fully_fixed(i) {
+            if self.load.covers(&p.initial_positions()[i]) && !p.constraints().is_fully_fixed(i) {
                 on.push(i);
             }
         }
