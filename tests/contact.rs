@@ -8,7 +8,7 @@
 //! penalty's rounded onset, see its docs).
 //! `cargo test --release --test suite contact:: -- --nocapture`
 
-use pfem::constitutive::Hypoelastic;
+use pfem::constitutive::{ContactPenalty, Hypoelastic};
 use pfem::prelude::*;
 
 const G: f64 = 9.81;
@@ -68,6 +68,53 @@ fn lowest(sim: &Simulation<2>, body: &str) -> f64 {
         .iter()
         .map(|&i| sim.particles().x()[i][1])
         .fold(f64::INFINITY, f64::min)
+}
+
+/// Session 50 (session 49's review): a restored simulation reads the
+/// contact force its checkpoint's run did. The contact range is formed
+/// anew by the restore without a solve, and its elements read zero until
+/// the next step; a block sticking on a 20° incline (μ = 0.5) now reads
+/// its weight's normal and tangential parts from the restore on.
+#[test]
+fn a_restored_simulation_reads_the_contact_force_of_its_checkpoint() {
+    let (h, theta) = (0.02, 20f64.to_radians());
+    let scene = || block_on_floor(h, 0.4, 0.2, theta, 0.5, 1e7);
+    let mut s = sim(scene());
+    s.set_end_time(0.3).unwrap();
+    s.run(&mut []).unwrap();
+    let before = s.contact_force("block", "floor").unwrap();
+    let weight = 1000.0 * 0.4 * 0.2 * G;
+    let mut restored = sim(scene());
+    restored.restore(&s.checkpoint()).unwrap();
+    let after = restored.contact_force("block", "floor").unwrap();
+    println!(
+        "sticking block: normal {:.2} / {:.2} N/m, tangential {:.2} / {:.2} N/m (weight's {:.2} / {:.2}), {} / {} active elements, before / after the restore",
+        before.normal,
+        after.normal,
+        before.tangential,
+        after.tangential,
+        weight * theta.cos(),
+        weight * theta.sin(),
+        before.active,
+        after.active
+    );
+    for (f, what) in [(before, "before"), (after, "after")] {
+        assert!(
+            (f.normal / (weight * theta.cos()) - 1.0).abs() < 0.02,
+            "{what}: normal {}",
+            f.normal
+        );
+        assert!(
+            (f.tangential / (weight * theta.sin()) - 1.0).abs() < 0.05,
+            "{what}: tangential {}",
+            f.tangential
+        );
+    }
+    // The frames' contact pressure too: some element pushes.
+    let first = restored.elements().len() - restored.elements().n_contact();
+    assert!(restored.elements().history()[first..]
+        .iter()
+        .any(|h| ContactPenalty::pressure(h) > 0.0));
 }
 
 #[test]

@@ -226,6 +226,38 @@ where
         self.contact_set = true;
     }
 
+    /// Gives each contact element the stress its layer holds at rest,
+    /// before any step moves it: the penalty of its gap ratio and its
+    /// carried traction, through its material's
+    /// [`pfem_constitutive::Material::update_history`] with the
+    /// kinematics at rest (`F = I`, no rate: the dashpot's part is left
+    /// out). Only the stress is written; the history the step reads (gap
+    /// ratio, normal, traction) is left as set, so a step's results do not
+    /// change. Without it a contact range re-formed without a solve (a
+    /// restore, a hook's change of the particle set) read zero in
+    /// `contact_force` and in the frames' `contact_pressure` until the next
+    /// step (session 49's review).
+    pub(crate) fn set_contact_stress_at_rest(
+        &mut self,
+        materials: &[Box<dyn pfem_constitutive::Material<D>>],
+        dt: f64,
+    ) {
+        let first = self.n_solid + self.n_fluid;
+        let at_rest = pfem_constitutive::Kinematics::<D>::at_rest(dt);
+        for (h, &m) in self.history[first..]
+            .iter_mut()
+            .zip(&self.material[first..])
+        {
+            let Some(material) = materials.get(m as usize) else {
+                continue;
+            };
+            let mut state = *h;
+            material.update_history(&at_rest, &mut state);
+            h.stress = state.stress;
+            h.stress_zz = state.stress_zz;
+        }
+    }
+
     /// Takes the alpha shape out to be refilled (its buffers reused).
     pub(crate) fn take_shape(&mut self) -> AlphaShape {
         std::mem::take(&mut self.shape)

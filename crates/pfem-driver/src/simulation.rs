@@ -1059,6 +1059,8 @@ where
                 self.particles.spacing(),
                 &mu,
             );
+            self.elements
+                .set_contact_stress_at_rest(&self.materials, self.clock.dt);
             self.contact.candidates = cands;
         }
         if self.clock.steps == 0 {
