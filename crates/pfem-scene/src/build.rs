@@ -187,6 +187,10 @@ pub struct Merge {
     pub body: String,
     /// Its particles dropped because another body's particle is there.
     pub dropped: usize,
+    /// Its particles dropped because one of its own is there (a
+    /// `Geometry::Particles` list that repeats a point): they are not
+    /// counted in `dropped`.
+    pub duplicates: usize,
     /// Its particles (a solid's) that fell on a wall's particle and replaced
     /// it: the solid is welded to the wall at those points.
     pub welded: usize,
@@ -326,6 +330,7 @@ where
             let mut local_index = vec![u32::MAX; pts.len()];
             let mut welded = 0usize;
             let mut dropped = 0usize;
+            let mut duplicates = 0usize;
             let first = particles.len();
             // The body's particles welded to a wall (not clamped: the weld
             // prescribes their velocity).
@@ -366,12 +371,27 @@ where
                         (ParticleKind::Solid, _) => {
                             return Err(SceneError::InvalidGeometry {
                                 body: b.name.clone(),
-                                why: format!(
-                                    "particle at {:?} lies within a quarter spacing ({tol:e} m) of a particle of body `{}`",
-                                    p.as_slice(),
-                                    body_names[particles.body()[j] as usize]
-                                ),
+                                why: if particles.body()[j] == id {
+                                    format!(
+                                        "particle at {:?} lies within a quarter spacing ({tol:e} m) of another of its own particles, at {:?}",
+                                        p.as_slice(),
+                                        particles.x()[j].as_slice()
+                                    )
+                                } else {
+                                    format!(
+                                        "particle at {:?} lies within a quarter spacing ({tol:e} m) of a particle of body `{}`",
+                                        p.as_slice(),
+                                        body_names[particles.body()[j] as usize]
+                                    )
+                                },
                             });
+                        }
+                        // (Its own particle there: a repeated point of
+                        // its list, counted apart; session 49's review
+                        // found it reported as an earlier body's.)
+                        _ if particles.body()[j] == id => {
+                            duplicates += 1;
+                            continue;
                         }
                         _ => {
                             dropped += 1;
@@ -479,10 +499,11 @@ where
             if b.kind == ParticleKind::Solid && b.clamps.is_empty() && welded == 0 {
                 free_solids[bi] = true;
             }
-            if dropped > 0 || welded > 0 {
+            if dropped > 0 || duplicates > 0 || welded > 0 {
                 merges.push(Merge {
                     body: b.name.clone(),
                     dropped,
+                    duplicates,
                     welded,
                 });
             }
@@ -860,6 +881,54 @@ where
 mod tests {
     use super::*;
     use crate::scene::Clamp;
+
+    /// Session 50 (session 49's review): a point repeated in a body's own
+    /// list is counted apart from those that fall on an earlier body's
+    /// (it was reported as an earlier body's), and a solid's is refused as
+    /// its own.
+    #[test]
+    fn a_bodys_repeated_point_is_told_apart_from_an_earlier_bodys() {
+        use pfem_constitutive::{Hypoelastic, Newtonian};
+        use pfem_geometry::Delaunay2;
+        let h = 0.1;
+        let p = |x: f64, y: f64| Point::<2>::new(x, y);
+        let floor = Geometry::Box {
+            min: p(-0.5, -h),
+            max: p(1.5, 0.0),
+        };
+        // Two points on the floor's top row, one repeated, two free.
+        let points = vec![
+            p(0.0, 0.0),
+            p(0.5, 0.0),
+            p(0.2, 0.5),
+            p(0.2, 0.5),
+            p(0.4, 0.5),
+        ];
+        let water = || Box::new(Newtonian::new(1000.0, 1e-3, 2.2e9).unwrap());
+        let built = Scene::<2>::new("dup")
+            .wall("floor", floor.clone(), h, WallMotion::Fixed)
+            .fluid("drops", water(), Geometry::Particles(points.clone()), h)
+            .build(&mut Delaunay2::default())
+            .unwrap();
+        let m = &built.merges[0];
+        assert_eq!(
+            (m.body.as_str(), m.dropped, m.duplicates, m.welded),
+            ("drops", 2, 1, 0)
+        );
+        let err = Scene::<2>::new("dup")
+            .wall("floor", floor, h, WallMotion::Fixed)
+            .solid(
+                "beads",
+                Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+                Geometry::Particles(points[2..].to_vec()),
+                h,
+                None,
+            )
+            .build(&mut Delaunay2::default())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("another of its own particles"), "{err}");
+    }
 
     /// A fixed-seed generator in [0, 1).
     fn lcg(state: &mut u64) -> f64 {

@@ -332,6 +332,12 @@ where
                 m.body, m.dropped
             );
         }
+        if m.duplicates > 0 {
+            println!(
+                "  warning: body `{}`: {} particles dropped (within a quarter spacing of another of its own particles)",
+                m.body, m.duplicates
+            );
+        }
         if m.welded > 0 {
             println!(
                 "  body `{}`: {} wall particles replaced by a solid's, which is welded there",
