@@ -22,6 +22,7 @@ mod petsc;
 mod picard_stop;
 mod presets;
 mod probes;
+mod solid_dynamics;
 mod stability_3d;
 mod stability_degenerate;
 mod stability_fluid;

@@ -33,7 +33,7 @@ use crate::material::{History, Kinematics, Material, MaterialKind, Unified};
 /// taken at mid-step and convected to the end by the half-step stretch
 /// `P = 2 V (V + I)⁻¹`, `V = √(F Fᵀ)`, so
 ///
-/// `J σⁿ⁺¹ = F σⁿ Fᵀ + λ_h (tr Δε) P² + 2 μ_h P Δε P` ([`Hypoelastic::stress_after`]),
+/// `σⁿ⁺¹ = F σⁿ Fᵀ / J + (λ_h (tr Δε) P² + 2 μ_h P Δε P) / det P` ([`Hypoelastic::stress_after`]),
 ///
 /// exact for rigid rotations of any size, second order in the step, and its linearisation in the
 /// velocity is `w D` with `w = ∂Δu/∂V` ([`Kinematics::displacement_weight`]:
@@ -47,7 +47,7 @@ use crate::material::{History, Kinematics, Material, MaterialKind, Unified};
 ///
 /// **2D is plane strain.** `F_zz = 1`, `D_zz = 0`, `Δε_zz = 0`, but the
 /// out-of-plane stress [`History::stress_zz`] evolves:
-/// `σ_zzⁿ⁺¹ = (σ_zzⁿ + λ_h tr Δε) / J`. In the small-strain limit this
+/// `σ_zzⁿ⁺¹ = σ_zzⁿ / J + λ_h tr Δε / det P`. In the small-strain limit this
 /// gives `σ_zz = ν (σ_xx + σ_yy)`. In 3D `stress_zz` is unused and left at
 /// zero.
 ///
@@ -260,8 +260,9 @@ where
         Unified::returning(mu, kappa, sigma, sigma_zz, kin)
     }
 
-    /// `σⁿ⁺¹ = F σⁿ Fᵀ / J + (λ_h tr Δε I + 2 μ_h Δε) / J` (eqs. 36–39, 63,
-    /// with the objective strain increment `Δε` for `Δt D`); in 2D also
+    /// `σⁿ⁺¹ = F σⁿ Fᵀ / J + (λ_h tr Δε P² + 2 μ_h P Δε P) / det P` (eqs.
+    /// 36–39, 63, with the objective strain increment `Δε` for `Δt D`,
+    /// see [`Hypoelastic::stress_after`]); in 2D also
     /// `σ_zz`. The pressure is not touched.
     fn update_history(&self, kin: &Kinematics<D>, history: &mut History<D>) {
         let (sigma, sigma_zz) = self.stress_after(kin, history);
@@ -274,12 +275,13 @@ impl Hypoelastic {
     /// The Cauchy stress after the step's displacement (eq. 36 in the
     /// Updated Lagrangian form, `Jⁿ = 1`, `f = F`):
     ///
-    /// `J σⁿ⁺¹ = F σⁿ Fᵀ + λ_h (tr Δε) P² + 2 μ_h P Δε P`,
+    /// `σⁿ⁺¹ = F σⁿ Fᵀ / J + (λ_h (tr Δε) P² + 2 μ_h P Δε P) / det P`,
     ///
     /// with `Δε` = [`Kinematics::strain_increment`] where the paper has
     /// `Δt D⁽ⁿ⁺¹⁾`, and `P = 2 V (V + I)⁻¹` (`V` the step's left stretch):
-    /// the Truesdell integral `∫ F F(t)⁻¹ (C : D) F(t)⁻ᵀ Fᵀ dt` by the
-    /// midpoint rule along the rotation-neutral path `F(t) = R(t) U(t)`.
+    /// the Truesdell integral `J σⁿ⁺¹ = F σⁿ Fᵀ + ∫ J(t) F F(t)⁻¹ (C : D)
+    /// F(t)⁻ᵀ Fᵀ dt` by the midpoint rule along the rotation-neutral path
+    /// `F(t) = R(t) U(t)`, whose mid-step volume is `J / det P`.
     /// Adding `C : Δε` unconvected at the end of the step made the stress
     /// path first order in Δt: a vibrating beam's energy wandered by 0.23 %
     /// at 40 steps per period against 0.013 % now. The plain midpoint rule
@@ -290,7 +292,7 @@ impl Hypoelastic {
     /// trapezoidal rule the increment is `Δt (Vⁿ + Vⁿ⁺¹)/2`, not
     /// `Δt Vⁿ⁺¹` (which damps). Returns `(σ, σ_zz)`, `σ_zz` zero in 3D;
     /// in 2D plane strain `F_zz = 1`, `Δε_zz = 0`, so
-    /// `σ_zzⁿ⁺¹ = (σ_zzⁿ + λ_h tr Δε) / J`.
+    /// `σ_zzⁿ⁺¹ = σ_zzⁿ / J + λ_h tr Δε / det P`.
     ///
     /// `σ` is symmetrised (`½ (A + Aᵀ)`) so that rounding never makes it
     /// unsymmetric.
@@ -308,15 +310,20 @@ impl Hypoelastic {
         // order); V, Δε and P commute, and the rotation does not enter.
         let (de, pm) = kin.strain_increment_and_convection();
         let tr = de.trace();
-        let a = (kin.f * history.stress * kin.f.transpose() // eq. 38
-            + pm * pm * (self.lambda * tr)
-            + pm * de * pm * (2.0 * self.mu))
-            / kin.j;
+        // The integrand carries the volume ratio `J(t)`: at mid-step
+        // `J_m = J / det P`, so the increment is divided by `det P`, not by
+        // `J`. Divided by `J` (until session 50) it lost `E e²/2` of
+        // stress each step to a stretch `1 + e` whatever the sign of `e`:
+        // a column vibrating under its weight grew taller than unloaded
+        // (a review).
+        let det_p = pm.determinant();
+        let a = kin.f * history.stress * kin.f.transpose() / kin.j // eq. 38
+            + (pm * pm * (self.lambda * tr) + pm * de * pm * (2.0 * self.mu)) / det_p;
         let sigma = (a + a.transpose()) * 0.5;
         let sigma_zz = if D == 2 && self.plane_stress {
             0.0
         } else if D == 2 {
-            (history.stress_zz + self.lambda * tr) / kin.j
+            history.stress_zz / kin.j + self.lambda * tr / det_p
         } else {
             0.0
         };
@@ -548,7 +555,8 @@ mod tests {
         assert!((u.kappa - (2.0e7 + 2.0 / 3.0 * 4.0e6) * 1e-3 / j).abs() <= 1e-12 * u.kappa);
         // D = 0: σ̂ is the whole stress after the displacement F, the
         // convected stress plus Hooke's law on Δε = 2 (V − I)(V + I)⁻¹
-        // convected by P = 2 V (V + I)⁻¹, V = √(F Fᵀ) (closed form in 2D).
+        // convected by P = 2 V (V + I)⁻¹, V = √(F Fᵀ) (closed form in 2D),
+        // at mid-step's volume J / det P.
         let b = f * f.transpose();
         let id = Tensor::<2>::identity();
         let s_det = b.determinant().sqrt();
@@ -557,9 +565,10 @@ mod tests {
         let inv = (v + id).try_inverse().unwrap();
         let (de, pm) = (((v - id) * inv) * 2.0, (v * inv) * 2.0);
         let hooke = pm * pm * (2.0e7 * de.trace()) + pm * de * pm * (2.0 * 4.0e6);
-        let sh = (f * h.stress * f.transpose() + hooke) / j;
+        let det_p = pm.determinant();
+        let sh = f * h.stress * f.transpose() / j + hooke / det_p;
         assert!((u.sigma_hat - sh).norm() <= 1e-13 * sh.norm());
-        let szz = (4.0 + 2.0e7 * de.trace()) / j;
+        let szz = 4.0 / j + 2.0e7 * de.trace() / det_p;
         assert!((u.sigma_hat_zz - szz).abs() <= 1e-13 * szz.abs());
         let mut h2 = h;
         solid.update_history(&kin, &mut h2);
@@ -630,6 +639,52 @@ mod tests {
         }
         // Negative λ is fine while the bulk modulus stays positive (ν < 0).
         assert!(Hypoelastic::from_lame(1e3, -0.5e6, 1e6).is_ok());
+    }
+
+    /// Session 50 (a review): under a cyclic stretch the stress comes back
+    /// to zero with the stretch. With `ν = 0` a uniaxial stretch `f` has
+    /// the Truesdell stress `σ = E (f − 1)` whatever the path; the
+    /// increment divided by `J` instead of `det P` lost `E e²/2` a step of
+    /// stretch `1 + e` on the way out and on the way back: after ten cycles
+    /// to `f` = 1.1 in 25 steps each way the bar held −0.040 E unloaded.
+    fn cyclic_stretch<const D: usize>()
+    where
+        Const<D>: Dim,
+    {
+        let e = 1.0e6;
+        let solid = Hypoelastic::new(1000.0, e, 0.0).unwrap();
+        let mut h = History::<D>::default();
+        let (steps, peak) = (25, 0.1);
+        let mut f = 1.0;
+        let mut step = |to: f64, h: &mut History<D>| {
+            let mut kin = Kinematics::<D>::at_rest(1e-3);
+            kin.f[(0, 0)] = to / f;
+            kin.j = to / f;
+            solid.update_history(&kin, h);
+            f = to;
+        };
+        for _ in 0..10 {
+            for k in 1..=steps {
+                step(1.0 + peak * k as f64 / steps as f64, &mut h);
+            }
+            let at_peak = h.stress[(0, 0)] / (e * peak) - 1.0;
+            assert!(at_peak.abs() < 1e-4, "{D}D: at the peak off by {at_peak:e}");
+            for k in (0..steps).rev() {
+                step(1.0 + peak * k as f64 / steps as f64, &mut h);
+            }
+        }
+        let left = h.stress.norm() / e;
+        assert!(left < 1e-9, "{D}D: {left:e} E left after ten cycles");
+    }
+
+    #[test]
+    fn a_cyclic_stretch_leaves_no_stress_2d() {
+        cyclic_stretch::<2>();
+    }
+
+    #[test]
+    fn a_cyclic_stretch_leaves_no_stress_3d() {
+        cyclic_stretch::<3>();
     }
 
     /// Plane stress: a uniaxial in-plane stretch with the in-plane Poisson

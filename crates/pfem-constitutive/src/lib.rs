@@ -22,7 +22,7 @@
 //! | law | `μ` | `𝒦` | `σ̂⁽ⁿ⁾` |
 //! |---|---|---|---|
 //! | [`Newtonian`] fluid (eqs. 16–27) | `μ_f` | `Δt K_f` | `−pⁿ I` |
-//! | [`Hypoelastic`] solid (eqs. 28–42) | `μ_h w / J` | `(λ_h + ⅔ μ_h) w / J` | `F σⁿ Fᵀ / J` + `P (C : Δε) P / J` − `(𝒦 ε_v I + 2 μ D')` |
+//! | [`Hypoelastic`] solid (eqs. 28–42) | `μ_h w / J` | `(λ_h + ⅔ μ_h) w / J` | `F σⁿ Fᵀ / J` + `P (C : Δε) P / det P` − `(𝒦 ε_v I + 2 μ D')` |
 //! | [`ContactPenalty`] layer (not in the paper) | `G_c w` sticking, its secant across the slip slipping | `K_c s_δ' r w` + dashpot | `σ` of the layer − `(𝒦 ε_v I + 2 μ P(D))` |
 //!
 //! For the solid, `w = ∂Δu/∂V` ([`Kinematics::displacement_weight`]: `Δt`
