@@ -70,6 +70,75 @@ fn lowest(sim: &Simulation<2>, body: &str) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// Session 50 (a review): a soft block (E = 10⁴ Pa) resting on a free
+/// steel block (E = 2·10¹¹ Pa) that rests on the floor. Each contact
+/// element took the stiffest penalty among its bodies, the steel's P-wave
+/// modulus, 2·10⁷ times the soft block's own: its elements inverted at
+/// t = 0.20 s (`StepTooSmall` after 238 Picard rejections), where on a
+/// wall it rests with none. The softer solid's penalty: no step rejected,
+/// and the soft block sits on the steel.
+#[test]
+fn a_soft_block_rests_on_a_free_steel_block() {
+    let h = 0.01;
+    let scene = Scene::<2>::new("stack_mixed")
+        .gravity(Vector::<2>::new(0.0, -G))
+        .settings(RunSettings {
+            end_time: 0.5,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: Point::<2>::new(-0.1, -2.0 * h),
+                max: Point::<2>::new(0.2, 0.0),
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "steel",
+            Box::new(Hypoelastic::new(7800.0, 2e11, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, h),
+                max: Point::<2>::new(0.1, 0.1),
+            },
+            h,
+            None,
+        )
+        .solid(
+            "soft",
+            Box::new(Hypoelastic::new(1000.0, 1e4, 0.3).unwrap()),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.1 + h),
+                max: Point::<2>::new(0.1, 0.2),
+            },
+            h,
+            None,
+        );
+    let mut s = sim(scene);
+    let result = s.run(&mut []);
+    let soft_low = lowest(&s, "soft");
+    let steel_top = s
+        .body_particles("steel")
+        .unwrap()
+        .iter()
+        .map(|&i| s.particles().x()[i][1])
+        .fold(f64::NEG_INFINITY, f64::max);
+    println!(
+        "soft on steel: {:?} at t = {:.3} s, {} steps ({} rejected), soft block's lowest particle {:.3} h above the steel's top",
+        result.as_ref().err(),
+        s.time(),
+        s.steps(),
+        s.rejected(),
+        (soft_low - steel_top) / h
+    );
+    result.unwrap();
+    assert!(s.rejected() * 20 <= s.steps(), "{} rejected", s.rejected());
+    assert!(soft_low - steel_top > 0.5 * h);
+}
+
 /// Session 50 (session 49's review): a restored simulation reads the
 /// contact force its checkpoint's run did. The contact range is formed
 /// anew by the restore without a solve, and its elements read zero until

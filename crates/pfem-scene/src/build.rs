@@ -191,6 +191,10 @@ pub struct Merge {
     /// `Geometry::Particles` list that repeats a point): they are not
     /// counted in `dropped`.
     pub duplicates: usize,
+    /// Its particles (a solid's lattice fill) that no element of its own
+    /// mesh held, left out: the row one spacing wide at a sharp corner
+    /// (`solid_mesh::solid_mesh_pruned`).
+    pub unmeshed: usize,
     /// Its particles (a solid's) that fell on a wall's particle and replaced
     /// it: the solid is welded to the wall at those points.
     pub welded: usize,
@@ -287,6 +291,10 @@ where
         let mut merges: Vec<Merge> = Vec::new();
         let mut laws = Vec::new();
         let mut pressure_fields = Vec::new();
+        let solid_mesh_params = crate::solid_mesh::SolidMeshParams {
+            alpha: settings.alpha,
+            ..Default::default()
+        };
         // Body ids follow the scene's order.
         for bi in order {
             let b = bodies[bi].take().expect("each body once");
@@ -310,6 +318,48 @@ where
                 } => lattice::cylinder_points::<D>(base, *axis, *radius, *height, b.spacing)?,
                 Geometry::Particles(p) => p.clone(),
                 Geometry::Surface(surface) => surface.fill(b.spacing),
+            };
+            // A solid of any shape but a box: its own mesh, made before its
+            // particles are placed. A lattice fill's particles that no
+            // element holds (the row one spacing wide that ends a sharp
+            // corner, whatever the spacing) are left out, counted in
+            // `Merge::unmeshed`: until session 50 a tapered cantilever or
+            // a triangle was refused, the message blaming alpha (a
+            // review). A user's own particles are meshed as given, once
+            // placed (below: a repeated one is refused by name first).
+            let mut unmeshed = 0usize;
+            let (pts, solid_conn) = match (&b.kind, &b.geometry) {
+                (ParticleKind::Solid, Geometry::Box { min, max }) => {
+                    let conn = lattice::box_simplices::<D>(min, max, b.spacing)?;
+                    (pts, Some(conn))
+                }
+                // (No particle: refused below as an empty geometry.)
+                (ParticleKind::Solid, Geometry::Particles(_)) => (pts, None),
+                (ParticleKind::Solid, _) if !pts.is_empty() => {
+                    let (m, left) = crate::solid_mesh::solid_mesh_pruned::<D>(
+                        &pts,
+                        b.spacing,
+                        tessellator,
+                        &solid_mesh_params,
+                    )
+                    .map_err(|e| SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: e.to_string(),
+                    })?;
+                    unmeshed = left.len();
+                    let mut out = vec![false; pts.len()];
+                    for i in left {
+                        out[i] = true;
+                    }
+                    let kept = pts
+                        .into_iter()
+                        .zip(out)
+                        .filter(|(_, o)| !o)
+                        .map(|(p, _)| p)
+                        .collect();
+                    (kept, Some(m.simplices))
+                }
+                _ => (pts, None),
             };
             let mat = match b.material {
                 Some(m) => {
@@ -473,24 +523,26 @@ where
             if let Some(f) = b.pressure_field.clone() {
                 pressure_fields.push((first..particles.len(), f));
             }
-            if b.kind == ParticleKind::Solid {
-                // Boxes: structured mesh; any other geometry: Delaunay of
-                // its own particles trimmed by the alpha shape.
-                let conn = match &b.geometry {
-                    Geometry::Box { min, max } => lattice::box_simplices::<D>(min, max, b.spacing)?,
-                    _ => {
-                        let params = crate::solid_mesh::SolidMeshParams {
-                            alpha: settings.alpha,
-                            ..Default::default()
-                        };
-                        crate::solid_mesh::solid_mesh::<D>(&pts, b.spacing, tessellator, &params)
-                            .map_err(|e| SceneError::InvalidGeometry {
-                                body: b.name.clone(),
-                                why: e.to_string(),
-                            })?
-                            .simplices
-                    }
-                };
+            // A solid's mesh (above; a user's particles here): boxes
+            // structured, any other geometry the Delaunay tessellation of
+            // its own particles trimmed by the alpha shape.
+            let solid_conn = match solid_conn {
+                None if b.kind == ParticleKind::Solid && !pts.is_empty() => Some(
+                    crate::solid_mesh::solid_mesh::<D>(
+                        &pts,
+                        b.spacing,
+                        tessellator,
+                        &solid_mesh_params,
+                    )
+                    .map_err(|e| SceneError::InvalidGeometry {
+                        body: b.name.clone(),
+                        why: e.to_string(),
+                    })?
+                    .simplices,
+                ),
+                conn => conn,
+            };
+            if let Some(conn) = solid_conn {
                 for &q in &conn {
                     solid_elements.push(local_index[q as usize]);
                 }
@@ -499,11 +551,12 @@ where
             if b.kind == ParticleKind::Solid && b.clamps.is_empty() && welded == 0 {
                 free_solids[bi] = true;
             }
-            if dropped > 0 || duplicates > 0 || welded > 0 {
+            if dropped > 0 || duplicates > 0 || welded > 0 || unmeshed > 0 {
                 merges.push(Merge {
                     body: b.name.clone(),
                     dropped,
                     duplicates,
+                    unmeshed,
                     welded,
                 });
             }
@@ -732,8 +785,8 @@ where
                 limit: crate::scene::MAX_STEPS,
             });
         }
-        // Contact: a contact element's default penalty is the largest
-        // P-wave modulus ρ c² among its particles' solids.
+        // Contact: a contact element's default penalty is the smallest
+        // P-wave modulus ρ c² among its particles' solids (the driver).
         let mut contact_stiffness = vec![0.0; bodies.len()];
         let mut in_contact = free_solids.clone();
         for ((&b, &m), k) in particles
@@ -881,6 +934,49 @@ where
 mod tests {
     use super::*;
     use crate::scene::Clamp;
+
+    /// Session 50 (a review): a solid polygon with a sharp corner builds,
+    /// the row of particles one spacing wide at its tip left out of its
+    /// mesh (and counted); a user's own particles are meshed as given, so
+    /// the same particles as a list are refused. Before, the wedge was
+    /// refused ("particles too sparse for alpha"), at any spacing.
+    #[test]
+    fn a_solid_with_a_sharp_corner_builds_without_its_tip_row() {
+        use pfem_constitutive::Hypoelastic;
+        use pfem_geometry::Delaunay2;
+        let p = |x: f64, y: f64| Point::<2>::new(x, y);
+        let wedge = || Geometry::polygon(vec![p(0.0, 0.0), p(0.3, 0.0), p(0.3, 0.1)]);
+        let solid = || Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap());
+        for h in [0.01, 0.0025] {
+            let built = Scene::<2>::new("wedge")
+                .solid("wedge", solid(), wedge(), h, None)
+                .build(&mut Delaunay2::default())
+                .unwrap();
+            let m = &built.merges[0];
+            let placed = built.particles.len();
+            assert!(
+                m.unmeshed > 0 && m.unmeshed * 20 <= placed + m.unmeshed,
+                "{h}: {} of {placed}",
+                m.unmeshed
+            );
+            // Every particle placed is in an element.
+            let mut used = vec![false; placed];
+            for &v in &built.solid_elements {
+                used[v as usize] = true;
+            }
+            assert!(used.iter().all(|&u| u), "{h}");
+        }
+        let Geometry::Surface(surface) = wedge() else {
+            unreachable!("a polygon is a surface")
+        };
+        let points = surface.fill(0.01);
+        let err = Scene::<2>::new("wedge")
+            .solid("wedge", solid(), Geometry::Particles(points), 0.01, None)
+            .build(&mut Delaunay2::default())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("in no element"), "{err}");
+    }
 
     /// Session 50 (session 49's review): a point repeated in a body's own
     /// list is counted apart from those that fall on an earlier body's

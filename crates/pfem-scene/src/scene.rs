@@ -399,11 +399,14 @@ pub struct ContactSettings {
     /// slope of the contact pressure against the gap's closure beyond the
     /// rounded onset (a gap closed entirely: `K_c (1 − δ/2)`,
     /// `pfem_constitutive::ContactPenalty`). Default, for each contact
-    /// element: the largest P-wave modulus `λ + 2μ` of the solids among
-    /// its particles' bodies (a wall counts as none), so the penetration under a stress `σ` is `σ/K_c` of the
-    /// spacing, the stiffer solid's own strain. (Before session 36 the
-    /// default was the scene's stiffest solid's for every pair: a soft
-    /// body then met a wall with a penalty many times its own stiffness.)
+    /// element: the smallest P-wave modulus `λ + 2μ` of the solids among
+    /// its particles' bodies (a wall counts as none), so the penetration
+    /// under a stress `σ` is `σ/K_c` of the spacing, the softer solid's
+    /// own strain: the layer is one more cell of it. (Before session 36
+    /// the default was the scene's stiffest solid's for every pair: a soft
+    /// body then met a wall with a penalty many times its own stiffness;
+    /// until session 50 the stiffest of the element's own: a soft block
+    /// on a free steel one inverted its elements.)
     pub stiffness: Option<f64>,
     /// Normal damping of the contact layer, in steps
     /// (`pfem_constitutive::ContactPenalty::damping`): damping ratio

@@ -82,6 +82,94 @@ pub fn solid_mesh<const D: usize>(
 where
     Const<D>: Dim,
 {
+    match mesh_or_orphans(points, h, tessellator, params)? {
+        Ok(mesh) => Ok(mesh),
+        Err(orphans) => Err(orphan_error(points, orphans[0], params)),
+    }
+}
+
+/// At most this fraction of a solid's particles may be left out of its
+/// mesh by [`solid_mesh_pruned`]; beyond it the particles are too sparse
+/// for the alpha shape, not a corner's.
+pub const MAX_PRUNED_FRACTION: f64 = 0.05;
+
+/// [`solid_mesh`], leaving out the particles that no element holds (a
+/// lattice filling a sharp corner of a polygon ends in a row of particles
+/// one spacing wide, which no simplex of the alpha shape joins, however
+/// fine the spacing) and meshing the rest again, until every particle is
+/// in an element. Returns the mesh, numbered over the kept particles, and
+/// the indices in `points` of those left out (increasing). Refused as
+/// [`solid_mesh`] is when more than [`MAX_PRUNED_FRACTION`] of the
+/// particles would go.
+pub fn solid_mesh_pruned<const D: usize>(
+    points: &[Point<D>],
+    h: f64,
+    tessellator: &mut dyn Tessellator<D>,
+    params: &SolidMeshParams,
+) -> Result<(SolidMesh, Vec<usize>), SceneError>
+where
+    Const<D>: Dim,
+{
+    let mut kept: Vec<usize> = (0..points.len()).collect();
+    let limit = (MAX_PRUNED_FRACTION * points.len() as f64).floor() as usize;
+    loop {
+        let sub: Vec<Point<D>> = kept.iter().map(|&i| points[i]).collect();
+        match mesh_or_orphans(&sub, h, tessellator, params)? {
+            Ok(mesh) => {
+                let mut is_kept = vec![false; points.len()];
+                for &i in &kept {
+                    is_kept[i] = true;
+                }
+                let left = (0..points.len()).filter(|&i| !is_kept[i]).collect();
+                return Ok((mesh, left));
+            }
+            Err(orphans) => {
+                if points.len() - kept.len() + orphans.len() > limit {
+                    return Err(orphan_error(&sub, orphans[0], params));
+                }
+                let mut out = vec![false; sub.len()];
+                for &o in &orphans {
+                    out[o] = true;
+                }
+                kept = kept
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| !out[*k])
+                    .map(|(_, &i)| i)
+                    .collect();
+            }
+        }
+    }
+}
+
+fn orphan_error<const D: usize>(
+    points: &[Point<D>],
+    i: usize,
+    params: &SolidMeshParams,
+) -> SceneError
+where
+    Const<D>: Dim,
+{
+    SceneError::Mesh {
+        why: format!(
+            "solid mesh: its particle {} (counting from 1), at {:?}, is in no element (particles too sparse for alpha = {})",
+            i + 1,
+            points[i].as_slice(),
+            params.alpha
+        ),
+    }
+}
+
+/// The mesh, or the particles in no element (increasing).
+fn mesh_or_orphans<const D: usize>(
+    points: &[Point<D>],
+    h: f64,
+    tessellator: &mut dyn Tessellator<D>,
+    params: &SolidMeshParams,
+) -> Result<Result<SolidMesh, Vec<usize>>, SceneError>
+where
+    Const<D>: Dim,
+{
     let nv = D + 1;
     let err = |why: String| SceneError::Mesh { why };
     let mut tess = Tessellation::new(nv);
@@ -123,13 +211,9 @@ where
     for &v in &mesh.simplices {
         valence[v as usize] += 1;
     }
-    if let Some(i) = valence.iter().position(|&c| c == 0) {
-        return Err(err(format!(
-            "solid mesh: its particle {} (counting from 1), at {:?}, is in no element (particles too sparse for alpha = {})",
-            i + 1,
-            points[i].as_slice(),
-            params.alpha
-        )));
+    let orphans: Vec<usize> = (0..points.len()).filter(|&i| valence[i] == 0).collect();
+    if !orphans.is_empty() {
+        return Ok(Err(orphans));
     }
     // Drop boundary slivers one at a time, worst first; a simplex is on the
     // boundary when one of its facets has no kept neighbour (NO_NEIGHBOR,
@@ -167,7 +251,7 @@ where
         out.volume += simplex_measure::<D>(&corners(s)[..nv]);
         out.min_radius_ratio = out.min_radius_ratio.min(ratio[s]);
     }
-    Ok(out)
+    Ok(Ok(out))
 }
 
 #[cfg(test)]

@@ -372,6 +372,29 @@ geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
     assert!(text.contains("particles placed"), "{text}");
     assert!(text.contains("MB"), "{text}");
     assert!(text.contains("body `water`: 5 particles dropped"), "{text}");
+    // Its floor has the water's spacing: no warning about it.
+    assert!(!text.contains("warning: wall"), "{text}");
+    // Session 50 (a review): a wall of another spacing than the water's
+    // is named, since still water beside it moves.
+    let coarse = dir.join("coarse.toml");
+    std::fs::write(
+        &coarse,
+        std::fs::read_to_string(&file).unwrap().replace(
+            "name = \"floor\"\nkind = \"wall\"",
+            "name = \"floor\"\nkind = \"wall\"\nspacing = 0.075",
+        ),
+    )
+    .unwrap();
+    let out = Command::new(bin)
+        .args(["check", coarse.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("warning: wall `floor` has 1.50 times the finest fluid's spacing"),
+        "{text}"
+    );
     let bad = Command::new(bin)
         .args(["check", file.to_str().unwrap(), "--volume-correction", "7"])
         .output()
