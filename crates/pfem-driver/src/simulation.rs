@@ -451,7 +451,7 @@ where
     /// Per body: the index of the contact material it brings (the
     /// penalty of its solid, [`pfem_scene::ContactSettings::stiffness`]),
     /// `NO_MATERIAL` for a body without one; an element takes its
-    /// stiffest body's.
+    /// softest solid's (since session 50; the stiffest before).
     material: Vec<u16>,
     /// Per body: its penalty stiffness (Pa), 0 for walls and fluids.
     stiffness: Vec<f64>,

@@ -151,7 +151,9 @@ where
     pub settings: RunSettings,
     /// Particles of a body that fell within a quarter spacing of an earlier
     /// body's particle: dropped (a fluid on a wall, two walls) or welded (a
-    /// solid's on a wall's, which it replaces). Reported by `pfem check`.
+    /// solid's on a wall's, which it replaces); of its own (a repeated
+    /// point, dropped); and a solid's lattice fill's that no element of its
+    /// mesh holds (left out). Reported by `pfem check`.
     pub merges: Vec<Merge>,
     /// Walls moving along a law of time, by name.
     #[allow(clippy::type_complexity)]
@@ -415,9 +417,11 @@ where
                             weld = Some(particles.v[j]);
                             welded += 1;
                         }
-                        // A solid keeps every particle (its own mesh uses
-                        // them all): one that falls on another solid's
-                        // particle is an error, not a merge.
+                        // A solid keeps every particle it places (its own
+                        // mesh uses them all; a lattice fill's that no
+                        // element holds were left out above): one that
+                        // falls on another solid's particle is an error,
+                        // not a merge.
                         (ParticleKind::Solid, _) => {
                             return Err(SceneError::InvalidGeometry {
                                 body: b.name.clone(),
@@ -502,12 +506,19 @@ where
                     return Err(SceneError::InvalidGeometry {
                         body: b.name.clone(),
                         why: format!(
-                            "clamp {} ({}) holds none of its particles",
+                            "clamp {} ({}) holds none of its particles{}",
                             k + 1,
                             match &b.clamps[k] {
                                 crate::scene::Clamp::Box(lo, hi) =>
                                     format!("box {:?} to {:?}", lo.as_slice(), hi.as_slice()),
                                 crate::scene::Clamp::Where(_) => "a predicate".into(),
+                            },
+                            // (A clamp at a sharp tip held only the row its
+                            // mesh left out: session 50's review.)
+                            if unmeshed > 0 {
+                                format!(" ({unmeshed} of its particles, at a corner or a part thinner than a spacing, were left out of its mesh: clamp it over a wider part)")
+                            } else {
+                                String::new()
                             }
                         ),
                     });
@@ -710,12 +721,15 @@ where
                     _ => 0.0,
                 })
                 .collect();
+            let held: Vec<bool> = particles.fixed.iter().map(Option::is_some).collect();
             particles.pressure = crate::hydrostatic::pressures(
                 particles.x(),
                 particles.kind(),
                 particles.spacing(),
                 &density,
                 &g,
+                particles.body(),
+                &held,
             );
         }
         // A gravity finite but so large that ρ g H overflows (or its norm

@@ -27,6 +27,12 @@
 //!
 //! For one fluid body with a flat surface every column's top is the
 //! body's highest row, and the field is `ρ g (x − x_top)·ĝ` bit for bit.
+//!
+//! Only fluid held up starts loaded: a connected fluid (across densities)
+//! with no wall particle, and no particle of a held solid (clamped,
+//! welded, or resting on a wall or a held solid), right below one of its
+//! particles falls freely and starts at zero, and so do the walls and
+//! solids beside it (session 50).
 
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
 
@@ -70,13 +76,18 @@ enum Top {
 
 /// The hydrostatic start pressure of every particle (Pa), 0 where it has
 /// none. `density` is each fluid particle's (kg/m³; ignored elsewhere),
-/// `g` the gravity (m/s², nonzero).
+/// `g` the gravity (m/s², nonzero); `body` each particle's body and
+/// `held` whether it is held in place (a wall's, a clamped or welded
+/// solid's particle): a free solid holds the fluid on it only when it
+/// rests on something held itself.
 pub(crate) fn pressures<const D: usize>(
     x: &[Point<D>],
     kind: &[ParticleKind],
     spacing: &[f64],
     density: &[f64],
     g: &Vector<D>,
+    body: &[u32],
+    held: &[bool],
 ) -> Vec<f64>
 where
     Const<D>: Dim,
@@ -262,18 +273,54 @@ where
             }
         });
     }
+    // Whether `j` lies right below `i` (the mirror of the search above).
+    let right_below = |i: usize, j: usize| {
+        let s = spacing[i].max(spacing[j]);
+        let dh = depth[j] - depth[i];
+        let d = x[i] - x[j];
+        let perp = (d - dir * d.dot(&dir)).norm();
+        dh > 0.1 * s && dh <= 1.5 * s && perp <= 0.75 * s
+    };
+    // The solid bodies held up: clamped or welded, or resting on a wall or
+    // on a solid held up (a free raft 2 m over the floor holds nothing: a
+    // review found the water on it started at ρ g H).
+    let n_bodies = body.iter().map(|&b| b as usize + 1).max().unwrap_or(0);
+    let mut body_held = vec![false; n_bodies];
+    for i in 0..n {
+        if kind[i] == ParticleKind::Solid && held[i] {
+            body_held[body[i] as usize] = true;
+        }
+    }
+    let support = |j: usize, body_held: &[bool]| match kind[j] {
+        ParticleKind::Wall => true,
+        ParticleKind::Solid => body_held[body[j] as usize],
+        ParticleKind::Fluid => false,
+    };
+    let solids: Vec<usize> = (0..n).filter(|&i| kind[i] == ParticleKind::Solid).collect();
+    loop {
+        let mut more = false;
+        for &i in &solids {
+            if body_held[body[i] as usize] {
+                continue;
+            }
+            let mut on = false;
+            all.visit(&x[i], spacing[i], 1.5, x, |j| {
+                on |= body[j] != body[i] && support(j, &body_held) && right_below(i, j);
+            });
+            if on {
+                body_held[body[i] as usize] = true;
+                more = true;
+            }
+        }
+        if !more {
+            break;
+        }
+    }
     let mut held = vec![false; n];
     for &i in &fluid {
         let mut below = false;
         all.visit(&x[i], spacing[i], 1.5, x, |j| {
-            if kind[j] == ParticleKind::Fluid {
-                return;
-            }
-            let s = spacing[i].max(spacing[j]);
-            let dh = depth[j] - depth[i];
-            let d = x[i] - x[j];
-            let perp = (d - dir * d.dot(&dir)).norm();
-            below |= dh > 0.1 * s && dh <= 1.5 * s && perp <= 0.75 * s;
+            below |= support(j, &body_held) && right_below(i, j);
         });
         if below {
             let r = find(&mut held_by, i);
@@ -385,7 +432,16 @@ mod tests {
 
     impl Cloud2 {
         fn pressures(&self, g: Vector<2>) -> Vec<f64> {
-            pressures(&self.x, &self.kind, &self.spacing, &self.density, &g)
+            let n = self.x.len();
+            pressures(
+                &self.x,
+                &self.kind,
+                &self.spacing,
+                &self.density,
+                &g,
+                &vec![0; n],
+                &vec![false; n],
+            )
         }
     }
 
@@ -653,6 +709,69 @@ mod tests {
         }
     }
 
+    /// Session 50 (the day's review): water on a free solid raft that rests
+    /// on nothing falls with it at zero pressure; on a clamped raft, or on a
+    /// free raft resting on a floor, it carries its weight.
+    #[test]
+    fn water_on_a_free_raft_in_the_air_starts_at_zero() {
+        let s = 0.05;
+        // (held raft, raft on the floor)
+        for (clamped, on_floor) in [(false, false), (true, false), (false, true)] {
+            let mut c = Cloud2::default();
+            fill(
+                &mut c,
+                (0.0, 0.5),
+                (0.0, 0.3),
+                s,
+                ParticleKind::Fluid,
+                1000.0,
+            );
+            let fluid = c.x.len();
+            fill(&mut c, (0.0, 0.5), (-0.1, 0.0), s, ParticleKind::Solid, 0.0);
+            let raft = c.x.len();
+            let floor_top = if on_floor { -0.1 } else { -2.0 };
+            fill(
+                &mut c,
+                (-0.1, 0.6),
+                (floor_top - s, floor_top),
+                s,
+                ParticleKind::Wall,
+                0.0,
+            );
+            let n = c.x.len();
+            let body: Vec<u32> = (0..n)
+                .map(|i| {
+                    if i < fluid {
+                        0
+                    } else if i < raft {
+                        1
+                    } else {
+                        2
+                    }
+                })
+                .collect();
+            let held: Vec<bool> = (0..n)
+                .map(|i| i >= raft || (clamped && i >= fluid))
+                .collect();
+            let p = pressures(&c.x, &c.kind, &c.spacing, &c.density, &down(), &body, &held);
+            let bottom = 1000.0 * G * (0.3 - s);
+            let supported = clamped || on_floor;
+            for i in 0..fluid {
+                let want = if supported {
+                    1000.0 * G * (0.3 - 0.5 * s - c.x[i][1])
+                } else {
+                    0.0
+                };
+                assert!(
+                    (p[i] - want).abs() <= 1e-9 * bottom,
+                    "clamped {clamped}, on the floor {on_floor}: {} against {want} at {:?}",
+                    p[i],
+                    c.x[i]
+                );
+            }
+        }
+    }
+
     /// A sloping surface (a step of water) and a tilted gravity start every
     /// free-surface particle at zero pressure.
     #[test]
@@ -728,12 +847,15 @@ mod tests {
                 }
             }
         }
+        let n = x.len();
         let p = pressures(
             &x,
             &kind,
             &spacing,
             &density,
             &Vector::<3>::new(0.0, 0.0, -G),
+            &vec![0; n],
+            &vec![false; n],
         );
         let (top, interface) = (9.0 * s, 5.5 * s);
         for i in 0..x.len() {

@@ -125,7 +125,7 @@ where
             }
             Err(orphans) => {
                 if points.len() - kept.len() + orphans.len() > limit {
-                    return Err(orphan_error(&sub, orphans[0], params));
+                    return Err(orphan_error(points, kept[orphans[0]], params));
                 }
                 let mut out = vec![false; sub.len()];
                 for &o in &orphans {

@@ -258,8 +258,8 @@ pub enum MaterialSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
-    /// Normal penalty stiffness (Pa); default, for each pair, the larger
-    /// P-wave modulus of its solids (`pfem::scene::ContactSettings::stiffness`).
+    /// Normal penalty stiffness (Pa); default, for each contact element, the
+    /// smallest P-wave modulus of its solids (`pfem::scene::ContactSettings::stiffness`).
     #[serde(default)]
     pub stiffness: Option<f64>,
     /// Normal damping, dimensionless (the dashpot `c Δt K_c`: its time

@@ -345,7 +345,7 @@ where
             let ratio = p.spacing[i] / finest_fluid;
             if !(0.95..=1.05).contains(&ratio) {
                 println!(
-                    "  warning: wall `{}` has {ratio:.2} times the finest fluid's spacing ({} m against {finest_fluid} m): water at rest beside a wall of another spacing does not stay at rest (0.067 m/s measured at 1.25 times); give walls the water's spacing",
+                    "  warning: wall `{}` has {ratio:.2} times the finest fluid's spacing ({} m against {finest_fluid} m): water at rest beside a wall of another spacing does not stay at rest (0.067 m/s measured at 1.25 times); give a wall the spacing of the water it touches (a wall that touches none, or a coarser fluid's, is fine)",
                     built.body_names[b], p.spacing[i]
                 );
             }
