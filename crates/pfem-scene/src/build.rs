@@ -335,8 +335,8 @@ where
                     let conn = lattice::box_simplices::<D>(min, max, b.spacing)?;
                     (pts, Some(conn))
                 }
-                // (No particle: refused below as an empty geometry.)
                 (ParticleKind::Solid, Geometry::Particles(_)) => (pts, None),
+                // (No particle: refused below as an empty geometry.)
                 (ParticleKind::Solid, _) if !pts.is_empty() => {
                     let (m, left) = crate::solid_mesh::solid_mesh_pruned::<D>(
                         &pts,
