@@ -330,6 +330,10 @@ where
             // review). A user's own particles are meshed as given, once
             // placed (below: a repeated one is refused by name first).
             let mut unmeshed = 0usize;
+            let mesh_error = |e: SceneError| SceneError::InvalidGeometry {
+                body: b.name.clone(),
+                why: e.to_string(),
+            };
             let (pts, solid_conn) = match (&b.kind, &b.geometry) {
                 (ParticleKind::Solid, Geometry::Box { min, max }) => {
                     let conn = lattice::box_simplices::<D>(min, max, b.spacing)?;
@@ -344,20 +348,14 @@ where
                         tessellator,
                         &solid_mesh_params,
                     )
-                    .map_err(|e| SceneError::InvalidGeometry {
-                        body: b.name.clone(),
-                        why: e.to_string(),
-                    })?;
+                    .map_err(mesh_error)?;
                     unmeshed = left.len();
-                    let mut out = vec![false; pts.len()];
-                    for i in left {
-                        out[i] = true;
-                    }
+                    // (`left` increases.)
                     let kept = pts
                         .into_iter()
-                        .zip(out)
-                        .filter(|(_, o)| !o)
-                        .map(|(p, _)| p)
+                        .enumerate()
+                        .filter(|(i, _)| left.binary_search(i).is_err())
+                        .map(|(_, p)| p)
                         .collect();
                     (kept, Some(m.simplices))
                 }
@@ -545,10 +543,7 @@ where
                         tessellator,
                         &solid_mesh_params,
                     )
-                    .map_err(|e| SceneError::InvalidGeometry {
-                        body: b.name.clone(),
-                        why: e.to_string(),
-                    })?
+                    .map_err(mesh_error)?
                     .simplices,
                 ),
                 conn => conn,

@@ -114,23 +114,28 @@ where
     // Highest first: a particle's neighbour above comes before it.
     let mut order = fluid.clone();
     order.sort_by(|&a, &b| depth[a].total_cmp(&depth[b]).then(a.cmp(&b)));
+    // `(perp, dh)` when particle `j` lies right above particle `i`: higher
+    // by more than a tenth and at most 1.5 of the larger spacing, within
+    // 0.75 of it across.
+    let above_of = |i: usize, j: usize| -> Option<(f64, f64)> {
+        let s = spacing[i].max(spacing[j]);
+        let dh = depth[i] - depth[j];
+        if !(dh > 0.1 * s && dh <= 1.5 * s) {
+            return None;
+        }
+        let d = x[i] - x[j];
+        let perp = (d - dir * d.dot(&dir)).norm();
+        (perp <= 0.75 * s).then_some((perp, dh))
+    };
     let mut root = vec![usize::MAX; n];
     let mut top = vec![Top::Free; n];
     for &i in &order {
         let mut above: Option<(f64, f64, usize)> = None;
         all.visit(&x[i], spacing[i], 1.5, x, |j| {
-            let s = spacing[i].max(spacing[j]);
-            let dh = depth[i] - depth[j];
-            if !(dh > 0.1 * s && dh <= 1.5 * s) {
-                return;
-            }
-            let d = x[i] - x[j];
-            let perp = (d - dir * d.dot(&dir)).norm();
-            if perp > 0.75 * s {
-                return;
-            }
-            if above.is_none_or(|(bp, bh, bj)| (perp, dh, j) < (bp, bh, bj)) {
-                above = Some((perp, dh, j));
+            if let Some((perp, dh)) = above_of(i, j) {
+                if above.is_none_or(|(bp, bh, bj)| (perp, dh, j) < (bp, bh, bj)) {
+                    above = Some((perp, dh, j));
+                }
             }
         });
         match above {
@@ -148,8 +153,10 @@ where
             }
         }
     }
-    // Connected fluids of one density.
+    // Connected fluids of one density (`parent`), and of any density
+    // (`held_by`: what holds the water up holds the oil on it, below).
     let mut parent: Vec<usize> = (0..n).collect();
+    let mut held_by: Vec<usize> = (0..n).collect();
     fn find(parent: &mut [usize], mut a: usize) -> usize {
         while parent[a] != a {
             parent[a] = parent[parent[a]];
@@ -157,13 +164,18 @@ where
         }
         a
     }
+    fn join(parent: &mut [usize], i: usize, j: usize) {
+        let (a, b) = (find(parent, i), find(parent, j));
+        if a != b {
+            parent[a.max(b)] = a.min(b);
+        }
+    }
     for &i in &fluid {
         fluid_grid.visit(&x[i], spacing[i], 1.5, x, |j| {
-            if density[j] == density[i] && (x[i] - x[j]).norm() <= 1.5 * spacing[i].max(spacing[j])
-            {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                if a != b {
-                    parent[a.max(b)] = a.min(b);
+            if (x[i] - x[j]).norm() <= 1.5 * spacing[i].max(spacing[j]) {
+                join(&mut held_by, i, j);
+                if density[j] == density[i] {
+                    join(&mut parent, i, j);
                 }
             }
         });
@@ -255,32 +267,15 @@ where
         }
     }
     // Fluid with nothing under it (a drop, a block of water released in
-    // the air) falls freely: no pressure. Fluid particles join across
-    // densities (oil on water is held by what holds the water), and a
-    // connected fluid is held where one of its particles has a wall or
+    // the air) falls freely: no pressure. A fluid connected across
+    // densities (`held_by`: oil on water is held by what holds the water)
+    // is held where one of its particles has a wall or
     // solid particle right below it (the mirror of the search above).
     // Until session 50 a block of water released 2 m over a floor started
     // at ρ g H: its base burst sideways at 0.06 m/s and its volume fell
     // 1.1 % in a step (a review).
-    let mut held_by: Vec<usize> = (0..n).collect();
-    for &i in &fluid {
-        fluid_grid.visit(&x[i], spacing[i], 1.5, x, |j| {
-            if (x[i] - x[j]).norm() <= 1.5 * spacing[i].max(spacing[j]) {
-                let (a, b) = (find(&mut held_by, i), find(&mut held_by, j));
-                if a != b {
-                    held_by[a.max(b)] = a.min(b);
-                }
-            }
-        });
-    }
     // Whether `j` lies right below `i` (the mirror of the search above).
-    let right_below = |i: usize, j: usize| {
-        let s = spacing[i].max(spacing[j]);
-        let dh = depth[j] - depth[i];
-        let d = x[i] - x[j];
-        let perp = (d - dir * d.dot(&dir)).norm();
-        dh > 0.1 * s && dh <= 1.5 * s && perp <= 0.75 * s
-    };
+    let right_below = |i: usize, j: usize| above_of(j, i).is_some();
     // The solid bodies held up: clamped or welded, or resting on a wall or
     // on a solid held up (a free raft 2 m over the floor holds nothing: a
     // review found the water on it started at ρ g H).
