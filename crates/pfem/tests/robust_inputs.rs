@@ -392,8 +392,80 @@ geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");
     assert!(
-        text.contains("warning: wall `floor` has 1.50 times the finest fluid's spacing"),
+        text.contains("warning: wall `floor` has 1.50 times the spacing of the water it touches"),
         "{text}"
+    );
+    // Session 51: each wall is compared with the water it touches, not
+    // with the scene's finest fluid (a fine floor under a coarse fluid was
+    // missed), a wall no water touches yet with the finest fluid, and two
+    // fluids that meet with spacings more than 2.5 times apart are named
+    // (4 times apart, still water opened a hole where they met).
+    let two = |name: &str, coarse: f64, far_wall: f64| {
+        let f = dir.join(format!("{name}.toml"));
+        std::fs::write(
+            &f,
+            format!(
+                r#"name = "{name}"
+dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.01
+
+[run]
+end_time = 0.1
+max_dt = 5e-3
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = {{ min = [-0.01, -0.01], max = [0.41, 0.0] }}
+
+[[body]]
+name = "far"
+kind = "wall"
+spacing = {far_wall}
+geometry.box = {{ min = [0.8, 0.0], max = [0.85, 0.2] }}
+
+[[body]]
+name = "fine"
+kind = "fluid"
+material.newtonian = {{ density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }}
+geometry.box = {{ min = [0.0, 0.0], max = [0.2, 0.1] }}
+
+[[body]]
+name = "coarse"
+kind = "fluid"
+spacing = {coarse}
+material.newtonian = {{ density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }}
+geometry.box = {{ min = [0.2, 0.0], max = [0.4, 0.1] }}
+"#
+            ),
+        )
+        .unwrap();
+        let out = Command::new(bin)
+            .args(["check", f.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(out.status.success(), "{text}");
+        text
+    };
+    let apart = two("apart", 0.04, 0.01);
+    assert!(
+        apart.contains("warning: fluids `coarse` and `fine` meet with spacings 4.00 times apart"),
+        "{apart}"
+    );
+    // The floor has the fine water's spacing and touches the coarse one:
+    // named with the coarse water's ratio; the finest fluid's would be 1.
+    assert!(
+        apart.contains("warning: wall `floor` has 0.25 times the spacing of the water it touches"),
+        "{apart}"
+    );
+    assert!(!apart.contains("wall `far`"), "{apart}");
+    let near = two("near", 0.02, 0.015);
+    assert!(!near.contains("warning: fluids"), "{near}");
+    assert!(
+        near.contains("warning: wall `far` touches no water at the start and has 1.50 times the finest fluid's spacing"),
+        "{near}"
     );
     let bad = Command::new(bin)
         .args(["check", file.to_str().unwrap(), "--volume-correction", "7"])
