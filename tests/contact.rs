@@ -70,24 +70,12 @@ fn lowest(sim: &Simulation<2>, body: &str) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Session 50 (a review): a soft block (E = 10⁴ Pa) resting on a free
-/// steel block (E = 2·10¹¹ Pa) that rests on the floor. Each contact
-/// element took the stiffest penalty among its bodies, the steel's P-wave
-/// modulus, 2·10⁷ times the soft block's own: its elements inverted at
-/// t = 0.20 s (`StepTooSmall` after 238 Picard rejections), where on a
-/// wall it rests with none. The softer solid's penalty: no step rejected,
-/// and the soft block sits on the steel.
-#[test]
-fn a_soft_block_rests_on_a_free_steel_block() {
-    let h = 0.01;
-    let scene = Scene::<2>::new("stack_mixed")
+/// A floor two rows deep (top row at y = 0, spacing `h`) and a free steel
+/// block (E = 2·10¹¹ Pa, 0.1 m wide) from `bottom` to `top`.
+fn steel_over_floor(name: &str, settings: RunSettings, h: f64, bottom: f64, top: f64) -> Scene<2> {
+    Scene::<2>::new(name)
         .gravity(Vector::<2>::new(0.0, -G))
-        .settings(RunSettings {
-            end_time: 0.5,
-            max_dt: 2e-3,
-            output_interval: None,
-            ..Default::default()
-        })
+        .settings(settings)
         .wall(
             "floor",
             Geometry::Box {
@@ -99,24 +87,45 @@ fn a_soft_block_rests_on_a_free_steel_block() {
         )
         .solid(
             "steel",
-            Box::new(Hypoelastic::new(7800.0, 2e11, 0.3).unwrap()),
+            Box::new(Hypoelastic::new(STEEL.0, STEEL.1, STEEL.2).unwrap()),
             Geometry::Box {
-                min: Point::<2>::new(0.0, h),
-                max: Point::<2>::new(0.1, 0.1),
+                min: Point::<2>::new(0.0, bottom),
+                max: Point::<2>::new(0.1, top),
             },
             h,
             None,
         )
-        .solid(
-            "soft",
-            Box::new(Hypoelastic::new(1000.0, 1e4, 0.3).unwrap()),
-            Geometry::Box {
-                min: Point::<2>::new(0.0, 0.1 + h),
-                max: Point::<2>::new(0.1, 0.2),
-            },
-            h,
-            None,
-        );
+}
+
+/// Steel: density (kg/m³), Young's modulus (Pa), Poisson's ratio.
+const STEEL: (f64, f64, f64) = (7800.0, 2e11, 0.3);
+
+/// Session 50 (a review): a soft block (E = 10⁴ Pa) resting on a free
+/// steel block (E = 2·10¹¹ Pa) that rests on the floor. Each contact
+/// element took the stiffest penalty among its bodies, the steel's P-wave
+/// modulus, 2·10⁷ times the soft block's own: its elements inverted at
+/// t = 0.20 s (`StepTooSmall` after 238 Picard rejections), where on a
+/// wall it rests with none. The softer solid's penalty: no step rejected,
+/// and the soft block sits on the steel.
+#[test]
+fn a_soft_block_rests_on_a_free_steel_block() {
+    let h = 0.01;
+    let settings = RunSettings {
+        end_time: 0.5,
+        max_dt: 2e-3,
+        output_interval: None,
+        ..Default::default()
+    };
+    let scene = steel_over_floor("stack_mixed", settings, h, h, 0.1).solid(
+        "soft",
+        Box::new(Hypoelastic::new(1000.0, 1e4, 0.3).unwrap()),
+        Geometry::Box {
+            min: Point::<2>::new(0.0, 0.1 + h),
+            max: Point::<2>::new(0.1, 0.2),
+        },
+        h,
+        None,
+    );
     let mut s = sim(scene);
     let result = s.run(&mut []);
     let soft_low = lowest(&s, "soft");
@@ -657,35 +666,16 @@ fn a_block_dropped_onto_a_floor_lands_on_it() {
 /// dropped 5 and 45 cm with neither.
 #[test]
 fn a_stiff_block_dropped_onto_a_floor_never_rises_above_its_start() {
-    let (h, rho, young, nu) = (0.01, 7800.0, 2e11, 0.3);
+    let h = 0.01;
+    let (rho, young, nu) = STEEL;
     for drop in [0.01, 0.05, 0.45] {
-        let scene = Scene::<2>::new("steel drop")
-            .gravity(Vector::<2>::new(0.0, -G))
-            .settings(RunSettings {
-                end_time: 4.0 * (2.0 * drop / G).sqrt(),
-                max_dt: 5e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall(
-                "floor",
-                Geometry::Box {
-                    min: Point::<2>::new(-0.1, -2.0 * h),
-                    max: Point::<2>::new(0.2, 0.0),
-                },
-                h,
-                WallMotion::Fixed,
-            )
-            .solid(
-                "steel",
-                Box::new(Hypoelastic::new(rho, young, nu).unwrap()),
-                Geometry::Box {
-                    min: Point::<2>::new(0.0, h + drop),
-                    max: Point::<2>::new(0.1, h + drop + 0.09),
-                },
-                h,
-                None,
-            );
+        let settings = RunSettings {
+            end_time: 4.0 * (2.0 * drop / G).sqrt(),
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        };
+        let scene = steel_over_floor("steel drop", settings, h, h + drop, h + drop + 0.09);
         let mut s = sim(scene);
         let mass = crate::stability_support::solid_masses(&s, rho);
         let total = |s: &Simulation<2>| {

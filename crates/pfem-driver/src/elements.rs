@@ -4,7 +4,7 @@
 
 use pfem_assembly::StepMesh;
 use pfem_constitutive::History;
-use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point};
+use pfem_core::{simplex_measure, Const, Dim, ParticleKind, Point, Vector};
 use pfem_geometry::{AlphaShape, Tessellation};
 
 use crate::checkpoint::{fingerprint, CheckpointError, Decoder, Encoder};
@@ -339,6 +339,41 @@ where
     /// after the step, and `pfem_constitutive::contact`'s slots).
     pub fn contact_history(&self) -> &[History<D>] {
         &self.history[self.n_solid + self.n_fluid..]
+    }
+
+    /// The nodal forces of the contact elements `e` for which `keep(e)`
+    /// holds, on positions `x`: `add(e, particle, f)` with
+    /// `f = −V σ ∇N` of the element's stress (its last step's, constant
+    /// in the simplex) for each of its particles; a degenerate element
+    /// gives none.
+    pub fn contact_nodal_forces(
+        &self,
+        x: &[Point<D>],
+        keep: impl Fn(usize) -> bool,
+        mut add: impl FnMut(usize, usize, Vector<D>),
+    ) {
+        let nv = D + 1;
+        let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+        let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
+        for (e, (el, h)) in self
+            .contact()
+            .chunks_exact(nv)
+            .zip(self.contact_history())
+            .enumerate()
+        {
+            if !keep(e) {
+                continue;
+            }
+            for k in 0..nv {
+                p[k] = x[el[k] as usize];
+            }
+            let Some(vol) = pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]) else {
+                continue;
+            };
+            for k in 0..nv {
+                add(e, el[k] as usize, -(h.stress * g[k] * vol));
+            }
+        }
     }
 
     /// The two bodies of each contact element, the master (whose facet

@@ -1863,29 +1863,15 @@ where
         if !any {
             return;
         }
-        let x = self.particles.x();
-        let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
-        let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
         // The impacts' own force: the particles' other contacts (a floor
         // under a block that strikes a side wall) are left as they are,
         // so that the two bodies' parts stay opposite.
         let mut force = vec![Vector::<D>::zeros(); n];
-        for ((el, h), _) in contact
-            .chunks_exact(nv)
-            .zip(history)
-            .zip(&impact)
-            .filter(|(_, &hit)| hit)
-        {
-            for k in 0..nv {
-                p[k] = x[el[k] as usize];
-            }
-            let Some(vol) = pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]) else {
-                continue;
-            };
-            for k in 0..nv {
-                force[el[k] as usize] -= h.stress * g[k] * vol;
-            }
-        }
+        self.elements.contact_nodal_forces(
+            self.particles.x(),
+            |e| impact[e],
+            |_, i, f| force[i] += f,
+        );
         // The lumped mass the step's system gave each particle (eq. 46
         // for its solid elements, the fluid's as the assembly lumps it).
         let assembler = self.stepper.integrator.assembler();

@@ -165,44 +165,37 @@ where
     fn contact_force(&self, on: &str, from: &str) -> Result<ContactForce<D>, RunError> {
         let (a, b) = (self.body_id(on)?, self.body_id(from)?);
         not_meshed(self)?;
-        let nv = D + 1;
-        let x = self.particles().x();
         let body = self.particles().body();
         let mut force = Vector::<D>::zeros();
         let mut normal = Vector::<D>::zeros();
         let mut active = 0;
-        let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
-        let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
         let elements = self.elements();
-        for ((el, h), pair) in elements
-            .contact()
-            .chunks_exact(nv)
-            .zip(elements.contact_history())
-            .zip(elements.contact_bodies())
-        {
-            if !((pair.0 == a && pair.1 == b) || (pair.0 == b && pair.1 == a)) {
-                continue;
-            }
-            if h.stress.trace() >= 0.0 {
-                continue; // open
-            }
-            for k in 0..nv {
-                p[k] = x[el[k] as usize];
-            }
-            let Some(vol) = pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]) else {
-                continue;
-            };
-            active += 1;
-            for k in 0..nv {
-                if body[el[k] as usize] == a {
-                    force -= h.stress * g[k] * vol;
+        let (history, pairs) = (elements.contact_history(), elements.contact_bodies());
+        let mut last = None;
+        elements.contact_nodal_forces(
+            self.particles().x(),
+            // The pair's elements that push (an open one has no stress).
+            |e| {
+                let pair = pairs[e];
+                ((pair.0 == a && pair.1 == b) || (pair.0 == b && pair.1 == a))
+                    && history[e].stress.trace() < 0.0
+            },
+            |e, i, f| {
+                if last != Some(e) {
+                    last = Some(e);
+                    active += 1;
+                    // The element's normal points from its master into the
+                    // other body: into `on` when `on` is not the master.
+                    let n = Vector::<D>::from_fn(|k, _| {
+                        history[e].internal[pfem_constitutive::contact::NORMAL + k]
+                    });
+                    normal += if pairs[e].0 == a { -n } else { n };
                 }
-            }
-            // The element's normal points from its master into the other
-            // body: into `on` when `on` is not the master.
-            let n = Vector::<D>::from_fn(|k, _| h.internal[pfem_constitutive::contact::NORMAL + k]);
-            normal += if pair.0 == a { -n } else { n };
-        }
+                if body[i] == a {
+                    force += f;
+                }
+            },
+        );
         let (fn_, ft) = if normal.norm() > 0.0 {
             let n = normal / normal.norm();
             let f_n = force.dot(&n);

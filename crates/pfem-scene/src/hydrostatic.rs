@@ -483,6 +483,13 @@ mod tests {
         }
     }
 
+    /// Water (1000 kg/m³) over `0 ≤ x ≤ 0.5`, `0 ≤ y ≤ 0.4`, and oil (800)
+    /// on it up to `y = 0.6`, at spacing `s`.
+    fn oil_on_water(c: &mut Cloud2, s: f64) {
+        fill(c, (0.0, 0.5), (0.0, 0.4), s, ParticleKind::Fluid, 1000.0);
+        fill(c, (0.0, 0.5), (0.4, 0.6), s, ParticleKind::Fluid, 800.0);
+    }
+
     /// Oil (800 kg/m³, 0.2 m) resting on water (1000, 0.4 m): the water
     /// carries the oil's weight, exactly on a lattice whose interface lies
     /// midway between two rows.
@@ -490,22 +497,7 @@ mod tests {
     fn oil_on_water_carries_its_weight() {
         let s = 0.05;
         let mut c = Cloud2::default();
-        fill(
-            &mut c,
-            (0.0, 0.5),
-            (0.0, 0.4),
-            s,
-            ParticleKind::Fluid,
-            1000.0,
-        );
-        fill(
-            &mut c,
-            (0.0, 0.5),
-            (0.4, 0.6),
-            s,
-            ParticleKind::Fluid,
-            800.0,
-        );
+        oil_on_water(&mut c, s);
         let fluid = c.x.len();
         fill(&mut c, (-0.1, 0.6), (-s, 0.0), s, ParticleKind::Wall, 0.0);
         let p = c.pressures(down());
@@ -656,22 +648,7 @@ mod tests {
         let s = 0.05;
         for floor_at in [0.0, -2.0] {
             let mut c = Cloud2::default();
-            fill(
-                &mut c,
-                (0.0, 0.5),
-                (0.0, 0.4),
-                s,
-                ParticleKind::Fluid,
-                1000.0,
-            );
-            fill(
-                &mut c,
-                (0.0, 0.5),
-                (0.4, 0.6),
-                s,
-                ParticleKind::Fluid,
-                800.0,
-            );
+            oil_on_water(&mut c, s);
             let fluid = c.x.len();
             // A side wall beside the water, from the floor up.
             fill(
