@@ -54,7 +54,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -412,7 +412,7 @@ fn cases(quick: bool) -> Res<Vec<Case>> {
     ];
     // The dam break's reference: a finer run of the library itself.
     let ref_cells = if quick { 32 } else { 45 };
-    eprintln!("dam_break: the reference run at a/{ref_cells} …");
+    pfem::errln!("dam_break: the reference run at a/{ref_cells} …");
     let t0 = Instant::now();
     let (reference, _) = DamBreakFront {
         cells: ref_cells,
@@ -420,7 +420,7 @@ fn cases(quick: bool) -> Res<Vec<Case>> {
     }
     .run(StepParams::default(), 0.5)?;
     let reference_wall = t0.elapsed().as_secs_f64();
-    eprintln!("dam_break: reference done in {reference_wall:.0} s");
+    pfem::errln!("dam_break: reference done in {reference_wall:.0} s");
     v.push(Case {
         name: "dam_break",
         error: if quick {
@@ -525,7 +525,9 @@ fn run() -> Res<()> {
             "--out" => out = Some(args.next().ok_or("--out needs a value")?.into()),
             "--quick" => quick = true,
             "-h" | "--help" => {
-                println!("cargo run --release --example accuracy_cost -- [--out DIR] [--quick]");
+                pfem::outln!(
+                    "cargo run --release --example accuracy_cost -- [--out DIR] [--quick]"
+                );
                 return Ok(());
             }
             other => {
@@ -538,7 +540,7 @@ fn run() -> Res<()> {
     let started = Instant::now();
     let cases = cases(quick)?;
     let total: usize = cases.iter().map(|c| c.points().len()).sum();
-    eprintln!(
+    pfem::errln!(
         "accuracy_cost: {} runs ({}), writing {}",
         total,
         if quick { "quick" } else { "full" },
@@ -580,7 +582,7 @@ fn run() -> Res<()> {
                     status: format!("error: {e}"),
                 },
             };
-            eprintln!(
+            pfem::errln!(
                 "[{n:2}/{total}] {:20} {:16} cells {:5.1}  step ×{:<4} tol {:.0e}: error {:.3e}  wall {:6.1} s  {:4} steps ({} rejected)  {}  [elapsed {:.0} s]",
                 rec.case,
                 rec.varied,
@@ -605,7 +607,7 @@ fn run() -> Res<()> {
         quick,
         started.elapsed().as_secs_f64(),
     )?;
-    println!(
+    pfem::outln!(
         "wrote {} ({} runs, {:.0} s)",
         out.display(),
         records.len(),

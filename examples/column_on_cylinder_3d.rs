@@ -19,7 +19,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -37,7 +37,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .clone()
         .unwrap_or_else(|| "out/column_on_cylinder_3d".into());
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay3::default()))?;
-    eprintln!(
+    pfem::errln!(
         "column_on_cylinder_3d: {} particles ({} in the cylinder, {} solid elements), h = {} m, end time {} s",
         sim.particles().len(),
         sim.body_particles("cylinder")?.len(),
@@ -57,7 +57,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             |a, b| if b.1.abs() > a.1.abs() { b } else { a },
         );
     let f_max = fx.iter().map(|&(_, f)| f.abs()).fold(0.0, f64::max);
-    println!("largest top displacement {ux_max:+.4e} m at t = {t_max:.3} s; largest |force_x| {f_max:.3} N");
+    pfem::outln!("largest top displacement {ux_max:+.4e} m at t = {t_max:.3} s; largest |force_x| {f_max:.3} N");
     output.extra.insert("ux_top_max".into(), ux_max.into());
     output.extra.insert("ux_top_max_time".into(), t_max.into());
     output.extra.insert("force_x_abs_max".into(), f_max.into());

@@ -103,7 +103,7 @@ fn mud() -> Bingham {
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -162,7 +162,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     sim.run(&mut [&mut output])?;
     pfem::cli::exit_if_stopped(&sim);
     let front = output.probe_series("front_x");
-    println!(
+    pfem::outln!(
         "Bingham mud column: front {:.4} m -> {:.4} m after {} s",
         front[0].1,
         front.last().map(|f| f.1).unwrap_or(f64::NAN),

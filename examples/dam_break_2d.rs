@@ -17,7 +17,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -53,7 +53,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut scene = case.scene();
     scene.settings.alpha = args.number("alpha", scene.settings.alpha)?;
     let mut sim = args.simulation(scene, Box::new(Delaunay2::default()))?;
-    eprintln!(
+    pfem::errln!(
         "dam_break_2d: {} particles, a = {} m, n² = {}, h = {} m, end time {:.3} s",
         sim.particles().len(),
         case.width,
@@ -85,7 +85,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         )
     };
     let (shift, rms) = best_shift(&front, &measured, 3.0, 0.5, 0.01);
-    println!("surge front vs Martin & Moyce (T <= 3): RMS relative error {:.2}% after a fitted time shift of {:+.3} (in T)", 100.0 * rms, shift);
+    pfem::outln!("surge front vs Martin & Moyce (T <= 3): RMS relative error {:.2}% after a fitted time shift of {:+.3} (in T)", 100.0 * rms, shift);
     output
         .extra
         .insert("front_rms_relative_error".into(), rms.into());
@@ -118,7 +118,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             .collect();
         let measured_h = parse_reference_csv(reference::MARTIN_MOYCE_N2_1_HEIGHT)?;
         let (hs, hrms) = best_shift(&height, &measured_h, 3.0, 0.5, 0.01);
-        println!(
+        pfem::outln!(
             "residual height vs Martin & Moyce: RMS relative error {:.2}% (shift {hs:+.3})",
             100.0 * hrms
         );

@@ -16,7 +16,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -34,7 +34,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .clone()
         .unwrap_or_else(|| "out/dam_break_obstacle_2d".into());
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay2::default()))?;
-    eprintln!(
+    pfem::errln!(
         "dam_break_obstacle_2d: {} particles, end time {} s",
         sim.particles().len(),
         case.end_time
@@ -51,7 +51,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             |b, p| if p.1 > b.1 { p } else { b },
         );
     let f_max = fx.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
-    println!(
+    pfem::outln!(
         "largest top displacement {:.2} mm at {:.3} s; largest force {:.1} N/m",
         1e3 * ux_max,
         t_max,

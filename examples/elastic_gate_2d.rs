@@ -21,7 +21,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -54,7 +54,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .clone()
         .unwrap_or_else(|| "out/elastic_gate_2d".into());
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay2::default()))?;
-    eprintln!(
+    pfem::errln!(
         "elastic_gate_2d: {} particles, h = {} m, gate in {}, E = {} Pa, ν = {}, end time {} s",
         sim.particles().len(),
         case.spacing,
@@ -80,7 +80,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (t_exp, ux_max) = peak(&ux_exp);
     let (ty_sim, uy_sim) = peak(&uy);
     let (ty_exp, uy_max) = peak(&uy_exp);
-    println!(
+    pfem::outln!(
         "peak ux: {:.2} mm at {:.3} s (experiment {:.2} mm at {:.3} s): {:+.1}%",
         1e3 * ux_sim,
         t_sim,
@@ -88,7 +88,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         t_exp,
         100.0 * (ux_sim / ux_max - 1.0)
     );
-    println!(
+    pfem::outln!(
         "peak uy: {:.2} mm at {:.3} s (experiment {:.2} mm at {:.3} s): {:+.1}%",
         1e3 * uy_sim,
         ty_sim,

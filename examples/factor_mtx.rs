@@ -22,7 +22,7 @@ type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -144,7 +144,7 @@ fn run() -> Res<()> {
         t_so = t_so.min(t.elapsed().as_secs_f64());
     }
     let residual = pfem::assembly::solver::relative_residual(a.as_ref(), &b, &x);
-    println!(
+    pfem::outln!(
         "faer(threads {threads}) n {n} nnz(A) {} nnz(L) {nnz_l} analyse {t_an:.4} s factorise {t_fa:.4} s solve {t_so:.4} s residual {residual:.2e}",
         a.compute_nnz()
     );

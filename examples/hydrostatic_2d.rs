@@ -11,7 +11,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -39,13 +39,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .fold(0.0, f64::max);
     let exact = 1000.0 * G * case.height;
     let p_end = p.last().map(|v| v.1).unwrap_or(f64::NAN);
-    println!(
+    pfem::outln!(
         "bottom pressure {:.1} Pa vs rho g H = {:.1} Pa ({:+.2}%)",
         p_end,
         exact,
         100.0 * (p_end / exact - 1.0)
     );
-    println!(
+    pfem::outln!(
         "largest fluid speed {:.2e} m/s = {:.2e} sqrt(gH)",
         vmax,
         vmax / (G * case.height).sqrt()

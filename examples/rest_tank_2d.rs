@@ -14,7 +14,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -35,7 +35,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let report = |sim: &Simulation<2>| {
         let f = rest_figures(sim, depth);
         let at = sim.particles().x()[f.fastest];
-        println!(
+        pfem::outln!(
             "t = {:6.3} s  steps {:5}  max speed {:.2e} sqrt(gH) at {:.3?}  rms {:.2e}  pressure rms err {:.3} %  volume {:+.4} %",
             sim.time(),
             sim.steps(),

@@ -55,7 +55,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -172,7 +172,7 @@ where
         d(st.solve, st0.solve),
         d(st.rejected, st0.rejected),
     );
-    println!(
+    pfem::outln!(
         "RESULT {n} {:.4e} {:.4e} {:.4e} {:.4e} {:.4e} {:.2} {:.1} {} {:.0} {:.4e}",
         wall / k,
         remesh.1 / k,
@@ -187,7 +187,7 @@ where
         sim.time(),
     );
     // The stages the RESULT line leaves out (s per step).
-    println!(
+    pfem::outln!(
         "STAGES free_surface {:.4e} update {:.4e} observe {:.4e} hooks {:.4e}",
         (st.free_surface.1 - st0.free_surface.1) / k,
         (st.update.1 - st0.update.1) / k,
@@ -304,7 +304,7 @@ fn run() -> Res<()> {
     };
     let mut failed = 0usize;
     let exe = std::env::current_exe()?;
-    println!(
+    pfem::outln!(
         "{:<9} {:>4} {:<7} {:>8} {:>9} {:>8} {:>8} {:>8} {:>8} {:>7} {:>8} {:>5} {:>8}",
         "case",
         "a/n",
@@ -348,7 +348,7 @@ fn run() -> Res<()> {
                     .output()?;
                 let text = String::from_utf8_lossy(&out.stdout);
                 let Some(line) = text.lines().find(|l| l.starts_with("RESULT")) else {
-                    println!(
+                    pfem::outln!(
                         "{case:<9} {n:>4} {s:<7} failed: {}",
                         String::from_utf8_lossy(&out.stderr).trim()
                     );
@@ -360,7 +360,7 @@ fn run() -> Res<()> {
                     .skip(1)
                     .map(|x| x.parse().unwrap_or(f64::NAN))
                     .collect();
-                println!(
+                pfem::outln!(
                     "{case:<9} {n:>4} {s:<7} {:>8} {:>9.4} {:>8.4} {:>8.4} {:>8.4} {:>8.4} {:>7.2} {:>8.1} {:>5} {:>8.0}",
                     v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8], v[9]
                 );
@@ -371,7 +371,7 @@ fn run() -> Res<()> {
             }
         }
         for (s, pts) in &fits {
-            println!(
+            pfem::outln!(
                 "{case}: {s}: time per step grows as N^{:.2} over these sizes",
                 pfem::exact::slope(pts)
             );

@@ -19,7 +19,7 @@ use pfem::prelude::*;
 
 fn main() {
     if let Err(e) = run() {
-        eprintln!("error: {e}");
+        pfem::errln!("error: {e}");
         std::process::exit(1);
     }
 }
@@ -40,7 +40,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         .unwrap_or_else(|| "out/water_column_3d".into());
     let mut sim = args.simulation(case.scene(), Box::new(Delaunay3::default()))?;
     pfem::cases3d::slip_sides(&mut sim);
-    eprintln!(
+    pfem::errln!(
         "water_column_3d: {} particles ({} fluid), h = {} m, depth {} m, end time {} s",
         sim.particles().len(),
         sim.particles()
@@ -60,7 +60,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let front = output.probe_series("front_x");
     for t in [0.1, 0.2, 0.3, 0.4] {
         let x = pfem::cases::interpolate(&front, t);
-        println!(
+        pfem::outln!(
             "t = {t:.1} s: front at x = {x:.3} m (x/a = {:.2})",
             x / case.width
         );

@@ -6,8 +6,11 @@
 //! - [`observe`]: [`StandardOutput`], the observer that writes them during
 //!   a run, and [`Probe`], a named measurement;
 //! - [`loads`]: [`Loads`], the water's pressure at each particle and the
-//!   forces on bodies, and contact forces, read from a `Simulation`.
+//!   forces on bodies, and contact forces, read from a `Simulation`;
+//! - [`console`]: [`outln!`] and [`errln!`], lines for the terminal that a
+//!   closed pipe cannot turn into a panic.
 
+pub mod console;
 pub mod loads;
 pub mod observe;
 pub mod output;

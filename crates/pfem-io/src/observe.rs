@@ -68,7 +68,8 @@ where
     vtu: bool,
     probes: Vec<Probe<D>>,
     /// Interval between probe rows (s), positive and finite (else the
-    /// run's start is refused); every step when `None`.
+    /// run's start is refused), and a row at the end time; every step when
+    /// `None`.
     pub probe_interval: Option<f64>,
     series: Option<VtuSeries>,
     csv: Option<CsvProbe>,
@@ -856,7 +857,7 @@ where
                 summary.fluid_volume_initial, summary.fluid_volume_final
             )
         };
-        println!(
+        crate::outln!(
             "{} steps ({} rejected), simulated {:.4} s, {volume}, wall time {:.1} s",
             summary.steps,
             summary.rejected_steps,
@@ -864,12 +865,12 @@ where
             summary.wall_time_s.get("total").copied().unwrap_or(0.0)
         );
         if change.abs() > VOLUME_WARNING {
-            eprintln!(
+            crate::errln!(
                 "warning: the fluid volume changed by {:+.1}%: the run is likely unresolved (a soft bulk modulus, a coarse spacing, walls squeezing the water); see the README's section \"When a run fails\"",
                 100.0 * change
             );
         }
-        println!("wrote {}", self.dir.display());
+        crate::outln!("wrote {}", self.dir.display());
         Ok(summary)
     }
 
@@ -1141,7 +1142,11 @@ where
             self.write_frame(sim)?;
             self.next_frame = next_after(sim.time() + eps, sim.output_interval());
         }
-        if sim.time() + eps >= self.next_probe {
+        // With an interval, the end time's row too when it falls between
+        // two (rows at 0, 0.3, 0.6, 0.9 of a run to 1 s left out its final
+        // state; session 52's review).
+        let end = self.probe_interval.is_some() && sim.time() + eps >= sim.end_time();
+        if sim.time() + eps >= self.next_probe || end {
             self.record(sim)?;
             if self.probe_interval.is_some() {
                 self.next_probe = next_after(sim.time() + eps, self.probe_interval);

@@ -58,7 +58,7 @@ where
     pfem_core::Const<D>: pfem_core::Dim,
 {
     if let Some(reason) = sim.stopped() {
-        eprintln!(
+        crate::errln!(
             "the run stopped at t = {} s of {} s ({reason}): no comparison is made",
             sim.time(),
             sim.end_time()
@@ -93,11 +93,11 @@ impl Args {
             .collect::<Result<Vec<String>, ArgsError>>()?;
         let asked = |names: [&str; 2]| asks(&args, names);
         if asked(["-h", "--help"]) {
-            println!("{USAGE}");
+            crate::outln!("{USAGE}");
             std::process::exit(0);
         }
         if asked(["--version", "-V"]) {
-            println!("pfem {}", env!("CARGO_PKG_VERSION"));
+            crate::outln!("pfem {}", env!("CARGO_PKG_VERSION"));
             std::process::exit(0);
         }
         let parsed = Self::parse(args)?;

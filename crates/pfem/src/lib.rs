@@ -62,6 +62,9 @@ pub use pfem_driver as driver;
 pub use pfem_geometry as geometry;
 pub use pfem_io as io;
 pub use pfem_io::Loads;
+/// `println!` / `eprintln!` that a closed pipe cannot turn into a panic
+/// (`pfem_io::console`).
+pub use pfem_io::{errln, outln};
 /// The PETSc backend (`petsc` feature): [`petsc::PetscSolver`].
 #[cfg(feature = "petsc")]
 pub use pfem_petsc as petsc;

@@ -1146,6 +1146,24 @@ impl SceneFile {
     where
         Const<D>: Dim,
     {
+        // A given name ends the probe's column names: empty, it named the
+        // columns `p_`, `vx_` (session 52's review).
+        let given = match p.get_ref() {
+            ProbeSpec::BodyDisplacement { name, .. } | ProbeSpec::Force { name, .. } => {
+                name.as_deref()
+            }
+            ProbeSpec::Point { name, .. } => Some(name.as_str()),
+            _ => None,
+        };
+        if given.is_some_and(|n| n.trim().is_empty()) {
+            return Err(self.error(
+                p.span(),
+                format!(
+                    "probe `{}`: `name` must be non-empty (it ends the probe's column names)",
+                    p.get_ref().label()
+                ),
+            ));
+        }
         Ok(match p.get_ref() {
             ProbeSpec::FrontX => {
                 let body = shared.body.clone();

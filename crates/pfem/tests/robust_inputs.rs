@@ -769,6 +769,38 @@ fn a_paddle_with_a_motion_law_runs_from_a_scene_file() {
             "{times:?}"
         );
     }
+    // An end time between two rows gets a row of its own, the run's final
+    // state (session 52's review: rows at 0, 0.3, 0.6, 0.9 of a 1 s run),
+    // and one on a row's time (0.2 above) is written once.
+    let odd = dir.join("odd");
+    let run = Command::new(env!("CARGO_BIN_EXE_pfem"))
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            odd.to_str().unwrap(),
+            "--end-time",
+            "0.12",
+            "--quiet",
+            "--no-vtu",
+            "--probe-interval",
+            "0.05",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let odd_times: Vec<f64> = std::fs::read_to_string(odd.join("probes.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(odd_times.len(), 4, "{odd_times:?}");
+    assert!((odd_times[3] - 0.12).abs() < 1e-9, "{odd_times:?}");
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     for col in [
@@ -1493,4 +1525,91 @@ fn a_failed_step_changes_nothing_the_next_one_reads() {
     assert_eq!(broken.time(), whole.time());
     assert_eq!(broken.particles().x(), whole.particles().x());
     assert_eq!(broken.particles().v(), whole.particles().v());
+}
+
+/// A closed pipe on stdout or stderr (`pfem check f.toml | head -1`, a log
+/// collector that went away) ends `check` and `run` as they would end
+/// otherwise: `println!` panicked on it, so `check` reported an internal
+/// error, a finished run exited with status 1, and a run whose stderr was
+/// closed from the start exited with status 101 before writing anything
+/// (session 52's review).
+#[test]
+fn a_closed_pipe_does_not_turn_a_run_into_a_failure() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-pipe-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("pipe.toml");
+    std::fs::write(
+        &file,
+        r#"name = "pipe"
+dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.05
+
+[run]
+end_time = 0.02
+max_dt = 5e-3
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = { min = [-0.1, -0.05], max = [0.3, 0.0] }
+
+[[body]]
+name = "water"
+kind = "fluid"
+material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
+geometry.box = { min = [0.0, 0.05], max = [0.2, 0.2] }
+"#,
+    )
+    .unwrap();
+    let bin = env!("CARGO_BIN_EXE_pfem");
+    // A pipe whose reading end is closed before the child starts: every
+    // write to it fails (EPIPE), whenever the child writes.
+    let closed = || {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        writer
+    };
+    let f = file.to_str().unwrap();
+    let out = dir.join("out");
+    let o = out.to_str().unwrap();
+    let cases: [(&str, Vec<&str>, bool); 4] = [
+        ("check, stdout closed", vec!["check", f], true),
+        (
+            "run, stdout closed",
+            vec!["run", f, "--out", o, "--overwrite"],
+            true,
+        ),
+        (
+            "run, stderr closed",
+            vec!["run", f, "--out", o, "--overwrite"],
+            false,
+        ),
+        ("--help, stdout closed", vec!["--help"], true),
+    ];
+    for (what, args, stdout_closed) in cases {
+        let _ = std::fs::remove_dir_all(&out);
+        let mut cmd = Command::new(bin);
+        cmd.args(&args);
+        if stdout_closed {
+            cmd.stdout(closed()).stderr(std::process::Stdio::piped());
+        } else {
+            cmd.stderr(closed()).stdout(std::process::Stdio::piped());
+        }
+        let r = cmd.output().unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&r.stdout),
+            String::from_utf8_lossy(&r.stderr)
+        );
+        assert_eq!(r.status.code(), Some(0), "{what}: {text}");
+        assert!(!text.contains("panic"), "{what}: {text}");
+        if args[0] == "run" {
+            let summary = std::fs::read_to_string(out.join("summary.json"))
+                .unwrap_or_else(|e| panic!("{what}: no summary.json ({e})"));
+            assert!(summary.contains("\"finished\""), "{what}: {summary}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

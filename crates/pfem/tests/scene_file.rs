@@ -695,6 +695,19 @@ fn mistakes_that_used_to_run_are_refused() {
         WATER,
     ));
     assert!(why.contains("CSV column"), "{why}");
+    // An empty probe name (it gave columns `p_`, `vx_`; session 52).
+    for probe in [
+        "{ point = { at = [0.1, 0.05], name = \"\" } }",
+        "{ force = { body = \"floor\", name = \" \" } }",
+        "{ body_displacement = { body = \"water\", point = [0.1, 0.1], name = \"\" } }",
+    ] {
+        let why = file_error(&puddle(
+            &format!("probes = [{probe}]"),
+            "end_time = 0.01",
+            WATER,
+        ));
+        assert!(why.contains("`name` must be non-empty"), "{probe}: {why}");
+    }
     // An empty body name.
     let text = puddle("", "end_time = 0.01", WATER).replace("name = \"water\"", "name = \"\"");
     let why = any_error(&text);

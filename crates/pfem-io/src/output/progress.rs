@@ -22,10 +22,10 @@ impl ProgressBar {
         let _ = e.flush();
     }
     fn println(&self, line: &str) {
-        eprintln!("\r{line}");
+        crate::errln!("\r{line}");
     }
     fn finish_with_message(&self, msg: String) {
-        eprintln!("\r{msg}    ");
+        crate::errln!("\r{msg}    ");
     }
 }
 
@@ -128,7 +128,7 @@ impl Progress {
             if now.duration_since(last) >= every {
                 self.log = Some((start, now, every));
                 let done = 100.0 * self.position(t) as f64 / TICKS as f64;
-                eprintln!(
+                crate::errln!(
                     "[{:.0} s] {} ({done:.1} %)",
                     now.duration_since(start).as_secs_f64(),
                     self.message(t, dt)
@@ -158,7 +158,7 @@ impl Progress {
     pub fn println(&self, line: &str) {
         match &self.bar {
             Some(bar) => bar.println(line),
-            None if !self.quiet => eprintln!("{line}"),
+            None if !self.quiet => crate::errln!("{line}"),
             None => {}
         }
     }

@@ -57,7 +57,7 @@ Options of `pfem run`:
                         write DIR/checkpoint.bin every T seconds of simulated time
                         and at the end (atomically; the last one is kept)
   --probe-interval T    a row of probes.csv every T seconds of simulated time
-                        (default: every step). The rows go to probes.csv, none
+                        and at the end time (default: every step). The rows go to probes.csv, none
                         is kept in memory; this thins the file (a note is
                         printed when it would pass 1 GB)
   --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE and
@@ -83,7 +83,7 @@ fn main() -> ExitCode {
         match a.into_string() {
             Ok(a) => args.push(a),
             Err(a) => {
-                eprintln!("error: argument {a:?} is not valid UTF-8");
+                pfem::errln!("error: argument {a:?} is not valid UTF-8");
                 return ExitCode::FAILURE;
             }
         }
@@ -96,11 +96,11 @@ fn main() -> ExitCode {
         Ok(Err(e)) if e == INTERRUPTED => ExitCode::from(130),
         Ok(Err(e)) if e == STOPPED => ExitCode::from(2),
         Ok(Err(e)) => {
-            eprintln!("error: {e}");
+            pfem::errln!("error: {e}");
             ExitCode::FAILURE
         }
         Err(_) => {
-            eprintln!("error: internal error (a panic, see above); please report it");
+            pfem::errln!("error: internal error (a panic, see above); please report it");
             ExitCode::FAILURE
         }
     }
@@ -134,11 +134,11 @@ fn run(args: Vec<String>) -> Result<(), String> {
         return Err(format!("no command given\n\n{HELP}"));
     }
     if args[0] == "help" || pfem::cli::asks(&args, ["--help", "-h"]) {
-        print!("{HELP}\n{}\n{HELP_END}", pfem::cli::USAGE);
+        pfem::io::console::out_part(format_args!("{HELP}\n{}\n{HELP_END}", pfem::cli::USAGE));
         return Ok(());
     }
     if pfem::cli::asks(&args, ["--version", "-V"]) {
-        println!("pfem {}", env!("CARGO_PKG_VERSION"));
+        pfem::outln!("pfem {}", env!("CARGO_PKG_VERSION"));
         return Ok(());
     }
     let command = args[0].as_str();
@@ -313,11 +313,11 @@ where
     } else {
         (steps, why)
     };
-    println!(
+    pfem::outln!(
         "{}: valid {D}D scene `{name}`: {bodies} bodies, {probes} probe columns, end time {t} s",
         file.display()
     );
-    println!(
+    pfem::outln!(
         "  {} particles placed (estimated {:.0}), memory about {:.1} MB of a {:.1} GB budget, about {:.0} steps or more ({why})",
         built.particles.len(),
         estimate.particles,
@@ -335,27 +335,28 @@ where
         .fold(f64::INFINITY, f64::min);
     for m in &built.merges {
         if m.dropped > 0 {
-            println!(
+            pfem::outln!(
                 "  warning: body `{}`: {} particles dropped (within a quarter spacing of an earlier body's particle)",
                 m.body, m.dropped
             );
         }
         if m.duplicates > 0 {
-            println!(
+            pfem::outln!(
                 "  warning: body `{}`: {} particles dropped (within a quarter spacing of another of its own particles)",
                 m.body, m.duplicates
             );
         }
         if m.unmeshed > 0 {
-            println!(
+            pfem::outln!(
                 "  warning: body `{}`: {} particles left out of its mesh (in no element: a corner or a part thinner than a spacing)",
                 m.body, m.unmeshed
             );
         }
         if m.welded > 0 {
-            println!(
+            pfem::outln!(
                 "  body `{}`: {} wall particles replaced by a solid's, which is welded there",
-                m.body, m.welded
+                m.body,
+                m.welded
             );
         }
     }
@@ -366,13 +367,13 @@ where
     let sim = args
         .simulation(again, tessellator)
         .map_err(|e| e.to_string())?;
-    println!(
+    pfem::outln!(
         "  simulation built: {} elements in the first mesh ({} contact)",
         sim.elements().len(),
         sim.elements().n_contact()
     );
     for w in spacing_warnings(&sim, finest_fluid) {
-        println!("  warning: {w}");
+        pfem::outln!("  warning: {w}");
     }
     Ok(())
 }
@@ -618,7 +619,7 @@ where
             ));
         }
     }
-    eprintln!(
+    pfem::errln!(
         "{name}: {D}D, {} particles, h_min = {} m, end time {} s{} -> {}",
         sim.particles().len(),
         sim.h_min(),
@@ -636,7 +637,7 @@ where
     let rows = output.rows_to_come(&sim);
     let bytes = rows * 22.0 * columns as f64;
     if bytes > 1e9 {
-        eprintln!(
+        pfem::errln!(
             "note: probes.csv will hold at least {rows:.0} rows of {columns} values, {:.1} GB or more ({}); --probe-interval thins it",
             bytes / 1e9,
             match probe_interval {
@@ -690,7 +691,7 @@ where
             }
         };
         let words: Vec<String> = again.iter().map(|w| quote(w)).collect();
-        eprintln!(
+        pfem::errln!(
             "{reason}{when}; continue with: pfem {} --out {} --restart {}",
             words.join(" "),
             quote(&out.to_string_lossy()),
@@ -721,7 +722,7 @@ fn install_interrupt(flag: &Arc<AtomicBool>) -> Result<(), String> {
         if f.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
         }
-        eprintln!("\ninterrupt: stopping after this step (again to quit at once)");
+        pfem::errln!("\ninterrupt: stopping after this step (again to quit at once)");
     })
     .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))
 }
