@@ -886,6 +886,46 @@ fn a_solid_welded_to_a_moving_wall_is_refused() {
         StepParams::default()
     )
     .is_ok());
+    // The same law given as a hook to a simulation built with the wall
+    // fixed (session 52's review: the flap stayed put, the paddle passed
+    // 2 cm through it, and the run ended `Ok`): refused at the hook's
+    // start, naming the solid, the wall and the weld.
+    let mut sim = Simulation::new(
+        scene(WallMotion::Fixed),
+        Box::new(Delaunay2::default()),
+        StepParams::default(),
+    )
+    .unwrap();
+    sim.add_hook(Box::new(PrescribedMotion::new(
+        "paddle",
+        std::sync::Arc::new(law),
+    )));
+    let err = sim.step().unwrap_err().to_string();
+    assert!(
+        err.contains("solid `flap` is welded to wall `paddle`") && err.contains("moving wall"),
+        "{err}"
+    );
+    // A wall no solid is welded to takes the hook and moves.
+    let apart = Scene::<2>::new("paddle alone")
+        .settings(RunSettings {
+            end_time: 0.01,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall("paddle", boxed(0.0, 0.0, 0.02, 0.3), h, WallMotion::Fixed)
+        .fluid(
+            "water",
+            Box::new(Newtonian::water()),
+            boxed(0.5, 0.0, 0.6, 0.1),
+            h,
+        );
+    let mut sim =
+        Simulation::new(apart, Box::new(Delaunay2::default()), StepParams::default()).unwrap();
+    sim.add_hook(Box::new(PrescribedMotion::new(
+        "paddle",
+        std::sync::Arc::new(law),
+    )));
+    sim.run(&mut []).unwrap();
 }
 
 /// Particles pushed by hand or by a hook (session 42; until then

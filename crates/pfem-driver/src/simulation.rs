@@ -404,6 +404,9 @@ where
     /// Which bodies are walls' or solids' (a fluid particle may not join
     /// one): fixed for the run, since walls and solids never come or go.
     fixed_body: Vec<bool>,
+    /// Solid particles welded to a wall, with the wall's body
+    /// (`pfem_scene::Built::welds`; walls and solids keep their indices).
+    welds: Vec<(u32, u32)>,
     hooks: Vec<Box<dyn Hook<D>>>,
     /// External forces the hooks added for the coming attempt (N; empty
     /// for none): `HookContext::add_force`.
@@ -611,6 +614,7 @@ where
             laws,
             forces,
             free_solids,
+            welds,
             in_contact,
             friction,
             contact_stiffness,
@@ -732,6 +736,7 @@ where
             materials,
             body_names,
             fixed_body,
+            welds,
             hooks,
             external_force: Vec::new(),
             started: 0,
@@ -1168,6 +1173,7 @@ where
                 materials: &self.materials,
                 body_names: &self.body_names,
                 fixed_body: &self.fixed_body,
+                welds: &self.welds,
                 gravity: &mut self.gravity,
                 stop: &mut self.stop,
                 external_force: &mut self.external_force,

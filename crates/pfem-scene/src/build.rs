@@ -162,6 +162,11 @@ where
     pub forces: Vec<crate::AppliedLoad<D>>,
     /// Per body: a free solid (no clamp, not welded to a wall).
     pub free_solids: Vec<bool>,
+    /// Solid particles welded to a wall (they replaced a wall particle and
+    /// take its velocity): (particle, the wall's body index). A hook that
+    /// moves that wall would leave them where they started
+    /// (`PrescribedMotion` refuses it, as the scene refuses a motion law).
+    pub welds: Vec<(u32, u32)>,
     /// Per body: takes part in contact (the free solids, and every solid
     /// with [`crate::ContactSettings::clamped`]).
     pub in_contact: Vec<bool>,
@@ -263,6 +268,8 @@ where
         });
         // Wall particles replaced by a solid's (removed after placement).
         let mut replaced: Vec<usize> = Vec::new();
+        // (solid particle, wall body) of each weld, renumbered with them.
+        let mut weld_walls: Vec<(usize, u32)> = Vec::new();
         let mut is_replaced = std::collections::HashSet::new();
         // The walls that are boxes, for the fluid-inside-a-wall check
         // after placement: (body, interior shrunk by half its spacing).
@@ -386,7 +393,7 @@ where
             // prescribes their velocity).
             let mut welds: Vec<usize> = Vec::new();
             for (li, p) in pts.iter().enumerate() {
-                let mut weld: Option<Vector<D>> = None;
+                let mut weld: Option<(Vector<D>, u32)> = None;
                 if let Some(j) = grid.find(p, tol, particles.x()) {
                     match (b.kind, particles.kind()[j]) {
                         // A wall driven by a motion law moves only its own
@@ -412,7 +419,7 @@ where
                         // welded to the wall: it moves with the wall.
                         (ParticleKind::Solid, ParticleKind::Wall) if is_replaced.insert(j) => {
                             replaced.push(j);
-                            weld = Some(particles.v[j]);
+                            weld = Some((particles.v[j], particles.body()[j]));
                             welded += 1;
                         }
                         // A solid keeps every particle it places (its own
@@ -475,9 +482,10 @@ where
                 grid.insert(p, i);
                 if b.kind == ParticleKind::Wall {
                     fixed.push((i, wall_velocity));
-                } else if let Some(w) = weld {
+                } else if let Some((w, wall)) = weld {
                     fixed.push((i, w));
                     welds.push(i);
+                    weld_walls.push((i, wall));
                 }
             }
             // A body that places no particle, or a clamp that holds none of
@@ -602,6 +610,9 @@ where
             }
             fixed.retain(|(i, _)| keep(i));
             for (i, _) in &mut fixed {
+                *i = new_index[*i] as usize;
+            }
+            for (i, _) in &mut weld_walls {
                 *i = new_index[*i] as usize;
             }
             let shift = replaced.len();
@@ -853,6 +864,7 @@ where
         }
         Ok(Built {
             free_solids,
+            welds: weld_walls.into_iter().map(|(i, w)| (i as u32, w)).collect(),
             in_contact,
             friction,
             contact_stiffness,

@@ -171,6 +171,8 @@ where
     pub(crate) body_names: &'a [String],
     /// Which bodies are walls' or solids' (`Simulation`'s, fixed for the run).
     pub(crate) fixed_body: &'a [bool],
+    /// Solid particles welded to a wall, with the wall's body.
+    pub(crate) welds: &'a [(u32, u32)],
     pub(crate) gravity: &'a mut Option<Vector<D>>,
     pub(crate) stop: &'a mut Option<String>,
     pub(crate) external_force: &'a mut Vec<Vector<D>>,
@@ -329,6 +331,16 @@ where
             .ok_or_else(|| RunError::UnknownBody {
                 name: name.to_string(),
             })
+    }
+
+    /// The solid particles welded to wall `body` (a solid particle placed
+    /// on a wall's replaces it and takes its velocity): a hook that moves
+    /// the wall must move them too, or refuse (`PrescribedMotion` refuses).
+    pub fn welded_to(&self, body: u32) -> impl Iterator<Item = usize> + '_ {
+        self.welds
+            .iter()
+            .filter(move |&&(_, w)| w == body)
+            .map(|&(i, _)| i as usize)
     }
 
     /// Body names, by index.

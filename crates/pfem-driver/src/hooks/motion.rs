@@ -78,6 +78,24 @@ where
                 why: format!("body `{}` is not a wall", self.body),
             });
         }
+        // A solid welded to the wall would stay where it started while the
+        // wall moved through it (a law moves the wall's own particles): the
+        // scene refuses a motion law on such a wall, and a hook added to
+        // the simulation is refused the same way (session 52's review).
+        if let Some(i) = ctx.welded_to(id).next() {
+            let solid = ctx
+                .body_names()
+                .get(ctx.particles().body()[i] as usize)
+                .cloned()
+                .unwrap_or_default();
+            return Err(RunError::Hook {
+                hook: "prescribed motion".into(),
+                why: format!(
+                    "solid `{solid}` is welded to wall `{}` (its particle {i} lies on the wall's lattice): a solid cannot be welded to a moving wall (it would stay where it started); leave a spacing between them, or clamp the solid",
+                    self.body
+                ),
+            });
+        }
         let t = ctx.time();
         let p = ctx.particles_mut();
         for &i in &self.particles {
