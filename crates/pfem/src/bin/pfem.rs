@@ -57,9 +57,9 @@ Options of `pfem run`:
                         write DIR/checkpoint.bin every T seconds of simulated time
                         and at the end (atomically; the last one is kept)
   --probe-interval T    a row of probes.csv every T seconds of simulated time
-                        and at the end time (default: every step). The rows go to probes.csv, none
-                        is kept in memory; this thins the file (a note is
-                        printed when it would pass 1 GB)
+                        and at the end time (default: every step). The rows
+                        go to probes.csv, none is kept in memory; this thins
+                        the file (a note is printed when it would pass 1 GB)
   --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE and
                         options, other ones refused; DIR its output folder, by
                         default the checkpoint's; another folder that is not
