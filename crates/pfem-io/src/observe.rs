@@ -1144,8 +1144,10 @@ where
         }
         // With an interval, the end time's row too when it falls between
         // two (rows at 0, 0.3, 0.6, 0.9 of a run to 1 s left out its final
-        // state; session 52's review).
-        let end = self.probe_interval.is_some() && sim.time() + eps >= sim.end_time();
+        // state; session 52's review): on the step `run` ends on alone
+        // (`reached_end_time`, a relative 10⁻¹²; with `eps`, two steps
+        // shorter than 10⁻⁹ of the end time could each write one).
+        let end = self.probe_interval.is_some() && sim.reached_end_time();
         if sim.time() + eps >= self.next_probe || end {
             self.record(sim)?;
             if self.probe_interval.is_some() {

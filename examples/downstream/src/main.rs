@@ -14,7 +14,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let j2 = J2Plastic::new(rho, e, nu, 2.5e4, 1.0e6)?;
     let (plastic, sim) = cantilever(Box::new(j2), Some(monitor))?;
     let r = record.lock().map_err(|_| "poisoned")?;
-    println!(
+    pfem::outln!(
         "cantilever tip: elastic {:.3} mm, J2 (σy = 25 kPa, H = 1 MPa) {:.3} mm; {} of {} elements yielded, largest plastic strain {:.3e}; {} steps",
         1e3 * elastic,
         1e3 * plastic,
