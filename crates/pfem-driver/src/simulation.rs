@@ -457,6 +457,11 @@ where
     /// ([`Simulation::initialize_acceleration`]): a first step under
     /// another one (a hook's) sets them again.
     accelerated_with: Option<Vector<D>>,
+    /// Before the first step, a hook's start set the gravity at `t₀`
+    /// (`BodyForceRamp`'s, zero at the ramp's start) and the accelerations
+    /// were set with it: the first step does not set them again with its
+    /// end-of-step gravity.
+    start_gravity: bool,
     stepper: Stepper<D>,
     contact: ContactSetup<D>,
 }
@@ -770,6 +775,7 @@ where
             meshed_at: Vec::new(),
             start_check: false,
             accelerated_with: None,
+            start_gravity: false,
             stepper: Stepper {
                 tessellator,
                 integrator: Integrator::new(params),
@@ -1136,6 +1142,15 @@ where
         if first < self.hooks.len() {
             self.started = self.hooks.len();
             self.run_hooks_from(HookPoint::Start, first)?;
+            // A gravity a hook's start set before the first step is the
+            // load at `t₀`: the accelerations are set with it now (a
+            // ramp's zero), not with the first step's end-of-step gravity
+            // (a ramp from zero kept `½ k Δt²` of velocity too much, for
+            // good: session 52's review).
+            if self.clock.steps == 0 && self.gravity != self.accelerated_with {
+                self.accelerations(false)?;
+                self.start_gravity = true;
+            }
         }
         Ok(())
     }
@@ -2031,9 +2046,11 @@ where
         // the hooks set it then): exact for a constant load; a load
         // ramped from zero keeps about `½ k Δt²` of momentum too much.
         // The same for a gravity a hook set before the first step (a scene
-        // with none, switched on by a hook: session 42).
+        // with none, switched on by a hook: session 42), unless a hook's
+        // start gave the gravity at `t₀` (`start_gravity`, session 52).
         if self.clock.steps == 0
-            && (!self.external_force.is_empty() || self.gravity != self.accelerated_with)
+            && (!self.external_force.is_empty()
+                || (self.gravity != self.accelerated_with && !self.start_gravity))
         {
             self.accelerations(false)?;
         }

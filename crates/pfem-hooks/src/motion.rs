@@ -45,6 +45,15 @@ where
                 reason: "must be positive and finite, with a finite target",
             });
         }
+        // The body force at the start, `t₀ / T` of the target (zero from
+        // rest): the first accelerations are set with it, not with the
+        // first step's end-of-step value (which left `½ k Δt²` of velocity
+        // too much; session 52). (Not at a restart, whose gravity is the
+        // checkpoint's.)
+        if ctx.steps() == 0 {
+            let s = (ctx.time() / self.duration).min(1.0);
+            ctx.set_gravity(Some(self.target * s))?;
+        }
         Ok(())
     }
 
