@@ -660,6 +660,53 @@ fn a_free_fall_under_a_ramped_body_force_follows_its_closed_form() {
     }
 }
 
+/// A run with a body-force ramp restarts from a checkpoint taken on the
+/// ramp and continues as the uninterrupted run, bit for bit: the ramp's
+/// start gives its gravity before the first step only (session 52), and
+/// a restart keeps the checkpoint's.
+#[test]
+fn a_ramped_run_restarts_from_a_checkpoint_on_its_ramp() {
+    let h = 0.025;
+    let build = || {
+        let scene = Scene::<2>::new("ramped restart")
+            .settings(RunSettings {
+                end_time: 0.1,
+                max_dt: 5e-3,
+                output_interval: None,
+                ..Default::default()
+            })
+            .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                boxed(0.0, h, 0.1, 0.1),
+                h,
+            );
+        let mut sim = sim2(scene, StepParams::default());
+        sim.add_hook(Box::new(BodyForceRamp {
+            target: Vector::<2>::new(0.0, -G),
+            duration: 0.1,
+        }));
+        sim
+    };
+    let mut whole = build();
+    let mut ck = None;
+    while whole.time() < whole.end_time() - 1e-12 {
+        whole.step().unwrap();
+        if whole.steps() == 6 {
+            ck = Some(whole.checkpoint().encode());
+        }
+    }
+    let mut restarted = build();
+    restarted
+        .restore(&pfem::checkpoint::Checkpoint::decode(&ck.unwrap()).unwrap())
+        .unwrap();
+    restarted.run(&mut []).unwrap();
+    assert_eq!(restarted.steps(), whole.steps());
+    assert_eq!(restarted.particles().x(), whole.particles().x());
+    assert_eq!(restarted.gravity(), whole.gravity());
+}
+
 /// A hook stops the run (`HookContext::stop`): `run` returns `Ok`, the
 /// reason is kept, and no step runs after it. A body-force ramp and a
 /// closure hook see the time they are given, and the alpha shape's water
