@@ -1124,6 +1124,13 @@ where
 
     /// `Hook::start` of the hooks that have not had it yet.
     fn start_hooks(&mut self) -> Result<(), RunError> {
+        self.start_hooks_then(true)
+    }
+
+    /// [`Simulation::start_hooks`]; `accelerations`: a gravity a hook's
+    /// start set before the first step sets the accelerations (not when
+    /// `restore` starts the hooks on the fresh state it then replaces).
+    fn start_hooks_then(&mut self, accelerations: bool) -> Result<(), RunError> {
         // Two volume corrections (the driver's own and one added, e.g.
         // `with_target_volume`) would pull the free surface to two
         // targets, out and back every step.
@@ -1147,7 +1154,7 @@ where
             // ramp's zero), not with the first step's end-of-step gravity
             // (a ramp from zero kept `½ k Δt²` of velocity too much, for
             // good: session 52's review).
-            if self.clock.steps == 0 && self.gravity != self.accelerated_with {
+            if accelerations && self.clock.steps == 0 && self.gravity != self.accelerated_with {
                 self.accelerations(false)?;
                 self.start_gravity = true;
             }
@@ -2971,7 +2978,7 @@ where
         // restored run's first step differed, a review).
         let start_at_first_step = clock.steps == 0;
         if !start_at_first_step {
-            self.start_hooks()?;
+            self.start_hooks_then(false)?;
         }
         let before = Backup {
             particles: self.particles.clone(),
