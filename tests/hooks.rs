@@ -666,22 +666,13 @@ fn a_free_fall_under_a_ramped_body_force_follows_its_closed_form() {
 /// a restart keeps the checkpoint's.
 #[test]
 fn a_ramped_run_restarts_from_a_checkpoint_on_its_ramp() {
-    let h = 0.025;
     let build = || {
-        let scene = Scene::<2>::new("ramped restart")
-            .settings(RunSettings {
-                end_time: 0.1,
-                max_dt: 5e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall("floor", boxed(-0.1, -h, 0.3, 0.0), h, WallMotion::Fixed)
-            .fluid(
-                "water",
-                Box::new(Newtonian::water()),
-                boxed(0.0, h, 0.1, 0.1),
-                h,
-            );
+        let scene = small_tank("ramped restart").settings(RunSettings {
+            end_time: 0.1,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        });
         let mut sim = sim2(scene, StepParams::default());
         sim.add_hook(Box::new(BodyForceRamp {
             target: Vector::<2>::new(0.0, -G),

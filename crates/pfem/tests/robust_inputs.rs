@@ -41,6 +41,34 @@ fn build(scene: Scene<2>) -> Result<Simulation<2>, SceneError> {
     Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
 }
 
+/// The scene file of water on a floor (spacing 0.05 m) for the binary's
+/// tests: `run` the `[run]` table's lines, `water` the water body's lines
+/// before its material, `bottom` the height of its box's base (0: its
+/// bottom row falls on the floor's top row and is dropped).
+fn puddle_file(name: &str, run: &str, water: &str, bottom: f64) -> String {
+    format!(
+        r#"name = "{name}"
+dimension = 2
+gravity = [0.0, -9.81]
+spacing = 0.05
+
+[run]
+{run}
+
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = {{ min = [-0.1, -0.05], max = [0.3, 0.0] }}
+
+[[body]]
+name = "water"
+kind = "fluid"
+{water}material.newtonian = {{ density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }}
+geometry.box = {{ min = [0.0, {bottom:?}], max = [0.2, 0.2] }}
+"#
+    )
+}
+
 /// Scene names become file names: a path, a parent reference or a hidden
 /// name is refused before anything is written.
 #[test]
@@ -339,26 +367,7 @@ fn check_reports_size_and_merges_and_validates_options() {
     // The water's bottom row falls on the floor's top row: dropped.
     std::fs::write(
         &file,
-        r#"name = "overlap"
-dimension = 2
-gravity = [0.0, -9.81]
-spacing = 0.05
-
-[run]
-end_time = 0.1
-max_dt = 5e-3
-
-[[body]]
-name = "floor"
-kind = "wall"
-geometry.box = { min = [-0.1, -0.05], max = [0.3, 0.0] }
-
-[[body]]
-name = "water"
-kind = "fluid"
-material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
-geometry.box = { min = [0.0, 0.0], max = [0.2, 0.2] }
-"#,
+        puddle_file("overlap", "end_time = 0.1\nmax_dt = 5e-3", "", 0.0),
     )
     .unwrap();
     let bin = env!("CARGO_BIN_EXE_pfem");
@@ -973,27 +982,11 @@ fn validation_errors_name_their_body_line() {
     let dir = std::env::temp_dir().join(format!("pfem-test-line-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("coarse.toml");
-    let text = r#"name = "coarse"
-dimension = 2
-gravity = [0.0, -9.81]
-spacing = 0.05
-
-[run]
-end_time = 0.1
-
-[[body]]
-name = "floor"
-kind = "wall"
-geometry.box = { min = [-0.1, -0.05], max = [0.3, 0.0] }
-
-[[body]]
-name = "water"
-kind = "fluid"
-spacing = 0.5
-material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
-geometry.box = { min = [0.0, 0.05], max = [0.2, 0.2] }
-"#;
-    std::fs::write(&file, text).unwrap();
+    std::fs::write(
+        &file,
+        puddle_file("coarse", "end_time = 0.1", "spacing = 0.5\n", 0.05),
+    )
+    .unwrap();
     let typed = pfem::scene_file::SceneFile::load(&file, None, None).unwrap_err();
     assert!(matches!(typed, SceneError::SpacingLargerThanBody { .. }));
     let out = Command::new(env!("CARGO_BIN_EXE_pfem"))
@@ -1541,26 +1534,7 @@ fn a_closed_pipe_does_not_turn_a_run_into_a_failure() {
     let file = dir.join("pipe.toml");
     std::fs::write(
         &file,
-        r#"name = "pipe"
-dimension = 2
-gravity = [0.0, -9.81]
-spacing = 0.05
-
-[run]
-end_time = 0.02
-max_dt = 5e-3
-
-[[body]]
-name = "floor"
-kind = "wall"
-geometry.box = { min = [-0.1, -0.05], max = [0.3, 0.0] }
-
-[[body]]
-name = "water"
-kind = "fluid"
-material.newtonian = { density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e9 }
-geometry.box = { min = [0.0, 0.05], max = [0.2, 0.2] }
-"#,
+        puddle_file("pipe", "end_time = 0.02\nmax_dt = 5e-3", "", 0.05),
     )
     .unwrap();
     let bin = env!("CARGO_BIN_EXE_pfem");
