@@ -127,7 +127,7 @@ pub enum SceneError {
         limit: f64,
     },
     /// The scene would need more memory than the budget.
-    #[error("the scene has about {particles:.3e} particles and would need about {bytes:.2e} bytes, over the memory budget of {budget:.2e} bytes (coarsen the spacing, or raise the budget)")]
+    #[error("the scene has about {particles:.3e} particles and would need about {bytes:.2e} bytes, over the memory budget of {budget:.2e} bytes (coarsen the spacing, or raise the budget){largest}")]
     TooLarge {
         /// Estimated particles.
         particles: f64,
@@ -135,6 +135,10 @@ pub enum SceneError {
         bytes: f64,
         /// The budget (bytes).
         budget: f64,
+        /// The body that places the most particles, with its count,
+        /// spacing and extent (`"; the largest, body …"`), or empty where
+        /// one lattice is refused.
+        largest: String,
     },
     /// A setting the scene's dimension does not support (yet).
     #[error("setting `{setting}` is not supported in {dim}D: {why}")]

@@ -39,6 +39,7 @@ where
             particles: count,
             bytes,
             budget,
+            largest: String::new(),
         });
     }
     Ok(())
@@ -155,6 +156,7 @@ where
             particles: pts.len() as f64,
             bytes: indices * 4.0,
             budget,
+            largest: String::new(),
         });
     }
     if pts.len() > u32::MAX as usize {
@@ -162,6 +164,7 @@ where
             particles: pts.len() as f64,
             bytes: (pts.len() * std::mem::size_of::<Point<D>>()) as f64,
             budget: (u32::MAX as usize * std::mem::size_of::<Point<D>>()) as f64,
+            largest: String::new(),
         });
     }
     let n = counts::<D>(min, max, h);

@@ -742,39 +742,42 @@ where
         self.estimate_up_to(f64::INFINITY)
     }
 
+    /// The particles body `b` is estimated to place (its geometry's
+    /// measure over its lattice cell), as [`Scene::estimate`] counts them.
+    fn body_particles(b: &Body<D>) -> f64 {
+        let h = b.spacing;
+        match &b.geometry {
+            Geometry::Box { min, max } => (0..D)
+                .map(|k| ((max[k] - min[k]) / h).round().max(0.0) + 1.0)
+                .product::<f64>(),
+            Geometry::Ball { radius, .. } => {
+                let r = radius / h + 1.0;
+                if D == 2 {
+                    std::f64::consts::PI * r * r
+                } else {
+                    4.0 / 3.0 * std::f64::consts::PI * r * r * r
+                }
+            }
+            Geometry::Cylinder { radius, height, .. } => {
+                let r = radius / h + 1.0;
+                std::f64::consts::PI * r * r * (height / h + 1.0)
+            }
+            Geometry::Particles(p) => p.len() as f64,
+            // The enclosed measure over a lattice cell, plus a layer.
+            Geometry::Surface(s) => {
+                let (lo, hi) = s.bounds();
+                let cells: f64 = (0..D).map(|k| (hi[k] - lo[k]) / h + 1.0).product();
+                cells.min(s.enclosed_measure() / h.powi(D as i32) * 1.5 + 8.0)
+            }
+        }
+    }
+
     /// [`Scene::estimate`], its count of the surfaces' fill work stopped
     /// once the bytes exceed `budget` (the estimate is then above `budget`,
     /// not exact): the particles are counted first, the fill work, whose
     /// count costs a step a slab of lattice lines, after.
     fn estimate_up_to(&self, budget: f64) -> Estimate {
-        let mut particles = 0.0;
-        for b in &self.bodies {
-            let h = b.spacing;
-            particles += match &b.geometry {
-                Geometry::Box { min, max } => (0..D)
-                    .map(|k| ((max[k] - min[k]) / h).round().max(0.0) + 1.0)
-                    .product::<f64>(),
-                Geometry::Ball { radius, .. } => {
-                    let r = radius / h + 1.0;
-                    if D == 2 {
-                        std::f64::consts::PI * r * r
-                    } else {
-                        4.0 / 3.0 * std::f64::consts::PI * r * r * r
-                    }
-                }
-                Geometry::Cylinder { radius, height, .. } => {
-                    let r = radius / h + 1.0;
-                    std::f64::consts::PI * r * r * (height / h + 1.0)
-                }
-                Geometry::Particles(p) => p.len() as f64,
-                // The enclosed measure over a lattice cell, plus a layer.
-                Geometry::Surface(s) => {
-                    let (lo, hi) = s.bounds();
-                    let cells: f64 = (0..D).map(|k| (hi[k] - lo[k]) / h + 1.0).product();
-                    cells.min(s.enclosed_measure() / h.powi(D as i32) * 1.5 + 8.0)
-                }
-            };
-        }
+        let particles: f64 = self.bodies.iter().map(Self::body_particles).sum();
         let per_particle = if D == 2 {
             BYTES_PER_PARTICLE_2D
         } else {
@@ -792,6 +795,32 @@ where
             }
         }
         Estimate { particles, bytes }
+    }
+
+    /// The body with the most estimated particles, named with its count,
+    /// spacing and extent, for [`SceneError::TooLarge`]: a model in
+    /// millimetres read as metres (an STL without `scale`) was refused
+    /// naming no body (a review of session 53).
+    fn largest_body(&self) -> String {
+        let Some(b) = self
+            .bodies
+            .iter()
+            .max_by(|a, b| Self::body_particles(a).total_cmp(&Self::body_particles(b)))
+        else {
+            return String::new();
+        };
+        let (lo, hi) = b.geometry.bounds();
+        let extent: Vec<String> = (0..D).map(|k| format!("{:.3e}", hi[k] - lo[k])).collect();
+        let mm = matches!(b.geometry, Geometry::Surface(_))
+            .then_some("; a surface in millimetres needs `scale = 0.001`")
+            .unwrap_or("");
+        format!(
+            "; the largest, body `{}`: about {:.3e} particles at spacing {:e} m over {} m{mm}",
+            b.name,
+            Self::body_particles(b),
+            b.spacing,
+            extent.join(" × ")
+        )
     }
 
     /// [`Scene::validate`], then refuses a scene whose
@@ -814,6 +843,7 @@ where
                 particles: e.particles,
                 bytes: e.bytes,
                 budget,
+                largest: self.largest_body(),
             });
         }
         Ok(e)

@@ -229,6 +229,24 @@ where
         {
             return Err("a vertex is not finite".into());
         }
+        if D == 3 {
+            // A triangle given twice (an exporter's repeat) closes no
+            // hole and opens none, but it left three edges shared by an
+            // odd count of triangles, named as a hole (a review of session
+            // 53); with the winding reversed it passed.
+            let mut seen: HashMap<[u32; 3], usize> = HashMap::new();
+            for (t, f) in self.facets.chunks_exact(3).enumerate() {
+                let mut key = [f[0], f[1], f[2]];
+                key.sort_unstable();
+                if let Some(first) = seen.insert(key, t) {
+                    return Err(format!(
+                        "triangle {} repeats triangle {} (the same three vertices): remove the repeat",
+                        t + 1,
+                        first + 1
+                    ));
+                }
+            }
+        }
         let mut count: HashMap<(u32, u32), usize> = HashMap::new();
         for f in self.facets.chunks_exact(D) {
             if (0..D).any(|a| (a + 1..D).any(|b| f[a] == f[b])) {
@@ -1043,6 +1061,24 @@ mod tests {
         let mut c = cube(1.0);
         c.facets[0] = 99;
         assert!(c.check().is_err());
+        // A triangle given twice is named as the repeat it is, whichever
+        // its winding (it was "not closed", or accepted reversed).
+        for reversed in [false, true] {
+            let mut c = cube(1.0);
+            let mut t = [c.facets[0], c.facets[1], c.facets[2]];
+            if reversed {
+                t.swap(1, 2);
+            }
+            c.facets.extend_from_slice(&t);
+            let n = c.facets.len() / 3;
+            let why = c.check().unwrap_err();
+            assert_eq!(
+                why,
+                format!(
+                    "triangle {n} repeats triangle 1 (the same three vertices): remove the repeat"
+                )
+            );
+        }
         let two =
             ClosedSurface::polygon(vec![Point::<2>::new(0.0, 0.0), Point::<2>::new(1.0, 0.0)]);
         assert!(two.check().is_err());

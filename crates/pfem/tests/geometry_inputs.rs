@@ -146,6 +146,15 @@ fn bad_geometry_input_is_a_typed_error_with_its_line() {
         format!("{}endsolid wedge\n", &stl[..cut]),
     )
     .unwrap();
+    // The closed wedge with its first triangle given twice.
+    let first = stl.find("  facet").unwrap();
+    let end = first + stl[first..].find("endfacet").unwrap() + "endfacet\n".len();
+    std::fs::write(
+        dir.join("dup.stl"),
+        format!("{}{}", &stl[..end], &stl[first..]),
+    )
+    .unwrap();
+    std::fs::write(dir.join("wedge.stl"), &stl).unwrap();
     let scene = |geometry: &str, dim: u32| {
         format!(
             "name = \"bad\"\ndimension = {dim}\nspacing = 0.02\n[[body]]\nname = \"w\"\nkind = \"wall\"\n{geometry}\n"
@@ -170,6 +179,10 @@ fn bad_geometry_input_is_a_typed_error_with_its_line() {
         ),
         (scene("geometry.stl = { file = \"open.stl\" }", 2), "is 3D"),
         (
+            scene("geometry.stl = { file = \"dup.stl\", scale = 0.001 }", 3),
+            "triangle 2 repeats triangle 1",
+        ),
+        (
             scene("geometry.polygon = [[0.0, 0.0], [1.0, 0.0]]", 2),
             "at least",
         ),
@@ -187,6 +200,21 @@ fn bad_geometry_input_is_a_typed_error_with_its_line() {
         assert!(err.contains(expect), "case {i}: {err}");
         assert!(err.contains("line "), "case {i} names no line: {err}");
     }
+    // The wedge in millimetres read as metres (no `scale`): refused by
+    // the memory budget, naming the body and the likely cause (it named
+    // neither, a review of session 53).
+    let path = dir.join("mm.toml");
+    std::fs::write(&path, scene("geometry.stl = { file = \"wedge.stl\" }", 3)).unwrap();
+    let o = Command::new(PFEM)
+        .args(["check", &path.display().to_string()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    println!("millimetres: {}", err.trim());
+    assert_eq!(o.status.code(), Some(1));
+    assert!(err.contains("memory budget"), "{err}");
+    assert!(err.contains("body `w`"), "{err}");
+    assert!(err.contains("`scale = 0.001`"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
