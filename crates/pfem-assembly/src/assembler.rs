@@ -209,9 +209,10 @@ where
 }
 
 /// The 3D stabilised pressure increments, `(I + L̃) q = C V − o`, are
-/// found by multigrid-preconditioned CG from this many rows (the 3D
-/// stabilised system's `block::MULTIGRID_FROM`), by the sparse factor below.
-const INCREMENT_MULTIGRID_FROM: usize = crate::block::MULTIGRID_FROM[1];
+/// found by multigrid-preconditioned CG from this many rows, by the sparse
+/// factor below (the 3D stabilised system's `block::MULTIGRID_FROM` until
+/// session 53, which lowered that one alone).
+const INCREMENT_MULTIGRID_FROM: usize = 2_000;
 
 /// A multigrid hierarchy of the stabilised increments' `I + L̃` with what
 /// carrying it to the next pattern needs ([`Assembler`]'s `inc_amg`).

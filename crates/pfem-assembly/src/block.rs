@@ -1279,8 +1279,12 @@ const NAME: &str = "block-split iterative";
 /// on the running stabilised 2D dam break and 3D water column
 /// (`docs/benchmarks.md`, session 20: with GMRES, multigrid was faster
 /// from 800 rows in 2D, and in 3D at 343, 1 728, 2 744 and 5 184 rows but
-/// not at 1 000). It was 100 000 and 4 000 with MINRES (session 18).
-pub const MULTIGRID_FROM: [usize; 2] = [1_000, 2_000];
+/// not at 1 000). It was 100 000 and 4 000 with MINRES (session 18), and
+/// 2 000 in 3D until session 53, when the stabilised 3D water column
+/// solved 2.6, 3.0 and 2.9 times faster by multigrid than by the
+/// saddle-point `L D Lᵀ` at 150, 452 and 1 000 fluid particles (its 3D
+/// fill grows faster than the multigrid's work).
+pub const MULTIGRID_FROM: [usize; 2] = [1_000, 100];
 
 /// Default [`BlockSolver::carry_steps`]: on the running stabilised 3D
 /// water column (31k particles, 20 steps) a hierarchy carried over 19

@@ -64,6 +64,18 @@ fn the_stl_wedge_scene_runs_end_to_end_with_force_and_point_probes() {
         rows.len()
     );
     assert!(peak > 1.0, "peak force {peak} N");
+    // The gauge in front of the wedge reads a pressure of the water's
+    // scale (ρ g H = 2.35 kPa for the 0.24 m column) where it is wet (NaN
+    // where dry): the scene asks for the pressure stabilisation, without
+    // which it read +166, −320, +48 and +244 kPa on consecutive steps
+    // (session 53's review).
+    let gauge = rows
+        .iter()
+        .map(|r| r[4])
+        .filter(|p| p.is_finite())
+        .fold(0.0f64, |m, p| m.max(p.abs()));
+    println!("largest gauge pressure {gauge:.0} Pa");
+    assert!(gauge > 0.0 && gauge < 5e3, "gauge pressure {gauge} Pa");
     assert!(rows
         .iter()
         .all(|r| r[1..4].iter().chain([&r[8]]).all(|v| v.is_finite())));
