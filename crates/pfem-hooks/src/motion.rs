@@ -2,6 +2,7 @@
 
 use pfem_core::{Const, Dim, Vector};
 
+use pfem_driver::checkpoint::{CheckpointError, Decoder, Encoder};
 use pfem_driver::hooks::{Hook, HookContext};
 use pfem_driver::RunError;
 
@@ -60,6 +61,28 @@ where
     fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let s = ((ctx.time() + ctx.dt()) / self.duration).min(1.0);
         ctx.set_gravity(Some(self.target * s))?;
+        Ok(())
+    }
+
+    /// The ramp itself (its target and duration, as `Debug` writes them,
+    /// exactly): a restart under another ramp, or with the ramp removed
+    /// or added, is refused. The ramp saved nothing until session 53, and
+    /// such a restart ran on, the checkpoint's gravity kept for good (a
+    /// removed ramp) or ramped to another target (a review).
+    fn save_state(&self, out: &mut Encoder) {
+        out.str(&format!("{self:?}"));
+    }
+
+    fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
+        let saved = from.str()?;
+        let now = format!("{self:?}");
+        if saved != now {
+            return Err(CheckpointError::Mismatch {
+                what: "the body-force ramp",
+                checkpoint: saved.to_string(),
+                simulation: now,
+            });
+        }
         Ok(())
     }
 }
