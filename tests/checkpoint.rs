@@ -579,6 +579,17 @@ fn a_restart_under_another_alpha_solver_motion_law_or_hook_is_refused() {
     let mut scene = case().scene();
     scene.settings.alpha = 1.5;
     refused(&mut sim2(scene), &ck, "another alpha");
+    // The far wall moved by a third of a spacing (the same particle count:
+    // only the count was compared until session 53's review, and the run
+    // went on with the checkpoint's wall).
+    let moved = DamBreak {
+        tank_length: case().tank_length + 0.05715 / 24.0,
+        ..case()
+    };
+    let mut other = sim2(moved.scene());
+    let err = other.restore(&ck).unwrap_err().to_string();
+    assert!(err.contains("particle's start"), "{err}");
+    println!("a wall moved: {err}");
     let mut other = dam_break();
     let mut amg = BlockSolver::default();
     amg.pressure = PressureSolve::Multigrid;
@@ -1000,13 +1011,13 @@ fn a_material_update_that_returns_nan_stops_the_run_with_a_typed_error() {
 }
 
 /// A restore weighs the solid elements by the checkpoint's own initial
-/// positions (`ρ₀ V₀`, eq. 46), not by the scene it is restored into: a
-/// scene whose block was scaled by 1.1 (spacing too, so that its lattice
-/// and connectivity pass the checks) gives its masses from the run that
-/// wrote the checkpoint (session 40's review: they came from the edited
-/// scene, 1.21 times heavier).
+/// positions (`ρ₀ V₀`, eq. 46), not by the scene it is restored into
+/// (session 40's review: a scene whose block was scaled by 1.1, spacing
+/// too, gave masses 1.21 times heavier). Since session 53 such a scene is
+/// refused outright: its solid starts elsewhere (a wall or a solid moved
+/// in the scene ran on at the checkpoint's place without a word).
 #[test]
-fn a_restore_weighs_the_solids_by_the_checkpoint_s_own_start() {
+fn a_restore_refuses_a_solid_that_starts_elsewhere_and_weighs_by_its_own_start() {
     use pfem::constitutive::Hypoelastic;
     let block = |s: f64| {
         let h = 0.02 * s;
@@ -1038,10 +1049,13 @@ fn a_restore_weighs_the_solids_by_the_checkpoint_s_own_start() {
         (v_scaled / v0 - 1.21).abs() < 1e-9,
         "{v_scaled} against {v0}"
     );
-    // Accepted: the checks see the same particles, kinds, bodies,
-    // connectivity and materials.
-    scaled.restore(&ck).unwrap();
-    let v: f64 = scaled.elements().reference_volumes().iter().sum();
+    // The same particles, kinds, bodies, connectivity and materials, but
+    // not where they started.
+    let err = scaled.restore(&ck).unwrap_err().to_string();
+    assert!(err.contains("particle's start"), "{err}");
+    let mut same = sim2(block(1.0));
+    same.restore(&ck).unwrap();
+    let v: f64 = same.elements().reference_volumes().iter().sum();
     assert_eq!(v, v0, "the checkpoint's masses");
 }
 

@@ -2826,6 +2826,35 @@ where
                 fixed(&self.particles).len().to_string(),
             ));
         }
+        // ... where they started: a wall or a solid moved in the scene
+        // since the checkpoint (same count) ran on at the checkpoint's
+        // place without a word (a review of session 53: a wall moved by
+        // 4 cm). To 10⁻⁶ of a spacing, against round-off.
+        let (old, new) = (
+            particles.initial_positions(),
+            self.particles.initial_positions(),
+        );
+        if let Some(i) =
+            (0..prefix).find(|&i| (old[i] - new[i]).norm() > 1e-6 * self.particles.spacing()[i])
+        {
+            let body = self
+                .body_names
+                .get(self.particles.body()[i] as usize)
+                .cloned()
+                .unwrap_or_default();
+            let at = |p: &Point<D>| {
+                let c: Vec<String> = p.iter().map(|c| format!("{c}")).collect();
+                format!(
+                    "particle {i} of body `{body}` starting at ({})",
+                    c.join(", ")
+                )
+            };
+            return Err(mismatch(
+                "a wall or solid particle's start",
+                at(&old[i]),
+                at(&new[i]),
+            ));
+        }
         if particles
             .material()
             .iter()
