@@ -189,6 +189,32 @@ impl Encoder {
     }
 }
 
+/// A hook's fingerprint (a text that names what it prescribes: a wall's
+/// motion law, a body-force ramp), read back from its saved state and
+/// compared with `now`: a restart under another is refused as a
+/// [`CheckpointError::Mismatch`] of `what`. An empty state, from a
+/// checkpoint written before the hook saved one, is accepted unchecked
+/// (a ramp's older checkpoints were refused as "truncated" by the first
+/// version; a review of session 53).
+pub fn restore_fingerprint(
+    from: &mut Decoder<'_>,
+    what: &'static str,
+    now: String,
+) -> Result<(), CheckpointError> {
+    if from.is_at_end() {
+        return Ok(());
+    }
+    let saved = from.str()?;
+    if saved != now {
+        return Err(CheckpointError::Mismatch {
+            what,
+            checkpoint: saved.to_string(),
+            simulation: now,
+        });
+    }
+    Ok(())
+}
+
 /// Reads values written by an [`Encoder`], in the same order.
 #[derive(Debug, Clone)]
 pub struct Decoder<'a> {

@@ -109,6 +109,35 @@ pub struct Stages {
     pub contact: bool,
 }
 
+/// The items of a settings print (`Simulation::settings_print`), `name:
+/// value` each: split at `;`, `,`, `{` and `}` outside brackets, so that an
+/// array setting stays whole (`multigrid_from: [1000, 100]` was shown as
+/// "2000] in the checkpoint, 100] here", a review of session 53).
+fn setting_items(s: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut depth = 0i32;
+    for ch in s.chars() {
+        match ch {
+            '[' | '(' => {
+                depth += 1;
+                cur.push(ch);
+            }
+            ']' | ')' => {
+                depth -= 1;
+                cur.push(ch);
+            }
+            ';' | ',' | '{' | '}' if depth <= 0 => out.push(std::mem::take(&mut cur)),
+            _ => cur.push(ch),
+        }
+    }
+    out.push(cur);
+    out.into_iter()
+        .map(|t| t.trim().to_string())
+        .filter(|t| !t.is_empty())
+        .collect()
+}
+
 /// Wall time and call count of each stage.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StageStats {
@@ -457,11 +486,6 @@ where
     /// ([`Simulation::initialize_acceleration`]): a first step under
     /// another one (a hook's) sets them again.
     accelerated_with: Option<Vector<D>>,
-    /// Before the first step, a hook's start set the gravity at `t₀`
-    /// (`BodyForceRamp`'s, zero at the ramp's start) and the accelerations
-    /// were set with it: the first step does not set them again with its
-    /// end-of-step gravity.
-    start_gravity: bool,
     stepper: Stepper<D>,
     contact: ContactSetup<D>,
 }
@@ -775,7 +799,6 @@ where
             meshed_at: Vec::new(),
             start_check: false,
             accelerated_with: None,
-            start_gravity: false,
             stepper: Stepper {
                 tessellator,
                 integrator: Integrator::new(params),
@@ -1156,7 +1179,6 @@ where
             // good: session 52's review).
             if accelerations && self.clock.steps == 0 && self.gravity != self.accelerated_with {
                 self.accelerations(false)?;
-                self.start_gravity = true;
             }
         }
         Ok(())
@@ -2045,22 +2067,29 @@ where
         }
         self.clock.dt = dt;
         book += tb.elapsed().as_secs_f64();
-        self.run_hooks(HookPoint::BeforeSolve)?;
         // A load on from the start: `new`'s accelerations did not know it,
         // and Bossak's stored acceleration lagged (the run kept `F Δt₁/2`
-        // of momentum too little, for good). They are set again with the
-        // first step's loads, those at its end `t₀ + Δt` (and gravity as
-        // the hooks set it then): exact for a constant load; a load
-        // ramped from zero keeps about `½ k Δt²` of momentum too much.
-        // The same for a gravity a hook set before the first step (a scene
-        // with none, switched on by a hook: session 42), unless a hook's
-        // start gave the gravity at `t₀` (`start_gravity`, session 52).
-        if self.clock.steps == 0
-            && (!self.external_force.is_empty()
-                || (self.gravity != self.accelerated_with && !self.start_gravity))
-        {
-            self.accelerations(false)?;
+        // of momentum too little, for good). Before the first step the
+        // hooks' `before_solve` runs once with the clock moved back by the
+        // step, so that what each gives for `time + dt` (a force, a
+        // gravity, a wall's velocity) is its value at `t₀`, and the
+        // accelerations are set again with those loads when there are
+        // any. They were set with the first step's end-of-step loads, `t₀
+        // + Δt`, until session 53: exact for a constant load, but a force
+        // ramped from zero kept `½ k Δt²` of momentum too much for good
+        // (a review; `BodyForceRamp`'s gravity was mended in session 52 by
+        // its start). The step's own pass follows.
+        if self.clock.steps == 0 && !self.hooks.is_empty() {
+            let t = self.clock.time;
+            self.clock.time = t - dt;
+            let at_start = self.run_hooks(HookPoint::BeforeSolve);
+            self.clock.time = t;
+            at_start?;
+            if !self.external_force.is_empty() || self.gravity != self.accelerated_with {
+                self.accelerations(false)?;
+            }
         }
+        self.run_hooks(HookPoint::BeforeSolve)?;
         // The attempts, halving the step after each rejected one; the hooks
         // before the solve run again for each smaller step, so that what
         // they prescribe for `t + Δt` (a wall's velocity, a ramped body
@@ -2729,13 +2758,7 @@ where
             let now = self.settings_print(false);
             if saved != now && saved != self.settings_print(true) {
                 // The first setting that differs, `name: value` each.
-                let split = |s: &str| -> Vec<String> {
-                    s.split([';', ',', '{', '}'])
-                        .map(|t| t.trim().to_string())
-                        .filter(|t| !t.is_empty())
-                        .collect()
-                };
-                let (a, b) = (split(&saved), split(&now));
+                let (a, b) = (setting_items(&saved), setting_items(&now));
                 let at = (0..a.len().max(b.len()))
                     .find(|&i| a.get(i) != b.get(i))
                     .unwrap_or(0);
@@ -3472,5 +3495,23 @@ mod tests {
         // And it is rigid: the accelerations' gradient is antisymmetric.
         let g = |i: usize, j: usize| (after[i] - after[j]).dot(&(x3[i] - x3[j]));
         assert!(g(1, 0).abs() < 1e-12 && g(4, 2).abs() < 1e-12);
+    }
+
+    /// A settings print's items keep an array whole.
+    #[test]
+    fn setting_items_keep_arrays_whole() {
+        let items = super::setting_items(
+            "scheme: Bossak; solver: block {target: 1e-9, multigrid_from: [1000, 100], split_from: 0}",
+        );
+        assert_eq!(
+            items,
+            [
+                "scheme: Bossak",
+                "solver: block",
+                "target: 1e-9",
+                "multigrid_from: [1000, 100]",
+                "split_from: 0"
+            ]
+        );
     }
 }

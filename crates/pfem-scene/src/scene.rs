@@ -811,9 +811,15 @@ where
         };
         let (lo, hi) = b.geometry.bounds();
         let extent: Vec<String> = (0..D).map(|k| format!("{:.3e}", hi[k] - lo[k])).collect();
-        let mm = matches!(b.geometry, Geometry::Surface(_))
-            .then_some("; a surface in millimetres needs `scale = 0.001`")
-            .unwrap_or("");
+        // The hint where a surface spans more than 10 m (a model in
+        // millimetres read as metres), not whenever the largest body is a
+        // surface.
+        let widest = (0..D).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+        let mm = if matches!(b.geometry, Geometry::Surface(_)) && widest > 10.0 {
+            "; a surface in millimetres needs `scale = 0.001` (a scene file's `stl` key)"
+        } else {
+            ""
+        };
         format!(
             "; the largest, body `{}`: about {:.3e} particles at spacing {:e} m over {} m{mm}",
             b.name,

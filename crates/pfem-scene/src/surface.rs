@@ -206,10 +206,45 @@ where
         (lo, hi)
     }
 
+    /// A triangle given twice with the same winding (an exporter's
+    /// repeat), named by its corners: it leaves its three edges shared by
+    /// an odd count of triangles, which [`ClosedSurface::check`] would
+    /// otherwise report as a hole (a review of session 53). By its
+    /// corners, not its number, since the reader drops degenerate
+    /// triangles and renumbers the rest. Two parts sharing a face (the
+    /// face twice, opposite windings) are closed and not named.
+    fn repeated_triangle(&self) -> Option<String> {
+        if D != 3 {
+            return None;
+        }
+        let mut seen: HashMap<[u32; 3], ()> = HashMap::new();
+        for f in self.facets.chunks_exact(3) {
+            // The winding kept: the rotation starting at the least index.
+            let r = (0..3).min_by_key(|&a| f[a]).unwrap_or(0);
+            let key = [f[r], f[(r + 1) % 3], f[(r + 2) % 3]];
+            if seen.insert(key, ()).is_some() {
+                let corners: Vec<String> = key
+                    .iter()
+                    .map(|&v| {
+                        let p = &self.vertices[v as usize];
+                        let c: Vec<String> = p.iter().map(|c| format!("{c}")).collect();
+                        format!("({})", c.join(", "))
+                    })
+                    .collect();
+                return Some(format!(
+                    "a triangle is given twice, with the same winding: {}; remove the repeat",
+                    corners.join(", ")
+                ));
+            }
+        }
+        None
+    }
+
     /// Why this is not a closed boundary, if it is not: too few facets,
     /// an index out of range, a non-finite vertex, a degenerate facet, or
     /// a boundary with holes (a vertex of a polygon, or an edge of a
-    /// triangle surface, shared by an odd number of facets).
+    /// triangle surface, shared by an odd number of facets; a triangle
+    /// given twice with one winding is named as such).
     pub fn check(&self) -> Result<(), String> {
         let n = self.vertices.len();
         if !self.facets.len().is_multiple_of(D) || self.facets.len() / D < D + 1 {
@@ -229,24 +264,6 @@ where
         {
             return Err("a vertex is not finite".into());
         }
-        if D == 3 {
-            // A triangle given twice (an exporter's repeat) closes no
-            // hole and opens none, but it left three edges shared by an
-            // odd count of triangles, named as a hole (a review of session
-            // 53); with the winding reversed it passed.
-            let mut seen: HashMap<[u32; 3], usize> = HashMap::new();
-            for (t, f) in self.facets.chunks_exact(3).enumerate() {
-                let mut key = [f[0], f[1], f[2]];
-                key.sort_unstable();
-                if let Some(first) = seen.insert(key, t) {
-                    return Err(format!(
-                        "triangle {} repeats triangle {} (the same three vertices): remove the repeat",
-                        t + 1,
-                        first + 1
-                    ));
-                }
-            }
-        }
         let mut count: HashMap<(u32, u32), usize> = HashMap::new();
         for f in self.facets.chunks_exact(D) {
             if (0..D).any(|a| (a + 1..D).any(|b| f[a] == f[b])) {
@@ -264,6 +281,9 @@ where
             }
         }
         if let Some((k, c)) = count.iter().find(|(_, c)| *c % 2 == 1) {
+            if let Some(why) = self.repeated_triangle() {
+                return Err(why);
+            }
             return Err(if D == 2 {
                 format!("the polygon is not closed at vertex {} ({c} edges)", k.0)
             } else {
@@ -1061,24 +1081,25 @@ mod tests {
         let mut c = cube(1.0);
         c.facets[0] = 99;
         assert!(c.check().is_err());
-        // A triangle given twice is named as the repeat it is, whichever
-        // its winding (it was "not closed", or accepted reversed).
-        for reversed in [false, true] {
+        // A triangle given twice with one winding is named as the repeat
+        // it is, by its corners (it was "not closed"); rotated too.
+        for rotate in [0, 1] {
             let mut c = cube(1.0);
-            let mut t = [c.facets[0], c.facets[1], c.facets[2]];
-            if reversed {
-                t.swap(1, 2);
-            }
-            c.facets.extend_from_slice(&t);
-            let n = c.facets.len() / 3;
+            let t = [c.facets[0], c.facets[1], c.facets[2]];
+            c.facets
+                .extend_from_slice(&[t[rotate], t[(rotate + 1) % 3], t[(rotate + 2) % 3]]);
             let why = c.check().unwrap_err();
-            assert_eq!(
-                why,
-                format!(
-                    "triangle {n} repeats triangle 1 (the same three vertices): remove the repeat"
-                )
+            assert!(
+                why.starts_with("a triangle is given twice, with the same winding: (0, 0, 0)"),
+                "{why}"
             );
         }
+        // Reversed, it is a face shared by two parts (each edge used once
+        // each way more): not named as a repeat.
+        let mut c = cube(1.0);
+        let t = [c.facets[0], c.facets[2], c.facets[1]];
+        c.facets.extend_from_slice(&t);
+        assert!(c.repeated_triangle().is_none());
         let two =
             ClosedSurface::polygon(vec![Point::<2>::new(0.0, 0.0), Point::<2>::new(1.0, 0.0)]);
         assert!(two.check().is_err());

@@ -192,7 +192,7 @@ fn bad_geometry_input_is_a_typed_error_with_its_line() {
         (scene("geometry.stl = { file = \"open.stl\" }", 2), "is 3D"),
         (
             scene("geometry.stl = { file = \"dup.stl\", scale = 0.001 }", 3),
-            "triangle 2 repeats triangle 1",
+            "a triangle is given twice, with the same winding",
         ),
         (
             scene("geometry.polygon = [[0.0, 0.0], [1.0, 0.0]]", 2),

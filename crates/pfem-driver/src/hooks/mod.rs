@@ -122,7 +122,11 @@ where
 
     /// Before the solve, with `Δt` chosen; again, with the halved `Δt`,
     /// after each rejected attempt (so that what a hook prescribes for
-    /// `t + Δt` is for the step taken). Write it to be repeated.
+    /// `t + Δt` is for the step taken). Write it to be repeated. Before
+    /// the first step it runs once more first, with the clock moved back
+    /// by `Δt` (`time()` is then `t₀ − Δt`, which may be negative), so that
+    /// what it gives for `time() + dt()` is the load at `t₀`: the first
+    /// accelerations are set with it.
     fn before_solve(&mut self, _ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         Ok(())
     }

@@ -4,7 +4,7 @@ use pfem_core::{Const, Dim, ParticleKind, Vector};
 use pfem_scene::motion::MotionLaw;
 
 use super::{body_particles, Hook, HookContext};
-use crate::checkpoint::{CheckpointError, Decoder, Encoder};
+use crate::checkpoint::{restore_fingerprint, CheckpointError, Decoder, Encoder};
 use crate::RunError;
 
 /// Moves the particles of a wall along a [`MotionLaw`]: before each solve
@@ -53,16 +53,7 @@ where
     }
 
     fn restore_state(&mut self, from: &mut Decoder<'_>) -> Result<(), CheckpointError> {
-        let saved = from.str()?;
-        let now = self.fingerprint();
-        if saved != now {
-            return Err(CheckpointError::Mismatch {
-                what: "a wall's motion law",
-                checkpoint: saved.to_string(),
-                simulation: now,
-            });
-        }
-        Ok(())
+        restore_fingerprint(from, "a wall's motion law", self.fingerprint())
     }
 
     fn start(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
