@@ -18,4 +18,4 @@ mod motion;
 mod particles;
 
 pub use motion::{BodyForceRamp, SlipPlanes};
-pub use particles::{Inflow, ParticleManagement};
+pub use particles::{Inflow, ParticleManagement, MAX_LAYER, UPSTREAM_CLEARANCE};
