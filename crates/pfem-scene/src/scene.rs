@@ -325,6 +325,12 @@ where
     /// The total force at time `t` (s).
     #[allow(clippy::type_complexity)]
     pub force: std::sync::Arc<dyn Fn(f64) -> Vector<D> + Send + Sync>,
+    /// Times (s) at which the force's slope changes (a table's rows, a
+    /// ramp's end): the driver ends a step at each, so that the trapezoidal
+    /// rule integrates a piecewise-linear force's impulse exactly (a step
+    /// across a row was off by up to `F Δt / 2`; a review of session 53).
+    /// Empty for a force given as a closure ([`Scene::force`]).
+    pub kinks: Vec<f64>,
 }
 
 impl<const D: usize> AppliedLoad<D>
@@ -653,15 +659,29 @@ where
     /// that holds none is refused): a tip load, a traction on a face,
     /// a push. Applied at the end of each step (`t = tₙ + Δt`).
     pub fn force(
+        self,
+        body: &str,
+        region: Option<(Point<D>, Point<D>)>,
+        force: impl Fn(f64) -> Vector<D> + Send + Sync + 'static,
+    ) -> Self {
+        self.force_with_kinks(body, region, force, Vec::new())
+    }
+
+    /// [`Scene::force`] with the times at which the force's slope changes
+    /// ([`AppliedLoad::kinks`]: a table's rows, a ramp's end), at which
+    /// the steps end: a piecewise-linear force's impulse is then exact.
+    pub fn force_with_kinks(
         mut self,
         body: &str,
         region: Option<(Point<D>, Point<D>)>,
         force: impl Fn(f64) -> Vector<D> + Send + Sync + 'static,
+        kinks: Vec<f64>,
     ) -> Self {
         self.forces.push(AppliedLoad {
             body: body.into(),
             region,
             force: std::sync::Arc::new(force),
+            kinks,
         });
         self
     }

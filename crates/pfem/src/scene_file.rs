@@ -941,6 +941,9 @@ impl SceneFile {
                 )),
                 None => None,
             };
+            // The times at which the force's slope changes (a ramp's end, a
+            // table's rows): steps end there.
+            let mut kinks = Vec::new();
             let law: Box<dyn Fn(f64) -> Vector<D> + Send + Sync> = match (&spec.value, &spec.table)
             {
                 (Some(v), None) => {
@@ -951,6 +954,9 @@ impl SceneFile {
                             span,
                             format!("force.ramp must be non-negative and finite, got {ramp}"),
                         ));
+                    }
+                    if ramp > 0.0 {
+                        kinks.push(ramp);
                     }
                     Box::new(move |t| {
                         if ramp > 0.0 {
@@ -976,6 +982,7 @@ impl SceneFile {
                                 ),
                             ));
                     }
+                    kinks.extend(rows.iter().map(|r| r[0]));
                     Box::new(move |t| {
                         let k = rows.partition_point(|r| r[0] <= t);
                         let at = |r: &Vec<f64>| Vector::<D>::from_fn(|i, _| r[i + 1]);
@@ -998,7 +1005,7 @@ impl SceneFile {
                     ))
                 }
             };
-            scene = scene.force(&spec.body, region, law);
+            scene = scene.force_with_kinks(&spec.body, region, law, kinks);
         }
         scene.validate()?;
         Ok(scene)

@@ -38,11 +38,23 @@ where
             body: body.into(),
             region,
             force: std::sync::Arc::new(force),
+            kinks: Vec::new(),
         })
     }
 
+    /// The times (s) at which the force's slope changes, at which the
+    /// steps end ([`AppliedLoad::kinks`]).
+    pub fn with_kinks(mut self, mut kinks: Vec<f64>) -> Self {
+        kinks.retain(|t| t.is_finite());
+        kinks.sort_by(f64::total_cmp);
+        self.load.kinks = kinks;
+        self
+    }
+
     /// The hook that applies a scene's [`AppliedLoad`] (`Scene::force`).
-    pub fn from_load(load: AppliedLoad<D>) -> Self {
+    pub fn from_load(mut load: AppliedLoad<D>) -> Self {
+        load.kinks.retain(|t| t.is_finite());
+        load.kinks.sort_by(f64::total_cmp);
         Self {
             load,
             particles: Vec::new(),
@@ -98,6 +110,10 @@ where
         }
         self.particles = on;
         Ok(())
+    }
+
+    fn next_kink(&self, t: f64) -> Option<f64> {
+        self.load.kinks.iter().copied().find(|&k| k > t)
     }
 
     fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
