@@ -610,7 +610,7 @@ pub enum StepError {
         why: String,
     },
     /// Halving the time step did not help before it fell below the minimum.
-    #[error("time step fell below the minimum {min_dt:e} s at t = {time} s after {rejections} rejections; last failure: {last}")]
+    #[error("time step fell below the minimum {min_dt:e} s at t = {time} s after {rejections} rejected attempts of this step (earlier steps' are in the run's count); last failure: {last}")]
     StepTooSmall {
         /// Time (s).
         time: f64,

@@ -155,14 +155,25 @@ impl Args {
                 "--overwrite" => out.overwrite = true,
                 s if s.starts_with("--") => {
                     let name = s.trim_start_matches("--").to_string();
-                    let value = it.next().ok_or_else(|| {
-                        ArgsError(format!(
-                            "--{name} needs a value (or is not an option: see --help)"
-                        ))
-                    })?;
+                    // `--end-time=0.1` as well as `--end-time 0.1` (it was
+                    // read as an option named `end-time=0.1` that needed a
+                    // value; a review of session 53).
+                    let (name, inline) = match name.split_once('=') {
+                        Some((n, v)) => (n.to_string(), Some(v.to_string())),
+                        None => (name, None),
+                    };
+                    let given = inline.is_some();
+                    let value = match inline {
+                        Some(v) => v,
+                        None => it.next().ok_or_else(|| {
+                            ArgsError(format!(
+                                "--{name} needs a value (or is not an option: see --help)"
+                            ))
+                        })?,
+                    };
                     // `--out --no-vtu` is a forgotten value, not a folder
                     // named `--no-vtu`.
-                    if value.starts_with("--") || FLAGS.contains(&value.as_str()) {
+                    if !given && (value.starts_with("--") || FLAGS.contains(&value.as_str())) {
                         return Err(ArgsError(format!(
                             "--{name} needs a value, got the option `{value}`"
                         )));
@@ -640,6 +651,14 @@ mod tests {
         assert!(a.reject_unknown(&[]).is_err());
         assert!(Args::parse(["--spacing", "-1"].map(String::from)).is_err());
         assert!(Args::parse(["--out"].map(String::from)).is_err());
+        // `--name=value` too (session 53's review: "--end-time=0.01 needs
+        // a value").
+        let eq =
+            Args::parse(["--end-time=0.01", "--out=d", "--aspect=2"].map(String::from)).unwrap();
+        assert_eq!(eq.end_time, Some(0.01));
+        assert_eq!(eq.out, Some(PathBuf::from("d")));
+        assert_eq!(eq.number("aspect", 1.0).unwrap(), 2.0);
+        assert!(Args::parse(["--spacing=-1"].map(String::from)).is_err());
         // Session 42's review: an option as a value was taken for it (a
         // folder named `--no-vtu`), and bare words were ignored.
         for flag in ["--no-vtu", "--quiet", "-q", "--end-time"] {

@@ -437,6 +437,17 @@ fn the_binary_checks_runs_and_fails_cleanly() {
         csv.starts_with("t,bottom_pressure,max_speed,volume"),
         "{csv}"
     );
+    // The series ends with the final state, though 0.01 s is off the
+    // scene's frame interval (session 53's review: the last frame was the
+    // last on the interval's grid, here the initial one).
+    let pvd = std::fs::read_to_string(out.join("hydrostatic_2d.pvd")).unwrap();
+    let last: f64 = pvd
+        .rsplit("timestep=\"")
+        .next()
+        .and_then(|t| t.split('"').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap();
+    assert!((last - 0.01).abs() < 1e-12, "last frame at {last}: {pvd}");
     std::fs::remove_dir_all(&out).ok();
 
     let bad = std::env::temp_dir().join(format!("pfem_bad_{}.toml", std::process::id()));
