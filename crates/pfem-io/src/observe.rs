@@ -933,7 +933,12 @@ where
                 e.insert("picard_iterations".into(), sim.stats().assemble.0.into());
                 // Of `fluid_volume_final`, the drops in flight (a lattice
                 // cell each).
-                e.insert("fluid_volume_final_drops".into(), sim.drop_volume().into());
+                e.insert(
+                    "fluid_volume_final_drops".into(),
+                    // (`+ 0.0`: no `-0.0` in the summary, a review of
+                    // session 53.)
+                    (sim.drop_volume() + 0.0).into(),
+                );
                 let status = match sim.stopped() {
                     _ if self.failure.is_some() => "failed",
                     None if sim.reached_end_time() => "finished",
