@@ -15,6 +15,20 @@ fn sim2(scene: Scene<2>, params: StepParams) -> Simulation<2> {
     Simulation::new(scene, Box::new(Delaunay2::default()), params).expect("scene builds")
 }
 
+/// Each particle's lumped mass from the solid elements' reference areas
+/// (`ρ₀ V₀ / 3` per triangle corner, eq. 46) of a 2D solid of density
+/// `rho`: the masses a free block's momentum is weighed by.
+fn solid_masses(sim: &Simulation<2>, rho: f64) -> Vec<f64> {
+    let el = sim.elements();
+    let mut m = vec![0.0; sim.particles().len()];
+    for (e, &v0) in el.solid().chunks_exact(3).zip(el.reference_volumes()) {
+        for &i in e {
+            m[i as usize] += rho * v0 / 3.0;
+        }
+    }
+    m
+}
+
 fn boxed(x0: f64, y0: f64, x1: f64, y1: f64) -> Geometry<2> {
     Geometry::Box {
         min: Point::<2>::new(x0, y0),
@@ -666,14 +680,20 @@ fn a_free_fall_under_a_ramped_body_force_follows_its_closed_form() {
 /// a restart keeps the checkpoint's.
 #[test]
 fn a_ramped_run_restarts_from_a_checkpoint_on_its_ramp() {
+    // The tank without a ramp, and with the run's ramp.
+    let tank = || {
+        sim2(
+            small_tank("ramped restart").settings(RunSettings {
+                end_time: 0.1,
+                max_dt: 5e-3,
+                output_interval: None,
+                ..Default::default()
+            }),
+            StepParams::default(),
+        )
+    };
     let build = || {
-        let scene = small_tank("ramped restart").settings(RunSettings {
-            end_time: 0.1,
-            max_dt: 5e-3,
-            output_interval: None,
-            ..Default::default()
-        });
-        let mut sim = sim2(scene, StepParams::default());
+        let mut sim = tank();
         sim.add_hook(Box::new(BodyForceRamp {
             target: Vector::<2>::new(0.0, -G),
             duration: 0.1,
@@ -698,26 +718,10 @@ fn a_ramped_run_restarts_from_a_checkpoint_on_its_ramp() {
     // Under another ramp, or without it, the run would not be this one
     // continued: refused (a review of session 53 found both ran on, the
     // removed ramp's run keeping the checkpoint's −1.962 m/s² for good).
-    let mut other = sim2(
-        small_tank("ramped restart").settings(RunSettings {
-            end_time: 0.1,
-            max_dt: 5e-3,
-            output_interval: None,
-            ..Default::default()
-        }),
-        StepParams::default(),
-    );
+    let mut other = tank();
     let err = other.restore(&ck).unwrap_err().to_string();
     assert!(err.contains("body-force ramp"), "{err}");
-    let mut changed = sim2(
-        small_tank("ramped restart").settings(RunSettings {
-            end_time: 0.1,
-            max_dt: 5e-3,
-            output_interval: None,
-            ..Default::default()
-        }),
-        StepParams::default(),
-    );
+    let mut changed = tank();
     changed.add_hook(Box::new(BodyForceRamp {
         target: Vector::<2>::new(0.0, -G),
         duration: 10.0,
@@ -727,15 +731,7 @@ fn a_ramped_run_restarts_from_a_checkpoint_on_its_ramp() {
     // A checkpoint written before the ramp saved itself (an empty state
     // under its name; here a hook of no state by that name) is read
     // unchecked, not refused as damaged.
-    let mut old = sim2(
-        small_tank("ramped restart").settings(RunSettings {
-            end_time: 0.1,
-            max_dt: 5e-3,
-            output_interval: None,
-            ..Default::default()
-        }),
-        StepParams::default(),
-    );
+    let mut old = tank();
     old.add_hook(Box::new(FnHook::new("body-force ramp")));
     old.step().unwrap();
     let older = old.checkpoint();
@@ -1643,16 +1639,7 @@ fn a_load_pushes_a_free_block_by_newton_s_law() {
         move |_| f,
     )));
     let block = sim.body_particles("block").unwrap();
-    let masses = {
-        let el = sim.elements();
-        let mut m = vec![0.0; sim.particles().len()];
-        for (e, &v0) in el.solid().chunks_exact(3).zip(el.reference_volumes()) {
-            for &i in e {
-                m[i as usize] += rho * v0 / 3.0;
-            }
-        }
-        m
-    };
+    let masses = solid_masses(&sim, rho);
     let momentum = |s: &Simulation<2>| {
         block
             .iter()
@@ -2684,16 +2671,7 @@ fn a_force_ramped_from_zero_gives_a_free_block_its_impulse() {
         Vector::<2>::new(k * s.min(ramp), 0.0)
     })));
     let block = sim.body_particles("block").unwrap();
-    let masses = {
-        let el = sim.elements();
-        let mut m = vec![0.0; sim.particles().len()];
-        for (e, &v0) in el.solid().chunks_exact(3).zip(el.reference_volumes()) {
-            for &i in e {
-                m[i as usize] += rho * v0 / 3.0;
-            }
-        }
-        m
-    };
+    let masses = solid_masses(&sim, rho);
     let momentum = |s: &Simulation<2>| {
         block
             .iter()

@@ -872,16 +872,12 @@ damping = {damping}
     }
 }
 
-/// Session 41: `[[force]]` puts a force on a solid in time (the library's
-/// `Scene::force`). A free block without gravity pushed by a table that
-/// steps to 2 N/m from 0.01 s gains the table's impulse; a ramp, a region
-/// and the checks (a fluid body, both `value` and `table`, a table out of
-/// order) are refused with their line.
-#[test]
-fn a_force_table_pushes_a_free_block() {
-    let block = |force: &str| {
-        format!(
-            r#"
+/// A free 2D block of 0.1 × 0.05 m (1 000 kg/m³, no gravity), run to
+/// 0.06 s in steps of at most 1 ms, with `rest` (more bodies, a
+/// `[[force]]`) after it.
+fn pushed_block(rest: &str) -> String {
+    format!(
+        r#"
 name = "pushed"
 dimension = 2
 spacing = 0.01
@@ -893,14 +889,27 @@ name = "block"
 kind = "solid"
 material.hypoelastic = {{ density = 1000.0, young = 1e6, poisson = 0.3 }}
 geometry.box = {{ min = [0.0, 0.0], max = [0.1, 0.05] }}
-[[body]]
+{rest}
+"#
+    )
+}
+
+/// Session 41: `[[force]]` puts a force on a solid in time (the library's
+/// `Scene::force`). A free block without gravity pushed by a table that
+/// steps to 2 N/m from 0.01 s gains the table's impulse; a ramp, a region
+/// and the checks (a fluid body, both `value` and `table`, a table out of
+/// order) are refused with their line.
+#[test]
+fn a_force_table_pushes_a_free_block() {
+    let block = |force: &str| {
+        pushed_block(&format!(
+            r#"[[body]]
 name = "water"
 kind = "fluid"
 material.newtonian = {{ density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e6 }}
 geometry.box = {{ min = [1.0, 0.0], max = [1.1, 0.1] }}
-{force}
-"#
-        )
+{force}"#
+        ))
     };
     let text = block("[[force]]\nbody = \"block\"\ntable = [[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.0101, 2.0, 0.0]]");
     let LoadedScene::Two(scene, _) = build(&text).unwrap() else {
@@ -951,25 +960,12 @@ geometry.box = {{ min = [1.0, 0.0], max = [1.1, 0.1] }}
 /// by up to `F Δt / 2` (a review of session 53: ±0.77 %).
 #[test]
 fn a_force_table_s_rows_end_steps_and_its_impulse_is_exact() {
-    let text = r#"
-name = "pushed"
-dimension = 2
-spacing = 0.01
-[run]
-end_time = 0.06
-max_dt = 1e-3
-[[body]]
-name = "block"
-kind = "solid"
-material.hypoelastic = { density = 1000.0, young = 1e6, poisson = 0.3 }
-geometry.box = { min = [0.0, 0.0], max = [0.1, 0.05] }
-[[force]]
-body = "block"
-table = [[0.0, 0.0, 0.0], [0.0213, 0.0, 0.0], [0.0214, 2.0, 0.0], [0.0407, 2.0, 0.0], [0.0408, 0.0, 0.0]]
-"#;
+    let text = pushed_block(
+        "[[force]]\nbody = \"block\"\ntable = [[0.0, 0.0, 0.0], [0.0213, 0.0, 0.0], [0.0214, 2.0, 0.0], [0.0407, 2.0, 0.0], [0.0408, 0.0, 0.0]]",
+    );
     let exact = 2.0 * (0.0407 - 0.0214) + 2.0 * 0.5 * 2.0 * 1e-4;
     for scheme in [pfem::time::Scheme::Newmark, pfem::time::Scheme::Bossak] {
-        let LoadedScene::Two(scene, _) = build(text).unwrap() else {
+        let LoadedScene::Two(scene, _) = build(&text).unwrap() else {
             panic!("2D")
         };
         let mut sim = Simulation::new(
