@@ -17,6 +17,10 @@ use pfem::cases3d::ColumnOnCylinder3d;
 use pfem::cli::Args;
 use pfem::prelude::*;
 
+/// This example's own options, for `--help`.
+const OPTIONS: &str = "  --depth W             depth of the tank (m; default 0.0584)
+  --cylinder-x X        the cylinder's axis along the tank (m; default 0.35)";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -25,7 +29,7 @@ fn main() {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&["depth", "cylinder-x"])?;
     let mut case = ColumnOnCylinder3d::default();
     case.column.spacing = args.spacing.unwrap_or(case.column.spacing);

@@ -101,6 +101,9 @@ fn mud() -> Bingham {
     }
 }
 
+/// This example's own options, for `--help`: none.
+const OPTIONS: &str = "";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -109,7 +112,7 @@ fn main() {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&[])?;
     let h = args.spacing.unwrap_or(0.005);
     let end_time = args.end_time.unwrap_or(0.3);

@@ -15,6 +15,13 @@ use pfem::cli::Args;
 use pfem::output::{parse_reference_csv, plot_series_png, reference, PlotSeries, PlotSpec};
 use pfem::prelude::*;
 
+/// This example's own options, for `--help`.
+const OPTIONS: &str =
+    "  --aspect N2           height over width of the column, 1 or 2 (Martin & Moyce's; default 2)
+  --width A             column width a (m; default 0.05715)
+  --tank-length L       tank length (m; default 10 a)
+  --alpha A             alpha-shape parameter (default the scene's, 1.3)";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -23,7 +30,7 @@ fn main() {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&["aspect", "width", "tank-length", "alpha"])?;
     let mut case = DamBreak::default();
     case.width = args.number("width", case.width)?;

@@ -14,6 +14,9 @@ use pfem::cli::Args;
 use pfem::output::{plot_series_png, PlotSeries, PlotSpec};
 use pfem::prelude::*;
 
+/// This example's own options, for `--help`.
+const OPTIONS: &str = "  --young E             the obstacle's Young's modulus (Pa; default 1e6)";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -22,7 +25,7 @@ fn main() {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&["young"])?;
     let mut case = DamBreakObstacle::default();
     case.spacing = args.spacing.unwrap_or(case.spacing);

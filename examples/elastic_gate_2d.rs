@@ -19,6 +19,11 @@ use pfem::cli::Args;
 use pfem::output::{parse_reference_csv, plot_series_png, reference, PlotSeries, PlotSpec};
 use pfem::prelude::*;
 
+/// This example's own options, for `--help`.
+const OPTIONS: &str = "  --young E             the gate's Young's modulus (Pa; default 12e6)
+  --gate-spacing H      the gate's particle spacing (m; default 0.00125)
+  --model M             plane-stress (default) or plane-strain";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -35,7 +40,7 @@ fn peak(series: &[(f64, f64)]) -> (f64, f64) {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&["young", "gate-spacing", "model"])?;
     let mut case = ElasticGate::default();
     case.spacing = args.spacing.unwrap_or(case.spacing);

@@ -9,6 +9,9 @@ use pfem::cases::{Hydrostatic, G};
 use pfem::cli::Args;
 use pfem::prelude::*;
 
+/// This example's own options, for `--help`: none.
+const OPTIONS: &str = "";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -17,7 +20,7 @@ fn main() {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&[])?;
     let mut case = Hydrostatic::default();
     case.spacing = args.spacing.unwrap_or(case.spacing);

@@ -12,6 +12,9 @@ use pfem::cases::{rest_figures, RestTank};
 use pfem::cli::Args;
 use pfem::prelude::*;
 
+/// This example's own options, for `--help`: none.
+const OPTIONS: &str = "";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -20,7 +23,7 @@ fn main() {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&[])?;
     args.reject_output_options("rest_tank_2d")?;
     let case = RestTank {

@@ -13,6 +13,9 @@ use pfem::cases3d::RestTank3d;
 use pfem::cli::Args;
 use pfem::prelude::*;
 
+/// This example's own options, for `--help`: none.
+const OPTIONS: &str = "";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -21,7 +24,7 @@ fn main() {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&[])?;
     args.reject_output_options("rest_tank_3d")?;
     let case = RestTank3d {

@@ -17,6 +17,9 @@ use pfem::cases3d::WaterColumn3d;
 use pfem::cli::Args;
 use pfem::prelude::*;
 
+/// This example's own options, for `--help`.
+const OPTIONS: &str = "  --depth W             depth of the slice (m; default 0.0584)";
+
 fn main() {
     if let Err(e) = run() {
         pfem::errln!("error: {e}");
@@ -25,7 +28,7 @@ fn main() {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let args = Args::from_env()?;
+    let args = Args::from_env_with(OPTIONS)?;
     args.reject_unknown(&["depth"])?;
     let mut case = WaterColumn3d {
         side_walls: false,

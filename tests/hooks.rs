@@ -1256,6 +1256,13 @@ fn an_inflow_refuses_non_finite_or_huge_faces() {
             .to_string();
         assert!(err.contains("finite") || err.contains("layer"), "{err}");
     }
+    // A face of no width across the flow (a point in 2D) has no area for
+    // its rate (session 53's review: accepted).
+    let err = Inflow::new("water", p(0.0, 0.05), p(0.0, 0.05), v, 0.01, 0.02)
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no width along axis 1"), "{err}");
 }
 
 /// An inflow releases only the particles it drove: a constraint another
@@ -2697,4 +2704,103 @@ fn a_force_ramped_from_zero_gives_a_free_block_its_impulse() {
         exact(sim.time())
     );
     assert!(worst < 1e-9 * exact(sim.end_time()), "{worst:e}");
+}
+
+/// A wall that the scene moves along a law and that an added
+/// `PrescribedMotion` moves too is refused when the run starts, naming the
+/// wall (session 53's review: the added hook alone moved it, silently).
+#[test]
+fn a_wall_driven_by_two_motion_laws_is_refused() {
+    let law = |a: f64| {
+        std::sync::Arc::new(Sinusoidal {
+            amplitude: Vector::<2>::new(a, 0.0),
+            period: 1.0,
+            ramp: 0.0,
+        })
+    };
+    let scene = small_tank("two laws").wall(
+        "paddle",
+        boxed(-0.1, 0.0, -0.05, 0.2),
+        0.05,
+        WallMotion::Law(law(0.01)),
+    );
+    let mut sim = sim2(scene, StepParams::default());
+    sim.add_hook(Box::new(PrescribedMotion::new("paddle", law(0.02))));
+    let err = sim.run(&mut []).unwrap_err().to_string();
+    assert!(
+        err.contains("`paddle`") && err.contains("two hooks"),
+        "{err}"
+    );
+    assert_eq!(sim.steps(), 0);
+    // One law each on two walls runs.
+    let scene = small_tank("two walls")
+        .wall(
+            "paddle",
+            boxed(-0.1, 0.0, -0.05, 0.2),
+            0.05,
+            WallMotion::Law(law(0.01)),
+        )
+        .wall("far", boxed(0.25, 0.0, 0.3, 0.2), 0.05, WallMotion::Fixed);
+    let mut sim = sim2(scene, StepParams::default());
+    sim.add_hook(Box::new(PrescribedMotion::new("far", law(0.001))));
+    sim.run(&mut []).unwrap();
+}
+
+/// `insert_fluid` refuses a particle inside a solid, naming the solid (it
+/// was accepted, and the fluid's mesh overlapped the solid's), and a
+/// particle inserted onto another fails naming the hook that inserted it
+/// (the remeshing's "coincident" named neither).
+#[test]
+fn inserting_fluid_inside_a_solid_or_onto_a_particle_is_an_error_naming_it() {
+    let scene = || {
+        small_tank("insert into solid").solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap()),
+            boxed(0.15, 0.05, 0.25, 0.15),
+            0.05,
+            None,
+        )
+    };
+    let fluid_like = |sim: &Simulation<2>, x: Point<2>| {
+        let p = sim.particles();
+        let i = (0..p.len())
+            .find(|&i| p.kind()[i] == ParticleKind::Fluid)
+            .unwrap();
+        let mut q = p.get(i);
+        q.x = x;
+        q
+    };
+    for (at, expect) in [
+        (Point::<2>::new(0.17, 0.08), "inside solid `block`"),
+        (Point::<2>::new(0.22, 0.12), "inside solid `block`"),
+    ] {
+        let mut sim = sim2(scene(), StepParams::default());
+        let q = fluid_like(&sim, at);
+        sim.add_hook(Box::new(
+            FnHook::new("pour").start(move |ctx| ctx.insert_fluid(q).map(|_| ())),
+        ));
+        let err = sim.run(&mut []).unwrap_err().to_string();
+        assert!(err.contains(expect), "{err}");
+    }
+    // Beside the solid, and above it, it is accepted.
+    for at in [Point::<2>::new(0.125, 0.05), Point::<2>::new(0.2, 0.2)] {
+        let mut sim = sim2(scene(), StepParams::default());
+        let q = fluid_like(&sim, at);
+        sim.add_hook(Box::new(
+            FnHook::new("pour").start(move |ctx| ctx.insert_fluid(q).map(|_| ())),
+        ));
+        sim.run(&mut []).unwrap();
+    }
+    // Onto a fluid particle: the error names the hook.
+    let mut sim = sim2(scene(), StepParams::default());
+    let p = sim.particles();
+    let i = (0..p.len())
+        .find(|&i| p.kind()[i] == ParticleKind::Fluid)
+        .unwrap();
+    let q = p.get(i);
+    sim.add_hook(Box::new(
+        FnHook::new("pour").start(move |ctx| ctx.insert_fluid(q).map(|_| ())),
+    ));
+    let err = sim.run(&mut []).unwrap_err().to_string();
+    assert!(err.contains("pour") && err.contains("inserted"), "{err}");
 }

@@ -1168,6 +1168,27 @@ where
                 why: format!("{corrections} volume corrections: one at most (set Options::volume_correction to 0 to add one of your own)"),
             });
         }
+        // Two motion laws on one wall: the later hook alone moved it (a
+        // scene's law and an added `PrescribedMotion`, session 53's
+        // review).
+        let driven: Vec<(usize, &str)> = self
+            .hooks
+            .iter()
+            .enumerate()
+            .filter_map(|(k, h)| h.drives_body().map(|b| (k, b)))
+            .collect();
+        for (n, &(k, body)) in driven.iter().enumerate() {
+            if let Some(&(j, _)) = driven[n + 1..].iter().find(|(_, b)| *b == body) {
+                return Err(RunError::Hook {
+                    hook: self.hooks[j].name().to_string(),
+                    why: format!(
+                        "body `{body}` is driven by two hooks (the {} and the {}, hooks {k} and {j}; a scene's motion law counts as one): give each wall one motion law",
+                        self.hooks[k].name(),
+                        self.hooks[j].name()
+                    ),
+                });
+            }
+        }
         let first = self.started;
         if first < self.hooks.len() {
             self.started = self.hooks.len();
@@ -1233,6 +1254,7 @@ where
                 // and not yet meshed reads as changed from the start.)
                 mesh_generation: self.meshed,
                 forces_generation: generation,
+                solid_boxes: None,
             };
             let r = match point {
                 HookPoint::Start => hook.start(&mut ctx),
@@ -1322,8 +1344,19 @@ where
                     self.elements.keep_stash();
                 }
                 self.elements.clear_fluid();
+                // Named with the hook: a particle inserted onto another
+                // failed as a bare "remeshing failed" naming neither the
+                // hook nor the insertion (session 53's review).
                 if let Err(e) = self.remesh() {
-                    result = Err(e);
+                    result = Err(match e {
+                        RunError::Geometry(g) => RunError::Hook {
+                            hook: hook.name().to_string(),
+                            why: format!(
+                                "the particles it inserted, removed or moved cannot be meshed: {g}"
+                            ),
+                        },
+                        e => e,
+                    });
                     break;
                 }
                 // After the step the solved range went to the stash

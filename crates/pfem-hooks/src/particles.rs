@@ -184,6 +184,16 @@ where
         if (0..D).any(|k| k != axis && face_max[k] - face_min[k] < 0.0) {
             return Err(bad("face max below min".into()));
         }
+        // A face of no width across the flow (a point in 2D, a line in 3D)
+        // has no area for the rate `|v| × area`, yet its lattice put a
+        // line of particles through it (it was accepted: session 53's
+        // review).
+        if let Some(k) = (0..D).find(|&k| k != axis && face_max[k] == face_min[k]) {
+            return Err(bad(format!(
+                "the face has no width along axis {k} (min = max = {}): give it its extent across the flow",
+                face_min[k]
+            )));
+        }
         // One layer of particles is placed each time the fluid advances a
         // spacing: bound it before allocating it.
         let layer_count: f64 = (0..D)

@@ -83,6 +83,19 @@ impl Args {
     /// `--version` the version, and both exit the process; `--threads N`
     /// sizes the worker pool (before any parallel work).
     pub fn from_env() -> Result<Self, ArgsError> {
+        Self::from_env_help(USAGE.to_string())
+    }
+
+    /// [`Args::from_env`] for a program that says its own options: `own`,
+    /// their help (one option a line, as [`USAGE`]'s; empty for none), is
+    /// printed by `--help` after the common options ([`usage_with`]; the
+    /// examples' `--help` listed the common options only: session 53's
+    /// review).
+    pub fn from_env_with(own: &str) -> Result<Self, ArgsError> {
+        Self::from_env_help(usage_with(own))
+    }
+
+    fn from_env_help(help: String) -> Result<Self, ArgsError> {
         // `std::env::args` panics on an argument that is not UTF-8.
         let args = std::env::args_os()
             .skip(1)
@@ -93,7 +106,7 @@ impl Args {
             .collect::<Result<Vec<String>, ArgsError>>()?;
         let asked = |names: [&str; 2]| asks(&args, names);
         if asked(["-h", "--help"]) {
-            crate::outln!("{USAGE}");
+            crate::outln!("{help}");
             std::process::exit(0);
         }
         if asked(["--version", "-V"]) {
@@ -566,6 +579,18 @@ Options common to the bundled examples and `pfem run`:
   --help, -h            this help
 Each example has its own options too (see its source's header).";
 
+/// [`USAGE`] followed by a program's own options `own` (none: the
+/// common options alone).
+pub fn usage_with(own: &str) -> String {
+    let common =
+        USAGE.trim_end_matches("Each example has its own options too (see its source's header).");
+    if own.trim().is_empty() {
+        format!("{common}This program has no options of its own.")
+    } else {
+        format!("{common}Options of this program:\n{}", own.trim_end())
+    }
+}
+
 fn parse_positive(name: &str, v: &str) -> Result<f64, ArgsError> {
     match v.parse::<f64>() {
         Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
@@ -595,6 +620,23 @@ fn parse_threads(v: &str) -> Result<usize, ArgsError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A program's own options follow the common ones in its help, and a
+    /// program with none says so (the examples' help listed the common
+    /// options only, pointing to their sources: session 53's review).
+    #[test]
+    fn a_program_s_help_lists_its_own_options() {
+        let own = "  --young E             Young's modulus (Pa)";
+        let help = usage_with(own);
+        assert!(help.starts_with("Options common"), "{help}");
+        assert!(help.contains("--max-wall-time"), "{help}");
+        assert!(
+            help.ends_with(&format!("Options of this program:\n{own}")),
+            "{help}"
+        );
+        assert!(!help.contains("see its source"), "{help}");
+        assert!(usage_with("").ends_with("no options of its own."));
+    }
 
     /// `-h` asks for the help, except as an option's value (session 35's
     /// review: `--out -h` printed the help and exited).

@@ -71,7 +71,7 @@ pub use volume::{FreeSurfacePressureZero, VolumeCorrection};
 
 use pfem_assembly::Constraints;
 use pfem_constitutive::Material;
-use pfem_core::{Const, Dim, Vector};
+use pfem_core::{Const, Dim, Point, Vector};
 use pfem_geometry::{AlphaShapeParams, ParticleManagementParams, Tessellation, Tessellator};
 
 use crate::checkpoint::{CheckpointError, Decoder, Encoder};
@@ -100,6 +100,16 @@ where
     /// such changes in [`crate::VolumeLedger::sources`] too.
     fn sources_fluid(&self) -> bool {
         false
+    }
+
+    /// The body whose motion this hook prescribes (a wall's motion law,
+    /// [`PrescribedMotion`]), if any. Two hooks that drive one body are
+    /// refused when the run starts: each would prescribe its own velocity
+    /// and reset the positions to its own path, and the later one alone
+    /// moved the wall (a scene's law and an added one, session 53's
+    /// review). Default `None`.
+    fn drives_body(&self) -> Option<&str> {
+        None
     }
 
     /// The first time after `t` at which what the hook prescribes jumps
@@ -195,6 +205,9 @@ where
     pub(crate) mesh_generation: u64,
     /// The generation the external forces are numbered in.
     pub(crate) forces_generation: u64,
+    /// Each solid body's bounding box (body, min, max), made by the first
+    /// `insert_fluid` of the call.
+    pub(crate) solid_boxes: Option<Vec<(u32, Point<D>, Point<D>)>>,
 }
 
 impl<const D: usize> std::fmt::Debug for HookContext<'_, D>
@@ -431,7 +444,10 @@ where
     }
 
     /// Appends a fluid particle (acceleration zero, no constraint); the mesh
-    /// is remade before the next hook runs. Returns its index.
+    /// is remade before the next hook runs. Returns its index. A particle
+    /// inside a solid's mesh is refused, naming the solid (it was accepted,
+    /// and the fluid mesh then overlapped the solid's: session 53's
+    /// review).
     pub fn insert_fluid(&mut self, p: Particle<D>) -> Result<usize, RunError> {
         if let Some(why) = crate::particles::fluid_particle_fault(
             &p,
@@ -444,12 +460,103 @@ where
                 why,
             });
         }
+        if let Some(e) = self.solid_element_holding(&p.x) {
+            let nv = D + 1;
+            let first = self.elements.solid()[e * nv] as usize;
+            let body = self.particles.body()[first] as usize;
+            let name = self.body_names.get(body).map_or("?", String::as_str);
+            return Err(RunError::Hook {
+                hook: "insert_fluid".into(),
+                why: format!(
+                    "a fluid particle at {:?} lies inside solid `{name}` (its element {e}): insert fluid outside the solids",
+                    p.x.as_slice()
+                ),
+            });
+        }
         self.moved = true;
         self.touched = true;
         self.particles.push(p).map_err(|e| RunError::Hook {
             hook: "insert_fluid".into(),
             why: e.to_string(),
         })
+    }
+
+    /// The solid element (index in [`Elements::solid`]) that holds `x`
+    /// (inside or on a side, to 10⁻⁹ of its size), if any. Each solid
+    /// body's bounding box is computed once per hook call, so that points
+    /// away from the solids cost a few comparisons.
+    fn solid_element_holding(&mut self, x: &Point<D>) -> Option<usize> {
+        let nv = D + 1;
+        let solid = self.elements.solid();
+        if solid.is_empty() {
+            return None;
+        }
+        let xs = self.particles.x();
+        let boxes = self.solid_boxes.get_or_insert_with(|| {
+            let mut boxes: Vec<(u32, Point<D>, Point<D>)> = Vec::new();
+            for el in solid.chunks_exact(nv) {
+                let b = self.particles.body()[el[0] as usize];
+                let k = match boxes.iter().position(|(id, ..)| *id == b) {
+                    Some(k) => k,
+                    None => {
+                        let x0 = xs[el[0] as usize];
+                        boxes.push((b, x0, x0));
+                        boxes.len() - 1
+                    }
+                };
+                for &i in el {
+                    let y = xs[i as usize];
+                    boxes[k].1 = boxes[k].1.inf(&y);
+                    boxes[k].2 = boxes[k].2.sup(&y);
+                }
+            }
+            boxes
+        });
+        let inside_box = |lo: &Point<D>, hi: &Point<D>| {
+            let t = 1e-9 * (hi - lo).norm();
+            (0..D).all(|k| x[k] >= lo[k] - t && x[k] <= hi[k] + t)
+        };
+        let near: Vec<u32> = boxes
+            .iter()
+            .filter(|(_, lo, hi)| inside_box(lo, hi))
+            .map(|(b, ..)| *b)
+            .collect();
+        if near.is_empty() {
+            return None;
+        }
+        let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
+        let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
+        for (e, el) in solid.chunks_exact(nv).enumerate() {
+            if !near.contains(&self.particles.body()[el[0] as usize]) {
+                continue;
+            }
+            let mut lo = xs[el[0] as usize];
+            let mut hi = lo;
+            for a in 0..nv {
+                p[a] = xs[el[a] as usize];
+                lo = lo.inf(&p[a]);
+                hi = hi.sup(&p[a]);
+            }
+            if !inside_box(&lo, &hi) {
+                continue;
+            }
+            if pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]).is_none() {
+                continue;
+            }
+            // The barycentric coordinates, `λ_a(x) = λ_a(p₀) + ∇λ_a · (x − p₀)`.
+            // (On an element's side counts: a point on a side between two
+            // of the solid's elements is inside the solid, and one on its
+            // surface would make a flat fluid element.)
+            let d = x - p[0];
+            let inside = (0..nv).all(|a| {
+                let at_p0 = if a == 0 { 1.0 } else { 0.0 };
+                at_p0 + g[a].dot(&d) > -1e-9
+            });
+            if inside {
+                return Some(e);
+            }
+        }
+        None
     }
 
     /// Removes crowding fluid particles and inserts particles into oversized

@@ -113,6 +113,10 @@ where
         self.law.next_kink(t)
     }
 
+    fn drives_body(&self) -> Option<&str> {
+        Some(&self.body)
+    }
+
     fn before_solve(&mut self, ctx: &mut HookContext<'_, D>) -> Result<(), RunError> {
         let t1 = ctx.time() + ctx.dt();
         // Constraints only: no particle moves, so the driver does not
