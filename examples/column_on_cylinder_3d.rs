@@ -19,7 +19,8 @@ use pfem::prelude::*;
 
 /// This example's own options, for `--help`.
 const OPTIONS: &str = "  --depth W             depth of the tank (m; default 0.0584)
-  --cylinder-x X        the cylinder's axis along the tank (m; default 0.35)";
+  --cylinder-x X        the cylinder's axis along the tank (m; default 0.35)
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
 
 fn main() {
     if let Err(e) = run() {
@@ -30,16 +31,13 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env_with(OPTIONS)?;
-    args.reject_unknown(&["depth", "cylinder-x"])?;
+    args.reject_unknown(&["depth", "cylinder-x", "restart"])?;
     let mut case = ColumnOnCylinder3d::default();
     case.column.spacing = args.spacing.unwrap_or(case.column.spacing);
     case.column.end_time = args.end_time.unwrap_or(case.column.end_time);
     case.column.depth = args.number("depth", case.column.depth)?;
     case.cylinder_x = args.number("cylinder-x", case.cylinder_x)?;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| "out/column_on_cylinder_3d".into());
+    let out = args.out_or("out/column_on_cylinder_3d");
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay3::default()))?;
     pfem::errln!(
         "column_on_cylinder_3d: {} particles ({} in the cylinder, {} solid elements), h = {} m, end time {} s",
@@ -51,8 +49,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     );
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
+    args.restart(&mut sim, &mut output, &out)?;
     sim.run(&mut [&mut output])?;
-    pfem::cli::exit_if_stopped(&sim);
+    pfem::cli::exit_if_stopped_at(&sim, &output);
     let ux = output.probe_series("ux_top");
     let fx = output.probe_series("force_x");
     let (t_max, ux_max) =

@@ -101,8 +101,8 @@ fn mud() -> Bingham {
     }
 }
 
-/// This example's own options, for `--help`: none.
-const OPTIONS: &str = "";
+/// This example's own options, for `--help`.
+const OPTIONS: &str = "  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
 
 fn main() {
     if let Err(e) = run() {
@@ -113,13 +113,10 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env_with(OPTIONS)?;
-    args.reject_unknown(&[])?;
+    args.reject_unknown(&["restart"])?;
     let h = args.spacing.unwrap_or(0.005);
     let end_time = args.end_time.unwrap_or(0.3);
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| "out/custom_material".into());
+    let out = args.out_or("out/custom_material");
     let scene = Scene::<2>::new("custom_material")
         .gravity(Vector::<2>::new(0.0, -9.81))
         .settings(RunSettings {
@@ -162,8 +159,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     ];
     let mut output =
         StandardOutput::new(&out, !args.no_vtu, probes, args.quiet).overwrite(args.overwrite);
+    args.restart(&mut sim, &mut output, &out)?;
     sim.run(&mut [&mut output])?;
-    pfem::cli::exit_if_stopped(&sim);
+    pfem::cli::exit_if_stopped_at(&sim, &output);
     let front = output.probe_series("front_x");
     pfem::outln!(
         "Bingham mud column: front {:.4} m -> {:.4} m after {} s",

@@ -16,11 +16,11 @@ use pfem::output::{parse_reference_csv, plot_series_png, reference, PlotSeries, 
 use pfem::prelude::*;
 
 /// This example's own options, for `--help`.
-const OPTIONS: &str =
-    "  --aspect N2           height over width of the column, 1 or 2 (Martin & Moyce's; default 2)
+const OPTIONS: &str = "  --aspect N2           height over width of the column, 1 or 2 (Martin & Moyce's; default 2)
   --width A             column width a (m; default 0.05715)
   --tank-length L       tank length (m; default 10 a)
-  --alpha A             alpha-shape parameter (default the scene's, 1.3)";
+  --alpha A             alpha-shape parameter (default the scene's, 1.3)
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
 
 fn main() {
     if let Err(e) = run() {
@@ -31,7 +31,7 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env_with(OPTIONS)?;
-    args.reject_unknown(&["aspect", "width", "tank-length", "alpha"])?;
+    args.reject_unknown(&["aspect", "width", "tank-length", "alpha", "restart"])?;
     let mut case = DamBreak::default();
     case.width = args.number("width", case.width)?;
     case.aspect = args.number("aspect", case.aspect)?;
@@ -52,10 +52,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         (2.0 * G / case.width).sqrt()
     };
     case.end_time = args.end_time.unwrap_or(3.2 / t_scale);
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| "out/dam_break_2d".into());
+    let out = args.out_or("out/dam_break_2d");
 
     let mut scene = case.scene();
     scene.settings.alpha = args.number("alpha", scene.settings.alpha)?;
@@ -70,8 +67,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     );
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
+    args.restart(&mut sim, &mut output, &out)?;
     sim.run(&mut [&mut output])?;
-    pfem::cli::exit_if_stopped(&sim);
+    pfem::cli::exit_if_stopped_at(&sim, &output);
 
     // Compare with Martin & Moyce.
     let a = case.width;

@@ -15,7 +15,8 @@ use pfem::output::{plot_series_png, PlotSeries, PlotSpec};
 use pfem::prelude::*;
 
 /// This example's own options, for `--help`.
-const OPTIONS: &str = "  --young E             the obstacle's Young's modulus (Pa; default 1e6)";
+const OPTIONS: &str = "  --young E             the obstacle's Young's modulus (Pa; default 1e6)
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
 
 fn main() {
     if let Err(e) = run() {
@@ -26,16 +27,13 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env_with(OPTIONS)?;
-    args.reject_unknown(&["young"])?;
+    args.reject_unknown(&["young", "restart"])?;
     let mut case = DamBreakObstacle::default();
     case.spacing = args.spacing.unwrap_or(case.spacing);
     case.obstacle_spacing = case.obstacle_spacing.min(case.spacing);
     case.end_time = args.end_time.unwrap_or(case.end_time);
     case.young = args.number("young", case.young)?;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| "out/dam_break_obstacle_2d".into());
+    let out = args.out_or("out/dam_break_obstacle_2d");
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay2::default()))?;
     pfem::errln!(
         "dam_break_obstacle_2d: {} particles, end time {} s",
@@ -44,8 +42,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     );
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
+    args.restart(&mut sim, &mut output, &out)?;
     sim.run(&mut [&mut output])?;
-    pfem::cli::exit_if_stopped(&sim);
+    pfem::cli::exit_if_stopped_at(&sim, &output);
     let ux = output.probe_series("ux_top");
     let fx = output.probe_series("force_x");
     let (t_max, ux_max) =

@@ -22,7 +22,8 @@ use pfem::prelude::*;
 /// This example's own options, for `--help`.
 const OPTIONS: &str = "  --young E             the gate's Young's modulus (Pa; default 12e6)
   --gate-spacing H      the gate's particle spacing (m; default 0.00125)
-  --model M             plane-stress (default) or plane-strain";
+  --model M             plane-stress (default) or plane-strain
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
 
 fn main() {
     if let Err(e) = run() {
@@ -41,7 +42,7 @@ fn peak(series: &[(f64, f64)]) -> (f64, f64) {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env_with(OPTIONS)?;
-    args.reject_unknown(&["young", "gate-spacing", "model"])?;
+    args.reject_unknown(&["young", "gate-spacing", "model", "restart"])?;
     let mut case = ElasticGate::default();
     case.spacing = args.spacing.unwrap_or(case.spacing);
     case.end_time = args.end_time.unwrap_or(case.end_time);
@@ -54,10 +55,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             return Err(format!("--model {other}: use plane-stress or plane-strain").into())
         }
     };
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| "out/elastic_gate_2d".into());
+    let out = args.out_or("out/elastic_gate_2d");
     let mut sim = args.simulation(case.scene()?, Box::new(Delaunay2::default()))?;
     pfem::errln!(
         "elastic_gate_2d: {} particles, h = {} m, gate in {}, E = {} Pa, ν = {}, end time {} s",
@@ -74,8 +72,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     );
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
+    args.restart(&mut sim, &mut output, &out)?;
     sim.run(&mut [&mut output])?;
-    pfem::cli::exit_if_stopped(&sim);
+    pfem::cli::exit_if_stopped_at(&sim, &output);
 
     let ux = output.probe_series("ux_tip");
     let uy = output.probe_series("uy_tip");

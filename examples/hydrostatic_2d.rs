@@ -9,8 +9,8 @@ use pfem::cases::{Hydrostatic, G};
 use pfem::cli::Args;
 use pfem::prelude::*;
 
-/// This example's own options, for `--help`: none.
-const OPTIONS: &str = "";
+/// This example's own options, for `--help`.
+const OPTIONS: &str = "  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
 
 fn main() {
     if let Err(e) = run() {
@@ -21,19 +21,17 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env_with(OPTIONS)?;
-    args.reject_unknown(&[])?;
+    args.reject_unknown(&["restart"])?;
     let mut case = Hydrostatic::default();
     case.spacing = args.spacing.unwrap_or(case.spacing);
     case.end_time = args.end_time.unwrap_or(case.end_time);
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| "out/hydrostatic_2d".into());
+    let out = args.out_or("out/hydrostatic_2d");
     let mut sim = args.simulation(case.scene(), Box::new(Delaunay2::default()))?;
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
+    args.restart(&mut sim, &mut output, &out)?;
     sim.run(&mut [&mut output])?;
-    pfem::cli::exit_if_stopped(&sim);
+    pfem::cli::exit_if_stopped_at(&sim, &output);
     let p = output.probe_series("bottom_pressure");
     let vmax = output
         .probe_series("max_speed")

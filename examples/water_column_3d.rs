@@ -18,7 +18,8 @@ use pfem::cli::Args;
 use pfem::prelude::*;
 
 /// This example's own options, for `--help`.
-const OPTIONS: &str = "  --depth W             depth of the slice (m; default 0.0584)";
+const OPTIONS: &str = "  --depth W             depth of the slice (m; default 0.0584)
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
 
 fn main() {
     if let Err(e) = run() {
@@ -29,7 +30,7 @@ fn main() {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::from_env_with(OPTIONS)?;
-    args.reject_unknown(&["depth"])?;
+    args.reject_unknown(&["depth", "restart"])?;
     let mut case = WaterColumn3d {
         side_walls: false,
         ..Default::default()
@@ -37,10 +38,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     case.spacing = args.spacing.unwrap_or(case.spacing);
     case.end_time = args.end_time.unwrap_or(case.end_time);
     case.depth = args.number("depth", case.depth)?;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| "out/water_column_3d".into());
+    let out = args.out_or("out/water_column_3d");
     let mut sim = args.simulation(case.scene(), Box::new(Delaunay3::default()))?;
     pfem::cases3d::slip_sides(&mut sim);
     pfem::errln!(
@@ -57,8 +55,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     );
     let mut output = StandardOutput::new(&out, !args.no_vtu, case.probes(), args.quiet)
         .overwrite(args.overwrite);
+    args.restart(&mut sim, &mut output, &out)?;
     sim.run(&mut [&mut output])?;
-    pfem::cli::exit_if_stopped(&sim);
+    pfem::cli::exit_if_stopped_at(&sim, &output);
     // Surge front at the paper's snapshot times.
     let front = output.probe_series("front_x");
     // (Only those the run reached: a run to 0.1 s printed the front at

@@ -12,6 +12,7 @@ mod contact;
 mod convergence;
 mod custom_materials;
 mod determinism;
+mod example_restart;
 mod floating;
 mod floating_3d;
 mod hertz_3d;

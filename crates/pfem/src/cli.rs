@@ -67,6 +67,32 @@ where
     }
 }
 
+/// [`exit_if_stopped`] for an example that can continue: the message adds
+/// the command that does (`--restart` with the checkpoint the output
+/// wrote when the run stopped), as `pfem run` prints its own.
+pub fn exit_if_stopped_at<const D: usize>(
+    sim: &pfem_driver::Simulation<D>,
+    output: &crate::StandardOutput<D>,
+) where
+    pfem_core::Const<D>: pfem_core::Dim,
+{
+    if let Some(reason) = sim.stopped() {
+        crate::errln!(
+            "the run stopped at t = {} s of {} s ({reason}): no comparison is made",
+            sim.time(),
+            sim.end_time()
+        );
+        let checkpoint = output.checkpoint_path();
+        if checkpoint.is_file() {
+            crate::errln!(
+                "continue with the same command and --restart {}",
+                checkpoint.display()
+            );
+        }
+        std::process::exit(2);
+    }
+}
+
 /// The options that take no value.
 pub const FLAGS: [&str; 6] = [
     "--quiet",
@@ -117,6 +143,76 @@ impl Args {
         parsed.reject_positional()?;
         parsed.apply_threads()?;
         Ok(parsed)
+    }
+
+    /// The output folder: `--out`, else with `--restart` the checkpoint's
+    /// own folder (its real file's), else `default`.
+    pub fn out_or(&self, default: impl Into<PathBuf>) -> PathBuf {
+        if let Some(out) = &self.out {
+            return out.clone();
+        }
+        let own = self
+            .options
+            .get("restart")
+            .and_then(|f| std::fs::canonicalize(f).ok())
+            .and_then(|real| real.parent().map(std::path::Path::to_path_buf));
+        own.unwrap_or_else(|| default.into())
+    }
+
+    /// Continues the run from `--restart CHECKPOINT` when given (the
+    /// examples' counterpart of `pfem run --restart`; before session 54 an
+    /// example wrote a checkpoint on `--max-wall-time` and could not read
+    /// it): reads it within the memory budget, restores `sim` from it
+    /// ([`crate::Simulation::restore`]: a scene, a setting or a hook that
+    /// differs from the checkpoint's is refused, naming it) and resumes
+    /// `output` in its folder ([`crate::StandardOutput::resume`]). The
+    /// output must write into the checkpoint's own folder ([`Args::out_or`]
+    /// gives it); a checkpoint at or past the end time is refused (nothing
+    /// to run). Call it after the hooks are added and before the run.
+    /// Without `--restart`, does nothing.
+    pub fn restart<const D: usize>(
+        &self,
+        sim: &mut crate::Simulation<D>,
+        output: &mut crate::StandardOutput<D>,
+        out: &std::path::Path,
+    ) -> Result<(), Box<dyn std::error::Error>>
+    where
+        pfem_core::Const<D>: pfem_core::Dim,
+    {
+        let Some(f) = self.options.get("restart") else {
+            return Ok(());
+        };
+        let own = std::fs::canonicalize(f)
+            .map_err(|e| ArgsError(format!("--restart {f}: {e}")))?
+            .parent()
+            .map(std::path::Path::to_path_buf);
+        let here = std::fs::canonicalize(out).ok();
+        if own.is_none() || here != own {
+            return Err(ArgsError(format!(
+                "--restart {f} --out {}: an example continues in its checkpoint's own folder (leave --out out, or give that folder)",
+                out.display()
+            ))
+            .into());
+        }
+        let ck = crate::observe::read_checkpoint_within(f, self.memory_budget()?)
+            .map_err(|e| format!("--restart {f}: {e}"))?;
+        sim.restore(&ck)
+            .and_then(|()| output.resume(&ck))
+            .map_err(|e| format!("--restart {f}: {e}"))?;
+        if sim.reached_end_time() {
+            return Err(format!(
+                "--restart {f}: the checkpoint is at t = {} s, at or past the end time {} s: nothing to run (give a later --end-time to continue)",
+                sim.time(),
+                sim.end_time()
+            )
+            .into());
+        }
+        crate::errln!(
+            "restarted from {f} at t = {} s (step {})",
+            sim.time(),
+            sim.steps()
+        );
+        Ok(())
     }
 
     /// Refuses bare words: an example takes options only, and a bare word
