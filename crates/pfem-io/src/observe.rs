@@ -1187,10 +1187,29 @@ where
     }
 
     /// `summary.json` with `"status": "failed"` and the error's text
-    /// (`"error"`), the figures as they stood at the last accepted step.
+    /// (`"error"`), the figures as they stood at the last accepted step,
+    /// and a last VTU frame of that step's state when it falls after the
+    /// series' last frame (the series ended at the last frame on the
+    /// interval, up to an interval before the failure: session 53's
+    /// review). A state that is not finite, or a set not meshed, writes
+    /// none.
     fn failed(&mut self, sim: &Simulation<D>, error: &RunError) {
         if let Some(p) = self.progress.as_mut() {
             p.finish();
+        }
+        let after_last = self
+            .series
+            .as_ref()
+            .is_some_and(|s| s.entries().last().is_none_or(|&(t, _)| t < sim.time()));
+        let finite = sim
+            .particles()
+            .x()
+            .iter()
+            .chain(sim.particles().v())
+            .all(|x| x.iter().all(|c| c.is_finite()))
+            && sim.particles().pressure().iter().all(|p| p.is_finite());
+        if after_last && finite && sim.is_meshed() {
+            let _ = self.write_frame(sim);
         }
         self.failure = Some(error.to_string());
         if self.dir.is_dir() {

@@ -708,6 +708,50 @@ fn a_courant_step_below_the_smallest_step_stops_the_run() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A run that fails between two frames writes its last accepted state as
+/// a final frame (the series ended at the last frame on the interval, up
+/// to an interval before the failure: session 53's review); one that
+/// fails on a frame's time writes it once.
+#[test]
+fn a_failed_run_s_series_ends_with_its_last_accepted_state() {
+    for fail_at in [3u64, 2] {
+        let dir = std::env::temp_dir().join(format!(
+            "pfem-test-failed-frame-{}-{fail_at}",
+            std::process::id()
+        ));
+        std::fs::remove_dir_all(&dir).ok();
+        let mut s = puddle("failing");
+        s.settings.end_time = 0.1;
+        let mut sim = build(s).unwrap();
+        sim.add_hook(Box::new(pfem::hooks::FnHook::new("fail").after_step(
+            move |ctx| {
+                if ctx.steps() == fail_at {
+                    Err(RunError::Hook {
+                        hook: "fail".into(),
+                        why: "on purpose".into(),
+                    })
+                } else {
+                    Ok(())
+                }
+            },
+        )));
+        let mut out = StandardOutput::new(&dir, true, Vec::new(), true);
+        sim.run(&mut [&mut out]).expect_err("the hook fails");
+        let pvd = std::fs::read_to_string(dir.join("failing.pvd")).unwrap();
+        let times: Vec<f64> = pvd
+            .split("timestep=\"")
+            .skip(1)
+            .map(|r| r.split('"').next().unwrap().parse().unwrap())
+            .collect();
+        let t = sim.time();
+        assert!(t > 0.0 && t < 0.1, "{t}");
+        assert_eq!(times.last().copied(), Some(t), "{pvd}");
+        // Each time once, increasing.
+        assert!(times.windows(2).all(|w| w[0] < w[1]), "{times:?}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
+
 /// The bundled wave-paddle scene runs end to end through `pfem run`: the
 /// paddle follows its sinusoidal law, and the force and point probes
 /// appear in `probes.csv` with finite values, a row every
