@@ -648,7 +648,8 @@ Options common to the bundled examples and `pfem run`:
                         change (default 1e-3; 0: every iterate to the solver's target)
   --solver S            block (default), block-amg (multigrid), direct, lu, cholesky, cg
                         or petsc (built with the `petsc` feature; PETSc options in
-                        PFEM_PETSC_OPTIONS, prefix -pfem_)
+                        PFEM_PETSC_OPTIONS, prefix -pfem_); block-amg is for a
+                        stabilised pressure (without it, measured 24x slower)
   --pressure-stabilisation A
                         pressure stabilisation factor of τ (default: the scene's,
                         0 = off unless a scene file sets `[run] pressure_stabilisation`;
