@@ -20,7 +20,7 @@ use pfem::prelude::*;
 /// This example's own options, for `--help`.
 const OPTIONS: &str = "  --depth W             depth of the tank (m; default 0.0584)
   --cylinder-x X        the cylinder's axis along the tank (m; default 0.35)
-  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT when it stopped (in its folder, with the same options)";
 
 fn main() {
     if let Err(e) = run() {

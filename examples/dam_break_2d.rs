@@ -20,7 +20,7 @@ const OPTIONS: &str = "  --aspect N2           height over width of the column, 
   --width A             column width a (m; default 0.05715)
   --tank-length L       tank length (m; default 10 a)
   --alpha A             alpha-shape parameter (default the scene's, 1.3)
-  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT when it stopped (in its folder, with the same options)";
 
 fn main() {
     if let Err(e) = run() {

@@ -16,7 +16,7 @@ use pfem::prelude::*;
 
 /// This example's own options, for `--help`.
 const OPTIONS: &str = "  --young E             the obstacle's Young's modulus (Pa; default 1e6)
-  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT when it stopped (in its folder, with the same options)";
 
 fn main() {
     if let Err(e) = run() {

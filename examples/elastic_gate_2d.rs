@@ -23,7 +23,7 @@ use pfem::prelude::*;
 const OPTIONS: &str = "  --young E             the gate's Young's modulus (Pa; default 12e6)
   --gate-spacing H      the gate's particle spacing (m; default 0.00125)
   --model M             plane-stress (default) or plane-strain
-  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT when it stopped (in its folder, with the same options)";
 
 fn main() {
     if let Err(e) = run() {

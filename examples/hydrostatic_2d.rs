@@ -10,7 +10,7 @@ use pfem::cli::Args;
 use pfem::prelude::*;
 
 /// This example's own options, for `--help`.
-const OPTIONS: &str = "  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
+const OPTIONS: &str = "  --restart CHECKPOINT  continue the run that wrote CHECKPOINT when it stopped (in its folder, with the same options)";
 
 fn main() {
     if let Err(e) = run() {

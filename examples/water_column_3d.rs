@@ -19,7 +19,7 @@ use pfem::prelude::*;
 
 /// This example's own options, for `--help`.
 const OPTIONS: &str = "  --depth W             depth of the slice (m; default 0.0584)
-  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (in its folder, with the same options; a later --end-time extends it)";
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT when it stopped (in its folder, with the same options)";
 
 fn main() {
     if let Err(e) = run() {

@@ -2732,6 +2732,22 @@ fn a_wall_driven_by_two_motion_laws_is_refused() {
         "{err}"
     );
     assert_eq!(sim.steps(), 0);
+    // A wall the scene moves at a constant velocity is not a hook: the law
+    // took it over silently (session 54's review).
+    let scene = small_tank("velocity and law").wall(
+        "paddle",
+        boxed(-0.1, 0.0, -0.05, 0.2),
+        0.05,
+        WallMotion::Velocity(Vector::<2>::new(0.5, 0.0)),
+    );
+    let mut sim = sim2(scene, StepParams::default());
+    sim.add_hook(Box::new(PrescribedMotion::new("paddle", law(0.001))));
+    let err = sim.run(&mut []).unwrap_err().to_string();
+    assert!(
+        err.contains("`paddle` moves already") && err.contains("0.5"),
+        "{err}"
+    );
+    assert_eq!(sim.steps(), 0);
     // One law each on two walls runs.
     let scene = small_tank("two walls")
         .wall(
@@ -2771,8 +2787,18 @@ fn inserting_fluid_inside_a_solid_or_onto_a_particle_is_an_error_naming_it() {
         q
     };
     for (at, expect) in [
-        (Point::<2>::new(0.17, 0.08), "inside solid `block`"),
-        (Point::<2>::new(0.22, 0.12), "inside solid `block`"),
+        (
+            Point::<2>::new(0.17, 0.08),
+            "inside or on the surface of solid `block`",
+        ),
+        (
+            Point::<2>::new(0.22, 0.12),
+            "inside or on the surface of solid `block`",
+        ),
+        (
+            Point::<2>::new(0.25, 0.1),
+            "inside or on the surface of solid `block`",
+        ),
     ] {
         let mut sim = sim2(scene(), StepParams::default());
         let q = fluid_like(&sim, at);
@@ -2780,7 +2806,7 @@ fn inserting_fluid_inside_a_solid_or_onto_a_particle_is_an_error_naming_it() {
             FnHook::new("pour").start(move |ctx| ctx.insert_fluid(q).map(|_| ())),
         ));
         let err = sim.run(&mut []).unwrap_err().to_string();
-        assert!(err.contains(expect), "{err}");
+        assert!(err.contains(expect) && err.contains("pour"), "{err}");
     }
     // Beside the solid, and above it, it is accepted.
     for at in [Point::<2>::new(0.125, 0.05), Point::<2>::new(0.2, 0.2)] {
@@ -2802,5 +2828,8 @@ fn inserting_fluid_inside_a_solid_or_onto_a_particle_is_an_error_naming_it() {
         FnHook::new("pour").start(move |ctx| ctx.insert_fluid(q).map(|_| ())),
     ));
     let err = sim.run(&mut []).unwrap_err().to_string();
-    assert!(err.contains("pour") && err.contains("inserted"), "{err}");
+    assert!(
+        err.contains("`pour`") && err.contains("after it changed the particles"),
+        "{err}"
+    );
 }

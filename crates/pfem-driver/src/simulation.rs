@@ -1255,6 +1255,7 @@ where
                 mesh_generation: self.meshed,
                 forces_generation: generation,
                 solid_boxes: None,
+                hook_name: hook.name().to_string(),
             };
             let r = match point {
                 HookPoint::Start => hook.start(&mut ctx),
@@ -1344,16 +1345,16 @@ where
                     self.elements.keep_stash();
                 }
                 self.elements.clear_fluid();
-                // Named with the hook: a particle inserted onto another
-                // failed as a bare "remeshing failed" naming neither the
-                // hook nor the insertion (session 53's review).
+                // Named with the hook after which it failed: a particle
+                // inserted onto another failed as a bare "remeshing failed"
+                // naming neither the hook nor the insertion (session 53's
+                // review). (Not blamed on it: an earlier hook's moves or
+                // the step's may be the cause, session 54's.)
                 if let Err(e) = self.remesh() {
                     result = Err(match e {
                         RunError::Geometry(g) => RunError::Hook {
                             hook: hook.name().to_string(),
-                            why: format!(
-                                "the particles it inserted, removed or moved cannot be meshed: {g}"
-                            ),
+                            why: format!("remeshing after it changed the particles failed (the cause may be this change, an earlier hook's or the step's): {g}"),
                         },
                         e => e,
                     });

@@ -1179,7 +1179,11 @@ where
         if let Some(p) = self.progress.as_mut() {
             p.finish();
         }
-        if self.checkpoint_every.is_some() || sim.stopped().is_some() {
+        // A resumed run's too: its folder's checkpoint was the stop's, and
+        // a restart from it re-ran the end and cut `probes.csv` back to it
+        // (session 54's review).
+        if self.checkpoint_every.is_some() || sim.stopped().is_some() || self.restarted_at.is_some()
+        {
             self.write_checkpoint(sim)?;
         }
         write_summary(self.dir.join("summary.json"), &self.summary(sim))?;

@@ -86,10 +86,23 @@ pub fn exit_if_stopped_at<const D: usize>(
         if checkpoint.is_file() {
             crate::errln!(
                 "continue with the same command and --restart {}",
-                checkpoint.display()
+                shell_quote(&checkpoint.to_string_lossy())
             );
         }
         std::process::exit(2);
+    }
+}
+
+/// `w` quoted for a POSIX shell where it needs it (a path with a space),
+/// for the commands a stopped run prints.
+pub fn shell_quote(w: &str) -> String {
+    if !w.is_empty()
+        && w.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-./:=+,@%".contains(c))
+    {
+        w.to_string()
+    } else {
+        format!("'{}'", w.replace('\'', r"'\''"))
     }
 }
 

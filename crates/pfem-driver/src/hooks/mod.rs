@@ -206,8 +206,12 @@ where
     /// The generation the external forces are numbered in.
     pub(crate) forces_generation: u64,
     /// Each solid body's bounding box (body, min, max), made by the first
-    /// `insert_fluid` of the call.
+    /// `insert_fluid` of the call (and again after `particles_mut`).
     pub(crate) solid_boxes: Option<Vec<(u32, Point<D>, Point<D>)>>,
+    /// The name of the hook called, for the errors of `insert_fluid` and
+    /// `manage_particles` (they named themselves alone: session 54's
+    /// review).
+    pub(crate) hook_name: String,
 }
 
 impl<const D: usize> std::fmt::Debug for HookContext<'_, D>
@@ -307,6 +311,8 @@ where
     pub fn particles_mut(&mut self) -> &mut Particles<D> {
         self.moved = true;
         self.touched = true;
+        // (The solids may be moved through it.)
+        self.solid_boxes = None;
         self.particles
     }
 
@@ -456,7 +462,7 @@ where
             self.fixed_body,
         ) {
             return Err(RunError::Hook {
-                hook: "insert_fluid".into(),
+                hook: format!("{} (insert_fluid)", self.hook_name),
                 why,
             });
         }
@@ -466,17 +472,18 @@ where
             let body = self.particles.body()[first] as usize;
             let name = self.body_names.get(body).map_or("?", String::as_str);
             return Err(RunError::Hook {
-                hook: "insert_fluid".into(),
+                hook: format!("{} (insert_fluid)", self.hook_name),
                 why: format!(
-                    "a fluid particle at {:?} lies inside solid `{name}` (its element {e}): insert fluid outside the solids",
+                    "a fluid particle at {:?} lies inside or on the surface of solid `{name}` (its element {e}): insert fluid outside the solids",
                     p.x.as_slice()
                 ),
             });
         }
         self.moved = true;
         self.touched = true;
+        let hook = format!("{} (insert_fluid)", self.hook_name);
         self.particles.push(p).map_err(|e| RunError::Hook {
-            hook: "insert_fluid".into(),
+            hook,
             why: e.to_string(),
         })
     }
@@ -572,7 +579,7 @@ where
         // set's Delaunay for the new particles (a review of session 48).
         if self.set_changed() {
             return Err(RunError::Hook {
-                hook: "manage_particles".into(),
+                hook: format!("{} (manage_particles)", self.hook_name),
                 why: "the particles were removed or inserted since the mesh was made (in this hook call, or by hand): call it once per hook call (the driver meshes the new set when the hook returns)".into(),
             });
         }
@@ -590,8 +597,9 @@ where
         if upd.removed == 0 && upd.inserted == 0 {
             return Ok((0, 0));
         }
+        let hook = format!("{} (manage_particles)", self.hook_name);
         self.particles.remap(&upd.map).map_err(|e| RunError::Hook {
-            hook: "manage_particles".into(),
+            hook,
             why: e.to_string(),
         })?;
         self.moved = true;

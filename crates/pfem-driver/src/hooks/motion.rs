@@ -87,6 +87,26 @@ where
                 ),
             });
         }
+        // A wall the scene moves at a constant velocity
+        // (`WallMotion::Velocity`) is not a hook, so `Hook::drives_body`
+        // does not see it: the law took it over silently (session 54's
+        // review). (Its particles' prescribed velocity is the scene's
+        // until a law sets it; another hook's law is `drives_body`'s.)
+        let c = ctx.particles().constraints();
+        if let Some(&i) = self
+            .particles
+            .iter()
+            .find(|&&i| c.is_fully_fixed(i) && c.velocity[i] != Vector::<D>::zeros())
+        {
+            return Err(RunError::Hook {
+                hook: "prescribed motion".into(),
+                why: format!(
+                    "wall `{}` moves already, at the velocity {:?} m/s the scene (or another hook) gives it (its particle {i}): give it one motion, the scene's or this law",
+                    self.body,
+                    c.velocity[i].as_slice()
+                ),
+            });
+        }
         let t = ctx.time();
         let p = ctx.particles_mut();
         for &i in &self.particles {

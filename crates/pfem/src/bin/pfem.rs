@@ -680,16 +680,7 @@ where
         };
         // Each word quoted for a POSIX shell where it needs it (a path
         // with a space).
-        let quote = |w: &str| {
-            if !w.is_empty()
-                && w.chars()
-                    .all(|c| c.is_ascii_alphanumeric() || "_-./:=+,@%".contains(c))
-            {
-                w.to_string()
-            } else {
-                format!("'{}'", w.replace('\'', r"'\''"))
-            }
-        };
+        let quote = pfem::cli::shell_quote;
         let words: Vec<String> = again.iter().map(|w| quote(w)).collect();
         pfem::errln!(
             "{reason}{when}; continue with: pfem {} --out {} --restart {}",
