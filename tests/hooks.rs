@@ -2718,12 +2718,10 @@ fn a_wall_driven_by_two_motion_laws_is_refused() {
             ramp: 0.0,
         })
     };
-    let scene = small_tank("two laws").wall(
-        "paddle",
-        boxed(-0.1, 0.0, -0.05, 0.2),
-        0.05,
-        WallMotion::Law(law(0.01)),
-    );
+    let with_paddle = |name: &str, motion: WallMotion<2>| {
+        small_tank(name).wall("paddle", boxed(-0.1, 0.0, -0.05, 0.2), 0.05, motion)
+    };
+    let scene = with_paddle("two laws", WallMotion::Law(law(0.01)));
     let mut sim = sim2(scene, StepParams::default());
     sim.add_hook(Box::new(PrescribedMotion::new("paddle", law(0.02))));
     let err = sim.run(&mut []).unwrap_err().to_string();
@@ -2734,10 +2732,8 @@ fn a_wall_driven_by_two_motion_laws_is_refused() {
     assert_eq!(sim.steps(), 0);
     // A wall the scene moves at a constant velocity is not a hook: the law
     // took it over silently (session 54's review).
-    let scene = small_tank("velocity and law").wall(
-        "paddle",
-        boxed(-0.1, 0.0, -0.05, 0.2),
-        0.05,
+    let scene = with_paddle(
+        "velocity and law",
         WallMotion::Velocity(Vector::<2>::new(0.5, 0.0)),
     );
     let mut sim = sim2(scene, StepParams::default());
@@ -2749,14 +2745,12 @@ fn a_wall_driven_by_two_motion_laws_is_refused() {
     );
     assert_eq!(sim.steps(), 0);
     // One law each on two walls runs.
-    let scene = small_tank("two walls")
-        .wall(
-            "paddle",
-            boxed(-0.1, 0.0, -0.05, 0.2),
-            0.05,
-            WallMotion::Law(law(0.01)),
-        )
-        .wall("far", boxed(0.25, 0.0, 0.3, 0.2), 0.05, WallMotion::Fixed);
+    let scene = with_paddle("two walls", WallMotion::Law(law(0.01))).wall(
+        "far",
+        boxed(0.25, 0.0, 0.3, 0.2),
+        0.05,
+        WallMotion::Fixed,
+    );
     let mut sim = sim2(scene, StepParams::default());
     sim.add_hook(Box::new(PrescribedMotion::new("far", law(0.001))));
     sim.run(&mut []).unwrap();

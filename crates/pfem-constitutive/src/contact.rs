@@ -300,12 +300,25 @@ where
             kin.j < 0.5
         };
         closed.then(|| {
-            format!(
-                "the contact layer closed to {:.2} % of its contact distance in one step (from {:.2} %): its penalty K_c = {:e} Pa is too soft for the load; raise the contact stiffness",
-                100.0 * r,
-                100.0 * ratio,
-                self.normal_stiffness
-            )
+            if ratio > CLOSED_GAP {
+                format!(
+                    "the contact layer closed to {:.2} % of its contact distance in one step (from {:.2} %): its penalty K_c = {:e} Pa is too soft for the load; raise the contact stiffness",
+                    100.0 * r,
+                    100.0 * ratio,
+                    self.normal_stiffness
+                )
+            } else {
+                // Closed before the step began: a smaller step cannot open
+                // it, nor can a stiffer penalty alone (the message said
+                // "closed … in one step (from 5.00 %) … too soft", which
+                // no stiffness cured: session 54's review).
+                format!(
+                    "the contact layer was closed to {:.2} % of its contact distance when the step began, and closed to {:.2} % (the bodies met inside it between two remeshings, too fast for the steps: lower max_dt; its penalty is K_c = {:e} Pa)",
+                    100.0 * ratio,
+                    100.0 * r,
+                    self.normal_stiffness
+                )
+            }
         })
     }
 

@@ -57,14 +57,7 @@ pub fn exit_if_stopped<const D: usize>(sim: &pfem_driver::Simulation<D>)
 where
     pfem_core::Const<D>: pfem_core::Dim,
 {
-    if let Some(reason) = sim.stopped() {
-        crate::errln!(
-            "the run stopped at t = {} s of {} s ({reason}): no comparison is made",
-            sim.time(),
-            sim.end_time()
-        );
-        std::process::exit(2);
-    }
+    exit_stopped(sim, None);
 }
 
 /// [`exit_if_stopped`] for an example that can continue: the message adds
@@ -76,17 +69,27 @@ pub fn exit_if_stopped_at<const D: usize>(
 ) where
     pfem_core::Const<D>: pfem_core::Dim,
 {
+    exit_stopped(sim, Some(output.checkpoint_path()));
+}
+
+/// [`exit_if_stopped`], saying how to continue from `checkpoint` when it
+/// was written.
+fn exit_stopped<const D: usize>(
+    sim: &pfem_driver::Simulation<D>,
+    checkpoint: Option<std::path::PathBuf>,
+) where
+    pfem_core::Const<D>: pfem_core::Dim,
+{
     if let Some(reason) = sim.stopped() {
         crate::errln!(
             "the run stopped at t = {} s of {} s ({reason}): no comparison is made",
             sim.time(),
             sim.end_time()
         );
-        let checkpoint = output.checkpoint_path();
-        if checkpoint.is_file() {
+        if let Some(c) = checkpoint.filter(|c| c.is_file()) {
             crate::errln!(
                 "continue with the same command and --restart {}",
-                shell_quote(&checkpoint.to_string_lossy())
+                shell_quote(&c.to_string_lossy())
             );
         }
         std::process::exit(2);
