@@ -503,6 +503,23 @@ pub enum ProbeSpec {
         #[serde(default)]
         name: Option<String>,
     },
+    /// `contact_force`: the contact force body `from` exerts on body `on`
+    /// (N; N per metre in 2D), `pfem_io::Loads::contact_force`, both walls
+    /// or solids; columns `cfx_NAME`, `cfy_NAME` (and `cfz_NAME`), its
+    /// component along the mean contact normal `cn_NAME` (positive when it
+    /// pushes) and the magnitude of the rest `ct_NAME` (friction), `NAME`
+    /// defaulting to `ON_FROM`. Zero while they do not touch. (The `force`
+    /// probe reads the water's pressure only: a block resting on a floor
+    /// gave no scene-file probe of its contact: session 54's review.)
+    ContactForce {
+        /// The body acted on.
+        on: String,
+        /// The body acting.
+        from: String,
+        /// Column suffix; default `ON_FROM`.
+        #[serde(default)]
+        name: Option<String>,
+    },
     /// `point`: the fluid's pressure (Pa) and velocity (m/s) at a fixed
     /// point, interpolated in the fluid element holding it (NaN where no
     /// fluid element does: a dry point); columns `p_NAME`, `vx_NAME`,
@@ -525,6 +542,7 @@ impl ProbeSpec {
             ProbeSpec::BottomPressure => "bottom_pressure",
             ProbeSpec::BodyDisplacement { .. } => "body_displacement",
             ProbeSpec::Force { .. } => "force",
+            ProbeSpec::ContactForce { .. } => "contact_force",
             ProbeSpec::Point { .. } => "point",
         }
     }
@@ -1156,9 +1174,9 @@ impl SceneFile {
         // A given name ends the probe's column names: empty, it named the
         // columns `p_`, `vx_` (session 52's review).
         let given = match p.get_ref() {
-            ProbeSpec::BodyDisplacement { name, .. } | ProbeSpec::Force { name, .. } => {
-                name.as_deref()
-            }
+            ProbeSpec::BodyDisplacement { name, .. }
+            | ProbeSpec::Force { name, .. }
+            | ProbeSpec::ContactForce { name, .. } => name.as_deref(),
             ProbeSpec::Point { name, .. } => Some(name.as_str()),
             _ => None,
         };
@@ -1281,6 +1299,63 @@ impl SceneFile {
                                 f.as_ref().map_or(f64::NAN, |f| f.1[k])
                             },
                         )
+                    })
+                    .collect()
+            }
+            ProbeSpec::ContactForce { on, from, name } => {
+                for b in [on, from] {
+                    match self.bodies.iter().find(|x| &x.get_ref().name == b) {
+                        None => {
+                            return Err(self.error(
+                                p.span(),
+                                format!("probe `contact_force`: no body `{b}`"),
+                            ))
+                        }
+                        Some(x) if x.get_ref().kind == BodyKind::Fluid => {
+                            return Err(self.error(
+                                p.span(),
+                                format!("probe `contact_force`: `{b}` is a fluid (contact is between walls and solids)"),
+                            ))
+                        }
+                        Some(_) => {}
+                    }
+                }
+                if on == from {
+                    return Err(self.error(
+                        p.span(),
+                        format!("probe `contact_force`: `on` and `from` are both `{on}`"),
+                    ));
+                }
+                let suffix = name.clone().unwrap_or_else(|| format!("{on}_{from}"));
+                // Measured once a row for its D + 2 columns.
+                let contact: Shared<(RowKey, Vec<f64>)> = Arc::default();
+                let labels: Vec<String> = (0..D)
+                    .map(|k| format!("cf{}_{suffix}", ["x", "y", "z"][k]))
+                    .chain([format!("cn_{suffix}"), format!("ct_{suffix}")])
+                    .collect();
+                labels
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, label)| {
+                        let (on, from) = (on.clone(), from.clone());
+                        let contact = contact.clone();
+                        Probe::new(&label, move |s: &Simulation<D>| {
+                            let key = row_key(s);
+                            let mut c = contact.lock().unwrap_or_else(|e| e.into_inner());
+                            if c.as_ref().is_none_or(|c| c.0 != key) {
+                                let v = match s.contact_force(&on, &from) {
+                                    Ok(f) => f
+                                        .force
+                                        .iter()
+                                        .copied()
+                                        .chain([f.normal, f.tangential])
+                                        .collect(),
+                                    Err(_) => vec![f64::NAN; D + 2],
+                                };
+                                *c = Some((key, v));
+                            }
+                            c.as_ref().map_or(f64::NAN, |c| c.1[k])
+                        })
                     })
                     .collect()
             }

@@ -1301,3 +1301,88 @@ fn messages_name_the_right_thing() {
     assert_eq!(SceneFile::read(&path).unwrap().locate(&err), None, "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Session 54: the `contact_force` probe reads the contact force of one
+/// wall or solid on another (the `force` probe reads the water's pressure
+/// only, and a block resting on a floor had no scene-file probe of its
+/// contact): a block resting on a floor carries its weight, pushing; the
+/// checks (an unknown body, a fluid, one body twice) are refused with
+/// their line.
+#[test]
+fn a_contact_force_probe_reads_a_resting_block_s_weight() {
+    let text = |probe: &str| {
+        format!(
+            r#"
+name = "resting"
+dimension = 2
+spacing = 0.01
+gravity = [0.0, -9.81]
+probes = [{probe}]
+[run]
+end_time = 0.2
+max_dt = 2e-3
+[[body]]
+name = "floor"
+kind = "wall"
+geometry.box = {{ min = [-0.05, -0.02], max = [0.15, 0.0] }}
+[[body]]
+name = "block"
+kind = "solid"
+material.hypoelastic = {{ density = 1000.0, young = 1e7, poisson = 0.3 }}
+geometry.box = {{ min = [0.0, 0.01], max = [0.1, 0.06] }}
+[[body]]
+name = "water"
+kind = "fluid"
+material.newtonian = {{ density = 1000.0, viscosity = 1e-3, bulk_modulus = 2.2e6 }}
+geometry.box = {{ min = [1.0, 0.0], max = [1.05, 0.05] }}
+"#
+        )
+    };
+    let LoadedScene::Two(scene, probes) = build(&text(
+        "{ contact_force = { on = \"block\", from = \"floor\" } }",
+    ))
+    .unwrap() else {
+        panic!("2D")
+    };
+    let names: Vec<&str> = probes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "cfx_block_floor",
+            "cfy_block_floor",
+            "cn_block_floor",
+            "ct_block_floor"
+        ]
+    );
+    let mut sim = simulation(scene);
+    sim.run(&mut []).unwrap();
+    let value = |k: usize| (probes[k].measure)(&sim);
+    // The block's weight: its lumped masses, 0.1 × 0.05 m² of 1000 kg/m³.
+    let weight = 1000.0 * 0.1 * 0.05 * 9.81;
+    println!(
+        "contact force on the resting block: ({:.3}, {:.3}) N/m, normal {:.3}, against its weight {weight:.3}",
+        value(0),
+        value(1),
+        value(2)
+    );
+    assert!((value(1) / weight - 1.0).abs() < 0.02, "{}", value(1));
+    assert!((value(2) / weight - 1.0).abs() < 0.02, "{}", value(2));
+    assert!(value(0).abs() < 0.01 * weight && value(3) < 0.01 * weight);
+    for (probe, why) in [
+        (
+            "{ contact_force = { on = \"block\", from = \"flor\" } }",
+            "no body `flor`",
+        ),
+        (
+            "{ contact_force = { on = \"water\", from = \"floor\" } }",
+            "is a fluid",
+        ),
+        (
+            "{ contact_force = { on = \"block\", from = \"block\" } }",
+            "both `block`",
+        ),
+    ] {
+        let err = build(&text(probe)).map(|_| ()).unwrap_err().to_string();
+        assert!(err.contains(why) && err.contains("line"), "{err}");
+    }
+}
