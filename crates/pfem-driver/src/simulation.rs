@@ -1271,7 +1271,7 @@ where
                 // and not yet meshed reads as changed from the start.)
                 mesh_generation: self.meshed,
                 forces_generation: generation,
-                solid_boxes: None,
+                solid_bins: None,
                 hook_name: hook.name().to_string(),
             };
             let r = match point {
@@ -1446,7 +1446,10 @@ where
     /// the step's start, `g₀` half the sum of their spacings,
     /// `H` the larger), or half the time to `|r + u t| = g₀` if
     /// that is later; a pair that passes by farther than `g₀` is not
-    /// counted. The step is bounded by it
+    /// counted. A pair whose bodies' mean accelerations bring them together
+    /// (a body let fall from rest, which has no velocity yet) takes the
+    /// time to close along the line between them instead,
+    /// `c_v t + ½ c_a t² = |r| − d` (session 54). The step is bounded by it
     /// ([`Simulation::step`]): contact elements join edges shorter than
     /// `CONTACT_REACH` spacings only (within 1.25 spacings of a floor for
     /// an aligned lattice), so a body faster than a quarter spacing a step

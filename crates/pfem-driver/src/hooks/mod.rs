@@ -205,9 +205,9 @@ where
     pub(crate) mesh_generation: u64,
     /// The generation the external forces are numbered in.
     pub(crate) forces_generation: u64,
-    /// Each solid body's bounding box (body, min, max), made by the first
+    /// The solid elements binned on a grid, made by the first
     /// `insert_fluid` of the call (and again after `particles_mut`).
-    pub(crate) solid_boxes: Option<Vec<(u32, Point<D>, Point<D>)>>,
+    pub(crate) solid_bins: Option<SolidBins<D>>,
     /// The name of the hook called, for the errors of `insert_fluid` and
     /// `manage_particles` (they named themselves alone: session 54's
     /// review).
@@ -312,7 +312,7 @@ where
         self.moved = true;
         self.touched = true;
         // (The solids may be moved through it.)
-        self.solid_boxes = None;
+        self.solid_bins = None;
         self.particles
     }
 
@@ -489,9 +489,12 @@ where
     }
 
     /// The solid element (index in [`Elements::solid`]) that holds `x`
-    /// (inside or on a side, to 10⁻⁹ of its size), if any. Each solid
-    /// body's bounding box is computed once per hook call, so that points
-    /// away from the solids cost a few comparisons.
+    /// (inside or on a side, to 10⁻⁹ of its size), if any. The solid
+    /// elements are binned once per hook call on a grid of their mean size
+    /// (made again after `particles_mut`), so that a point costs the
+    /// elements of its cell: 10 000 points inserted into the hollow of an
+    /// L-shaped solid of 15 201 triangles took 0.74 s scanning them all
+    /// (session 54's review).
     fn solid_element_holding(&mut self, x: &Point<D>) -> Option<usize> {
         let nv = D + 1;
         let solid = self.elements.solid();
@@ -499,53 +502,15 @@ where
             return None;
         }
         let xs = self.particles.x();
-        let boxes = self.solid_boxes.get_or_insert_with(|| {
-            let mut boxes: Vec<(u32, Point<D>, Point<D>)> = Vec::new();
-            for el in solid.chunks_exact(nv) {
-                let b = self.particles.body()[el[0] as usize];
-                let k = match boxes.iter().position(|(id, ..)| *id == b) {
-                    Some(k) => k,
-                    None => {
-                        let x0 = xs[el[0] as usize];
-                        boxes.push((b, x0, x0));
-                        boxes.len() - 1
-                    }
-                };
-                for &i in el {
-                    let y = xs[i as usize];
-                    boxes[k].1 = boxes[k].1.inf(&y);
-                    boxes[k].2 = boxes[k].2.sup(&y);
-                }
-            }
-            boxes
-        });
-        let inside_box = |lo: &Point<D>, hi: &Point<D>| {
-            let t = 1e-9 * (hi - lo).norm();
-            (0..D).all(|k| x[k] >= lo[k] - t && x[k] <= hi[k] + t)
-        };
-        let near: Vec<u32> = boxes
-            .iter()
-            .filter(|(_, lo, hi)| inside_box(lo, hi))
-            .map(|(b, ..)| *b)
-            .collect();
-        if near.is_empty() {
-            return None;
-        }
+        let bins = self
+            .solid_bins
+            .get_or_insert_with(|| SolidBins::new(solid, xs));
         let mut p = [Point::<D>::zeros(); pfem_core::MAX_NV];
         let mut g = [Vector::<D>::zeros(); pfem_core::MAX_NV];
-        for (e, el) in solid.chunks_exact(nv).enumerate() {
-            if !near.contains(&self.particles.body()[el[0] as usize]) {
-                continue;
-            }
-            let mut lo = xs[el[0] as usize];
-            let mut hi = lo;
+        for &e in bins.candidates(x) {
+            let e = e as usize;
             for a in 0..nv {
-                p[a] = xs[el[a] as usize];
-                lo = lo.inf(&p[a]);
-                hi = hi.sup(&p[a]);
-            }
-            if !inside_box(&lo, &hi) {
-                continue;
+                p[a] = xs[solid[e * nv + a] as usize];
             }
             if pfem_core::shape_gradients::<D>(&p[..nv], &mut g[..nv]).is_none() {
                 continue;
@@ -605,6 +570,79 @@ where
         self.moved = true;
         self.touched = true;
         Ok((upd.removed, upd.inserted))
+    }
+}
+
+/// The solid elements binned on a uniform grid of their mean bounding-box
+/// size, for [`HookContext::insert_fluid`]'s inside-a-solid check: each
+/// element is listed in every cell its bounding box (widened by 10⁻⁹ of
+/// its size) meets.
+#[derive(Debug)]
+pub(crate) struct SolidBins<const D: usize>
+where
+    Const<D>: Dim,
+{
+    lo: Point<D>,
+    cell: f64,
+    bins: std::collections::HashMap<[i64; 3], Vec<u32>>,
+}
+
+impl<const D: usize> SolidBins<D>
+where
+    Const<D>: Dim,
+{
+    fn new(solid: &[u32], x: &[Point<D>]) -> Self {
+        let nv = D + 1;
+        let boxes: Vec<(Point<D>, Point<D>)> = solid
+            .chunks_exact(nv)
+            .map(|el| {
+                let mut lo = x[el[0] as usize];
+                let mut hi = lo;
+                for &i in &el[1..] {
+                    lo = lo.inf(&x[i as usize]);
+                    hi = hi.sup(&x[i as usize]);
+                }
+                let t = 1e-9 * (hi - lo).norm();
+                (lo.map(|v| v - t), hi.map(|v| v + t))
+            })
+            .collect();
+        let mut lo = boxes[0].0;
+        let mut size = 0.0;
+        for (a, b) in &boxes {
+            lo = lo.inf(a);
+            size += (b - a).norm();
+        }
+        let cell = (size / boxes.len() as f64).max(f64::MIN_POSITIVE);
+        let mut bins: std::collections::HashMap<[i64; 3], Vec<u32>> =
+            std::collections::HashMap::new();
+        for (e, (a, b)) in boxes.iter().enumerate() {
+            let (ka, kb) = (Self::key(&lo, cell, a), Self::key(&lo, cell, b));
+            // (At most a few cells a side: an element is about a cell.)
+            let span = |k: usize| ka[k]..=kb[k].min(ka[k] + 64);
+            for i in span(0) {
+                for j in span(1) {
+                    for l in span(2) {
+                        bins.entry([i, j, l]).or_default().push(e as u32);
+                    }
+                }
+            }
+        }
+        Self { lo, cell, bins }
+    }
+
+    fn key(lo: &Point<D>, cell: f64, x: &Point<D>) -> [i64; 3] {
+        let mut k = [0i64; 3];
+        for (d, kd) in k.iter_mut().enumerate().take(D) {
+            *kd = ((x[d] - lo[d]) / cell).floor().clamp(-1e15, 1e15) as i64;
+        }
+        k
+    }
+
+    /// The elements listed in the cell of `x`.
+    fn candidates(&self, x: &Point<D>) -> &[u32] {
+        self.bins
+            .get(&Self::key(&self.lo, self.cell, x))
+            .map_or(&[], Vec::as_slice)
     }
 }
 
