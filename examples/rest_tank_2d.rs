@@ -13,7 +13,8 @@ use pfem::cli::Args;
 use pfem::prelude::*;
 
 /// This example's own options, for `--help`: none.
-const OPTIONS: &str = "";
+const OPTIONS: &str =
+    "  (none: it prints its figures and writes no files, so --out and --overwrite do not apply)";
 
 fn main() {
     if let Err(e) = run() {
