@@ -1631,3 +1631,44 @@ fn a_closed_pipe_does_not_turn_a_run_into_a_failure() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `pfem run` prints `pfem check`'s spacing warnings before the run (on
+/// stderr): a run with walls several times coarser than its water let it
+/// through the floor and said nothing (session 54's review; at 5 times
+/// half the particles passed the floor in 0.3 s). Water of the floor's
+/// spacing gets none.
+#[test]
+fn a_run_warns_of_walls_coarser_than_their_water() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-coarse-wall-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).unwrap();
+    for (water, warned) in [("spacing = 0.0125\n", true), ("", false)] {
+        let file = dir.join("coarse.toml");
+        std::fs::write(
+            &file,
+            puddle_file("coarse", "end_time = 0.002\nmax_dt = 1e-3", water, 0.05),
+        )
+        .unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_pfem"))
+            .args([
+                "run",
+                file.to_str().unwrap(),
+                "--quiet",
+                "--no-vtu",
+                "--overwrite",
+                "--out",
+            ])
+            .arg(dir.join("out"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{err}");
+        assert_eq!(
+            err.contains("warning: wall `floor` has 4.00 times the spacing")
+                && err.contains("leaks into it"),
+            warned,
+            "{err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
