@@ -1672,3 +1672,55 @@ fn a_run_warns_of_walls_coarser_than_their_water() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `pfem check` and `pfem run` warn of a fluid whose bulk modulus is not
+/// far above its hydrostatic pressure (`K < 100 ρ g H`): a review of
+/// session 54 saw a dam break at `K = 10⁵ Pa` (90 ρ g H) have particles
+/// merge and blow apart, and `K = 1` accepted silently (the column burst
+/// at ten times free fall). Real water and the scenes' 2.2·10⁶ Pa get
+/// none.
+#[test]
+fn a_fluid_barely_stiffer_than_its_head_is_warned_of() {
+    let dir = std::env::temp_dir().join(format!("pfem-test-soft-bulk-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).unwrap();
+    // 0.15 m of water (three rows at 0.05 m): ρ g H = 1 471.5 Pa.
+    for (k, warned) in [
+        ("1.0", true),
+        ("1e5", true),
+        ("2.2e6", false),
+        ("2.2e9", false),
+    ] {
+        let file = dir.join("soft.toml");
+        let text = puddle_file("soft", "end_time = 0.002\nmax_dt = 1e-3", "", 0.05)
+            .replace("bulk_modulus = 2.2e9", &format!("bulk_modulus = {k}"));
+        std::fs::write(&file, text).unwrap();
+        for cmd in ["check", "run"] {
+            let out = Command::new(env!("CARGO_BIN_EXE_pfem"))
+                .args([cmd, file.to_str().unwrap()])
+                .args(if cmd == "run" {
+                    vec!["--quiet", "--no-vtu", "--overwrite", "--out"]
+                } else {
+                    vec![]
+                })
+                .args(if cmd == "run" {
+                    vec![dir.join("out")]
+                } else {
+                    vec![]
+                })
+                .output()
+                .unwrap();
+            let text = format!(
+                "{}{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            );
+            assert_eq!(
+                text.contains("fluid `water` has a bulk modulus"),
+                warned,
+                "{cmd} K = {k}: {text}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
