@@ -1816,6 +1816,36 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
         "{err}"
     );
     assert_eq!(sim.rejected(), 0, "retried: {err}");
+    // A solver reporting success with no progress (zeros, residual 5 or
+    // NaN): the Picard loop read the zero change as convergence, and a
+    // collapsing column stood frozen, `Ok` (session 54's review).
+    #[derive(Debug)]
+    struct Idle(f64);
+    impl pfem::assembly::LinearSolver for Idle {
+        fn name(&self) -> &str {
+            "idle solver"
+        }
+        fn solve(
+            &mut self,
+            _a: pfem::assembly::faer::sparse::SparseColMatRef<'_, usize, f64>,
+            _generation: u64,
+            _b: &[f64],
+            x: &mut [f64],
+        ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
+            x.fill(0.0);
+            Ok(pfem::assembly::SolveReport::new(self.0, 1))
+        }
+    }
+    for residual in [5.0, 1.0, f64::NAN] {
+        let mut sim = sim2(small_tank("idle solver"), StepParams::default());
+        sim.set_solver(Box::new(Idle(residual)));
+        let err = sim.step().unwrap_err().to_string();
+        assert!(
+            err.contains("idle solver") && err.contains("no better than a zero solution"),
+            "{residual}: {err}"
+        );
+        assert_eq!(sim.rejected(), 0, "retried: {err}");
+    }
 
     // The cases' body measures name an unknown body (they gave zero).
     use pfem::cases3d::{fluid_force, top_displacement};

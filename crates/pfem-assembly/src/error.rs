@@ -76,6 +76,19 @@ pub enum SolveError {
         /// The first offending entry.
         index: usize,
     },
+    /// The solver reported success with a relative residual of 1 or more,
+    /// or one that is not a number (a solver of one's own): its solution
+    /// has made no progress on the system (`x = 0` has residual 1), and
+    /// the Picard loop would have read it as converged. Refused at once,
+    /// not retried (session 54's review: a solver returning zeros with
+    /// residual 5 froze a collapsing column, and the run ended `Ok`).
+    #[error("{solver} reported success with a relative residual of {residual:e}, no better than a zero solution: a solver that does not converge returns an error")]
+    NoProgress {
+        /// Solver name.
+        solver: String,
+        /// The residual it reported.
+        residual: f64,
+    },
     /// The factorisation failed (singular or not positive definite).
     #[error("{solver} factorisation failed: {detail}")]
     Factorization {

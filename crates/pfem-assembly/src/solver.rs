@@ -102,9 +102,17 @@ pub trait LinearSolver: Send + Sync + std::fmt::Debug {
     /// iterative solvers) and the solution on return.
     ///
     /// Return `Err` when the answer is not good to the solver's tolerance:
-    /// the integrator takes the reported residual as given, and an `Ok`
-    /// with a poor `x` only shows later, as a Picard loop that does not
-    /// converge.
+    /// the integrator takes the reported residual as given. An `Ok` whose
+    /// relative residual is 1 or more, or not a number, is refused at once
+    /// ([`SolveError::NoProgress`]: a zero solution has residual 1, and the
+    /// Picard loop read its zero change as convergence); an `Ok` with a
+    /// poor `x` reported as good is not caught.
+    ///
+    /// With the pressure stabilisation on, the system exists in split form
+    /// only and the default [`LinearSolver::solve_split`] solves it itself,
+    /// so `solve` is not called: a wrapper that forwards `solve` alone to
+    /// another solver loses that solver's `solve_split`, `wants_split`,
+    /// `resolve` and `set_accuracy` (forward them too).
     fn solve(
         &mut self,
         a: SparseColMatRef<'_, usize, f64>,

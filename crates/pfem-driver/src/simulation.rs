@@ -2404,7 +2404,10 @@ where
 
     /// Replaces the linear solver (default: [`pfem_assembly::BlockSolver`];
     /// [`pfem_assembly::DirectSolver`] is sparse Cholesky of the whole
-    /// system with an LU fallback).
+    /// system with an LU fallback). With the pressure stabilisation on, a
+    /// solver that does not override `LinearSolver::solve_split` is not
+    /// called: the trait's default solves the saddle-point system itself
+    /// (see `LinearSolver::solve`).
     pub fn set_solver(&mut self, solver: Box<dyn pfem_assembly::LinearSolver>) {
         let params = self.stepper.integrator.params;
         self.stepper.integrator = Integrator::with_solver(params, solver);

@@ -660,7 +660,10 @@ impl StepError {
             }
             StepError::Solve { source, .. } => !matches!(
                 source,
-                S::DimensionMismatch { .. } | S::InvalidSystem { .. } | S::NonFiniteSolution { .. }
+                S::DimensionMismatch { .. }
+                    | S::InvalidSystem { .. }
+                    | S::NonFiniteSolution { .. }
+                    | S::NoProgress { .. }
             ),
             _ => true,
         }
@@ -1270,6 +1273,19 @@ where
                     ),
                 }
                 .map_err(|source| StepError::Solve { time, dt, source })?;
+                // A success that made no progress (one of the user's
+                // solvers): the loop would read its zero change as
+                // convergence.
+                if !(sr.residual < 1.0) {
+                    return Err(StepError::Solve {
+                        time,
+                        dt,
+                        source: pfem_assembly::SolveError::NoProgress {
+                            solver: self.solver.name().to_string(),
+                            residual: sr.residual,
+                        },
+                    });
+                }
                 rep.residual = sr.residual;
                 rep.factorizations += 1;
                 let tol = self.params.picard_tolerance;

@@ -790,6 +790,13 @@ type StepFn<const D: usize> =
     Box<dyn FnMut(&mut HookContext<'_, D>) -> Result<(), RunError> + Send>;
 
 /// A hook from closures, one per point of the step (each optional).
+/// What its closures capture is not saved in a checkpoint: a counter
+/// moved into one starts again from its initial value in a restored run
+/// (session 54's review: a hook acting at its 15th step acted 10 steps
+/// late after a restart at step 10). A hook with state of its own that
+/// must survive a restart is a type implementing [`Hook::save_state`] and
+/// [`Hook::restore_state`]; an `FnHook` may read the clock instead
+/// (`HookContext::time`, `HookContext::steps`), which a restart restores.
 pub struct FnHook<const D: usize>
 where
     Const<D>: Dim,
