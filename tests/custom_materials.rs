@@ -261,3 +261,62 @@ fn a_non_finite_initial_history_is_refused() {
         other => panic!("{:?}", other.map(|_| ())),
     }
 }
+
+/// Rubber whose viscosity turns into a NaN (a user law's overflow).
+#[derive(Debug)]
+struct Poisoned(Hypoelastic);
+
+impl Material<2> for Poisoned {
+    fn name(&self) -> &str {
+        "poisoned rubber"
+    }
+    fn kind(&self) -> MaterialKind {
+        MaterialKind::Solid
+    }
+    fn density(&self) -> f64 {
+        Material::<2>::density(&self.0)
+    }
+    fn wave_speed(&self) -> f64 {
+        Material::<2>::wave_speed(&self.0)
+    }
+    fn unified(&self, kin: &Kinematics<2>, history: &History<2>) -> Unified<2> {
+        let mut u = self.0.unified(kin, history);
+        u.mu = f64::NAN;
+        u
+    }
+    fn update_history(&self, kin: &Kinematics<2>, history: &mut History<2>) {
+        self.0.update_history(kin, history);
+    }
+}
+
+/// A material whose constitutive triple is not a number is named in the
+/// error, not only numbered (session 54's review: "material 0 returned a
+/// non-finite constitutive triple", where a negative modulus was named).
+#[test]
+fn a_material_returning_a_non_number_is_named() {
+    let scene = Scene::<2>::new("poisoned")
+        .settings(RunSettings {
+            end_time: 0.01,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .solid(
+            "block",
+            Box::new(Poisoned(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap())),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.1, 0.05),
+            },
+            0.025,
+            None,
+        );
+    let err = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
+        .map_err(|e| e.to_string())
+        .and_then(|mut sim| sim.run(&mut []).map_err(|e| e.to_string()))
+        .unwrap_err();
+    assert!(
+        err.contains("`poisoned rubber`") && err.contains("non-finite"),
+        "{err}"
+    );
+}

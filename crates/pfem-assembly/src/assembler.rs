@@ -1359,6 +1359,7 @@ where
                 Bad::NonFinite => AssemblyError::NonFiniteMaterial {
                     element: e,
                     material,
+                    name: input.materials[material as usize].name().to_string(),
                 },
                 Bad::Invalid(why) => AssemblyError::InvalidMaterial {
                     element: e,

@@ -13,13 +13,17 @@ pub enum AssemblyError {
         /// Its particles.
         nodes: Vec<u32>,
     },
-    /// A material returned a non-finite coefficient.
-    #[error("material {material} returned a non-finite constitutive triple on element {element}")]
+    /// A material returned a non-finite coefficient (retried with a
+    /// smaller step: a return map may fail only at large increments).
+    #[error("material {material} (`{name}`) returned a non-finite constitutive triple on element {element}")]
     NonFiniteMaterial {
         /// Element index.
         element: usize,
         /// Material index.
         material: u16,
+        /// The material's name ([`pfem_constitutive::Material::name`];
+        /// only its index until session 54).
+        name: String,
     },
     /// A material returned a constitutive triple that no step size cures
     /// (a negative `μ` or `𝒦`, a fluid's deviatoric `σ̂`): returned at once.
