@@ -1276,7 +1276,7 @@ where
                 // A success that made no progress (one of the user's
                 // solvers): the loop would read its zero change as
                 // convergence.
-                if !(sr.residual < 1.0) {
+                if sr.residual.is_nan() || sr.residual >= 1.0 {
                     return Err(StepError::Solve {
                         time,
                         dt,
