@@ -1789,12 +1789,19 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
     sim.particles_mut().remap(&map).unwrap();
     sim.initialize_acceleration().unwrap();
 
-    // A solver returning a non-number.
-    #[derive(Debug, Default)]
-    struct Broken(pfem::assembly::DirectSolver);
-    impl pfem::assembly::LinearSolver for Broken {
+    // A solver returning a non-number (`Faulty(_, None)`: a real solve, a
+    // NaN written in), and one reporting success with no progress
+    // (`Some(residual)`: zeros, residual 5, 1 or NaN): the Picard loop read
+    // the zero change as convergence, and a collapsing column stood
+    // frozen, `Ok` (session 54's review).
+    #[derive(Debug)]
+    struct Faulty(pfem::assembly::DirectSolver, Option<f64>);
+    impl pfem::assembly::LinearSolver for Faulty {
         fn name(&self) -> &str {
-            "broken solver"
+            match self.1 {
+                None => "broken solver",
+                Some(_) => "idle solver",
+            }
         }
         fn solve(
             &mut self,
@@ -1803,42 +1810,30 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
             b: &[f64],
             x: &mut [f64],
         ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
-            let r = self.0.solve(a, generation, b, x)?;
-            x[0] = f64::NAN;
-            Ok(r)
+            match self.1 {
+                None => {
+                    let r = self.0.solve(a, generation, b, x)?;
+                    x[0] = f64::NAN;
+                    Ok(r)
+                }
+                Some(residual) => {
+                    x.fill(0.0);
+                    Ok(pfem::assembly::SolveReport::new(residual, 1))
+                }
+            }
         }
     }
     let mut sim = sim2(small_tank("broken solver"), StepParams::default());
-    sim.set_solver(Box::new(Broken::default()));
+    sim.set_solver(Box::new(Faulty(Default::default(), None)));
     let err = sim.step().unwrap_err().to_string();
     assert!(
         err.contains("broken solver") && err.contains("not finite"),
         "{err}"
     );
     assert_eq!(sim.rejected(), 0, "retried: {err}");
-    // A solver reporting success with no progress (zeros, residual 5 or
-    // NaN): the Picard loop read the zero change as convergence, and a
-    // collapsing column stood frozen, `Ok` (session 54's review).
-    #[derive(Debug)]
-    struct Idle(f64);
-    impl pfem::assembly::LinearSolver for Idle {
-        fn name(&self) -> &str {
-            "idle solver"
-        }
-        fn solve(
-            &mut self,
-            _a: pfem::assembly::faer::sparse::SparseColMatRef<'_, usize, f64>,
-            _generation: u64,
-            _b: &[f64],
-            x: &mut [f64],
-        ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
-            x.fill(0.0);
-            Ok(pfem::assembly::SolveReport::new(self.0, 1))
-        }
-    }
     for residual in [5.0, 1.0, f64::NAN] {
         let mut sim = sim2(small_tank("idle solver"), StepParams::default());
-        sim.set_solver(Box::new(Idle(residual)));
+        sim.set_solver(Box::new(Faulty(Default::default(), Some(residual))));
         let err = sim.step().unwrap_err().to_string();
         assert!(
             err.contains("idle solver") && err.contains("no better than a zero solution"),

@@ -109,6 +109,32 @@ pub fn shell_quote(w: &str) -> String {
     }
 }
 
+/// Restores `sim` from `checkpoint` and resumes `output` with it (what
+/// `--restart` does, in the examples and in `pfem run`); a checkpoint at or
+/// past the end time is refused: nothing to run, not a finished run (its
+/// summary rewritten from a fresh remeshing's volume, a review in session
+/// 49).
+pub fn continue_from<const D: usize>(
+    sim: &mut crate::Simulation<D>,
+    output: &mut crate::StandardOutput<D>,
+    checkpoint: &crate::checkpoint::Checkpoint,
+) -> Result<(), String>
+where
+    pfem_core::Const<D>: pfem_core::Dim,
+{
+    sim.restore(checkpoint)
+        .and_then(|()| output.resume(checkpoint))
+        .map_err(|e| e.to_string())?;
+    if sim.reached_end_time() {
+        return Err(format!(
+            "the checkpoint is at t = {} s, at or past the end time {} s: nothing to run (give a later --end-time to continue)",
+            sim.time(),
+            sim.end_time()
+        ));
+    }
+    Ok(())
+}
+
 /// The options that take no value.
 pub const FLAGS: [&str; 6] = [
     "--quiet",
@@ -212,17 +238,7 @@ impl Args {
         }
         let ck = crate::observe::read_checkpoint_within(f, self.memory_budget()?)
             .map_err(|e| format!("--restart {f}: {e}"))?;
-        sim.restore(&ck)
-            .and_then(|()| output.resume(&ck))
-            .map_err(|e| format!("--restart {f}: {e}"))?;
-        if sim.reached_end_time() {
-            return Err(format!(
-                "--restart {f}: the checkpoint is at t = {} s, at or past the end time {} s: nothing to run (give a later --end-time to continue)",
-                sim.time(),
-                sim.end_time()
-            )
-            .into());
-        }
+        continue_from(sim, output, &ck).map_err(|e| format!("--restart {f}: {e}"))?;
         crate::errln!(
             "restarted from {f} at t = {} s (step {})",
             sim.time(),

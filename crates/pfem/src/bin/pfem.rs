@@ -325,14 +325,6 @@ where
         budget / 1e9,
         steps.ceil()
     );
-    // The finest fluid spacing, for the walls that no water touches at
-    // the start (`spacing_warnings` compares the others with the water
-    // they touch).
-    let p = &built.particles;
-    let finest_fluid = (0..p.len())
-        .filter(|&i| p.kind[i] == pfem::core::ParticleKind::Fluid)
-        .map(|i| p.spacing[i])
-        .fold(f64::INFINITY, f64::min);
     for m in &built.merges {
         if m.dropped > 0 {
             pfem::outln!(
@@ -372,13 +364,28 @@ where
         sim.elements().len(),
         sim.elements().n_contact()
     );
-    for w in spacing_warnings(&sim, finest_fluid)
-        .into_iter()
-        .chain(compressibility_warnings(&sim))
-    {
+    for w in scene_warnings(&sim) {
         pfem::outln!("  warning: {w}");
     }
     Ok(())
+}
+
+/// What `pfem check` warns of, and `pfem run` before it starts:
+/// [`spacing_warnings`] (the walls that no water touches at the start
+/// compared with the finest fluid's spacing) and
+/// [`compressibility_warnings`].
+fn scene_warnings<const D: usize>(sim: &pfem::Simulation<D>) -> Vec<String>
+where
+    Const<D>: Dim,
+{
+    let p = sim.particles();
+    let finest_fluid = (0..p.len())
+        .filter(|&i| p.kind()[i] == pfem::core::ParticleKind::Fluid)
+        .map(|i| p.spacing()[i])
+        .fold(f64::INFINITY, f64::min);
+    let mut out = spacing_warnings(sim, finest_fluid);
+    out.extend(compressibility_warnings(sim));
+    out
 }
 
 /// Where the first mesh joins particles of spacings that do not keep water
@@ -664,15 +671,7 @@ where
     // through the floor and said nothing (session 54's review).
     // (Not on a restart: said when the run began.)
     if restart.is_none() {
-        let p = sim.particles();
-        let finest_fluid = (0..p.len())
-            .filter(|&i| p.kind()[i] == pfem::core::ParticleKind::Fluid)
-            .map(|i| p.spacing()[i])
-            .fold(f64::INFINITY, f64::min);
-        for w in spacing_warnings(&sim, finest_fluid)
-            .into_iter()
-            .chain(compressibility_warnings(&sim))
-        {
+        for w in scene_warnings(&sim) {
             pfem::errln!("warning: {w}");
         }
     }
@@ -687,21 +686,9 @@ where
         .keep_rows(false);
     output.probe_interval = probe_interval;
     if let Some(ck) = &restart {
-        let resumed = sim.restore(ck).and_then(|()| output.resume(ck));
-        if let Err(e) = resumed {
+        if let Err(e) = pfem::cli::continue_from(&mut sim, &mut output, ck) {
             undo(&copied);
             return Err(format!("--restart: {e}"));
-        }
-        // Nothing left to run: said, not reported as a finished run (its
-        // summary rewritten from a fresh remeshing's volume, a review in
-        // session 49).
-        if sim.reached_end_time() {
-            undo(&copied);
-            return Err(format!(
-                "--restart: the checkpoint is at t = {} s, at or past the end time {} s: nothing to run (give a later --end-time to continue)",
-                sim.time(),
-                sim.end_time()
-            ));
         }
     }
     pfem::errln!(
