@@ -650,6 +650,7 @@ where
             contact_damping,
             contact_onset,
             domain,
+            particle_management,
         } = built;
         let can_touch = cloud.solid_can_touch();
         let particles = Particles::from_cloud(cloud);
@@ -743,6 +744,12 @@ where
         }
         for load in forces {
             hooks.push(Box::new(crate::hooks::AppliedForce::from_load(load)));
+        }
+        // Last of the driver's own, where a program's would run.
+        if let Some((params, every)) = particle_management.filter(|_| has_fluid) {
+            hooks.push(Box::new(crate::hooks::ParticleManagement::new(
+                params, every,
+            )));
         }
         // The solid elements weigh their initial volume (eq. 46).
         let mut elements = Elements::new(
@@ -948,7 +955,7 @@ where
 
     /// Adds a hook, run after those added before it (and after the
     /// driver's own: the scene's domain, those of [`Options`], the
-    /// scene's motion laws and forces). A hook added after the run has started
+    /// scene's motion laws, forces and particle management). A hook added after the run has started
     /// has its `start` before the next step, seeing the state of then.
     pub fn add_hook(&mut self, hook: Box<dyn Hook<D>>) {
         self.hooks.push(hook);

@@ -18,4 +18,6 @@ mod motion;
 mod particles;
 
 pub use motion::{BodyForceRamp, SlipPlanes};
-pub use particles::{Inflow, ParticleManagement, MAX_LAYER, UPSTREAM_CLEARANCE};
+pub use particles::{Inflow, MAX_LAYER, UPSTREAM_CLEARANCE};
+/// (Defined in the driver, which installs it for a scene that asks.)
+pub use pfem_driver::hooks::ParticleManagement;

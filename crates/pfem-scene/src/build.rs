@@ -184,6 +184,8 @@ where
     pub contact_onset: f64,
     /// The domain box ([`Scene::domain`]).
     pub domain: Option<(Point<D>, Point<D>)>,
+    /// Particle management ([`Scene::particle_management`]).
+    pub particle_management: Option<(pfem_geometry::ParticleManagementParams, u64)>,
 }
 
 /// What [`Scene::build`] did to one body's particles that fell on another
@@ -246,6 +248,7 @@ where
             misuse: _,
             forces,
             domain,
+            particle_management,
         } = scene;
         let mut free_solids = vec![false; bodies.len()];
         let mut particles = Cloud::<D>::default();
@@ -882,6 +885,7 @@ where
             laws,
             forces,
             domain,
+            particle_management,
         })
     }
 }

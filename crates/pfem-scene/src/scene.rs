@@ -5,6 +5,7 @@
 
 use pfem_constitutive::{Material, MaterialKind};
 use pfem_core::{Const, Dim, ParticleKind, Point, Vector};
+use pfem_geometry::ParticleManagementParams;
 
 use crate::SceneError;
 
@@ -388,6 +389,9 @@ where
     /// The domain box (lower and upper corners, m), `None` for none
     /// ([`Scene::domain`]): fluid particles that leave it are removed.
     pub domain: Option<(Point<D>, Point<D>)>,
+    /// Particle management ([`Scene::particle_management`]): its
+    /// thresholds and the steps between two passes; `None` for none.
+    pub particle_management: Option<(ParticleManagementParams, u64)>,
 }
 
 /// Contact settings ([`Scene::friction`], [`Scene::contact_stiffness`],
@@ -478,7 +482,25 @@ where
             misuse: Vec::new(),
             forces: Vec::new(),
             domain: None,
+            particle_management: None,
         }
+    }
+
+    /// Particle management every `every` steps (≥ 1): after the step's
+    /// remeshing, fluid particles closer than
+    /// [`ParticleManagementParams::removal_fraction`] of the spacing to
+    /// another are removed, and fluid elements grown beyond
+    /// [`ParticleManagementParams::insertion_factor`] times the regular
+    /// one get a particle at their centroid
+    /// (`pfem_geometry::manage_particles`; the driver installs the hook
+    /// `pfem_driver::hooks::ParticleManagement`, and the volume ledger
+    /// books the changes under its name). For fluids that crowd: a soft
+    /// bulk modulus lets two particles close on each other until their
+    /// elements flatten and blow apart. Default: none (the paper's fixed
+    /// particle set).
+    pub fn particle_management(mut self, params: ParticleManagementParams, every: u64) -> Self {
+        self.particle_management = Some((params, every));
+        self
     }
 
     /// The domain: the box `[min, max]` (m) outside which fluid particles
@@ -961,6 +983,34 @@ where
                     });
                 }
             }
+        }
+        if let Some((params, every)) = &self.particle_management {
+            if *every == 0 {
+                return Err(SceneError::OutOfRange {
+                    setting: "particle_management.every",
+                    value: 0.0,
+                    range: "a number of steps, 1 or more",
+                });
+            }
+            params.validate().map_err(|e| match e {
+                pfem_geometry::GeometryError::InvalidParameter {
+                    name,
+                    value,
+                    reason,
+                } => SceneError::OutOfRange {
+                    setting: match name {
+                        "removal_fraction" => "particle_management.removal_fraction",
+                        "insertion_factor" => "particle_management.insertion_factor",
+                        other => other,
+                    },
+                    value,
+                    range: reason,
+                },
+                _ => SceneError::InvalidSetting {
+                    setting: "particle_management",
+                    value: f64::NAN,
+                },
+            })?;
         }
         if self.bodies.len() > MAX_BODIES {
             return Err(SceneError::OutOfRange {

@@ -71,6 +71,7 @@
 //! | `gravity` | body force per unit mass (m/s²), `D` numbers; omit for none |
 //! | `spacing` | default particle spacing of every body (m) |
 //! | `domain` | `{ min, max }` (m): fluid particles that leave this box are removed at the start of the next step (after its remeshing, before the volume correction), booked as fluid leaving ([`Scene::domain`]); every fluid body must start inside; omit for none |
+//! | `[particle_management]` | `every` (steps between passes, default 1), `removal_fraction` (a fluid particle closer than this fraction of the spacing to another is removed, in `[0, 1)`, default 0.3), `insertion_factor` (a fluid element over this many times the regular one of its spacing gets a particle at its centroid, ≥ 1, default 2, `inf` for none): fluid particles removed where they crowd and added where they thin out ([`Scene::particle_management`]); omit for none (the paper's fixed particle set) |
 //! | `[run]` | `end_time` (s), `max_dt` (s), `courant`, `output_interval` (s), `alpha`; each defaults to [`RunSettings::default`]; `pressure_stabilisation` (factor α ≥ 0, default 0: [`Scene::pressure_stabilisation`]) |
 //! | `[[body]]` | `name`, `kind` (`fluid`, `solid`, `wall`), `material`, `geometry`, `spacing` (m), `velocity` (initial, m/s), `wall_velocity` (walls, m/s), `motion` (walls: `sinusoidal = { amplitude, period, ramp }` (m, s, s), `table = [[t, dx, dy], …]` (s, m) or `rotation = { center, axis (3D), rate, amplitude, period, ramp }` (m, –, rad/s, rad, s, s)), `clamp` (solids: `{ min, max }`, m), `clamps` (solids: a list of such boxes), `velocity_field` and `pressure_field` (fluids/solids and fluids: `{ points = [[x, y], …], values = […] }` (points m; values m/s or Pa), the nearest sample's value; points whose box misses the body's by more than two spacings are refused) |
 //! | `material` | `newtonian = { density, viscosity, bulk_modulus }` (kg/m³, Pa·s, Pa) or `hypoelastic = { density, young, poisson, plane_stress }` (kg/m³, Pa, –; `plane_stress = true` in 2D for a thin strip, plane strain by default) |
@@ -139,6 +140,10 @@ pub struct SceneFile {
     /// particles that leave it are removed (`Scene::domain`).
     #[serde(default)]
     pub domain: Option<BoxSpec>,
+    /// Particle management (the `[particle_management]` table), `None`
+    /// for none.
+    #[serde(default)]
+    pub particle_management: Option<ManagementSpec>,
     /// The file's text, to turn spans into line numbers.
     #[serde(skip)]
     source: String,
@@ -323,6 +328,22 @@ fn two_names<'de, De: serde::Deserializer<'de>>(d: De) -> Result<[String; 2], De
     let n = names.len();
     <[String; 2]>::try_from(names)
         .map_err(|_| serde::de::Error::custom(format!("expected exactly 2 body names, got {n}")))
+}
+
+/// The `[particle_management]` table ([`Scene::particle_management`]):
+/// every key optional.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ManagementSpec {
+    /// Steps between two passes; default 1.
+    pub every: Option<u64>,
+    /// A fluid particle closer than this fraction of the spacing to another
+    /// is removed; default 0.3, 0 for no removal.
+    pub removal_fraction: Option<f64>,
+    /// A fluid element larger than this many times the regular one of its
+    /// spacing gets a particle at its centroid; default 2, `inf` for no
+    /// insertion.
+    pub insertion_factor: Option<f64>,
 }
 
 /// An axis-aligned box `{ min = [..], max = [..] }` (m).
@@ -775,6 +796,16 @@ impl SceneFile {
             scene = scene.domain(
                 Point::from(self.vector::<D>(&d.min, "domain.min")?),
                 Point::from(self.vector::<D>(&d.max, "domain.max")?),
+            );
+        }
+        if let Some(m) = &self.particle_management {
+            let d = pfem_geometry::ParticleManagementParams::default();
+            scene = scene.particle_management(
+                pfem_geometry::ParticleManagementParams {
+                    removal_fraction: m.removal_fraction.unwrap_or(d.removal_fraction),
+                    insertion_factor: m.insertion_factor.unwrap_or(d.insertion_factor),
+                },
+                m.every.unwrap_or(1),
             );
         }
         for spanned in &self.bodies {

@@ -60,11 +60,13 @@
 
 mod domain;
 mod force;
+mod management;
 mod motion;
 mod volume;
 
 pub use domain::Domain;
 pub use force::AppliedForce;
+pub use management::ParticleManagement;
 pub use motion::PrescribedMotion;
 pub use pfem_scene::motion::{MotionLaw, PiecewiseLinear, Rotation, Sinusoidal};
 pub use volume::{FreeSurfacePressureZero, VolumeCorrection};
