@@ -132,7 +132,7 @@ pub enum CheckpointError {
     #[error("checkpoint has no `{0}` section")]
     MissingSection(String),
     /// The checkpoint was written by another scene or set-up.
-    #[error("checkpoint does not match this simulation: {what} is {checkpoint} in the checkpoint, {simulation} here")]
+    #[error("checkpoint does not match this simulation, in {what}: {checkpoint} in the checkpoint, {simulation} here")]
     Mismatch {
         /// What differs.
         what: &'static str,

@@ -2949,7 +2949,7 @@ where
         }
         if fixed(&particles) != fixed(&self.particles) {
             return Err(mismatch(
-                "the wall and solid particles (count)",
+                "the count of wall and solid particles (another spacing or geometry?)",
                 fixed(&particles).len().to_string(),
                 fixed(&self.particles).len().to_string(),
             ));

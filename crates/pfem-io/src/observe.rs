@@ -106,6 +106,9 @@ where
     restarted_at: Option<f64>,
     /// The error that ended the run ([`Observer::failed`]).
     failure: Option<String>,
+    /// The program's own checkpoint sections
+    /// ([`StandardOutput::checkpoint_section`]).
+    sections: Vec<(String, Vec<u8>)>,
 }
 
 /// The output state read from a checkpoint, applied at the start of the
@@ -225,6 +228,7 @@ where
             checkpoint_every: None,
             next_checkpoint: f64::INFINITY,
             checkpoints: 0,
+            sections: Vec::new(),
             resume: None,
             restarted_at: None,
             failure: None,
@@ -539,6 +543,12 @@ where
             csv.sync()?;
         }
         let mut ck = sim.checkpoint();
+        for (name, bytes) in &self.sections {
+            // (The library's own names are not the program's to replace.)
+            if ck.section(name).is_none() && name != OUTPUT_SECTION && name != OUTPUT_WALL_SECTION {
+                ck.set(name, bytes.clone());
+            }
+        }
         ck.set(OUTPUT_SECTION, self.encode_state());
         let mut wall = Encoder::new();
         wall.f64(self.wall_total());
@@ -546,6 +556,20 @@ where
         crate::output::write_atomic(self.checkpoint_path(), &ck.encode())?;
         self.checkpoints += 1;
         Ok(())
+    }
+
+    /// A section of the program's own, `bytes` under `name`, written into
+    /// every checkpoint beside the simulation's and the outputs' (read back
+    /// with [`Checkpoint::section`](pfem_driver::checkpoint::Checkpoint::section)
+    /// before a restart: `pfem run` keeps its scene file there and refuses
+    /// a restart under an edited one). A name the library's sections use
+    /// (`pfem_driver::checkpoint::SIMULATION`, …) is not written; a second
+    /// call with the same name replaces the first.
+    pub fn checkpoint_section(mut self, name: impl Into<String>, bytes: Vec<u8>) -> Self {
+        let name = name.into();
+        self.sections.retain(|(n, _)| *n != name);
+        self.sections.push((name, bytes));
+        self
     }
 
     /// Whether a non-empty output directory is accepted: its previous run's
@@ -857,8 +881,15 @@ where
                 summary.fluid_volume_initial, summary.fluid_volume_final
             )
         };
+        // A scene without fluid has no volume to report (it printed
+        // "fluid volume 0.000000e0 -> 0.000000e0").
+        let volume = if summary.fluid_volume_initial == 0.0 && summary.fluid_volume_final == 0.0 {
+            String::new()
+        } else {
+            format!("{volume}, ")
+        };
         crate::outln!(
-            "{} steps ({} rejected), simulated {:.4} s, {volume}, wall time {:.1} s",
+            "{} steps ({} rejected), simulated {:.4} s, {volume}wall time {:.1} s",
             summary.steps,
             summary.rejected_steps,
             summary.simulated_time,
@@ -1053,6 +1084,35 @@ where
             next_after(sim.time() + 1e-9 * sim.end_time(), self.checkpoint_every);
         self.restarted_at = Some(sim.time());
         self.progress = Some(Progress::new(sim.end_time(), self.quiet));
+        // The stop's summary is not this run's: left, it outlived a kill
+        // of the continued run ("stopped" at 0.030 s beside rows to
+        // 0.071 s, session 55's review). This run's is written at its end,
+        // as a fresh run's.
+        let summary = self.dir.join("summary.json");
+        if summary.is_file() {
+            std::fs::remove_file(&summary)
+                .map_err(|e| crate::output::OutputError::io(&summary, e))?;
+        }
+        Ok(())
+    }
+
+    /// A fresh run's first files, in its prepared folder: the series and
+    /// the probe file, the first frame and row.
+    fn start_files(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        if self.vtu && sim.output_interval().is_some() {
+            self.series = Some(VtuSeries::create(&self.dir, sim.name(), Encoding::Base64)?);
+        }
+        if !self.probes.is_empty() {
+            let mut cols = vec!["t"];
+            cols.extend(self.probes.iter().map(|p| p.name.as_str()));
+            self.csv = Some(CsvProbe::create(self.dir.join("probes.csv"), &cols)?);
+        }
+        self.progress = Some(Progress::new(sim.end_time(), self.quiet));
+        self.write_frame(sim)?;
+        self.next_frame = sim.output_interval().unwrap_or(f64::INFINITY);
+        self.record(sim)?;
+        self.next_probe = self.probe_interval.unwrap_or(0.0);
+        self.next_checkpoint = self.checkpoint_every.unwrap_or(f64::INFINITY);
         Ok(())
     }
 }
@@ -1124,21 +1184,15 @@ where
         self.prepare_dir(sim.name())?;
         std::fs::create_dir_all(&self.dir)
             .map_err(|e| crate::output::OutputError::io(&self.dir, e))?;
-        if self.vtu && sim.output_interval().is_some() {
-            self.series = Some(VtuSeries::create(&self.dir, sim.name(), Encoding::Base64)?);
+        // The folder is this run's now: a start that fails from here on
+        // (a full disk at the first frame wrote no summary: session 55's
+        // review) says so in its summary, as a failed step does.
+        let started = self.start_files(sim);
+        if let Err(e) = &started {
+            self.failure = Some(e.to_string());
+            let _ = write_summary(self.dir.join("summary.json"), &self.summary(sim));
         }
-        if !self.probes.is_empty() {
-            let mut cols = vec!["t"];
-            cols.extend(self.probes.iter().map(|p| p.name.as_str()));
-            self.csv = Some(CsvProbe::create(self.dir.join("probes.csv"), &cols)?);
-        }
-        self.progress = Some(Progress::new(sim.end_time(), self.quiet));
-        self.write_frame(sim)?;
-        self.next_frame = sim.output_interval().unwrap_or(f64::INFINITY);
-        self.record(sim)?;
-        self.next_probe = self.probe_interval.unwrap_or(0.0);
-        self.next_checkpoint = self.checkpoint_every.unwrap_or(f64::INFINITY);
-        Ok(())
+        started
     }
 
     fn step(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {

@@ -742,6 +742,56 @@ impl SceneFile {
         self.name.clone().unwrap_or_else(|| "scene".into())
     }
 
+    /// The file's text, as read.
+    pub fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// What differs between this file and `other` as a restart sees it:
+    /// the names of the keys (a body's by its name) whose values differ,
+    /// in the file's order; empty when they describe the same run. The run
+    /// may go on to another end time and write frames at another interval:
+    /// `[run]`'s `end_time` and `output_interval` are not compared, nor the
+    /// scene's name (a checkpoint names its scene) or layout and comments.
+    /// Compare the files after the same overrides
+    /// ([`SceneFile::override_spacing`]).
+    pub fn differences(&self, other: &SceneFile) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut differs = |same: bool, key: &str| {
+            if !same {
+                out.push(key.to_string());
+            }
+        };
+        differs(self.dimension == other.dimension, "dimension");
+        differs(self.gravity == other.gravity, "gravity");
+        differs(self.spacing == other.spacing, "spacing");
+        let run = |r: &RunSpec| RunSpec {
+            end_time: None,
+            output_interval: None,
+            ..*r
+        };
+        differs(run(&self.run) == run(&other.run), "[run]");
+        differs(self.domain == other.domain, "domain");
+        differs(
+            self.particle_management == other.particle_management,
+            "[particle_management]",
+        );
+        let names = |f: &SceneFile| -> Vec<String> {
+            f.bodies.iter().map(|b| b.get_ref().name.clone()).collect()
+        };
+        if names(self) != names(other) {
+            differs(false, "the bodies (their names or order)");
+        } else {
+            for (a, b) in self.bodies.iter().zip(&other.bodies) {
+                differs(a == b, &format!("body `{}`", a.get_ref().name));
+            }
+        }
+        differs(self.contact == other.contact, "[contact]");
+        differs(self.forces == other.forces, "[[force]]");
+        differs(self.probes == other.probes, "probes");
+        out
+    }
+
     /// Replaces the spacing of every body (and the default) by `h` (m).
     pub fn override_spacing(&mut self, h: f64) {
         self.spacing = Some(h);

@@ -440,3 +440,141 @@ fn a_restart_keeps_to_its_own_folder_and_a_wall_clock_stop_says_so() {
         let _ = std::fs::remove_dir_all(dir);
     }
 }
+
+/// A restart under an edited scene file is refused, naming what differs
+/// (the checkpoint keeps the file's text): a review of session 55 moved a
+/// point probe (its column changed meaning mid-file, 984.66 → 1 471.59 Pa
+/// between two rows), changed the gravity (ignored: the checkpoint's ran
+/// on) and scaled a force table (applied), all accepted. The end time and
+/// the frames' interval may change; a `--spacing` the run did not have is
+/// named as the spacing.
+#[test]
+fn a_restart_under_an_edited_scene_file_is_refused_by_what_differs() {
+    let dir = tmp("edited");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(scene("loaded_cantilever_2d")).unwrap();
+    let file = dir.join("beam.toml");
+    std::fs::write(&file, &text).unwrap();
+    let out = dir.join("out");
+    let ran = Command::new(PFEM)
+        .args(run_args(&file, &out, "0.02", "0.01"))
+        .output()
+        .unwrap();
+    assert!(ran.status.success(), "{ran:?}");
+    let checkpoint = out.join("checkpoint.bin");
+    let restart = |edited: &str, extra: &[&str]| {
+        std::fs::write(&file, edited).unwrap();
+        let copy = dir.join("copy");
+        let _ = std::fs::remove_dir_all(&copy);
+        std::fs::create_dir_all(&copy).unwrap();
+        for e in std::fs::read_dir(&out).unwrap().flatten() {
+            std::fs::copy(e.path(), copy.join(e.file_name())).unwrap();
+        }
+        let mut args = run_args(&file, &copy, "0.03", "0.01");
+        args.extend([
+            "--restart".into(),
+            copy.join("checkpoint.bin").display().to_string(),
+        ]);
+        args.extend(extra.iter().map(|s| s.to_string()));
+        Command::new(PFEM).args(args).output().unwrap()
+    };
+    let _ = &checkpoint;
+    for (edit, key) in [
+        (
+            text.replace(
+                "[0.2, 0.0, -2000.0], [1.0, 0.0, -2000.0]",
+                "[0.2, 0.0, -20000.0], [1.0, 0.0, -20000.0]",
+            ),
+            "[[force]]",
+        ),
+        (
+            text.replace("point = [0.5, 0.0]", "point = [0.4, 0.0]"),
+            "probes",
+        ),
+        (
+            text.replace("dimension = 2\n", "dimension = 2\ngravity = [0.0, -9.81]\n"),
+            "gravity",
+        ),
+        (text.replace("young = 2e9", "young = 2.1e9"), "body `beam`"),
+    ] {
+        assert_ne!(edit, text, "the edit for {key} applies");
+        let r = restart(&edit, &[]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{key}: accepted");
+        assert!(
+            err.contains("the scene file differs") && err.contains(key),
+            "{key}: {err}"
+        );
+    }
+    let r = restart(&text, &["--spacing", "0.00625"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("differs") && err.contains("spacing"), "{err}");
+    // Comments, the end time and the frames' interval: accepted.
+    let edit = format!(
+        "# a comment\n{}",
+        text.replace("end_time = 0.6", "end_time = 0.9")
+            .replace("output_interval = 0.02", "output_interval = 0.01")
+    );
+    for edited in [text.as_str(), edit.as_str()] {
+        let r = restart(edited, &[]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A restarted run's summary is its own: the stop's, left in the folder,
+/// outlived a kill of the continued run (a review of session 55:
+/// "stopped" at 0.030 s beside probe rows to 0.071 s). Whenever the
+/// continued run is killed, the folder's summary (if any) is not behind
+/// its probe rows.
+#[test]
+fn a_killed_restart_leaves_no_summary_behind_its_rows() {
+    let dir = tmp("stale-summary");
+    let file = scene("dam_break_2d");
+    let out = dir.join("out");
+    let mut args = run_args(&file, &out, "0.01", "0.005");
+    args.extend(["--spacing".into(), "0.005715".into()]);
+    let ran = Command::new(PFEM).args(&args).output().unwrap();
+    assert!(ran.status.success(), "{ran:?}");
+    let summary = out.join("summary.json");
+    assert!(summary.is_file());
+    let mut args = run_args(&file, &out, "5.0", "1.0");
+    args.extend([
+        "--spacing".into(),
+        "0.005715".into(),
+        "--restart".into(),
+        out.join("checkpoint.bin").display().to_string(),
+    ]);
+    let mut child = Command::new(PFEM)
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Killed once it has written rows past the checkpoint's.
+    let rows = |p: &Path| std::fs::read_to_string(p).map_or(0, |t| t.lines().count());
+    let before = rows(&out.join("probes.csv"));
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while rows(&out.join("probes.csv")) < before + 5 && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(
+        rows(&out.join("probes.csv")) >= before + 5,
+        "no rows were written"
+    );
+    if let Ok(text) = std::fs::read_to_string(&summary) {
+        let last_row: f64 = std::fs::read_to_string(out.join("probes.csv"))
+            .unwrap()
+            .lines()
+            .last()
+            .and_then(|l| l.split(',').next())
+            .and_then(|t| t.parse().ok())
+            .unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let t = v["simulated_time"].as_f64().unwrap();
+        assert!(t >= last_row, "summary at {t} s, rows to {last_row} s");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1720,6 +1720,15 @@ fn a_fluid_barely_stiffer_than_its_head_is_warned_of() {
                 warned,
                 "{cmd} K = {k}: {text}"
             );
+            // The run's summary lists them too (session 55).
+            if cmd == "run" {
+                let summary = std::fs::read_to_string(dir.join("out/summary.json")).unwrap();
+                assert_eq!(
+                    summary.contains("\"warnings\"") && summary.contains("has a bulk modulus"),
+                    warned,
+                    "K = {k}: {summary}"
+                );
+            }
         }
     }
     std::fs::remove_dir_all(&dir).ok();

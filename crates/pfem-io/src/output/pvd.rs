@@ -220,7 +220,7 @@ impl VtuSeries {
             return Err(OutputError::Resume {
                 dir,
                 why: format!(
-                    "it does not hold `{f}`, a frame the checkpoint lists: restart into the folder the run wrote (--out)"
+                    "it does not hold `{f}`, a frame the checkpoint lists: continue in the folder the run wrote its frames to, or in a copy of that folder (a new folder gets its probes.csv only)"
                 ),
             });
         }

@@ -60,12 +60,17 @@ Options of `pfem run`:
                         and at the end time (default: every step). The rows
                         go to probes.csv, none is kept in memory; this thins
                         the file (a note is printed when it would pass 1 GB)
-  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE and
-                        options, other ones refused; DIR its output folder, by
-                        default the checkpoint's; another folder that is not
-                        empty is refused): the result is the uninterrupted
-                        run's, bit for bit (to the solver's tolerance with the
-                        pressure stabilised on large systems: docs/robustness.md).
+  --restart CHECKPOINT  continue the run that wrote CHECKPOINT (same FILE,
+                        whose text the checkpoint keeps: only [run]'s end_time
+                        and output_interval may change; same options, other
+                        ones refused). DIR is its output folder, by default the
+                        checkpoint's; another folder must be empty and gets a
+                        copy of probes.csv only, so a run that wrote frames
+                        continues in its own folder or a copy of it. The result
+                        is the uninterrupted run's, bit for bit (to the
+                        solver's tolerance, 1e-9, with the pressure stabilised
+                        on systems solved by multigrid: from 1 000 pressure
+                        rows in 2D, 100 in 3D; docs/robustness.md).
                         With a later --end-time, a finished run goes on
 ";
 
@@ -227,8 +232,16 @@ fn run(args: Vec<String>) -> Result<(), String> {
         "run" => {
             parsed.validate_options().map_err(|e| e.to_string())?;
             parsed.apply_threads().map_err(|e| e.to_string())?;
-            let loaded = SceneFile::load(&file, parsed.spacing, parsed.end_time)
-                .map_err(|e| located(&file, e, &parsed))?;
+            // As `SceneFile::load`, keeping the file: a checkpoint holds its
+            // text, and a restart is refused under an edited one.
+            let mut spec = SceneFile::read(&file).map_err(|e| located(&file, e, &parsed))?;
+            if let Some(h) = parsed.spacing {
+                spec.override_spacing(h);
+            }
+            if let Some(t) = parsed.end_time {
+                spec.run.end_time = Some(t);
+            }
+            let loaded = spec.build().map_err(|e| located(&file, e, &parsed))?;
             match loaded {
                 LoadedScene::Two(scene, probes) => simulate(
                     scene,
@@ -236,6 +249,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
                     Box::new(Delaunay2::default()),
                     &parsed,
                     (checkpoint_every, probe_interval),
+                    &spec,
                 ),
                 LoadedScene::Three(scene, probes) => simulate(
                     scene,
@@ -243,6 +257,7 @@ fn run(args: Vec<String>) -> Result<(), String> {
                     Box::new(Delaunay3::default()),
                     &parsed,
                     (checkpoint_every, probe_interval),
+                    &spec,
                 ),
             }
         }
@@ -534,9 +549,9 @@ where
         let k = rho * c * c;
         if head > 0.0 && k < COMPRESSIBLE_BELOW * head {
             out.push(format!(
-                "fluid `{}` has a bulk modulus of {k:.3e} Pa, {:.1} times the hydrostatic pressure of its {:.3} m of depth ({head:.3e} Pa): the flow will compress it visibly (at 10⁻³ times a column burst); give it {:.1e} Pa or more (real water 2.2e9){}",
+                "fluid `{}` has a bulk modulus of {k:.3e} Pa, {} times the hydrostatic pressure of its {:.3} m of depth ({head:.3e} Pa): the flow will compress it visibly (at 10⁻³ times a column burst); give it {:.1e} Pa or more (real water 2.2e9){}",
                 sim.body_names().get(b as usize).map_or("?", String::as_str),
-                k / head,
+                three_figures(k / head),
                 hi - lo,
                 COMPRESSIBLE_BELOW * head,
                 if managed {
@@ -550,6 +565,15 @@ where
     out
 }
 
+/// `x` to three significant figures (a ratio of 0.019 was printed "0.0").
+fn three_figures(x: f64) -> String {
+    if !(x.is_finite() && x > 0.0) {
+        return format!("{x}");
+    }
+    let digits = (2 - x.log10().floor() as i64).clamp(0, 12) as usize;
+    format!("{x:.digits$}")
+}
+
 /// [`compressibility_warnings`]' bound on `K / (ρ g H)`.
 const COMPRESSIBLE_BELOW: f64 = 100.0;
 
@@ -557,6 +581,33 @@ const COMPRESSIBLE_BELOW: f64 = 100.0;
 /// review: a column 0.1 m wide and high collapsing in a tank whose walls
 /// are 0.02 m apart, 0.3 s).
 const WALL_LEAK: &str = "a collapsing column's volume swung by 0.7, 4.8, 5.9, 11 and 23 % with walls 1.5, 2, 2.5, 3 and 4 times its spacing, 0.04 % at its own, and at 5 times half its particles passed through the floor";
+
+/// The checkpoint section in which `pfem run` keeps its scene file: its
+/// text and the `--spacing` override.
+const SCENE_FILE_SECTION: &str = "pfem run: scene file";
+
+fn encode_scene_file(spec: &SceneFile, spacing: Option<f64>) -> Vec<u8> {
+    let mut e = pfem::checkpoint::Encoder::new();
+    e.str(spec.source());
+    e.bool(spacing.is_some());
+    e.f64(spacing.unwrap_or(0.0));
+    e.finish()
+}
+
+/// The scene file of [`SCENE_FILE_SECTION`], with its run's overrides.
+fn decode_scene_file(bytes: &[u8]) -> Result<SceneFile, String> {
+    let mut d = pfem::checkpoint::Decoder::new(bytes);
+    let text = d.str().map_err(|e| e.to_string())?;
+    let has_spacing = d.bool().map_err(|e| e.to_string())?;
+    let h = d.f64().map_err(|e| e.to_string())?;
+    d.end().map_err(|e| e.to_string())?;
+    let mut file =
+        SceneFile::parse(text, "the checkpoint's scene file").map_err(|e| e.to_string())?;
+    if has_spacing {
+        file.override_spacing(h);
+    }
+    Ok(file)
+}
 
 /// Spacings of two fluids that meet may differ up to this factor
 /// (`spacing_warnings`): measured at rest, 2.5 held, 4 opened a hole.
@@ -570,6 +621,7 @@ fn simulate<const D: usize>(
     tessellator: Box<dyn Tessellator<D>>,
     args: &Args,
     (checkpoint_every, probe_interval): (Option<f64>, Option<f64>),
+    spec: &SceneFile,
 ) -> Result<(), String>
 where
     Const<D>: Dim,
@@ -621,6 +673,23 @@ where
         }
         None => None,
     };
+    // The scene file the checkpoint's run read: a restart under another is
+    // refused by what differs (a moved point probe's column changed meaning
+    // mid-file, another gravity was ignored and a changed force applied:
+    // session 55's review). A checkpoint written before it is unchecked.
+    if let (Some(ck), Some(f)) = (&restart, args.options.get("restart")) {
+        if let Some(bytes) = ck.section(SCENE_FILE_SECTION) {
+            let before = decode_scene_file(bytes)
+                .map_err(|e| format!("--restart {f}: its scene file: {e}"))?;
+            let now = spec.differences(&before);
+            if !now.is_empty() {
+                return Err(format!(
+                    "--restart {f}: the scene file differs from the one its run read, in {}: a restart continues the same scene (only [run]'s end_time and output_interval may change); start a new run for another",
+                    now.join(", ")
+                ));
+            }
+        }
+    }
     // The probe rows a checkpoint counts are its folder's `probes.csv`
     // (a checkpoint holds their count and hash, not the rows): a restart
     // into another folder (empty, above) starts from a copy of it, removed
@@ -678,9 +747,12 @@ where
     // The spacing warnings of `pfem check`, on stderr before the run: a
     // run with walls five times coarser than its water let half of it
     // through the floor and said nothing (session 54's review).
-    // (Not on a restart: said when the run began.)
+    // (Not on a restart: said when the run began.) `summary.json` lists
+    // them ("warnings"), a restarted run's too: a run that warned ends
+    // `finished` whatever its result (session 55's review).
+    let warnings = scene_warnings(&sim);
     if restart.is_none() {
-        for w in scene_warnings(&sim) {
+        for w in &warnings {
             pfem::errln!("warning: {w}");
         }
     }
@@ -692,8 +764,14 @@ where
     let mut output = StandardOutput::new(&out, !args.no_vtu, probes, args.quiet)
         .overwrite(args.overwrite)
         .checkpoint_every(checkpoint_every)
-        .keep_rows(false);
+        .keep_rows(false)
+        .checkpoint_section(SCENE_FILE_SECTION, encode_scene_file(spec, args.spacing));
     output.probe_interval = probe_interval;
+    if !warnings.is_empty() {
+        output
+            .extra
+            .insert("warnings".into(), serde_json::Value::from(warnings));
+    }
     if let Some(ck) = &restart {
         if let Err(e) = pfem::cli::continue_from(&mut sim, &mut output, ck) {
             undo(&copied);
