@@ -1509,3 +1509,74 @@ fn a_restore_over_a_set_changed_by_hand_meshes_it_first() {
     other.step().unwrap();
     assert_same("restored over a changed set", &whole, &other);
 }
+
+/// A restore takes the checkpoint's gravity (a hook may have changed it
+/// mid-run), whatever the scene the simulation was built from gave; a
+/// program that means another sets it after the restore
+/// (`Simulation::set_gravity`, session 55: a review restored into a scene
+/// of another gravity and ran on with the checkpoint's, unsaid). A water
+/// square in free fall: each step adds `g Δt` to its mean velocity.
+#[test]
+fn a_restore_keeps_the_checkpoint_s_gravity_and_set_gravity_changes_it() {
+    let square = |g: f64| {
+        let scene = Scene::<2>::new("falling")
+            .gravity(Vector::<2>::new(0.0, g))
+            .settings(RunSettings {
+                end_time: 1.0,
+                max_dt: 1e-3,
+                ..RunSettings::default()
+            })
+            .fluid(
+                "water",
+                Box::new(Newtonian::water()),
+                Geometry::Box {
+                    min: Point::<2>::new(0.0, 0.0),
+                    max: Point::<2>::new(0.1, 0.1),
+                },
+                0.01,
+            );
+        sim2(scene)
+    };
+    let mean_vy = |s: &Simulation<2>| {
+        let v = s.particles().v();
+        v.iter().map(|v| v.y).sum::<f64>() / v.len() as f64
+    };
+    let mut sim = square(-9.81);
+    sim.step().unwrap();
+    sim.step().unwrap();
+    let ck = sim.checkpoint();
+    let mut other = square(-1.0);
+    other.restore(&ck).unwrap();
+    assert_eq!(other.gravity(), Some(Vector::<2>::new(0.0, -9.81)));
+    other
+        .set_gravity(Some(Vector::<2>::new(0.0, -1.0)))
+        .unwrap();
+    // (The steps after the change blend the two accelerations, as the
+    // scheme does for any change of load: Bossak's ringing fades over a
+    // few steps, 1 % off after five.)
+    for _ in 0..20 {
+        other.step().unwrap();
+    }
+    let (t0, v0) = (other.time(), mean_vy(&other));
+    other.step().unwrap();
+    let dv = (mean_vy(&other) - v0) / (other.time() - t0);
+    assert!((dv + 1.0).abs() < 1e-3, "mean acceleration {dv} m/s²");
+    // Not a number: refused, gravity unchanged.
+    let err = other
+        .set_gravity(Some(Vector::<2>::new(f64::NAN, 0.0)))
+        .unwrap_err();
+    assert!(err.to_string().contains("gravity"), "{err}");
+    assert_eq!(other.gravity(), Some(Vector::<2>::new(0.0, -1.0)));
+    // Before the first step: the initial accelerations are the new
+    // gravity's.
+    let mut fresh = square(-9.81);
+    fresh
+        .set_gravity(Some(Vector::<2>::new(0.0, -2.0)))
+        .unwrap();
+    fresh.step().unwrap();
+    let dv = mean_vy(&fresh) / fresh.time();
+    assert!(
+        (dv + 2.0).abs() < 1e-6,
+        "first step's mean acceleration {dv} m/s²"
+    );
+}

@@ -2190,6 +2190,10 @@ where
             if !self.external_force.is_empty() || self.gravity != self.accelerated_with {
                 self.accelerations(false)?;
             }
+        } else if self.clock.steps == 0 && self.gravity != self.accelerated_with {
+            // A gravity set by the program before the first step
+            // (`set_gravity`): the load at `t₀`.
+            self.accelerations(false)?;
         }
         self.run_hooks(HookPoint::BeforeSolve)?;
         // The attempts, halving the step after each rejected one; the hooks
@@ -2533,6 +2537,28 @@ where
         self.gravity
     }
 
+    /// Sets the body force per unit mass (m/s²) from the next step on, as
+    /// a hook may ([`HookContext::set_gravity`](crate::hooks::HookContext::set_gravity)):
+    /// after a [`Simulation::restore`], whose gravity is the checkpoint's,
+    /// a program that means another sets it here. Before the first step
+    /// the initial accelerations are taken again under it.
+    ///
+    /// Errors: [`RunError::InvalidSetting`] for a non-finite component;
+    /// the body force is then unchanged.
+    pub fn set_gravity(&mut self, g: Option<Vector<D>>) -> Result<(), RunError> {
+        if let Some(c) = g.iter().flat_map(|v| v.iter()).find(|c| !c.is_finite()) {
+            return Err(RunError::InvalidSetting {
+                name: "gravity",
+                value: *c,
+                reason: "every component must be finite (m/s²)",
+            });
+        }
+        self.gravity = g;
+        self.gravity_changed();
+        self.version = next_state_version();
+        Ok(())
+    }
+
     /// End time (s).
     pub fn end_time(&self) -> f64 {
         self.end_time
@@ -2773,7 +2799,14 @@ where
     /// does). The fluid mesh is
     /// remade from the restored positions; a stop asked for before the
     /// checkpoint is not carried over. The end time stays this
-    /// simulation's, so a finished run may be continued further.
+    /// simulation's, so a finished run may be continued further. The
+    /// gravity is the checkpoint's (a hook may have changed it during the
+    /// run, [`HookContext::gravity`](crate::hooks::HookContext)), whatever
+    /// this simulation's scene gave: a program that wants another sets it
+    /// after the restore ([`Simulation::set_gravity`]). What a scene
+    /// describes that is not state (its forces' and motion laws' formulas,
+    /// its probes) is not compared: `pfem run` keeps its scene file in the
+    /// checkpoint and refuses a restart under an edited one.
     ///
     /// A refused checkpoint (any error) leaves the simulation as it was
     /// before the call: everything is read and checked before anything
