@@ -103,6 +103,27 @@ impl<const D: usize> Geometry<D>
 where
     Const<D>: Dim,
 {
+    /// The measure of the region drawn (m³; m² per metre of depth in 2D):
+    /// a box's, a disk's or ball's, a cylinder's (3D), the area or volume a
+    /// closed surface encloses; `None` for a list of particles. A fluid's
+    /// mass is its particles' mesh's, which spans their centres: a
+    /// lattice filling a curved or slanted boundary meshes less (a ball of
+    /// radius 5 spacings 25 % less; `pfem check` warns).
+    pub fn measure(&self) -> Option<f64> {
+        use std::f64::consts::PI;
+        match self {
+            Geometry::Box { min, max } => Some((max - min).iter().product()),
+            Geometry::Ball { radius, .. } => Some(if D == 2 {
+                PI * radius * radius
+            } else {
+                4.0 / 3.0 * PI * radius.powi(3)
+            }),
+            Geometry::Cylinder { radius, height, .. } => Some(PI * radius * radius * height),
+            Geometry::Particles(_) => None,
+            Geometry::Surface(s) => Some(s.enclosed_measure()),
+        }
+    }
+
     /// Lower and upper corners of the bounding box.
     pub fn bounds(&self) -> (Point<D>, Point<D>) {
         match self {
