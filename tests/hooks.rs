@@ -1841,6 +1841,34 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
         );
         assert_eq!(sim.rejected(), 0, "retried: {err}");
     }
+    // A user's solver that reports no work of its own (`work`'s default):
+    // `Simulation::work().linear_solves` counted 0 (session 54's review);
+    // it is now the solves the integrator asked of it, one a Picard
+    // iterate here (a direct solver, no resolves).
+    #[derive(Debug)]
+    struct Quiet(pfem::assembly::DirectSolver);
+    impl pfem::assembly::LinearSolver for Quiet {
+        fn name(&self) -> &str {
+            "quiet solver"
+        }
+        fn solve(
+            &mut self,
+            a: pfem::assembly::faer::sparse::SparseColMatRef<'_, usize, f64>,
+            generation: u64,
+            b: &[f64],
+            x: &mut [f64],
+        ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
+            self.0.solve(a, generation, b, x)
+        }
+    }
+    let mut sim = sim2(small_tank("quiet solver"), StepParams::default());
+    sim.set_solver(Box::new(Quiet(Default::default())));
+    let before = sim.work().linear_solves;
+    sim.step().unwrap();
+    sim.step().unwrap();
+    let solves = sim.work().linear_solves - before;
+    assert!(solves >= 2, "{solves} solves in two steps");
+    assert_eq!(solves, sim.stats().assemble.0, "one solve an accepted iterate");
 
     // The cases' body measures name an unknown body (they gave zero).
     use pfem::cases3d::{fluid_force, top_displacement};

@@ -286,7 +286,9 @@ pub struct Work {
     /// Linear solves, rejected attempts included: factorisations or
     /// preconditioner set-ups plus the solves that reused one
     /// (`solver_iterations / linear_solves` is the Krylov iterations per
-    /// solve).
+    /// solve); for a solver that reports no work (a user's, whose
+    /// `LinearSolver::work` is the default), the solves the integrator
+    /// asked of it (it was 0, session 54's review).
     pub linear_solves: u64,
     /// Solves an iterative solver handed to its direct fallback
     /// (`pfem_assembly::BlockStats::fallbacks`; 0 for a direct solver).
@@ -2389,7 +2391,13 @@ where
             factorizations: s.factorizations,
             setups_carried: s.carried,
             solver_iterations: s.iterations,
-            linear_solves: s.factorizations + s.resolves,
+            // A user's solver may report no work of its own
+            // (`LinearSolver::work`'s default): the integrator's count.
+            linear_solves: if s.factorizations + s.resolves > 0 {
+                s.factorizations + s.resolves
+            } else {
+                self.stepper.integrator.solves()
+            },
             solver_fallbacks: s.fallbacks,
         }
     }

@@ -795,6 +795,9 @@ where
     x_it: Vec<Point<D>>,
     v_it: Vec<Vector<D>>,
     rates: Vec<NodalRate>,
+    /// Calls of the linear solver that solved (solves and resolves),
+    /// counted here: a user's solver may report no work of its own.
+    solves: u64,
 }
 
 impl<const D: usize> Integrator<D>
@@ -820,7 +823,15 @@ where
             x_it: Vec::new(),
             v_it: Vec::new(),
             rates: Vec::new(),
+            solves: 0,
         }
+    }
+
+    /// The linear solves this integrator asked of its solvers so far
+    /// (solves and resolves that succeeded, rejected attempts included),
+    /// whatever the solvers report ([`Integrator::solver_work`]).
+    pub fn solves(&self) -> u64 {
+        self.solves
     }
 
     /// The assembler (for reactions and diagnostics after a step).
@@ -1245,6 +1256,7 @@ where
                 );
                 if let Some(r) = self.solver.resolve(&self.res, &mut self.delta) {
                     r.map_err(|source| StepError::Solve { time, dt, source })?;
+                    self.solves += 1;
                     for (x, d) in self.sol.iter_mut().zip(&self.delta) {
                         *x += d;
                     }
@@ -1273,6 +1285,7 @@ where
                     ),
                 }
                 .map_err(|source| StepError::Solve { time, dt, source })?;
+                self.solves += 1;
                 // A success that made no progress (one of the user's
                 // solvers): the loop would read its zero change as
                 // convergence.
