@@ -1868,7 +1868,11 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
     sim.step().unwrap();
     let solves = sim.work().linear_solves - before;
     assert!(solves >= 2, "{solves} solves in two steps");
-    assert_eq!(solves, sim.stats().assemble.0, "one solve an accepted iterate");
+    assert_eq!(
+        solves,
+        sim.stats().assemble.0,
+        "one solve an accepted iterate"
+    );
 
     // The cases' body measures name an unknown body (they gave zero).
     use pfem::cases3d::{fluid_force, top_displacement};

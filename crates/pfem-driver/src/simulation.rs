@@ -1194,6 +1194,19 @@ where
                 why: format!("{corrections} volume corrections: one at most (set Options::volume_correction to 0 to add one of your own)"),
             });
         }
+        // Particle management twice (the scene's and one added): each pass
+        // would be booked under one name, and their states restored by it.
+        let managers = self
+            .hooks
+            .iter()
+            .filter(|h| h.name() == crate::hooks::ParticleManagement::NAME)
+            .count();
+        if managers > 1 {
+            return Err(RunError::Hook {
+                hook: crate::hooks::ParticleManagement::NAME.into(),
+                why: format!("{managers} particle managements: one at most (the scene asks for one, `Scene::particle_management`; leave it out to add one of your own)"),
+            });
+        }
         // Two motion laws on one wall: the later hook alone moved it (a
         // scene's law and an added `PrescribedMotion`, session 53's
         // review).
@@ -2549,7 +2562,12 @@ where
     /// a hook may ([`HookContext::set_gravity`](crate::hooks::HookContext::set_gravity)):
     /// after a [`Simulation::restore`], whose gravity is the checkpoint's,
     /// a program that means another sets it here. Before the first step
-    /// the initial accelerations are taken again under it.
+    /// the initial accelerations are taken again under it, but the
+    /// fluid's initial pressure stays the scene's (hydrostatic under the
+    /// scene's gravity, `pfem_scene::Scene::build`): a scene meant to
+    /// start at rest under another gravity is built with it
+    /// ([`pfem_scene::Scene::gravity`]), and a gravity ramped from zero
+    /// is a scene without gravity and a `BodyForceRamp` hook.
     ///
     /// Errors: [`RunError::InvalidSetting`] for a non-finite component;
     /// the body force is then unchanged.

@@ -1010,7 +1010,7 @@ where
                 return Err(SceneError::OutOfRange {
                     setting: "particle_management.every",
                     value: 0.0,
-                    range: "a number of steps, 1 or more",
+                    range: "1..: a number of steps",
                 });
             }
             params.validate().map_err(|e| match e {
@@ -1018,14 +1018,23 @@ where
                     name,
                     value,
                     reason,
-                } => SceneError::OutOfRange {
-                    setting: match name {
-                        "removal_fraction" => "particle_management.removal_fraction",
-                        "insertion_factor" => "particle_management.insertion_factor",
-                        other => other,
+                } => match name {
+                    "removal_fraction" => SceneError::OutOfRange {
+                        setting: "particle_management.removal_fraction",
+                        value,
+                        range: "[0, 1): a fraction of the spacing, 0 for no removal",
                     },
-                    value,
-                    range: reason,
+                    "insertion_factor" => SceneError::OutOfRange {
+                        setting: "particle_management.insertion_factor",
+                        value,
+                        range:
+                            "1 or more: times the regular simplex's measure, inf for no insertion",
+                    },
+                    other => SceneError::OutOfRange {
+                        setting: other,
+                        value,
+                        range: reason,
+                    },
                 },
                 _ => SceneError::InvalidSetting {
                     setting: "particle_management",

@@ -1140,6 +1140,14 @@ impl SceneFile {
                 "contact_damping" => &["damping"],
                 "contact_onset" => &["onset"],
                 "contact_stiffness" => &["stiffness"],
+                // (The `[particle_management]` table's keys, else the table.)
+                "particle_management.every" => &["every", "[particle_management]"],
+                "particle_management.removal_fraction" => {
+                    &["removal_fraction", "[particle_management]"]
+                }
+                "particle_management.insertion_factor" => {
+                    &["insertion_factor", "[particle_management]"]
+                }
                 _ => std::slice::from_ref(setting),
             },
             // The scene's own `name`, above the first table: a name taken

@@ -506,9 +506,14 @@ fn a_restart_under_an_edited_scene_file_is_refused_by_what_differs() {
             "{key}: {err}"
         );
     }
+    // Another `--spacing` than the run's: named as the option (it read
+    // "the scene file differs … in spacing, body `beam`").
     let r = restart(&text, &["--spacing", "0.00625"]);
     let err = String::from_utf8_lossy(&r.stderr);
-    assert!(err.contains("differs") && err.contains("spacing"), "{err}");
+    assert!(
+        err.contains("its run was given none, this one --spacing 0.00625"),
+        "{err}"
+    );
     // Comments, the end time and the frames' interval: accepted.
     let edit = format!(
         "# a comment\n{}",

@@ -1454,6 +1454,17 @@ fn a_particle_management_table_installs_it_and_checks_its_keys() {
     }
     let err = file_error(&with("[particle_management]\nevry = 2\n"));
     assert!(err.contains("evry"), "{err}");
+    // The file's and a program's own: one at most.
+    let LoadedScene::Two(scene, _) = build(&with("[particle_management]\n")).unwrap() else {
+        panic!("2D")
+    };
+    let mut sim = simulation(scene);
+    sim.add_hook(Box::new(pfem::hooks::ParticleManagement::new(
+        pfem::geometry::ParticleManagementParams::default(),
+        1,
+    )));
+    let err = sim.step().unwrap_err().to_string();
+    assert!(err.contains("2 particle managements"), "{err}");
 }
 
 /// What the table is for: the bundled dam break with a bulk modulus of

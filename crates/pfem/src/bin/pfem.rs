@@ -447,7 +447,10 @@ where
 /// (session 55's review, 3D, h = 0.02 m): a ball of radius 0.1 m meshed
 /// 3.125e-3 m³ of its 4.19e-3 (−25 %), a cylinder of radius 0.1 m and
 /// height 0.2 m 5.28e-3 of 6.28e-3 (−16 %), unsaid; the ball −12 % and
-/// −6 % at h = 0.01 and 0.005 m (first order). Each fluid element's
+/// −6 % at h = 0.01 and 0.005 m (first order); a 2D disk −16 and −8 %
+/// at 5 and 10 spacings. A wall inside the region drawn (an obstacle the
+/// fluid is drawn round) counts as a shortfall too: the warning names
+/// both causes. Each fluid element's
 /// measure is shared among its fluid particles' bodies.
 fn volume_warnings<const D: usize>(sim: &pfem::Simulation<D>, drawn: &[Drawn]) -> Vec<String>
 where
@@ -483,9 +486,14 @@ where
             let change = meshed[b] / nominal - 1.0;
             (change.abs() > DRAWN_VOLUME).then(|| {
                 format!(
-                    "fluid `{name}` is drawn as a {kind} of {nominal:.4e} {unit}, but its particles mesh {:.4e} {unit} ({:+.1} %): the mesh spans the particles' centres, which fill a curved or slanted boundary up to a spacing inside it, and the fluid's mass is the mesh's; the gap halves with the spacing (a ball of radius 5, 10 and 20 spacings: −25, −12 and −6 %): refine the spacing, or draw the body larger to make up for it",
+                    "fluid `{name}` is drawn as a {kind} of {nominal:.4e} {unit}, but its particles mesh {:.4e} {unit} ({:+.1} %), and the fluid's mass is the mesh's: where its boundary is curved or slanted, the mesh spans the particles' centres, up to a spacing inside it (the gap halves with the spacing: {}; refine the spacing, or draw the body larger to make up for it); where walls or solids take part of the region, their share is not water",
                     meshed[b],
-                    100.0 * change
+                    100.0 * change,
+                    if D == 2 {
+                        "a disk of radius 5 and 10 spacings −16 and −8 %"
+                    } else {
+                        "a ball of radius 5, 10 and 20 spacings −25, −12 and −6 %"
+                    }
                 )
             })
         })
@@ -696,8 +704,9 @@ fn encode_scene_file(spec: &SceneFile, spacing: Option<f64>) -> Vec<u8> {
     e.finish()
 }
 
-/// The scene file of [`SCENE_FILE_SECTION`], with its run's overrides.
-fn decode_scene_file(bytes: &[u8]) -> Result<SceneFile, String> {
+/// The scene file of [`SCENE_FILE_SECTION`] with its run's overrides, and
+/// its run's `--spacing`.
+fn decode_scene_file(bytes: &[u8]) -> Result<(SceneFile, Option<f64>), String> {
     let mut d = pfem::checkpoint::Decoder::new(bytes);
     let text = d.str().map_err(|e| e.to_string())?;
     let has_spacing = d.bool().map_err(|e| e.to_string())?;
@@ -708,7 +717,7 @@ fn decode_scene_file(bytes: &[u8]) -> Result<SceneFile, String> {
     if has_spacing {
         file.override_spacing(h);
     }
-    Ok(file)
+    Ok((file, has_spacing.then_some(h)))
 }
 
 /// Spacings of two fluids that meet may differ up to this factor
@@ -780,9 +789,26 @@ where
     // mid-file, another gravity was ignored and a changed force applied:
     // session 55's review). A checkpoint written before it is unchecked.
     if let (Some(ck), Some(f)) = (&restart, args.options.get("restart")) {
+        if ck.section(SCENE_FILE_SECTION).is_none() {
+            pfem::errln!(
+                "note: --restart {f}: the checkpoint was written before pfem run kept its scene file: the file is not compared"
+            );
+        }
         if let Some(bytes) = ck.section(SCENE_FILE_SECTION) {
-            let before = decode_scene_file(bytes)
+            let (before, spacing) = decode_scene_file(bytes)
                 .map_err(|e| format!("--restart {f}: its scene file: {e}"))?;
+            // The option first: a file unchanged but read under another
+            // `--spacing` differed "in spacing, body …" (session 55's
+            // review of the change).
+            if spacing != args.spacing {
+                let said =
+                    |h: Option<f64>| h.map_or("none".to_string(), |h| format!("--spacing {h}"));
+                return Err(format!(
+                    "--restart {f}: its run was given {}, this one {}: restart with the run's options",
+                    said(spacing),
+                    said(args.spacing)
+                ));
+            }
             let now = spec.differences(&before);
             if !now.is_empty() {
                 return Err(format!(
