@@ -1120,7 +1120,7 @@ where
                         return Err(SceneError::InvalidGeometry {
                             body: b.name.clone(),
                             why: format!(
-                                "a solid box spans {:e} m along axis {k}, less than its spacing {:e} m: one layer of particles makes no element",
+                                "a solid box spans {} m along axis {k}, less than its spacing {} m: one layer of particles makes no element",
                                 max[k] - min[k],
                                 b.spacing
                             ),

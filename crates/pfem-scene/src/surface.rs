@@ -139,8 +139,17 @@ impl ClosedSurface<3> {
             use std::io::Seek;
             file.rewind()
                 .map_err(|e| format!("cannot read STL file {}: {e}", path.display()))?;
-            let mesh = stl_io::read_stl(&mut file)
-                .map_err(|e| format!("cannot read STL file {}: {e}", path.display()))?;
+            let mesh = stl_io::read_stl(&mut file).map_err(|e| {
+                // (The parser's own words for a NaN or an infinity read
+                // "expected finite f32, got NaN which is Nan".)
+                let what = e.to_string();
+                let hint = if what.contains("finite") {
+                    " (a coordinate that is not a finite number)"
+                } else {
+                    ""
+                };
+                format!("cannot read STL file {}: {what}{hint}", path.display())
+            })?;
             let mut out = Vec::with_capacity(mesh.faces.len());
             for f in &mesh.faces {
                 let mut t = [[0f32; 3]; 3];
@@ -288,8 +297,11 @@ where
                 format!("the polygon is not closed at vertex {} ({c} edges)", k.0)
             } else {
                 format!(
-                    "the surface is not closed: edge ({}, {}) belongs to {c} triangle(s)",
-                    k.0, k.1
+                    "the surface is not closed: the edge from {:?} to {:?} (vertices {} and {}) belongs to {c} triangle(s)",
+                    self.vertices[k.0 as usize].as_slice(),
+                    self.vertices[k.1 as usize].as_slice(),
+                    k.0,
+                    k.1
                 )
             });
         }
@@ -330,8 +342,11 @@ where
                 .min_by_key(|(k, _)| **k)
             {
                 return Err(format!(
-                    "the surface's triangles are not consistently oriented: edge ({}, {}) is crossed the same way by two of them (a face reversed?)",
-                    k.0, k.1
+                    "the surface's triangles are not consistently oriented: the edge from {:?} to {:?} (vertices {} and {}) is crossed the same way by two of them (a face reversed?)",
+                    self.vertices[k.0 as usize].as_slice(),
+                    self.vertices[k.1 as usize].as_slice(),
+                    k.0,
+                    k.1
                 ));
             }
         }

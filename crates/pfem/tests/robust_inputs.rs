@@ -1632,6 +1632,29 @@ fn a_closed_pipe_does_not_turn_a_run_into_a_failure() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `pfem CMD FILE [extra]` (`run` into `out`, quiet, no frames): whether
+/// it succeeded, and its stdout and stderr together.
+fn pfem_says(
+    cmd: &str,
+    file: &std::path::Path,
+    out: &std::path::Path,
+    extra: &[&str],
+) -> (bool, String) {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_pfem"));
+    c.args([cmd, file.to_str().unwrap()]).args(extra);
+    if cmd == "run" {
+        c.args(["--quiet", "--no-vtu", "--overwrite", "--out"])
+            .arg(out);
+    }
+    let o = c.output().unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    (o.status.success(), text)
+}
+
 /// `pfem run` prints `pfem check`'s spacing warnings before the run (on
 /// stderr): a run with walls several times coarser than its water let it
 /// through the floor and said nothing (session 54's review; at 5 times
@@ -1649,20 +1672,8 @@ fn a_run_warns_of_walls_coarser_than_their_water() {
             puddle_file("coarse", "end_time = 0.002\nmax_dt = 1e-3", water, 0.05),
         )
         .unwrap();
-        let out = Command::new(env!("CARGO_BIN_EXE_pfem"))
-            .args([
-                "run",
-                file.to_str().unwrap(),
-                "--quiet",
-                "--no-vtu",
-                "--overwrite",
-                "--out",
-            ])
-            .arg(dir.join("out"))
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{err}");
+        let (ok, err) = pfem_says("run", &file, &dir.join("out"), &[]);
+        assert!(ok, "{err}");
         assert_eq!(
             err.contains("warning: wall `floor` has 4.00 times the spacing")
                 && err.contains("leaks into it"),
@@ -1696,25 +1707,7 @@ fn a_fluid_barely_stiffer_than_its_head_is_warned_of() {
             .replace("bulk_modulus = 2.2e9", &format!("bulk_modulus = {k}"));
         std::fs::write(&file, text).unwrap();
         for cmd in ["check", "run"] {
-            let out = Command::new(env!("CARGO_BIN_EXE_pfem"))
-                .args([cmd, file.to_str().unwrap()])
-                .args(if cmd == "run" {
-                    vec!["--quiet", "--no-vtu", "--overwrite", "--out"]
-                } else {
-                    vec![]
-                })
-                .args(if cmd == "run" {
-                    vec![dir.join("out")]
-                } else {
-                    vec![]
-                })
-                .output()
-                .unwrap();
-            let text = format!(
-                "{}{}",
-                String::from_utf8_lossy(&out.stdout),
-                String::from_utf8_lossy(&out.stderr)
-            );
+            let (_, text) = pfem_says(cmd, &file, &dir.join("out"), &[]);
             assert_eq!(
                 text.contains("fluid `water` has a bulk modulus"),
                 warned,
@@ -1763,22 +1756,11 @@ fn a_3d_fluid_without_pressure_stabilisation_is_warned_of() {
     ] {
         std::fs::write(&file, scene(run, fluid)).unwrap();
         for cmd in ["check", "run"] {
-            let mut c = Command::new(env!("CARGO_BIN_EXE_pfem"));
-            c.args([cmd, file.to_str().unwrap()]);
-            if let Some(a) = option {
-                c.args(["--pressure-stabilisation", a]);
-            }
-            if cmd == "run" {
-                c.args(["--quiet", "--no-vtu", "--overwrite", "--out"])
-                    .arg(dir.join("out"));
-            }
-            let out = c.output().unwrap();
-            let text = format!(
-                "{}{}",
-                String::from_utf8_lossy(&out.stdout),
-                String::from_utf8_lossy(&out.stderr)
-            );
-            assert!(out.status.success(), "{cmd} {run:?} {option:?}: {text}");
+            let extra: Vec<&str> = option
+                .map(|a| vec!["--pressure-stabilisation", a])
+                .unwrap_or_default();
+            let (ok, text) = pfem_says(cmd, &file, &dir.join("out"), &extra);
+            assert!(ok, "{cmd} {run:?} {option:?}: {text}");
             assert_eq!(
                 text.contains("3D fluid without pressure stabilisation"),
                 warned,
@@ -1816,16 +1798,8 @@ fn a_fluid_drawn_round_that_meshes_short_is_warned_of() {
             ),
         )
         .unwrap();
-        let out = Command::new(env!("CARGO_BIN_EXE_pfem"))
-            .args(["check", file.to_str().unwrap()])
-            .output()
-            .unwrap();
-        let text = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{text}{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let (ok, text) = pfem_says("check", &file, &dir, &[]);
+        assert!(ok, "{text}");
         assert_eq!(
             text.contains("fluid `water` is drawn as a disk"),
             warned,
