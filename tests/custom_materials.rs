@@ -262,9 +262,10 @@ fn a_non_finite_initial_history_is_refused() {
     }
 }
 
-/// Rubber whose viscosity turns into a NaN (a user law's overflow).
+/// Rubber whose viscosity turns into a NaN (a user law's overflow), or,
+/// with a counter, which panics.
 #[derive(Debug)]
-struct Poisoned(Hypoelastic);
+struct Poisoned(Hypoelastic, Option<std::sync::atomic::AtomicUsize>);
 
 impl Material<2> for Poisoned {
     fn name(&self) -> &str {
@@ -280,6 +281,11 @@ impl Material<2> for Poisoned {
         Material::<2>::wave_speed(&self.0)
     }
     fn unified(&self, kin: &Kinematics<2>, history: &History<2>) -> Unified<2> {
+        // With a counter, it panics (and counts its panics).
+        if let Some(panics) = &self.1 {
+            panics.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            panic!("the rubber's table ran out");
+        }
         let mut u = self.0.unified(kin, history);
         u.mu = f64::NAN;
         u
@@ -303,7 +309,7 @@ fn a_material_returning_a_non_number_is_named() {
         })
         .solid(
             "block",
-            Box::new(Poisoned(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap())),
+            Box::new(Poisoned(Hypoelastic::new(1000.0, 1e6, 0.3).unwrap(), None)),
             Geometry::Box {
                 min: Point::<2>::new(0.0, 0.0),
                 max: Point::<2>::new(0.1, 0.05),
@@ -318,5 +324,77 @@ fn a_material_returning_a_non_number_is_named() {
     assert!(
         err.contains("`poisoned rubber`") && err.contains("non-finite"),
         "{err}"
+    );
+}
+
+/// A material that panics is an error naming it, returned at once, not a
+/// panic of the run (session 54's review: its message printed once an
+/// element, about 150 times, and the process ended). The elements after
+/// the first panic are not computed: a panic a thread at most.
+#[test]
+fn a_material_that_panics_is_an_error_naming_it() {
+    use std::sync::Arc;
+    let material = Arc::new(Poisoned(
+        Hypoelastic::new(1000.0, 1e6, 0.3).unwrap(),
+        Some(Default::default()),
+    ));
+    #[derive(Debug)]
+    struct Shared(Arc<Poisoned>);
+    impl Material<2> for Shared {
+        fn name(&self) -> &str {
+            Material::<2>::name(&*self.0)
+        }
+        fn kind(&self) -> MaterialKind {
+            MaterialKind::Solid
+        }
+        fn density(&self) -> f64 {
+            Material::<2>::density(&*self.0)
+        }
+        fn wave_speed(&self) -> f64 {
+            Material::<2>::wave_speed(&*self.0)
+        }
+        fn unified(&self, kin: &Kinematics<2>, history: &History<2>) -> Unified<2> {
+            self.0.unified(kin, history)
+        }
+        fn update_history(&self, kin: &Kinematics<2>, history: &mut History<2>) {
+            self.0.update_history(kin, history);
+        }
+    }
+    let scene = Scene::<2>::new("panicking")
+        .settings(RunSettings {
+            end_time: 0.01,
+            max_dt: 5e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .solid(
+            "block",
+            Box::new(Shared(material.clone())),
+            Geometry::Box {
+                min: Point::<2>::new(0.0, 0.0),
+                max: Point::<2>::new(0.2, 0.1),
+            },
+            0.01,
+            None,
+        );
+    let err = Simulation::new(scene, Box::new(Delaunay2::default()), StepParams::default())
+        .map_err(|e| e.to_string())
+        .and_then(|mut sim| sim.run(&mut []).map_err(|e| e.to_string()))
+        .unwrap_err();
+    assert!(
+        err.contains("`poisoned rubber`")
+            && err.contains("panicked")
+            && err.contains("the rubber's table ran out"),
+        "{err}"
+    );
+    let panics = material
+        .1
+        .as_ref()
+        .unwrap()
+        .load(std::sync::atomic::Ordering::Relaxed);
+    // 400 elements; one panic a worker thread at most, a few in flight.
+    assert!(
+        panics <= 2 * rayon::current_num_threads().max(1),
+        "{panics} panics"
     );
 }

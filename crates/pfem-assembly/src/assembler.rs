@@ -274,7 +274,7 @@ fn increment_scale(il: &crate::amg::Csr) -> f64 {
 }
 /// What is wrong with an element at the iterate (the assembly's first
 /// failure in element order).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 enum Bad {
     /// Degenerate or inverted: a smaller step may cure it.
     Inverted,
@@ -282,6 +282,8 @@ enum Bad {
     NonFinite,
     /// Its material returned what no step size cures.
     Invalid(&'static str),
+    /// Its material panicked (the message).
+    Panicked(String),
 }
 
 /// Whether `σ̂` (with its out-of-plane `σ̂_zz` in 2D) is isotropic, to a
@@ -1228,6 +1230,7 @@ where
         // squeezed out (the step is rejected and halved instead).
         let in_solid = &self.in_solid;
         let touches_solid = |parts: &[usize]| D == 2 && parts.iter().any(|&p| in_solid[p]);
+        let panicked = std::sync::atomic::AtomicBool::new(false);
         let bad = states
             .par_iter_mut()
             .zip(unified.par_iter_mut())
@@ -1241,6 +1244,11 @@ where
             // (A fluid element's history, one a thread, its pressure set
             // for each: not made anew for every element.)
             .map_init(History::<D>::default, |fluid_h, (e, ((st, un), ((fr, fw), bare)))| {
+                // After a material's panic the rest is not computed (each
+                // would print its panic too); the error is the first's.
+                if panicked.load(std::sync::atomic::Ordering::Relaxed) {
+                    return None;
+                }
                 let mut x = [Point::<D>::zeros(); MAX_NV];
                 let mut xn = [Point::<D>::zeros(); MAX_NV];
                 let mut v = [Vector::<D>::zeros(); MAX_NV];
@@ -1291,16 +1299,30 @@ where
                     Some(s) => {
                         *st = s;
                         let mat = &input.materials[self.elem_material[e] as usize];
-                        *un = if elem_fluid[e] {
-                            // A fluid's history is its nodal pressure (eq.
-                            // 62): the element is given its nodes' mean at
-                            // `tⁿ`, so that a fluid's `μ` or `𝒦` may depend
-                            // on it (a pressure-dependent viscosity).
-                            // Before, it was given 0.
-                            fluid_h.pressure = mean_pressure[e];
-                            mat.unified(&s.kin, fluid_h)
-                        } else {
-                            mat.unified(&s.kin, &input.element_history[e])
+                        let called = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                            if elem_fluid[e] {
+                                // A fluid's history is its nodal pressure
+                                // (eq. 62): the element is given its nodes'
+                                // mean at `tⁿ`, so that a fluid's `μ` or `𝒦`
+                                // may depend on it (a pressure-dependent
+                                // viscosity). Before, it was given 0.
+                                fluid_h.pressure = mean_pressure[e];
+                                mat.unified(&s.kin, fluid_h)
+                            } else {
+                                mat.unified(&s.kin, &input.element_history[e])
+                            }
+                        }));
+                        *un = match called {
+                            Ok(u) => u,
+                            Err(payload) => {
+                                panicked.store(true, std::sync::atomic::Ordering::Relaxed);
+                                let message = payload
+                                    .downcast_ref::<&str>()
+                                    .map(|m| m.to_string())
+                                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                                    .unwrap_or_else(|| "(a panic without a message)".into());
+                                return Some((e, Bad::Panicked(message)));
+                            }
                         };
                         if !(un.mu.is_finite()
                             && un.kappa.is_finite()
@@ -1366,6 +1388,12 @@ where
                     material,
                     name: input.materials[material as usize].name().to_string(),
                     why,
+                },
+                Bad::Panicked(message) => AssemblyError::MaterialPanicked {
+                    element: e,
+                    material,
+                    name: input.materials[material as usize].name().to_string(),
+                    message,
                 },
             });
         }

@@ -38,6 +38,22 @@ pub enum AssemblyError {
         /// What is wrong.
         why: &'static str,
     },
+    /// A material panicked computing its constitutive triple: returned at
+    /// once (a panic is a fault of the material, not of the step's size).
+    /// The first element's panic is caught, the other elements are left
+    /// uncomputed: the panic's message is printed once a thread, not once
+    /// an element (session 55: about 150 times, then the process ended).
+    #[error("material {material} (`{name}`) panicked on element {element}: {message}")]
+    MaterialPanicked {
+        /// Element index.
+        element: usize,
+        /// Material index.
+        material: u16,
+        /// The material's name.
+        name: String,
+        /// The panic's message (its payload if it is text).
+        message: String,
+    },
     /// The right-hand side is not finite.
     #[error("the assembled right-hand side is not finite at unknown {dof}")]
     NonFiniteSystem {

@@ -655,9 +655,10 @@ impl StepError {
         use pfem_assembly::{AssemblyError as A, SolveError as S};
         match self {
             StepError::InvalidInput { .. } => false,
-            StepError::Assembly { source, .. } => {
-                !matches!(source, A::MeshMismatch { .. } | A::InvalidMaterial { .. })
-            }
+            StepError::Assembly { source, .. } => !matches!(
+                source,
+                A::MeshMismatch { .. } | A::InvalidMaterial { .. } | A::MaterialPanicked { .. }
+            ),
             StepError::Solve { source, .. } => !matches!(
                 source,
                 S::DimensionMismatch { .. }
