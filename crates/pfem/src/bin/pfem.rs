@@ -388,8 +388,10 @@ where
 
 /// What `pfem check` warns of, and `pfem run` before it starts:
 /// [`spacing_warnings`] (the walls that no water touches at the start
-/// compared with the finest fluid's spacing) and
-/// [`compressibility_warnings`].
+/// compared with the finest fluid's spacing),
+/// [`compressibility_warnings`], [`volume_warnings`] (the fluids of
+/// `drawn`) and a 3D fluid without pressure stabilisation
+/// ([`UNSTABILISED_3D`]).
 fn scene_warnings<const D: usize>(sim: &pfem::Simulation<D>, drawn: &[Drawn]) -> Vec<String>
 where
     Const<D>: Dim,
