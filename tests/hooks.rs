@@ -1789,18 +1789,26 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
     sim.particles_mut().remap(&map).unwrap();
     sim.initialize_acceleration().unwrap();
 
-    // A solver returning a non-number (`Faulty(_, None)`: a real solve, a
-    // NaN written in), and one reporting success with no progress
-    // (`Some(residual)`: zeros, residual 5, 1 or NaN): the Picard loop read
-    // the zero change as convergence, and a collapsing column stood
-    // frozen, `Ok` (session 54's review).
+    // A solver returning a non-number (`Fault::Nan`: a real solve, a NaN
+    // written in), and one reporting success with no progress
+    // (`Fault::Idle(residual)`: zeros, residual 5, 1 or NaN): the Picard
+    // loop read the zero change as convergence, and a collapsing column
+    // stood frozen, `Ok` (session 54's review). `Fault::None` solves
+    // honestly and reports no work of its own (`work`'s default).
+    #[derive(Debug, Clone, Copy)]
+    enum Fault {
+        Nan,
+        Idle(f64),
+        None,
+    }
     #[derive(Debug)]
-    struct Faulty(pfem::assembly::DirectSolver, Option<f64>);
+    struct Faulty(pfem::assembly::DirectSolver, Fault);
     impl pfem::assembly::LinearSolver for Faulty {
         fn name(&self) -> &str {
             match self.1 {
-                None => "broken solver",
-                Some(_) => "idle solver",
+                Fault::Nan => "broken solver",
+                Fault::Idle(_) => "idle solver",
+                Fault::None => "quiet solver",
             }
         }
         fn solve(
@@ -1811,20 +1819,21 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
             x: &mut [f64],
         ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
             match self.1 {
-                None => {
+                Fault::Nan => {
                     let r = self.0.solve(a, generation, b, x)?;
                     x[0] = f64::NAN;
                     Ok(r)
                 }
-                Some(residual) => {
+                Fault::Idle(residual) => {
                     x.fill(0.0);
                     Ok(pfem::assembly::SolveReport::new(residual, 1))
                 }
+                Fault::None => self.0.solve(a, generation, b, x),
             }
         }
     }
     let mut sim = sim2(small_tank("broken solver"), StepParams::default());
-    sim.set_solver(Box::new(Faulty(Default::default(), None)));
+    sim.set_solver(Box::new(Faulty(Default::default(), Fault::Nan)));
     let err = sim.step().unwrap_err().to_string();
     assert!(
         err.contains("broken solver") && err.contains("not finite"),
@@ -1833,7 +1842,7 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
     assert_eq!(sim.rejected(), 0, "retried: {err}");
     for residual in [5.0, 1.0, f64::NAN] {
         let mut sim = sim2(small_tank("idle solver"), StepParams::default());
-        sim.set_solver(Box::new(Faulty(Default::default(), Some(residual))));
+        sim.set_solver(Box::new(Faulty(Default::default(), Fault::Idle(residual))));
         let err = sim.step().unwrap_err().to_string();
         assert!(
             err.contains("idle solver") && err.contains("no better than a zero solution"),
@@ -1845,24 +1854,8 @@ fn non_numbers_from_user_code_and_a_set_changed_before_a_run_are_named() {
     // `Simulation::work().linear_solves` counted 0 (session 54's review);
     // it is now the solves the integrator asked of it, one a Picard
     // iterate here (a direct solver, no resolves).
-    #[derive(Debug)]
-    struct Quiet(pfem::assembly::DirectSolver);
-    impl pfem::assembly::LinearSolver for Quiet {
-        fn name(&self) -> &str {
-            "quiet solver"
-        }
-        fn solve(
-            &mut self,
-            a: pfem::assembly::faer::sparse::SparseColMatRef<'_, usize, f64>,
-            generation: u64,
-            b: &[f64],
-            x: &mut [f64],
-        ) -> Result<pfem::assembly::SolveReport, pfem::assembly::SolveError> {
-            self.0.solve(a, generation, b, x)
-        }
-    }
     let mut sim = sim2(small_tank("quiet solver"), StepParams::default());
-    sim.set_solver(Box::new(Quiet(Default::default())));
+    sim.set_solver(Box::new(Faulty(Default::default(), Fault::None)));
     let before = sim.work().linear_solves;
     sim.step().unwrap();
     sim.step().unwrap();

@@ -1180,32 +1180,30 @@ where
     /// start set before the first step sets the accelerations (not when
     /// `restore` starts the hooks on the fresh state it then replaces).
     fn start_hooks_then(&mut self, accelerations: bool) -> Result<(), RunError> {
-        // Two volume corrections (the driver's own and one added, e.g.
-        // `with_target_volume`) would pull the free surface to two
-        // targets, out and back every step.
-        let corrections = self
-            .hooks
-            .iter()
-            .filter(|h| h.name() == VolumeCorrection::NAME)
-            .count();
-        if corrections > 1 {
-            return Err(RunError::Hook {
-                hook: VolumeCorrection::NAME.into(),
-                why: format!("{corrections} volume corrections: one at most (set Options::volume_correction to 0 to add one of your own)"),
-            });
-        }
-        // Particle management twice (the scene's and one added): each pass
-        // would be booked under one name, and their states restored by it.
-        let managers = self
-            .hooks
-            .iter()
-            .filter(|h| h.name() == crate::hooks::ParticleManagement::NAME)
-            .count();
-        if managers > 1 {
-            return Err(RunError::Hook {
-                hook: crate::hooks::ParticleManagement::NAME.into(),
-                why: format!("{managers} particle managements: one at most (the scene asks for one, `Scene::particle_management`; leave it out to add one of your own)"),
-            });
+        // Hooks that may be installed once: two volume corrections (the
+        // driver's own and one added, e.g. `with_target_volume`) would
+        // pull the free surface to two targets, out and back every step;
+        // two particle managements (the scene's and one added) would book
+        // their passes under one name and restore their states by it.
+        for (name, what, advice) in [
+            (
+                VolumeCorrection::NAME,
+                "volume corrections",
+                "set Options::volume_correction to 0 to add one of your own",
+            ),
+            (
+                crate::hooks::ParticleManagement::NAME,
+                "particle managements",
+                "the scene asks for one, `Scene::particle_management`; leave it out to add one of your own",
+            ),
+        ] {
+            let count = self.hooks.iter().filter(|h| h.name() == name).count();
+            if count > 1 {
+                return Err(RunError::Hook {
+                    hook: name.into(),
+                    why: format!("{count} {what}: one at most ({advice})"),
+                });
+            }
         }
         // Two motion laws on one wall: the later hook alone moved it (a
         // scene's law and an added `PrescribedMotion`, session 53's

@@ -471,13 +471,10 @@ where
             points[k] = p.x()[i as usize];
         }
         let v = pfem::core::simplex_measure::<D>(&points[..=D]).abs();
-        let fluid: Vec<usize> = el
-            .iter()
-            .map(|&i| i as usize)
-            .filter(|&i| p.kind()[i] == ParticleKind::Fluid)
-            .collect();
-        for &i in &fluid {
-            meshed[p.body()[i] as usize] += v / fluid.len() as f64;
+        let fluid = |i: &&u32| p.kind()[**i as usize] == ParticleKind::Fluid;
+        let n = el.iter().filter(fluid).count();
+        for &i in el.iter().filter(fluid) {
+            meshed[p.body()[i as usize] as usize] += v / n as f64;
         }
     }
     let unit = if D == 2 { "m²/m" } else { "m³" };
