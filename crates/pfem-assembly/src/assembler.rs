@@ -1316,11 +1316,7 @@ where
                             Ok(u) => u,
                             Err(payload) => {
                                 panicked.store(true, std::sync::atomic::Ordering::Relaxed);
-                                let message = payload
-                                    .downcast_ref::<&str>()
-                                    .map(|m| m.to_string())
-                                    .or_else(|| payload.downcast_ref::<String>().cloned())
-                                    .unwrap_or_else(|| "(a panic without a message)".into());
+                                let message = crate::error::panic_message(payload.as_ref());
                                 return Some((e, Bad::Panicked(message)));
                             }
                         };
@@ -1391,6 +1387,7 @@ where
                 },
                 Bad::Panicked(message) => AssemblyError::MaterialPanicked {
                     element: e,
+                    call: "unified",
                     material,
                     name: input.materials[material as usize].name().to_string(),
                     message,

@@ -38,15 +38,23 @@ pub enum AssemblyError {
         /// What is wrong.
         why: &'static str,
     },
-    /// A material panicked computing its constitutive triple: returned at
-    /// once (a panic is a fault of the material, not of the step's size).
-    /// The first element's panic is caught, the other elements are left
-    /// uncomputed: the panic's message is printed once a thread, not once
-    /// an element (session 55: about 150 times, then the process ended).
-    #[error("material {material} (`{name}`) panicked on element {element}: {message}")]
+    /// A material panicked in one of its calls (`call`: `unified`, its
+    /// constitutive triple, in the assembly; `refuses`, `update_history`
+    /// or `update_pressure` in the step's update): returned at once (a
+    /// panic is a fault of the material, not of the step's size). In the
+    /// assembly the first element's panic is caught and the other
+    /// elements are left uncomputed: the panic's message is printed once a
+    /// thread, not once an element (session 55: about 150 times, then the
+    /// process ended; session 56: the update's calls too).
+    #[error(
+        "material {material} (`{name}`) panicked in `{call}` on {} {element}: {message}",
+        panic_place(call)
+    )]
     MaterialPanicked {
-        /// Element index.
+        /// Element index (for `update_pressure`, the particle's).
         element: usize,
+        /// The material's call that panicked.
+        call: &'static str,
         /// Material index.
         material: u16,
         /// The material's name.
@@ -203,4 +211,23 @@ impl SolveError {
             })
         }
     }
+}
+
+/// "particle" for a nodal call (`update_pressure`), "element" otherwise.
+fn panic_place(call: &str) -> &'static str {
+    if call == "update_pressure" {
+        "particle"
+    } else {
+        "element"
+    }
+}
+
+/// The text of a caught panic's payload (`&str` or `String`), or a note
+/// that it had none.
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|m| m.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "(a panic without a message)".into())
 }

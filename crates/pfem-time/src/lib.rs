@@ -1409,57 +1409,83 @@ where
         let materials = input.materials;
         let (x_it, v_it, x_n) = (&self.x_it, &self.v_it, &state.x);
         let assembler = &self.assembler;
+        // Once a material has panicked the other elements are skipped: its
+        // message prints once a thread, not once an element.
+        let any_panic = std::sync::atomic::AtomicBool::new(false);
         // (Only the solid elements' histories and the failures are kept,
         // in element order.)
-        let outcome: Vec<(usize, Result<History<D>, StepError>)> =
-            (0..input.mesh.element_material.len())
-                .into_par_iter()
-                .with_min_len(256)
-                .filter_map(|e| {
-                    if assembler.is_frozen(e) {
-                        return None; // a sliver on its geometry at tⁿ, a fluid element
-                    }
-                    let el = &input.mesh.elements[e * nv..(e + 1) * nv];
-                    let mut xs = [Point::<D>::zeros(); pfem_core::MAX_NV];
-                    let mut xn = [Point::<D>::zeros(); pfem_core::MAX_NV];
-                    let mut vs = [Vector::<D>::zeros(); pfem_core::MAX_NV];
-                    for a in 0..nv {
-                        let p = el[a] as usize;
-                        xs[a] = x_it[p];
-                        xn[a] = x_n[p];
-                        vs[a] = v_it[p];
-                    }
-                    let Some(st) = pfem_assembly::kernels::element_state::<D>(
-                        &xs[..nv],
-                        &xn[..nv],
-                        &vs[..nv],
+        let outcome: Vec<(usize, Result<History<D>, StepError>)> = (0..input
+            .mesh
+            .element_material
+            .len())
+            .into_par_iter()
+            .with_min_len(256)
+            .filter_map(|e| {
+                if assembler.is_frozen(e) || any_panic.load(std::sync::atomic::Ordering::Relaxed) {
+                    return None; // a sliver on its geometry at tⁿ, a fluid element
+                }
+                let el = &input.mesh.elements[e * nv..(e + 1) * nv];
+                let mut xs = [Point::<D>::zeros(); pfem_core::MAX_NV];
+                let mut xn = [Point::<D>::zeros(); pfem_core::MAX_NV];
+                let mut vs = [Vector::<D>::zeros(); pfem_core::MAX_NV];
+                for a in 0..nv {
+                    let p = el[a] as usize;
+                    xs[a] = x_it[p];
+                    xn[a] = x_n[p];
+                    vs[a] = v_it[p];
+                }
+                let Some(st) = pfem_assembly::kernels::element_state::<D>(
+                    &xs[..nv],
+                    &xn[..nv],
+                    &vs[..nv],
+                    dt,
+                    inertia.displacement_weight,
+                ) else {
+                    return Some((
+                        e,
+                        Err(StepError::Assembly {
+                            time,
+                            dt,
+                            source: AssemblyError::InvertedElement {
+                                element: e,
+                                nodes: el.to_vec(),
+                            },
+                        }),
+                    ));
+                };
+                let mat = &materials[input.mesh.element_material[e] as usize];
+                if mat.kind() != MaterialKind::Solid {
+                    return None;
+                }
+                // An element whose every particle is prescribed (a
+                // clamped solid beside a wall) has a state no step size
+                // changes: not asked.
+                let held = el
+                    .iter()
+                    .all(|&p| input.constraints.is_fully_fixed(p as usize));
+                // A user's material that panics here is an error naming
+                // it, as in the assembly (`AssemblyError::MaterialPanicked`):
+                // it ended the process before (session 56).
+                let panicked = |call: &'static str, payload: Box<dyn std::any::Any + Send>| {
+                    any_panic.store(true, std::sync::atomic::Ordering::Relaxed);
+                    Err(StepError::Assembly {
+                        time,
                         dt,
-                        inertia.displacement_weight,
-                    ) else {
-                        return Some((
-                            e,
-                            Err(StepError::Assembly {
-                                time,
-                                dt,
-                                source: AssemblyError::InvertedElement {
-                                    element: e,
-                                    nodes: el.to_vec(),
-                                },
-                            }),
-                        ));
-                    };
-                    let mat = &materials[input.mesh.element_material[e] as usize];
-                    if mat.kind() != MaterialKind::Solid {
-                        return None;
-                    }
-                    // An element whose every particle is prescribed (a
-                    // clamped solid beside a wall) has a state no step size
-                    // changes: not asked.
-                    let held = el
-                        .iter()
-                        .all(|&p| input.constraints.is_fully_fixed(p as usize));
-                    if let Some(why) = (!held).then(|| mat.refuses(&st.kin, &history[e])).flatten()
-                    {
+                        source: AssemblyError::MaterialPanicked {
+                            element: e,
+                            call,
+                            material: input.mesh.element_material[e],
+                            name: mat.name().to_string(),
+                            message: pfem_assembly::error::panic_message(payload.as_ref()),
+                        },
+                    })
+                };
+                let refusal = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    (!held).then(|| mat.refuses(&st.kin, &history[e])).flatten()
+                }));
+                match refusal {
+                    Err(payload) => return Some((e, panicked("refuses", payload))),
+                    Ok(Some(why)) => {
                         return Some((
                             e,
                             Err(StepError::Refused {
@@ -1471,11 +1497,18 @@ where
                             }),
                         ));
                     }
-                    let mut h = history[e];
+                    Ok(None) => {}
+                }
+                let mut h = history[e];
+                let updated = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                     mat.update_history(&st.kin, &mut h); // eq. 63
-                    Some((e, Ok(h)))
-                })
-                .collect();
+                }));
+                match updated {
+                    Ok(()) => Some((e, Ok(h))),
+                    Err(payload) => Some((e, panicked("update_history", payload))),
+                }
+            })
+            .collect();
         let mut new_history: Vec<(usize, History<D>)> = Vec::with_capacity(outcome.len());
         for (e, r) in outcome {
             new_history.push((e, r?));
@@ -1502,29 +1535,49 @@ where
             self.assembler
                 .nodal_volumetric_rates(&self.v_it, &mut self.rates);
             let mixed = self.assembler.mixed_fluid_shares();
-            for r in &self.rates {
-                let p = r.particle as usize;
-                let start = mixed.partition_point(|s| s.0 < r.particle);
-                let shares = mixed[start..].iter().take_while(|s| s.0 == r.particle);
-                let weight: f64 = shares.clone().map(|s| s.2).sum();
-                let value = if weight > 0.0 {
-                    // Where two fluids meet, each material's update
-                    // weighted by its share, the weights of the momentum
-                    // equation's `𝒦_a` (it used the first element's
-                    // material alone, which that equation did not balance;
-                    // session 40's review).
-                    let mut sum = 0.0;
-                    for &(_, m, w) in shares {
-                        let mat = &input.materials[m as usize];
-                        sum += w * mat.update_pressure(state.pressure[p], r.rate, dt);
-                        // eq. 62
-                    }
-                    sum / weight
-                } else {
-                    let mat = &input.materials[r.material as usize];
-                    mat.update_pressure(state.pressure[p], r.rate, dt) // eq. 62
-                };
-                new_pressure.push((p, value));
+            // The particle being updated, for a material's panic (below).
+            let mut at = (0usize, 0u16);
+            let updated = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                for r in &self.rates {
+                    let p = r.particle as usize;
+                    let start = mixed.partition_point(|s| s.0 < r.particle);
+                    let shares = mixed[start..].iter().take_while(|s| s.0 == r.particle);
+                    let weight: f64 = shares.clone().map(|s| s.2).sum();
+                    let value = if weight > 0.0 {
+                        // Where two fluids meet, each material's update
+                        // weighted by its share, the weights of the momentum
+                        // equation's `𝒦_a` (it used the first element's
+                        // material alone, which that equation did not balance;
+                        // session 40's review).
+                        let mut sum = 0.0;
+                        for &(_, m, w) in shares {
+                            at = (p, m);
+                            let mat = &input.materials[m as usize];
+                            sum += w * mat.update_pressure(state.pressure[p], r.rate, dt);
+                            // eq. 62
+                        }
+                        sum / weight
+                    } else {
+                        at = (p, r.material);
+                        let mat = &input.materials[r.material as usize];
+                        mat.update_pressure(state.pressure[p], r.rate, dt) // eq. 62
+                    };
+                    new_pressure.push((p, value));
+                }
+            }));
+            if let Err(payload) = updated {
+                let (p, m) = at;
+                return Err(StepError::Assembly {
+                    time,
+                    dt,
+                    source: AssemblyError::MaterialPanicked {
+                        element: p,
+                        call: "update_pressure",
+                        material: m,
+                        name: input.materials[m as usize].name().to_string(),
+                        message: pfem_assembly::error::panic_message(payload.as_ref()),
+                    },
+                });
             }
         }
         if let Some(&(p, _)) = new_pressure.iter().find(|(_, v)| !v.is_finite()) {
