@@ -17,7 +17,11 @@
 //! `StepParams::sliver_quality_3d = 0` gives 4.72·10⁻³, +0.31 %, 0.36 %.
 //! Exempting the slivers that touch a solid (the 2D rule, tried with a
 //! temporary switch) makes it
-//! 5.74·10⁻³. The test keeps the defaults and fails.
+//! 5.74·10⁻³. The test keeps the defaults and failed until session 56:
+//! with a 3D contact element's gap measured to the facet itself rather
+//! than its plane (`pfem_geometry::contact`), largest speed 4.44·10⁻³
+//! √(gH), draft +0.32 %, pressure 0.31 % RMS: it passes, ignored for its
+//! time alone.
 //!
 //! Where the speed is (session 37, a scratch driver printing the fastest
 //! water particles): not at the surface or the walls but under the
@@ -40,7 +44,7 @@ use pfem::prelude::*;
 const G: f64 = 9.81;
 
 #[test]
-#[ignore = "known gap since slivers keep their shape (deviation 13): largest water speed 5.44e-3 sqrt(gH), bound 5e-3; about 70 s: cargo test --release --test suite floating_3d:: -- --ignored --nocapture"]
+#[ignore = "about 70 s: cargo test --release --test suite floating_3d:: -- --ignored --nocapture"]
 fn a_3d_block_half_as_dense_as_water_floats_at_half_its_height() {
     let h = 0.025;
     let (length, width, depth) = (0.6, 0.4, 0.2);
