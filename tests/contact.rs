@@ -955,34 +955,21 @@ fn a_free_block_rests_on_a_floor_in_3d() {
     let weight = 1000.0 * 0.3 * 0.2 * 0.3 * G;
     // (rejected steps, mean floor force over 0.2–0.3 s, deepest point).
     let run = |onset: f64| {
-        let scene = Scene::<3>::new("block3d")
-            .gravity(Vector::<3>::new(0.0, -G, 0.0))
-            .settings(RunSettings {
-                end_time: 0.3,
-                max_dt: 2e-3,
-                output_interval: None,
-                ..Default::default()
-            })
-            .wall(
-                "floor",
-                Geometry::Box {
-                    min: Point::<3>::new(-0.2, -h, -0.2),
-                    max: Point::<3>::new(0.5, 0.0, 0.5),
-                },
-                h,
-                WallMotion::Fixed,
-            )
-            .solid(
-                "block",
-                Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
-                Geometry::Box {
-                    min: Point::<3>::new(0.0, h, 0.0),
-                    max: Point::<3>::new(0.3, h + 0.2, 0.3),
-                },
-                h,
-                None,
-            )
-            .contact_onset(onset);
+        let scene = block_on_floor_3d(
+            "block3d",
+            Vector::<3>::new(0.0, -G, 0.0),
+            0.3,
+            h,
+            [
+                Point::<3>::new(-0.2, -h, -0.2),
+                Point::<3>::new(0.5, 0.0, 0.5),
+            ],
+            [
+                Point::<3>::new(0.0, h, 0.0),
+                Point::<3>::new(0.3, h + 0.2, 0.3),
+            ],
+        )
+        .contact_onset(onset);
         let mut s =
             Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
         assert!(s.stages().contact);
@@ -1497,34 +1484,21 @@ fn a_block_in_the_corner_of_one_wall_body_in_3d_is_refused_with_the_way_out() {
 #[test]
 fn a_block_slides_straight_down_a_slope_with_friction_in_3d() {
     let (h, theta, mu): (f64, f64, f64) = (0.02, 35f64.to_radians(), 0.5);
-    let scene = Scene::<3>::new("slope3d")
-        .gravity(Vector::<3>::new(0.0, -G * theta.cos(), G * theta.sin()))
-        .settings(RunSettings {
-            end_time: 0.2,
-            max_dt: 2e-3,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall(
-            "floor",
-            Geometry::Box {
-                min: Point::<3>::new(-0.06, -h, -0.1),
-                max: Point::<3>::new(0.16, 0.0, 0.5),
-            },
-            h,
-            WallMotion::Fixed,
-        )
-        .solid(
-            "block",
-            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
-            Geometry::Box {
-                min: Point::<3>::new(0.0, h, 0.0),
-                max: Point::<3>::new(0.1, h + 0.1, 0.1),
-            },
-            h,
-            None,
-        )
-        .friction("block", "floor", mu);
+    let scene = block_on_floor_3d(
+        "slope3d",
+        Vector::<3>::new(0.0, -G * theta.cos(), G * theta.sin()),
+        0.2,
+        h,
+        [
+            Point::<3>::new(-0.06, -h, -0.1),
+            Point::<3>::new(0.16, 0.0, 0.5),
+        ],
+        [
+            Point::<3>::new(0.0, h, 0.0),
+            Point::<3>::new(0.1, h + 0.1, 0.1),
+        ],
+    )
+    .friction("block", "floor", mu);
     let mut s =
         Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
     let block = s.body_particles("block").unwrap();
@@ -1567,33 +1541,20 @@ fn a_block_slides_straight_down_a_slope_with_friction_in_3d() {
 #[test]
 fn a_cube_dropped_flat_comes_to_rest_flat_in_3d() {
     let h = 0.02;
-    let scene = Scene::<3>::new("drop3d")
-        .gravity(Vector::<3>::new(0.0, -G, 0.0))
-        .settings(RunSettings {
-            end_time: 1.0,
-            max_dt: 2e-3,
-            output_interval: None,
-            ..Default::default()
-        })
-        .wall(
-            "floor",
-            Geometry::Box {
-                min: Point::<3>::new(0.0, -h, 0.0),
-                max: Point::<3>::new(0.3, 0.0, 0.3),
-            },
-            h,
-            WallMotion::Fixed,
-        )
-        .solid(
-            "block",
-            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
-            Geometry::Box {
-                min: Point::<3>::new(0.1, 0.07, 0.1),
-                max: Point::<3>::new(0.2, 0.17, 0.2),
-            },
-            h,
-            None,
-        );
+    let scene = block_on_floor_3d(
+        "drop3d",
+        Vector::<3>::new(0.0, -G, 0.0),
+        1.0,
+        h,
+        [
+            Point::<3>::new(0.0, -h, 0.0),
+            Point::<3>::new(0.3, 0.0, 0.3),
+        ],
+        [
+            Point::<3>::new(0.1, 0.07, 0.1),
+            Point::<3>::new(0.2, 0.17, 0.2),
+        ],
+    );
     let mut s =
         Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
     let block = s.body_particles("block").unwrap();
@@ -1639,4 +1600,44 @@ fn a_cube_dropped_flat_comes_to_rest_flat_in_3d() {
     assert!(most <= e0 * (1.0 + 1e-3), "energy rose to {most} from {e0}");
     assert!(tilt < 1.0, "tilted {tilt}°");
     assert!(fastest < 0.01, "still moving at {fastest} m/s");
+}
+
+/// A 3D scene of a wall box `floor` and a free elastic block `block`
+/// (1000 kg/m³, `E` = 10⁷ Pa, ν = 0.3), both of spacing `h`, under
+/// `gravity`, run to `end_time` with steps of at most 2 ms.
+fn block_on_floor_3d(
+    name: &str,
+    gravity: Vector<3>,
+    end_time: f64,
+    h: f64,
+    floor: [Point<3>; 2],
+    block: [Point<3>; 2],
+) -> Scene<3> {
+    Scene::<3>::new(name)
+        .gravity(gravity)
+        .settings(RunSettings {
+            end_time,
+            max_dt: 2e-3,
+            output_interval: None,
+            ..Default::default()
+        })
+        .wall(
+            "floor",
+            Geometry::Box {
+                min: floor[0],
+                max: floor[1],
+            },
+            h,
+            WallMotion::Fixed,
+        )
+        .solid(
+            "block",
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Box {
+                min: block[0],
+                max: block[1],
+            },
+            h,
+            None,
+        )
 }

@@ -1414,15 +1414,15 @@ where
         let any_panic = std::sync::atomic::AtomicBool::new(false);
         // (Only the solid elements' histories and the failures are kept,
         // in element order.)
-        let outcome: Vec<(usize, Result<History<D>, StepError>)> = (0..input
-            .mesh
-            .element_material
-            .len())
+        let n_elements = input.mesh.element_material.len();
+        let outcome: Vec<(usize, Result<History<D>, StepError>)> = (0..n_elements)
             .into_par_iter()
             .with_min_len(256)
             .filter_map(|e| {
                 if assembler.is_frozen(e) || any_panic.load(std::sync::atomic::Ordering::Relaxed) {
-                    return None; // a sliver on its geometry at tⁿ, a fluid element
+                    // A sliver on its geometry at tⁿ, or a material
+                    // panicked; below, a fluid element.
+                    return None;
                 }
                 let el = &input.mesh.elements[e * nv..(e + 1) * nv];
                 let mut xs = [Point::<D>::zeros(); pfem_core::MAX_NV];
