@@ -1569,19 +1569,25 @@ fn a_cube_dropped_flat_comes_to_rest_flat_in_3d() {
             / block.len() as f64
     };
     let e0 = energy(&s);
-    let x0: Vec<Point<3>> = block.iter().map(|&i| s.particles().x()[i]).collect();
     let (y_lo, y_hi) = (0.07 + 1e-9, 0.17 - 1e-9);
     let mut most = e0;
     while s.time() < s.end_time() - 1e-12 {
         s.step().unwrap();
         most = most.max(energy(&s));
     }
+    // The centre of the block's top or bottom row, as it started.
     let centre = |top: bool| {
         let pts: Vec<Point<3>> = block
             .iter()
-            .zip(&x0)
-            .filter(|(_, p)| if top { p.y >= y_hi } else { p.y <= y_lo })
-            .map(|(&i, _)| s.particles().x()[i])
+            .filter(|&&i| {
+                let y = s.initial_position(i).y;
+                if top {
+                    y >= y_hi
+                } else {
+                    y <= y_lo
+                }
+            })
+            .map(|&i| s.particles().x()[i])
             .collect();
         pts.iter().fold(Point::<3>::zeros(), |a, p| a + p) / pts.len() as f64
     };
