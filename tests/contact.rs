@@ -1647,3 +1647,63 @@ fn block_on_floor_3d(
             None,
         )
 }
+
+/// 3D: two equal soft balls (radius 3 spacings, E = 10⁷ Pa, no gravity)
+/// meeting head-on at ±0.3 m/s, one set 5 mm across. A known gap: they
+/// part with more kinetic energy than they came with, 1.136 times it
+/// (the bound, 1.2, is the gap's, not a target). Before session 57 they
+/// parted with 1.748 times it: each remeshing measured the contact layer's
+/// gap anew over the facets the impact had stretched; the layer now
+/// carries its gap from step to step
+/// (`pfem_constitutive::contact::CARRY_TOLERANCE`). What is left comes
+/// from elements formed on new particles, measured on both deformed
+/// surfaces (`docs/robustness.md`, session 57).
+#[test]
+fn two_soft_balls_meeting_slowly_part_with_at_most_a_fifth_more_energy_3d() {
+    let ball = |name: &str, centre: Point<3>, v: f64, s: Scene<3>| {
+        s.solid(
+            name,
+            Box::new(Hypoelastic::new(1000.0, 1e7, 0.3).unwrap()),
+            Geometry::Ball {
+                center: centre,
+                radius: 0.06,
+            },
+            0.02,
+            None,
+        )
+        .with_velocity(Vector::<3>::new(v, 0.0, 0.0))
+    };
+    let scene = Scene::<3>::new("two_balls_3d").settings(RunSettings {
+        end_time: 0.3,
+        max_dt: 2e-3,
+        output_interval: None,
+        ..Default::default()
+    });
+    let scene = ball("a", Point::<3>::new(-0.1, 0.0, 0.0), 0.3, scene);
+    let scene = ball("b", Point::<3>::new(0.1, 0.005, 0.0), -0.3, scene);
+    let mut s =
+        Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
+    let kinetic =
+        |s: &Simulation<3>| s.particles().v().iter().map(|v| 0.5 * v.norm_squared()).sum::<f64>();
+    let k0 = kinetic(&s);
+    let (mut met, mut parted) = (false, None);
+    while s.time() < s.end_time() - 1e-12 {
+        s.step().unwrap();
+        let active = s.contact_force("a", "b").unwrap().active > 0;
+        met |= active;
+        if met && !active {
+            parted = Some(kinetic(&s));
+        }
+        if met && active {
+            parted = None;
+        }
+    }
+    let k1 = parted.expect("the balls met and parted");
+    println!(
+        "two balls at ±0.3 m/s: {} steps ({} rejected); kinetic energy after they parted {:.4} of before",
+        s.steps(),
+        s.rejected(),
+        k1 / k0
+    );
+    assert!(k1 <= 1.2 * k0, "parted with {:.4} times the kinetic energy", k1 / k0);
+}
