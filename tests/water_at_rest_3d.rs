@@ -220,7 +220,7 @@ fn a_block_held_under_water_at_rest_feels_its_buoyancy_3d() {
 /// Without the pockets the walls summed to the elements' weight, 4.9 %
 /// short at the start, and the back and front walls' thrust followed the
 /// corners' split: 30.26 N each at the start, 34.34 and 33.21 N at 0.5 s
-/// (3.4 % apart); with them, 34.59 / 34.61 N and 34.54 / 34.54 N. (The
+/// (3.4 % apart); with them, 34.539 / 34.539 N and 34.535 / 34.549 N. (The
 /// continuum's thrust, `ρ g H² / 2` times the width, is 39.24 N: the
 /// corner lines, which the floor and the side walls hold, take the rest.)
 #[test]

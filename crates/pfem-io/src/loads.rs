@@ -227,14 +227,21 @@ where
     /// read 12 N sideways and +47 % up, `tests/water_at_rest_3d.rs`).
     /// The wall pockets of deviation 9 (3D: the water in a wall corner's
     /// lattice cell that the tessellation split into wall-only simplices)
-    /// add their weight and pressure force, `w (ρ (V/(D+1)) g + p̄ V grad
-    /// W_i)`, with the pressure `p̄` and density `ρ` of the fluid elements
-    /// that hold their nodes: the walls of a tank at rest then sum to
-    /// `ρ g` times the `volume` probe, and the force on each wall no longer
-    /// depends on which way round-off split its corners (without them two
-    /// opposite walls of a cubic tank read 30.3 and 34.5 N, and a wall
-    /// parallel to the load 2.1 N along it; `probes.rs`). The
-    /// viscous part is left out (negligible for water). The inertia is the
+    /// add their weight less inertia and pressure force, `w (ρ (V/(D+1))
+    /// (g − aᵢ) + p̄ V grad W_i)` (see `pocket_force`): the walls of a tank
+    /// at rest then sum to `ρ g` times the `volume` probe, and a wall's
+    /// thrust no longer jumps as round-off splits the corners' cells
+    /// another way (without them the walls of a cube of water 0.2 m on a
+    /// side summed to 4.9 % less than its weight, and a wall's thrust moved
+    /// from 30.26 to 34.34 N as the corners' ties flipped while its mirror
+    /// read 33.21 N;
+    /// `water_at_rest_3d::a_3d_tank_s_walls_feel_the_weight_and_thrust_whatever_the_corners`).
+    /// A body's force is its own particles': where walls meet, the
+    /// particles of the corner lines carry their share of both faces to
+    /// the body that holds them, and where three walls meet, a face of the
+    /// corner's cell shared by all three splits `p h²/6` between two of
+    /// them as its diagonal falls (1.7 % of a wall's thrust in a tank four
+    /// spacings deep, 0.19 % at eight; a review). The viscous part is left out (negligible for water). The inertia is the
     /// last acceleration's, `m aⁿ⁺¹`: under Bossak's scheme the step
     /// balanced `m [(1 − α_B) aⁿ⁺¹ + α_B aⁿ]`, so a force that changes
     /// fast reads slightly off the one the step transmitted (as
@@ -518,19 +525,23 @@ where
 
 /// The wall pockets' share of [`Loads::pressure_force_on`] on body `id`
 /// (3D; zero without pockets on the body): each pocket's weight `w` times
-/// the weight of the water it stands for, lumped on its nodes, and its
-/// pressure force `p̄ V grad W_i`, `p̄` and `ρ` the means over its nodes
-/// that a fluid element holds (a wall node outside every element carries
-/// no pressure: `pfem_time`'s update sets it to zero). A pocket none of
-/// whose nodes a fluid element holds is left out.
+/// the weight less the inertia of the water it stands for, lumped on its
+/// nodes (`ρ (V/(D+1)) (g − aᵢ)`, as the elements' mass), and its pressure
+/// force `p̄ V grad W_i`, `p̄` the mean of its nodes' pressures and `ρ` the
+/// mean density of the fluid elements that hold them. A node outside every
+/// element carries no pressure (`pfem_time`'s update sets it to zero): it
+/// takes that of the held nodes carried to its height by the water's
+/// weight. A pocket none of whose nodes a fluid element holds is left
+/// out.
 fn pocket_force<const D: usize>(s: &Simulation<D>, id: u32) -> Vector<D>
 where
     Const<D>: Dim,
 {
     let nv = D + 1;
     let (pockets, weights) = (s.elements().wall_pockets(), s.elements().pocket_weights());
-    let (x, pressure, body, material, kind) = (
+    let (x, accel, pressure, body, material, kind) = (
         s.particles().x(),
+        s.particles().a(),
         s.particles().pressure(),
         s.particles().body(),
         s.particles().material(),
@@ -588,11 +599,31 @@ where
             continue;
         };
         let n_held = held.len() as f64;
-        let p_mean = held.iter().map(|&q| pressure[q]).sum::<f64>() / n_held;
         let rho = held.iter().map(|&q| density[q]).sum::<f64>() / n_held;
+        // A node no fluid element holds carries no pressure of its own
+        // (zero after the first step): it takes its held neighbours',
+        // carried to its height by the water's weight, `p_h + ρ g·(x − x_h)`
+        // (the hydrostatic field exactly at rest; the stored start pressure
+        // would do at the start only, and the held nodes' mean alone read a
+        // tank's mirrored walls 0.15 % apart, a review).
+        let p_sum: f64 = el
+            .iter()
+            .map(|&q| q as usize)
+            .map(|q| {
+                if !density[q].is_nan() {
+                    return pressure[q];
+                }
+                held.iter()
+                    .map(|&h| pressure[h] + rho * gravity.dot(&(x[q] - x[h])))
+                    .sum::<f64>()
+                    / n_held
+            })
+            .sum();
+        let p_mean = p_sum / nv as f64;
         for (k, &q) in el.iter().enumerate() {
             if body[q as usize] == id {
-                f += (g[k] * (p_mean * vol) + gravity * (rho * vol / nv as f64)) * w;
+                let q = q as usize;
+                f += (g[k] * (p_mean * vol) + (gravity - accel[q]) * (rho * vol / nv as f64)) * w;
             }
         }
     }
