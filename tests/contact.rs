@@ -1683,8 +1683,13 @@ fn two_soft_balls_meeting_slowly_part_with_at_most_a_fifth_more_energy_3d() {
     let scene = ball("b", Point::<3>::new(0.1, 0.005, 0.0), -0.3, scene);
     let mut s =
         Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
-    let kinetic =
-        |s: &Simulation<3>| s.particles().v().iter().map(|v| 0.5 * v.norm_squared()).sum::<f64>();
+    let kinetic = |s: &Simulation<3>| {
+        s.particles()
+            .v()
+            .iter()
+            .map(|v| 0.5 * v.norm_squared())
+            .sum::<f64>()
+    };
     let k0 = kinetic(&s);
     let (mut met, mut parted) = (false, None);
     while s.time() < s.end_time() - 1e-12 {
@@ -1705,5 +1710,9 @@ fn two_soft_balls_meeting_slowly_part_with_at_most_a_fifth_more_energy_3d() {
         s.rejected(),
         k1 / k0
     );
-    assert!(k1 <= 1.2 * k0, "parted with {:.4} times the kinetic energy", k1 / k0);
+    assert!(
+        k1 <= 1.2 * k0,
+        "parted with {:.4} times the kinetic energy",
+        k1 / k0
+    );
 }

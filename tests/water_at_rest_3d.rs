@@ -246,7 +246,13 @@ fn a_3d_tank_s_walls_feel_the_weight_and_thrust_whatever_the_corners() {
     );
     let mut sim =
         Simulation::new(scene, Box::new(Delaunay3::default()), StepParams::default()).unwrap();
-    let walls = ["floor", "back_wall", "front_wall", "side_wall_0", "side_wall_1"];
+    let walls = [
+        "floor",
+        "back_wall",
+        "front_wall",
+        "side_wall_0",
+        "side_wall_1",
+    ];
     let mut worst = [0.0f64; 4];
     let mut k = 0;
     loop {
@@ -297,8 +303,20 @@ fn a_3d_tank_s_walls_feel_the_weight_and_thrust_whatever_the_corners() {
         worst[2] * 100.0,
         worst[3] * 100.0
     );
-    assert!(worst[0] <= 1e-3, "walls' sum off the weight by {}", worst[0]);
-    assert!(worst[1] <= 0.01, "back and front walls differ by {}", worst[1]);
+    assert!(
+        worst[0] <= 1e-3,
+        "walls' sum off the weight by {}",
+        worst[0]
+    );
+    assert!(
+        worst[1] <= 0.01,
+        "back and front walls differ by {}",
+        worst[1]
+    );
     assert!(worst[2] <= 0.01, "side walls differ by {}", worst[2]);
-    assert!(worst[3] <= 0.01, "back/front walls pushed along z by {}", worst[3]);
+    assert!(
+        worst[3] <= 0.01,
+        "back/front walls pushed along z by {}",
+        worst[3]
+    );
 }

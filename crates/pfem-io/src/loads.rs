@@ -563,7 +563,10 @@ where
         if !el.iter().any(|&q| density[q as usize] != 0.0) {
             continue;
         }
-        let Some(&fluid) = el.iter().find(|&&q| kind[q as usize] == ParticleKind::Fluid) else {
+        let Some(&fluid) = el
+            .iter()
+            .find(|&&q| kind[q as usize] == ParticleKind::Fluid)
+        else {
             continue;
         };
         let rho = pfem_constitutive::fluid_element_density(
