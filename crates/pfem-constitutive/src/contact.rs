@@ -23,10 +23,7 @@
 //! of the onset) damps the contact's unresolved chatter. The element's
 //! [`History::internal`] holds `[rⁿ, μ, nⁿ (3), τⁿ (3)]`; the driver sets
 //! the first five when it forms the element, and `τ` is carried while the
-//! same particles stay in contact (stick has memory). The update writes
-//! the step's end ratio `J rⁿ` in place of `rⁿ`, and an element formed
-//! again on the same particles starts from it, not from its gap measured
-//! anew ([`CARRY_TOLERANCE`]).
+//! same particles stay in contact (stick has memory).
 
 use pfem_core::{Const, Dim, Tensor, Vector};
 
@@ -59,21 +56,6 @@ pub const DASHPOT_RAMP: f64 = 0.1;
 /// state ([`Material::refuses`]): the step is retried smaller, and the run
 /// fails with the bodies named when no step cures it.
 pub const CLOSED_GAP: f64 = 0.05;
-
-/// An element formed again on the particles of one of the last contact
-/// range starts from that element's gap ratio at the end of the step,
-/// `J rⁿ`, instead of its gap measured on the new positions, unless the two
-/// differ by more than this (a fraction of the contact distance): then
-/// the particles were moved outside the step (by hand, or a hook), and the
-/// measure is taken. Measured anew every step, the gap of a soft body's
-/// layer read the height over its master's facet as the impact had
-/// stretched it, less than the `J rⁿ` the step had carried (which assumes
-/// the facet's area unchanged): each remeshing stored more energy in the
-/// layer than the step had put in. Two rubber balls meeting at ±0.3 m/s
-/// left with up to 1.72 times their energy; carried, no ball or cube
-/// leaves a floor or another ball with more than it came with (session
-/// 57, `docs/robustness.md`).
-pub const CARRY_TOLERANCE: f64 = 0.05;
 
 /// The penalty material of contact elements (module docs). Massless.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -344,12 +326,6 @@ where
         let s = self.state(kin, history);
         history.stress = s.sigma;
         history.stress_zz = if D == 2 { -s.pressure } else { 0.0 };
-        // The gap ratio at the step's end, `J rⁿ`: what the next contact
-        // range carries when the same particles form an element again
-        // (`pfem_driver`'s `Elements::set_contact`).
-        if history.internal[GAP_RATIO] > 0.0 {
-            history.internal[GAP_RATIO] *= kin.j;
-        }
         for k in 0..D {
             history.internal[NORMAL + k] = s.normal[k];
             history.internal[TRACTION + k] = s.traction[k];

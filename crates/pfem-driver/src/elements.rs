@@ -161,10 +161,7 @@ where
 
     /// Appends the contact range (after the fluid range): one element per
     /// candidate with `material(nodes)`, its history's gap ratio (gap over the
-    /// contact distance, [`contact_distance`]; for an element of the last
-    /// range formed again on the same particles, that element's ratio at
-    /// the end of its step, within
-    /// [`pfem_constitutive::contact::CARRY_TOLERANCE`] of the measure), friction
+    /// contact distance, [`contact_distance`]), friction
     /// (`friction(master, other)`) and normal set, and its tangential
     /// traction carried from the last contact range when the same
     /// particles were in contact there.
@@ -176,7 +173,7 @@ where
         spacing: &[f64],
         friction: &dyn Fn(u32, u32) -> f64,
     ) {
-        use pfem_constitutive::contact::{CARRY_TOLERANCE, FRICTION, GAP_RATIO, NORMAL, TRACTION};
+        use pfem_constitutive::contact::{FRICTION, GAP_RATIO, NORMAL, TRACTION};
         let nv = D + 1;
         // The shear stress of the last contact range, `τ ⊗ n + n ⊗ τ` (the
         // same whichever body is the master), averaged at its particles:
@@ -197,23 +194,6 @@ where
                 e.1 += 1;
             }
         }
-        // The last range's gap ratios at its step's end (`J rⁿ`, written
-        // by the update), by the element's particles in any order: an
-        // element formed on the same particles starts from its ratio
-        // (`pfem_constitutive::contact::CARRY_TOLERANCE`).
-        let key = |el: &[u32]| {
-            let mut k = [u32::MAX; 4];
-            k[..el.len()].copy_from_slice(el);
-            k.sort_unstable();
-            k
-        };
-        let carried: std::collections::HashMap<[u32; 4], f64> = self
-            .stash
-            .0
-            .chunks_exact(nv)
-            .zip(&self.stash.1)
-            .map(|(el, h)| (key(el), h.internal[GAP_RATIO]))
-            .collect();
         for c in candidates {
             let el = &c.nodes[..nv];
             self.conn.extend_from_slice(el);
@@ -235,11 +215,7 @@ where
                     h.internal[TRACTION + k] = t[k];
                 }
             }
-            let measured = c.gap / g0;
-            h.internal[GAP_RATIO] = match carried.get(&key(el)) {
-                Some(&r) if (r - measured).abs() <= CARRY_TOLERANCE => r,
-                _ => measured,
-            };
+            h.internal[GAP_RATIO] = c.gap / g0;
             h.internal[FRICTION] = friction(c.bodies.0, c.bodies.1);
             for k in 0..D {
                 h.internal[NORMAL + k] = c.normal[k];
