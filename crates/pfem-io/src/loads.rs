@@ -241,8 +241,9 @@ where
     /// the body that holds them, and where three walls meet, a face of the
     /// corner's cell shared by all three splits `p h²/6` between two of
     /// them as its diagonal falls (1.7 % of a wall's thrust in a tank four
-    /// spacings deep, 0.19 % at eight; a review). The viscous part is left out (negligible for water). The inertia is the
-    /// last acceleration's, `m aⁿ⁺¹`: under Bossak's scheme the step
+    /// spacings deep, 0.19 % at eight; a review). The viscous part is
+    /// left out (negligible for water). The inertia is the last
+    /// acceleration's, `m aⁿ⁺¹`: under Bossak's scheme the step
     /// balanced `m [(1 − α_B) aⁿ⁺¹ + α_B aⁿ]`, so a force that changes
     /// fast reads slightly off the one the step transmitted (as
     /// `pfem::cases3d::fluid_force` measures).
