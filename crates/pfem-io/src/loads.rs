@@ -256,11 +256,7 @@ where
             self.particles().a(),
             self.particles().pressure(),
         );
-        let (body, kind, material) = (
-            self.particles().body(),
-            self.particles().kind(),
-            self.particles().material(),
-        );
+        let body = self.particles().body();
         let gravity = self.gravity().unwrap_or_else(Vector::<D>::zeros);
         // The elements cut at a free solid's water line count their part
         // below it, as the assembly does (before session 49 they counted
@@ -297,18 +293,7 @@ where
                 .zip(&w)
                 .map(|(&q, w)| pressure[q as usize] * w)
                 .sum();
-            // The assembly's lumped mass: the midrange of the element's
-            // fluids (`pfem_constitutive::fluid_element_density`).
-            let rho = el
-                .iter()
-                .find(|&&q| kind[q as usize] == ParticleKind::Fluid)
-                .map_or(0.0, |&f| {
-                    pfem_constitutive::fluid_element_density(
-                        self.materials(),
-                        el.iter().map(|&q| material[q as usize]),
-                        material[f as usize],
-                    )
-                });
+            let rho = element_density(self, el);
             for (k, &q) in el.iter().enumerate() {
                 if body[q as usize] == id {
                     f += g[k] * p_w;
@@ -524,6 +509,25 @@ where
     }
 }
 
+/// The lumped-mass density of fluid element `el` as the assembly takes
+/// it: the midrange of its fluids
+/// (`pfem_constitutive::fluid_element_density`); 0 without a fluid node.
+fn element_density<const D: usize>(s: &Simulation<D>, el: &[u32]) -> f64
+where
+    Const<D>: Dim,
+{
+    let (kind, material) = (s.particles().kind(), s.particles().material());
+    el.iter()
+        .find(|&&q| kind[q as usize] == ParticleKind::Fluid)
+        .map_or(0.0, |&f| {
+            pfem_constitutive::fluid_element_density(
+                s.materials(),
+                el.iter().map(|&q| material[q as usize]),
+                material[f as usize],
+            )
+        })
+}
+
 /// The wall pockets' share of [`Loads::pressure_force_on`] on body `id`
 /// (3D; zero without pockets on the body): each pocket's weight `w` times
 /// the weight less the inertia of the water it stands for, lumped on its
@@ -540,13 +544,11 @@ where
 {
     let nv = D + 1;
     let (pockets, weights) = (s.elements().wall_pockets(), s.elements().pocket_weights());
-    let (x, accel, pressure, body, material, kind) = (
+    let (x, accel, pressure, body) = (
         s.particles().x(),
         s.particles().a(),
         s.particles().pressure(),
         s.particles().body(),
-        s.particles().material(),
-        s.particles().kind(),
     );
     let mut f = Vector::<D>::zeros();
     if !pockets
@@ -564,17 +566,10 @@ where
         if !el.iter().any(|&q| density[q as usize] != 0.0) {
             continue;
         }
-        let Some(&fluid) = el
-            .iter()
-            .find(|&&q| kind[q as usize] == ParticleKind::Fluid)
-        else {
+        let rho = element_density(s, el);
+        if rho == 0.0 {
             continue;
-        };
-        let rho = pfem_constitutive::fluid_element_density(
-            s.materials(),
-            el.iter().map(|&q| material[q as usize]),
-            material[fluid as usize],
-        );
+        }
         for &q in el {
             if density[q as usize] != 0.0 {
                 density[q as usize] = rho;
@@ -588,11 +583,15 @@ where
         if !el.iter().any(|&q| body[q as usize] == id) {
             continue;
         }
-        let held: Vec<usize> = el
-            .iter()
-            .map(|&q| q as usize)
-            .filter(|&q| !density[q].is_nan())
-            .collect();
+        let mut held = [0usize; pfem_core::MAX_NV];
+        let mut n_held = 0;
+        for &q in el {
+            if !density[q as usize].is_nan() {
+                held[n_held] = q as usize;
+                n_held += 1;
+            }
+        }
+        let held = &held[..n_held];
         if held.is_empty() {
             continue;
         }
